@@ -1,0 +1,5 @@
+"""camopt: batch optimiser for spring-actuated mechanisms."""
+
+from __future__ import annotations
+
+__version__ = "0.1.0"

@@ -1,0 +1,5 @@
+"""`python -m camopt` runs the command-line interface."""
+
+from camopt.cli import main
+
+main()

@@ -1,0 +1,36 @@
+"""One module per mechanism; each builds a Problem from its config."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from camopt.config.models import CaseConfig
+from camopt.problem import Problem
+
+
+def _fast_switch(config: CaseConfig) -> Problem:
+    from camopt.cases.fast_switch import FastSwitchProblem
+
+    return FastSwitchProblem(config)  # type: ignore[arg-type]
+
+
+CASE_BUILDERS: dict[str, Callable[[CaseConfig], Problem]] = {
+    "fast_switch": _fast_switch,
+}
+CASE_CLASSES: dict[str, str] = {"fast_switch": "camopt.cases.fast_switch:FastSwitchProblem"}
+
+
+def build_problem(config: CaseConfig) -> Problem:
+    """The Problem for a validated case config."""
+    return CASE_BUILDERS[config.kind](config)
+
+
+def case_class(kind: str) -> type[Problem]:
+    """The Problem class of a case kind (to ask which capabilities it offers)."""
+    import importlib
+
+    module, _, name = CASE_CLASSES[kind].partition(":")
+    return getattr(importlib.import_module(module), name)
+
+DEFAULT_SOLVER: dict[str, str] = {"fast_switch": "enumeration"}
+"""The solver a new case file of each kind starts with (the paper's method)."""

@@ -1,0 +1,17 @@
+"""Case files: pydantic models and the TOML loader. Nothing else in camopt reads TOML."""
+
+from __future__ import annotations
+
+from camopt.config.loader import LoadedConfig, load_config, parse_overrides
+from camopt.config.models import CASE_CONFIGS, CaseConfig, RunSection, SolverOptions, template
+
+__all__ = [
+    "CASE_CONFIGS",
+    "CaseConfig",
+    "LoadedConfig",
+    "RunSection",
+    "SolverOptions",
+    "load_config",
+    "parse_overrides",
+    "template",
+]

@@ -1,0 +1,163 @@
+"""Read a case file, apply ``--set`` overrides, validate; every failure names file and key."""
+
+from __future__ import annotations
+
+import re
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from camopt.config.models import CASE_CONFIGS, CaseConfig, RunSection, SolverOptions
+from camopt.errors import ConfigError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+SECTIONS = ("case", "solver", "run")
+_BARE_WORD = re.compile(r"^[A-Za-z_][\w.\-]*$")
+
+
+@dataclass(frozen=True)
+class LoadedConfig:
+    """A validated case file: the exact text read, overrides, and the parsed sections."""
+
+    path: str
+    text: str
+    overrides: tuple[str, ...]
+    case: CaseConfig
+    solver: SolverOptions
+    run: RunSection
+    data: dict[str, Any] = field(repr=False)
+
+    def effective(self) -> dict[str, Any]:
+        """The parsed values after overrides, as plain TOML-able data."""
+        return {
+            "case": self.case.model_dump(mode="json"),
+            "solver": self.solver.model_dump(mode="json"),
+            "run": self.run.model_dump(mode="json", exclude_none=True),
+        }
+
+
+def parse_overrides(items: Sequence[str]) -> list[tuple[str, Any]]:
+    """Parse ``key=value`` strings; the value is TOML, or a bare word taken as a string."""
+    parsed = []
+    for item in items:
+        key, sep, raw = item.partition("=")
+        key = key.strip()
+        if not sep or not key or not re.fullmatch(r"[A-Za-z_][\w]*(\.[A-Za-z_]\w*)+", key):
+            raise ConfigError("--set", item, "expected section.key=value, e.g. run.seed=3")
+        raw = raw.strip()
+        try:
+            value = tomllib.loads(f"v = {raw}")["v"]
+        except tomllib.TOMLDecodeError:
+            if not _BARE_WORD.fullmatch(raw):
+                raise ConfigError("--set", key, f"cannot parse value {raw!r}") from None
+            value = raw
+        parsed.append((key, value))
+    return parsed
+
+
+def _apply(data: dict[str, Any], key: str, value: Any) -> None:
+    parts = key.split(".")
+    node = data
+    for part in parts[:-1]:
+        child = node.setdefault(part, {})
+        if not isinstance(child, dict):
+            raise ConfigError("--set", key, f"'{part}' is not a table")
+        node = child
+    node[parts[-1]] = value
+
+
+def _read(path: Path) -> tuple[str, dict[str, Any]]:
+    source = str(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(source, "file", "no such file") from None
+    except IsADirectoryError:
+        raise ConfigError(source, "file", "is a directory, not a case file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(source, "file", f"cannot read: {exc}") from None
+    try:
+        return text, tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        message = str(exc)
+        match = re.search(r"\(at line (\d+), column (\d+)\)", message)
+        where = f"line {match.group(1)}" if match else "syntax"
+        what = re.sub(r"\s*\(at line \d+, column \d+\)", "", message)
+        raise ConfigError(source, where, f"TOML syntax error: {what}") from None
+
+
+def _validate(
+    model: type[BaseModel], data: Any, section: str, source: str, overridden: set[str]
+) -> Any:
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        error = exc.errors()[0]
+        loc = ".".join(str(p) for p in (section, *error["loc"]))
+        if error["type"] == "extra_forbidden":
+            what = "unknown key"
+        elif error["type"] == "missing":
+            what = "missing required key"
+        else:
+            what = error["msg"].removeprefix("Value error, ")
+            if "input" in error and error["type"] not in ("model_type", "dict_type"):
+                what += f" (got {error['input']!r})"
+        origin = "--set" if any(loc == k or loc.startswith(k + ".") for k in overridden) else source
+        raise ConfigError(origin, loc, what) from None
+
+
+def _select(
+    table: Any, section: str, tag: str, known: Mapping[str, Any], source: str, noun: str
+) -> Any:
+    if not isinstance(table, dict):
+        raise ConfigError(source, section, f"[{section}] must be a table")
+    value = table.get(tag)
+    names = ", ".join(sorted(known))
+    if value is None:
+        raise ConfigError(source, f"{section}.{tag}", f"missing; known {noun}s: {names}")
+    if value not in known:
+        raise ConfigError(source, f"{section}.{tag}", f"unknown {noun} {value!r}; known: {names}")
+    return known[value]
+
+
+def load_config(
+    path: str | Path,
+    solvers: Mapping[str, type[SolverOptions]],
+    overrides: Sequence[str] = (),
+) -> LoadedConfig:
+    """Load and validate a case file; ``solvers`` maps solver names to their Options models."""
+    path = Path(path)
+    source = str(path)
+    text, data = _read(path)
+    parsed = parse_overrides(overrides)
+    for key, value in parsed:
+        if key.split(".")[0] not in SECTIONS:
+            expected = ", ".join(SECTIONS)
+            raise ConfigError("--set", key, f"unknown section; expected one of {expected}")
+        _apply(data, key, value)
+    overridden = {key for key, _ in parsed}
+    for key in data:
+        if key not in SECTIONS:
+            raise ConfigError(source, key, f"unknown key; expected {', '.join(SECTIONS)}")
+    for key in ("case", "solver"):
+        if key not in data:
+            raise ConfigError(source, key, f"missing [{key}] table")
+    case_model = _select(data["case"], "case", "kind", CASE_CONFIGS, source, "case kind")
+    solver_model = _select(data["solver"], "solver", "name", solvers, source, "solver")
+    return LoadedConfig(
+        path=source,
+        text=text,
+        overrides=tuple(overrides),
+        case=_validate(case_model, data["case"], "case", source, overridden),
+        solver=_validate(solver_model, data["solver"], "solver", source, overridden),
+        run=_validate(RunSection, data.get("run", {}), "run", source, overridden),
+        data=data,
+    )

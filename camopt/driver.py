@@ -1,0 +1,145 @@
+"""The one loop every run goes through: ask -> evaluate -> tell -> record -> stop?
+
+Repeats get independent generators from ``SeedSequence(seed).spawn(repeats)``, so
+any repeat can be re-run alone from the archived entropy and spawn key.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from camopt.cases import build_problem
+from camopt.config import LoadedConfig
+from camopt.errors import ConfigError, SolverError
+from camopt.problem import Problem
+from camopt.solvers import Solver, get_solver
+from camopt.solvers.base import better
+
+
+@dataclass(frozen=True)
+class Progress:
+    """What a progress callback sees after every iteration."""
+
+    repeat: int
+    repeats: int
+    iteration: int
+    max_iterations: int | None
+    best_objective: float
+
+
+@dataclass
+class RepeatRecord:
+    """One solver repeat: result (scipy's field names where they fit) and its history."""
+
+    index: int
+    spawn_key: tuple[int, ...]
+    seed: int
+    x: NDArray
+    fun: float
+    feasible: bool
+    violation: float
+    g: NDArray
+    nfev: int
+    nit: int
+    wall_s: float
+    message: str
+    history: dict[str, NDArray]
+    table: list[dict[str, Any]] = field(default_factory=list)
+
+
+@dataclass
+class RunRecord:
+    """Everything a run archive holds."""
+
+    config: LoadedConfig
+    problem: Problem
+    seed: int
+    repeats: list[RepeatRecord]
+    best: RepeatRecord
+    metrics: dict[str, float]
+    analysis: dict[str, NDArray]
+
+
+def prepare(config: LoadedConfig) -> tuple[Problem, type[Solver]]:
+    """Build the case's problem and check the solver can run on it."""
+    problem = build_problem(config.case)
+    solver_cls = get_solver(config.solver.name)
+    if not solver_cls.supports(type(problem)):
+        raise ConfigError(
+            config.path, "solver.name",
+            f"solver '{solver_cls.name}' cannot run case '{config.case.kind}': it needs "
+            f"{', '.join(solver_cls.requires)}",
+        )
+    return problem, solver_cls
+
+
+def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
+               child: np.random.SeedSequence, index: int, repeats: int,
+               callback: Callable[[Progress], None] | None = None) -> RepeatRecord:
+    """Run one repeat of the solver to its stop reason."""
+    start = time.perf_counter()
+    try:
+        solver = solver_cls(problem, config.solver, np.random.default_rng(child))
+    except SolverError as exc:
+        raise ConfigError(config.path, "solver", str(exc)) from None
+    nfev, best_f, mean_f, best_v = [], [], [], []
+    while (reason := solver.stop_reason()) is None:
+        X = solver.ask()
+        ev = problem.evaluate(X)
+        solver.tell(X, ev)
+        _, bev = solver.best()
+        population = getattr(solver, "population_objectives", None)
+        pop_f = population() if population else ev.f
+        finite = pop_f[np.isfinite(pop_f)]
+        nfev.append(solver.nfev)
+        best_f.append(float(bev.f[0]))
+        best_v.append(float(bev.violation[0]))
+        mean_f.append(float(finite.mean()) if finite.size else np.inf)
+        if callback:
+            callback(Progress(index, repeats, solver.nit, solver.max_iterations(), best_f[-1]))
+    x, bev = solver.best()
+    return RepeatRecord(
+        index=index, spawn_key=tuple(child.spawn_key),
+        seed=int(child.generate_state(1, np.uint64)[0] >> np.uint64(1)),
+        x=x, fun=float(bev.f[0]), feasible=bool(bev.feasible[0]),
+        violation=float(bev.violation[0]), g=bev.g[0], nfev=solver.nfev, nit=solver.nit,
+        wall_s=time.perf_counter() - start, message=reason.value,
+        history={"nfev": np.array(nfev, dtype=np.int64), "best_objective": np.array(best_f),
+                 "mean_objective": np.array(mean_f), "best_violation": np.array(best_v)},
+        table=solver.table(),
+    )
+
+
+def best_repeat(records: list[RepeatRecord]) -> RepeatRecord:
+    """The best repeat by Deb's rules (least violation, then lowest objective)."""
+    best = records[0]
+    for rec in records[1:]:
+        if better(np.array(rec.fun), np.array(rec.violation),
+                  np.array(best.fun), np.array(best.violation)):
+            best = rec
+    return best
+
+
+def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None = None,
+            callback: Callable[[Progress], None] | None = None) -> RunRecord:
+    """Run a validated config: every repeat, then the best design's metrics and analysis."""
+    problem, solver_cls = prepare(config)
+    seed = config.run.seed if seed is None else seed
+    repeats = config.run.repeats if repeats is None else repeats
+    children = np.random.SeedSequence(seed).spawn(repeats)
+    records = [run_repeat(problem, solver_cls, config, child, i, repeats, callback)
+               for i, child in enumerate(children)]
+    best = best_repeat(records)
+    if callable(getattr(problem, "metrics", None)):
+        metrics = dict(problem.metrics(best.x))  # type: ignore[attr-defined]
+    else:
+        ev = problem.evaluate(best.x[None, :])
+        metrics = {k: float(v[0]) for k, v in ev.extras.items()}
+    analysis = dict(getattr(problem, "analysis", lambda x: {})(best.x))
+    return RunRecord(config, problem, seed, records, best, metrics, analysis)

@@ -1,0 +1,43 @@
+"""Slider-crank kinematics of the fast acting switch (Clauss 1982, Fig 1, Eqs 3 and 97).
+
+Crank (link 2) of length r2 at angle theta2 from the pivot; coupler (part 3) of
+length r3 at theta3 in the fourth quadrant; the piston pin lies on the pivot's
+horizontal line at distance ``span = r2 cos theta2 + r3 cos theta3``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+
+def crank_angle_for_span(r2: ArrayLike, r3: ArrayLike, span: ArrayLike) -> NDArray:
+    """cos(theta2) that closes the loop over ``span`` (law of cosines on Eq 3's first two lines).
+
+    Values outside [-1, 1] mean the loop cannot close; callers turn that into a constraint.
+    """
+    return (np.square(r2) + np.square(span) - np.square(r3)) / (2.0 * r2 * span)
+
+
+def coupler_angle(r2: ArrayLike, r3: ArrayLike, theta2: ArrayLike, span: ArrayLike) -> NDArray:
+    """theta3 in [0, 2 pi) from r2 sin theta2 + r3 sin theta3 = 0 and the horizontal loop."""
+    return np.mod(np.arctan2(-r2 * np.sin(theta2), span - r2 * np.cos(theta2)), 2.0 * np.pi)
+
+
+def coupler_derivatives(r2: ArrayLike, r3: ArrayLike, theta2: ArrayLike
+                        ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+    """theta3, dtheta3/dtheta2, d2theta3/dtheta2^2, ds/dtheta2, d2s/dtheta2^2 along the motion.
+
+    theta3 is taken on the fourth-quadrant branch (cos theta3 > 0) and s is the
+    spring length, which grows as the crank turns toward 90 deg (Eq 3, lines 1-2).
+    """
+    r2, r3, theta2 = np.asarray(r2), np.asarray(r3), np.asarray(theta2)
+    sin3 = -r2 * np.sin(theta2) / r3
+    cos3 = np.sqrt(np.clip(1.0 - sin3**2, 0.0, None))
+    theta3 = np.mod(np.arctan2(sin3, cos3), 2.0 * np.pi)
+    d3 = -r2 * np.cos(theta2) / (r3 * cos3)
+    dd3 = (r2 * np.sin(theta2) + r3 * sin3 * d3**2) / (r3 * cos3)
+    # s = g - p4 - r2 cos theta2 - r3 cos theta3 (Eq 3, line 2)
+    ds = r2 * np.sin(theta2) + r3 * sin3 * d3
+    dds = r2 * np.cos(theta2) + r3 * cos3 * d3**2 + r3 * sin3 * dd3
+    return theta3, d3, dd3, ds, dds

@@ -1,0 +1,70 @@
+"""``evaluate``: no search, just the designs given in the TOML (e.g. a paper's tables)."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import Field
+
+from camopt.config.models import SolverOptions
+from camopt.errors import SolverError
+from camopt.problem import Evaluation
+from camopt.solvers.base import Solver, StopReason, best_index, design_rows
+from camopt.solvers.registry import register_solver
+
+
+class EvaluateOptions(SolverOptions):
+    """Options of ``evaluate``: designs as tables ``{variable_with_unit = value}``."""
+
+    name: Literal["evaluate"] = "evaluate"
+    designs: list[dict[str, float]] = Field(
+        default_factory=list, description="designs to evaluate, in the variables' display units"
+    )
+    labels: list[str] = Field(default_factory=list, description="optional label per design")
+
+
+@register_solver
+class Evaluate(Solver):
+    """Evaluates given designs once; the best of them is the run's result."""
+
+    name = "evaluate"
+    Options = EvaluateOptions
+    summary = "evaluates the designs listed in the TOML (reference designs, papers' tables)"
+
+    def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
+        super().__init__(problem, options, rng)
+        if not options.designs:
+            raise SolverError("solver.designs: give at least one design to evaluate")
+        try:
+            self.X = np.array([problem.from_display(d) for d in options.designs])
+        except ValueError as exc:
+            raise SolverError(f"solver.designs: {exc}") from None
+        self.ev: Evaluation | None = None
+
+    def max_iterations(self) -> int:
+        return 1
+
+    def ask(self) -> NDArray:
+        return self.X.copy()
+
+    def tell(self, X: NDArray, ev: Evaluation) -> None:
+        self.ev = ev
+        self.nfev += len(X)
+        self.nit += 1
+
+    def best(self) -> tuple[NDArray, Evaluation]:
+        assert self.ev is not None
+        i = best_index(self.ev)
+        return self.X[i].copy(), self.ev.take(i)
+
+    def stop_reason(self) -> StopReason | None:
+        return StopReason.EXHAUSTED if self.ev is not None else None
+
+    def table(self) -> list[dict[str, Any]]:
+        """One row per given design, labelled."""
+        assert self.ev is not None
+        labels = list(self.options.labels) + [f"design {i}" for i in range(len(self.X))]
+        rows = design_rows(self.problem, self.X, self.ev)
+        return [{"label": label, **row} for label, row in zip(labels, rows)]

@@ -1,0 +1,156 @@
+"""Fast acting switch against Clauss & Papalambros (1982): Table 1, Eq 92, active set."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from camopt import archive
+from camopt.cases.fast_switch import FastSwitchProblem
+from camopt.config.models import FastSwitchConfig
+from camopt.driver import execute
+from tests.conftest import CONFIGS, DATA
+from tests.helpers import load
+
+TABLE1 = np.loadtxt(DATA / "fast_switch_table1.csv", delimiter=",", skiprows=2)
+COLUMNS = {  # Table 1 column -> (table row key in the archive, factor to SI)
+    1: ("s0_mm", 1e-3), 2: ("sud_mm", 1e-3), 3: ("k_n_per_m", 1.0), 4: ("r3_mm", 1e-3),
+    5: ("r2_mm", 1e-3), 6: ("closure_time_ms", 1e-3),
+}
+
+
+@pytest.fixture(scope="module")
+def enumeration_run(tmp_path_factory):
+    """`camopt run configs/fast_switch.toml` through the driver and archive."""
+    path = tmp_path_factory.mktemp("fs") / "fs.h5"
+    archive.write_run(execute(load(CONFIGS / "fast_switch.toml")), path)
+    return archive.load_run(path)
+
+
+def test_every_row_of_table1_within_0p1_percent(enumeration_run):
+    """Table 1: x5, x4 (= x3), x8, x6, x7 and tF for 3..42 coils, each within 0.1 %."""
+    rows = enumeration_run["table"]
+    assert [int(r["coils"]) for r in rows] == TABLE1[:, 0].astype(int).tolist()
+    for col, (key, factor) in COLUMNS.items():
+        ours = np.array([r[key] for r in rows]) * factor
+        np.testing.assert_allclose(ours, TABLE1[:, col], rtol=1e-3, err_msg=key)
+    np.testing.assert_allclose([r["sf_mm"] for r in rows], [r["sud_mm"] for r in rows])
+
+
+def test_optimum_is_7_coils_at_18p90_ms(enumeration_run, reported):
+    """Eq 92: 7 coils, tF = 18.9 ms (Table 1: .01890 s), to +-0.01 ms."""
+    best = enumeration_run["best"]
+    assert best["feasible"]
+    assert best["x"]["coils"] == reported["fast_switch"]["optimum_coils"]
+    assert best["objective"] == pytest.approx(18.90, abs=0.01)
+    assert best["metrics"]["closure_time_ms"] == pytest.approx(best["objective"])
+
+
+def test_eq92_angles_and_width(enumeration_run, reported):
+    """Eq 92: x10 = 400 mm, x11 = 348.9 deg, x12 = 354.4 deg, x13 = 30 deg (as rounded)."""
+    opt, m = reported["fast_switch"]["optimum"], enumeration_run["best"]["metrics"]
+    assert m["g_mm"] == pytest.approx(opt["x10_mm"], abs=0.5)
+    assert m["theta3f_deg"] == pytest.approx(opt["x11_deg"], abs=0.05)
+    assert m["theta30_deg"] == pytest.approx(opt["x12_deg"], abs=0.1)
+    assert m["theta20_deg"] == pytest.approx(opt["x13_deg"], abs=1e-9)
+    assert m["xi"] == pytest.approx(opt["x1"], abs=2e-4)
+
+
+def test_active_set_at_optimum_matches_paper(enumeration_run):
+    """The full model's active constraints at 7 coils are R2, R4, R14, R16, R21."""
+    row = next(r for r in enumeration_run["table"] if r["coils"] == 7)
+    assert set(row["active"]) == {"R2", "R4", "R14", "R16", "R21"}
+    assert row["violated"] == []
+
+
+def test_infeasible_rows_flagged_not_dropped(enumeration_run):
+    """Rows 37-42 need g > 2L (x3 > 2L - p4): the full model flags them, R2 violated."""
+    rows = {int(r["coils"]): r for r in enumeration_run["table"]}
+    assert len(rows) == 40
+    for n in range(37, 43):
+        assert not rows[n]["feasible"] and "R2" in rows[n]["violated"]
+    assert all(rows[n]["feasible"] for n in range(3, 37))
+
+
+def test_exact_dynamics_of_paper_optimum(enumeration_run):
+    """The exact 1-DOF motion (Eqs 2-3, I from Eq 106) is slower than Eq 39's constant-m'
+    approximation; the archive reports both."""
+    m = enumeration_run["best"]["metrics"]
+    assert 18.0 < m["closure_time_exact_ms"] < 25.0
+    assert m["closure_time_exact_ms"] > m["closure_time_ms"]
+    t = enumeration_run["extra"]["analysis"]["time_ms"]
+    theta = enumeration_run["extra"]["analysis"]["theta2_deg"]
+    assert theta[0] == pytest.approx(30.0) and theta[-1] == pytest.approx(90.0)
+    assert t[-1] == pytest.approx(m["closure_time_exact_ms"])
+
+
+def test_exact_dynamics_conserves_energy():
+    """Kinetic energy at closure equals the spring energy released (no damping in Eqs 2-3)."""
+    p = FastSwitchProblem(FastSwitchConfig(branch="I"))
+    x = p.family()[4]
+    travel = p.exact_closure(x)
+    v = p.complete(x[None])
+    r2, r3, k, sud, s0 = (float(v[key][0]) for key in ("x7", "x6", "x8", "x4", "x5"))
+    from camopt.mechanics.slider_crank import coupler_derivatives
+
+    _, d3, _, ds, _ = coupler_derivatives(r2, r3, np.pi / 2)
+    mass = p.p.M2 * p.p.L**2 / 12 + p.p.M3 * r3**2 / 12 * d3**2 + p.p.M4 * ds**2
+    released = 0.5 * k * ((s0 - sud) ** 2 - (float(v["x3"][0]) - sud) ** 2)
+    assert 0.5 * mass * travel.speed**2 == pytest.approx(released, rel=1e-7)
+
+
+def test_printed_objective_is_negative_at_the_paper_optimum():
+    """Eq 58 as printed takes +asin(v): at the paper's own optimum (v = 0) it gives a
+    negative time; Eq 76 (pi - atan) is what Table 1 uses, as does the corrected form."""
+    printed = FastSwitchProblem(FastSwitchConfig(branch="I", reduced_form="printed"))
+    x = printed.family()[4:5]
+    assert printed.evaluate(x).f[0] < 0
+    corrected = FastSwitchProblem(FastSwitchConfig(branch="I"))
+    assert corrected.evaluate(x).f[0] == pytest.approx(18.90, abs=0.01)
+
+
+@pytest.mark.slow
+def test_de_on_printed_form_is_caught_by_full_model():
+    """de_gr exploits the printed statement (absurd negative closure time); the full model
+    with the loop equations solved rejects that design."""
+    cfg = load(CONFIGS / "fast_switch_de.toml", "case.reduced_form=printed",
+               "solver.generations=150", "run.repeats=2")
+    rec = execute(cfg)
+    assert rec.best.fun < 0
+    assert rec.metrics["full_model_feasible"] == 0.0
+
+
+@pytest.mark.slow
+def test_de_on_corrected_form_beats_paper_on_full_model(reported):
+    """de_gr on the corrected reduced problem, both branches, integer coils: every design it
+    returns is feasible on the full model and closes faster than Eq 92's 18.9 ms; the best
+    lies in case II (sf < sud), where the paper's monotonicity argument fails."""
+    cfg = load(CONFIGS / "fast_switch_de.toml", "solver.generations=400", "run.repeats=4")
+    rec = execute(cfg)
+    assert all(r.feasible for r in rec.repeats)
+    assert all(r.fun < reported["fast_switch"]["optimum_closure_time_ms"] for r in rec.repeats)
+    assert rec.metrics["full_model_feasible"] == 1.0
+    assert rec.metrics["equality_residual_max"] < 1e-12
+    x = rec.problem.to_display(rec.best.x)
+    assert x["sf_mm"] < x["sud_mm"]
+    assert rec.best.fun < 18.2
+    assert rec.metrics["closure_time_exact_ms"] < 21.4  # also faster in exact dynamics
+
+
+def test_corrected_and_full_model_agree_on_equalities():
+    """Wherever the loop can close, the corrected reduction satisfies R8-R18 exactly."""
+    p = FastSwitchProblem(FastSwitchConfig(branch="both"))
+    rng = np.random.default_rng(3)
+    X = p.lower + rng.random((2000, p.n_var)) * (p.upper - p.lower)
+    X[:, 0] = np.rint(X[:, 0])
+    ev = p.evaluate(X)
+    names = list(p.constraint_names)
+    closes = (ev.g[:, names.index("R10a")] <= 0) & (ev.g[:, names.index("R9b")] <= 0)
+    assert closes.sum() > 100
+    assert np.max(ev.extras["equality_residual_max"][closes]) < 1e-12
+
+
+def test_same_config_same_numbers():
+    cfg = load(CONFIGS / "fast_switch.toml")
+    a, b = execute(cfg), execute(cfg)
+    assert a.best.fun == b.best.fun and np.array_equal(a.best.x, b.best.x)

@@ -1,0 +1,85 @@
+"""Contract tests over every registered generic solver (Optuna/pymoo style)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from camopt.driver import run_repeat
+from camopt.errors import SolverError
+from camopt.solvers import get_solver, solvers
+from camopt.solvers.registry import register_solver
+from tests.conftest import SphereConfig, SphereProblem
+
+GENERIC = [name for name, cls in solvers().items() if not cls.requires and name != "evaluate"]
+BUDGET = {"de_gr": {"population": 30, "generations": 150}}
+
+
+class _Cfg:
+    path = "test.toml"
+
+    def __init__(self, name: str, **opts):
+        self.solver = get_solver(name).Options(**opts)
+
+
+def _run(name: str, seed: int = 0, **case):
+    problem = SphereProblem(SphereConfig(**case))
+    cfg = _Cfg(name, **BUDGET.get(name, {}))
+    rec = run_repeat(problem, get_solver(name), cfg, np.random.SeedSequence(seed), 0, 1)
+    return problem, rec
+
+
+def test_generic_solvers_exist():
+    assert "de_gr" in GENERIC
+
+
+@pytest.mark.parametrize("name", GENERIC)
+def test_finds_sphere_optimum(name):
+    _, rec = _run(name)
+    assert rec.feasible
+    np.testing.assert_allclose(rec.x, 0.3, atol=2e-3)
+
+
+@pytest.mark.parametrize("name", GENERIC)
+def test_respects_bounds_and_integers(name):
+    problem, rec = _run(name, integer_first=True)
+    assert np.all(rec.x >= problem.lower) and np.all(rec.x <= problem.upper)
+    assert rec.x[0] == np.rint(rec.x[0]) and rec.x[0] == 0.0
+
+
+@pytest.mark.parametrize("name", GENERIC)
+def test_same_seed_same_result_other_seed_other_path(name):
+    _, a = _run(name, seed=5)
+    _, b = _run(name, seed=5)
+    _, c = _run(name, seed=6)
+    assert np.array_equal(a.x, b.x) and a.fun == b.fun
+    assert np.array_equal(a.history["best_objective"], b.history["best_objective"])
+    assert not np.array_equal(a.history["best_objective"], c.history["best_objective"])
+
+
+@pytest.mark.parametrize("name", GENERIC)
+def test_stays_in_budget(name):
+    _, rec = _run(name)
+    opts = BUDGET[name]
+    assert rec.nfev == opts["population"] * opts["generations"]
+    assert len(rec.history["best_objective"]) == opts["generations"]
+    assert np.all(np.diff(rec.history["best_objective"]) <= 0)  # elitist
+
+
+def test_enumeration_refuses_case_without_family():
+    cls = get_solver("enumeration")
+    with pytest.raises(SolverError, match="family"):
+        cls(SphereProblem(SphereConfig()), cls.Options(), np.random.default_rng(0))
+
+
+def test_duplicate_registration_raises():
+    class Impostor(get_solver("de_gr")):  # type: ignore[misc, valid-type]
+        pass
+
+    with pytest.raises(SolverError, match="registered twice"):
+        register_solver(Impostor)
+
+
+def test_unknown_solver_lists_known():
+    with pytest.raises(SolverError, match="known: de_gr"):
+        get_solver("nelder")
