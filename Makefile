@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-$(shell cat pyproject.toml | cksum | cut -d' ' -f1)
-RUN_CASE ?= configs/fast_switch.toml
+RUN_CASE ?= configs/vcb.toml
 
 .PHONY: install run test lint bench clean
 

@@ -7,6 +7,7 @@ Layout (schema 1): root attributes (versions, exact TOML, parsed config, seed);
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import platform
@@ -19,8 +20,9 @@ import h5py
 import numpy as np
 
 import camopt
+from camopt.config import LoadedConfig
 from camopt.driver import RunRecord
-from camopt.errors import ArchiveError
+from camopt.errors import ArchiveError, ConfigError
 
 SCHEMA_VERSION = 1
 _STR = h5py.string_dtype()
@@ -106,7 +108,8 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
         grp = reps.create_group(f"r{r.index:03d}")
         grp.attrs.update({"spawn_key": json.dumps(list(r.spawn_key)), "seed": r.seed,
                           "objective": r.fun, "feasible": r.feasible, "violation": r.violation,
-                          "nfev": r.nfev, "nit": r.nit, "wall_s": r.wall_s, "message": r.message})
+                          "nfev": r.nfev, "nit": r.nit, "wall_s": r.wall_s, "message": r.message,
+                          "converged_nit": r.converged_nit})
         grp.create_dataset("x", data=r.x)
         grp.create_dataset("g", data=r.g)
         hist = grp.create_group("history")
@@ -125,7 +128,8 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
         analysis.create_dataset(key, data=np.asarray(value))
     _write_columns(f.create_group("table"), rec.best.table)
     summary = [{"repeat": r.index, "seed": r.seed, "objective": r.fun, "feasible": r.feasible,
-                "nfev": r.nfev, "wall_s": r.wall_s} for r in rec.repeats]
+                "nfev": r.nfev, "converged_nit": r.converged_nit, "wall_s": r.wall_s}
+               for r in rec.repeats]
     _write_columns(f.create_group("summary"), summary)
 
 
@@ -174,6 +178,7 @@ def load_run(path: str | Path) -> dict[str, Any]:
             repeats.append({"seed": int(a["seed"]), "objective": float(a["objective"]),
                             "feasible": bool(a["feasible"]), "nfev": int(a["nfev"]),
                             "wall_s": float(a["wall_s"]),
+                            "converged_nit": int(a["converged_nit"]),
                             "spawn_key": json.loads(a["spawn_key"]),
                             "x": dict(zip(names, (grp["x"][()] * scale).tolist()))})
             histories.append({k: v[()] for k, v in grp["history"].items()})
@@ -208,3 +213,28 @@ def _plain(value: Any) -> Any:
     if isinstance(value, np.generic):
         return value.item()
     return value
+
+
+def resolve_references(config: LoadedConfig) -> LoadedConfig:
+    """Fill values a case file takes from another run's archive (VCB step 2's
+    ``cam_archive`` -> ``cam_design``); the archive path is relative to the working
+    folder, else to the case file's folder."""
+    case = config.case
+    ref = getattr(case, "cam_archive", None)
+    if not ref:
+        return config
+    path = Path(ref)
+    if not path.is_file() and (Path(config.path).parent / ref).is_file():
+        path = Path(config.path).parent / ref
+    try:
+        run = load_run(path)
+    except ArchiveError as exc:
+        raise ConfigError(config.path, "case.cam_archive", str(exc)) from None
+    x = run["best"]["x"]
+    if run["case"]["kind"] != "vcb" or run["case"].get("step") != "cam" or "a1" not in x:
+        raise ConfigError(config.path, "case.cam_archive",
+                          f"{path} is not a VCB step-1 (cam) run archive")
+    design = {"a0": run["best"]["metrics"]["a0"], "a1": x["a1"], "a2": x["a2"], "a3": x["a3"],
+              "kc1_n_per_mm": x["kc1_n_per_mm"], "kc2_n_per_mm": x["kc2_n_per_mm"]}
+    new_case = type(case).model_validate({**case.model_dump(), "cam_design": design})
+    return dataclasses.replace(config, case=new_case)

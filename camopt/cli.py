@@ -44,7 +44,7 @@ def _solver_options() -> dict[str, Any]:
 
 
 def _load(case: Path, overrides: list[str] | None = None) -> Any:
-    return load_config(case, _solver_options(), overrides or [])
+    return archive.resolve_references(load_config(case, _solver_options(), overrides or []))
 
 
 @app.command()
@@ -182,10 +182,11 @@ def _print_show(run_data: dict[str, Any], rows: int | None = None) -> None:
         head.add_row(k, _fmt(v))
     out.print(head)
     reps = Table(title="repeats")
-    for col in ("seed", "objective", "feasible", "nfev", "wall_s"):
+    columns = ("seed", "objective", "feasible", "nfev", "converged_nit", "wall_s")
+    for col in columns:
         reps.add_column(col, justify="right")
     for r in doc["repeats"]:
-        reps.add_row(*(_fmt(r[c]) for c in ("seed", "objective", "feasible", "nfev", "wall_s")))
+        reps.add_row(*(_fmt(r[c]) for c in columns))
     out.print(reps)
     if doc["table"]:
         columns = ["label", *best["x"], run_data["extra"]["objective_name"], "feasible",

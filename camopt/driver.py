@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from camopt.cases import build_problem
 from camopt.config import LoadedConfig
 from camopt.errors import ConfigError, SolverError
+from camopt.perf import tune_allocator
 from camopt.problem import Problem
 from camopt.solvers import Solver, get_solver
 from camopt.solvers.base import better
@@ -49,6 +50,7 @@ class RepeatRecord:
     nit: int
     wall_s: float
     message: str
+    converged_nit: int
     history: dict[str, NDArray]
     table: list[dict[str, Any]] = field(default_factory=list)
 
@@ -105,6 +107,7 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
             callback(Progress(index, repeats, solver.nit, solver.max_iterations(), best_f[-1]))
     x, bev = solver.best()
     return RepeatRecord(
+        converged_nit=converged_iteration(np.array(best_f), np.array(best_v)),
         index=index, spawn_key=tuple(child.spawn_key),
         seed=int(child.generate_state(1, np.uint64)[0] >> np.uint64(1)),
         x=x, fun=float(bev.f[0]), feasible=bool(bev.feasible[0]),
@@ -114,6 +117,21 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
                  "mean_objective": np.array(mean_f), "best_violation": np.array(best_v)},
         table=solver.table(),
     )
+
+
+CONVERGENCE_TOL = 1e-6
+
+
+def converged_iteration(best_f: NDArray, best_v: NDArray, tol: float = CONVERGENCE_TOL) -> int:
+    """First iteration (1-based) from which the best objective stays within ``tol`` of its
+    final value with the final violation."""
+    if best_f.size == 0:
+        return 0
+    with np.errstate(invalid="ignore"):  # inf - inf: equal infinities count as close
+        near = (best_f == best_f[-1]) | (np.abs(best_f - best_f[-1]) <= tol)
+    close = near & (best_v <= best_v[-1])
+    far = np.flatnonzero(~close)
+    return int(far[-1] + 2) if far.size else 1
 
 
 def best_repeat(records: list[RepeatRecord]) -> RepeatRecord:
@@ -129,6 +147,7 @@ def best_repeat(records: list[RepeatRecord]) -> RepeatRecord:
 def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None = None,
             callback: Callable[[Progress], None] | None = None) -> RunRecord:
     """Run a validated config: every repeat, then the best design's metrics and analysis."""
+    tune_allocator()
     problem, solver_cls = prepare(config)
     seed = config.run.seed if seed is None else seed
     repeats = config.run.repeats if repeats is None else repeats

@@ -14,10 +14,28 @@ def _fast_switch(config: CaseConfig) -> Problem:
     return FastSwitchProblem(config)  # type: ignore[arg-type]
 
 
+def _vcb(config: CaseConfig) -> Problem:
+    from camopt.cases.vcb import VcbProblem
+
+    return VcbProblem(config)  # type: ignore[arg-type]
+
+
+def _vcb_identify(config: CaseConfig) -> Problem:
+    from camopt.cases.vcb_identify import VcbIdentification
+
+    return VcbIdentification(config)  # type: ignore[arg-type]
+
+
 CASE_BUILDERS: dict[str, Callable[[CaseConfig], Problem]] = {
     "fast_switch": _fast_switch,
+    "vcb": _vcb,
+    "vcb_identify": _vcb_identify,
 }
-CASE_CLASSES: dict[str, str] = {"fast_switch": "camopt.cases.fast_switch:FastSwitchProblem"}
+CASE_CLASSES: dict[str, str] = {
+    "fast_switch": "camopt.cases.fast_switch:FastSwitchProblem",
+    "vcb": "camopt.cases.vcb:VcbProblem",
+    "vcb_identify": "camopt.cases.vcb_identify:VcbIdentification",
+}
 
 
 def build_problem(config: CaseConfig) -> Problem:
@@ -32,5 +50,6 @@ def case_class(kind: str) -> type[Problem]:
     module, _, name = CASE_CLASSES[kind].partition(":")
     return getattr(importlib.import_module(module), name)
 
-DEFAULT_SOLVER: dict[str, str] = {"fast_switch": "enumeration"}
+DEFAULT_SOLVER: dict[str, str] = {"fast_switch": "enumeration", "vcb": "de_gr",
+                                 "vcb_identify": "de_gr"}
 """The solver a new case file of each kind starts with (the paper's method)."""

@@ -20,6 +20,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 SECTIONS = ("case", "solver", "run")
+EXTENDS = "extends"
 _BARE_WORD = re.compile(r"^[A-Za-z_][\w.\-]*$")
 
 
@@ -128,6 +129,34 @@ def _select(
     return known[value]
 
 
+def _merge(base: dict[str, Any], child: dict[str, Any]) -> dict[str, Any]:
+    """[case] and [run] merge key by key; a child's [solver] replaces the base's whole."""
+    merged = dict(base)
+    for key, value in child.items():
+        if key in ("case", "run") and isinstance(value, dict) and isinstance(base.get(key), dict):
+            merged[key] = {**base[key], **value}
+        else:
+            merged[key] = value
+    return merged
+
+
+def _read_extended(path: Path, seen: tuple[Path, ...] = ()) -> tuple[str, dict[str, Any]]:
+    """Read a case file and, through ``extends = "other.toml"``, the files it builds on."""
+    text, data = _read(path)
+    base_name = data.pop(EXTENDS, None)
+    if base_name is None:
+        return text, data
+    if not isinstance(base_name, str):
+        raise ConfigError(str(path), EXTENDS, "must be a path string")
+    base = (path.parent / base_name).resolve()
+    if base in seen:
+        raise ConfigError(str(path), EXTENDS, f"circular: {base_name}")
+    if not base.is_file():
+        raise ConfigError(str(path), EXTENDS, f"no such file {base_name}")
+    _, base_data = _read_extended(base, (*seen, path.resolve()))
+    return text, _merge(base_data, data)
+
+
 def load_config(
     path: str | Path,
     solvers: Mapping[str, type[SolverOptions]],
@@ -136,7 +165,7 @@ def load_config(
     """Load and validate a case file; ``solvers`` maps solver names to their Options models."""
     path = Path(path)
     source = str(path)
-    text, data = _read(path)
+    text, data = _read_extended(path)
     parsed = parse_overrides(overrides)
     for key, value in parsed:
         if key.split(".")[0] not in SECTIONS:

@@ -97,6 +97,9 @@ def best_index(ev: Evaluation) -> int:
 def design_rows(problem: Problem, X: NDArray, ev: Evaluation) -> list[dict[str, Any]]:
     """One table row per candidate: variables in display units, extras, objective,
     feasibility, active and violated constraints."""
+    describe = getattr(problem, "describe", None)
+    if callable(describe):  # tables are not a hot path: take the descriptive metrics too
+        ev = describe(X)
     rows = []
     for i, x in enumerate(X):
         row: dict[str, Any] = dict(problem.to_display(x))

@@ -1,0 +1,83 @@
+"""VCB step 1: vectorised evaluation vs a per-individual loop, de_gr vs scipy's DE,
+and the wall time of the paper's full protocol (25 repeats x 300 generations)."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import differential_evolution
+
+from camopt.cases.vcb import VcbProblem
+from camopt.config import load_config
+from camopt.driver import execute
+from camopt.solvers import solvers
+
+CONFIG = Path(__file__).resolve().parents[1] / "configs" / "vcb.toml"
+
+
+def _load(*overrides: str):
+    return load_config(CONFIG, {n: c.Options for n, c in solvers().items()}, list(overrides))
+
+
+def vectorised_vs_loop(problem: VcbProblem, n_pop: int = 100) -> None:
+    rng = np.random.default_rng(0)
+    X = problem.lower + rng.random((n_pop, problem.n_var)) * (problem.upper - problem.lower)
+    t0 = time.perf_counter()
+    for _ in range(20):
+        problem.evaluate(X)
+    vec = (time.perf_counter() - t0) / 20 / n_pop
+    t0 = time.perf_counter()
+    for x in X:
+        problem.evaluate(x[None, :])
+    loop = (time.perf_counter() - t0) / n_pop
+    print(f"evaluation per individual: vectorised {vec * 1e6:.1f} us, loop {loop * 1e6:.0f} us,"
+          f" speed-up {loop / vec:.0f}x (target >= 30x)")
+
+
+def degr_vs_scipy(seeds: int = 5) -> None:
+    cfg = _load("run.repeats=1")
+    problem = VcbProblem(cfg.case)
+    opts = cfg.solver
+    ours, theirs = [], []
+    for seed in range(seeds):
+        t0 = time.perf_counter()
+        rec = execute(cfg, seed=seed)
+        ours.append((time.perf_counter() - t0, rec.best.fun))
+        t0 = time.perf_counter()
+        res = differential_evolution(
+            lambda X: problem.evaluate(X.T).f, list(zip(problem.lower, problem.upper)),
+            strategy="best1bin", mutation=opts.mutation_factor,
+            recombination=opts.crossover_rate, popsize=opts.population // problem.n_var,
+            maxiter=opts.generations - 1, tol=0, atol=0, polish=False, init="random",
+            vectorized=True, updating="deferred", rng=seed)
+        theirs.append((time.perf_counter() - t0, float(res.fun)))
+    ours_t, ours_f = np.array(ours).T
+    sc_t, sc_f = np.array(theirs).T
+    print(f"de_gr : {ours_t.mean():.2f} s/run, best objectives {np.array2string(ours_f, precision=3)}")
+    print(f"scipy : {sc_t.mean():.2f} s/run, best objectives {np.array2string(sc_f, precision=3)}")
+    print(f"wall-time ratio scipy/de_gr = {sc_t.mean() / ours_t.mean():.2f} (target >= 1)")
+
+
+def full_protocol() -> None:
+    cfg = _load()
+    t0 = time.perf_counter()
+    rec = execute(cfg)
+    wall = time.perf_counter() - t0
+    limit = 1e-6 * rec.metrics["initial_driving_work_j"]
+    hits = sum(r.feasible and r.fun <= limit for r in rec.repeats)
+    gens = [r.converged_nit for r in rec.repeats]
+    print(f"full step 1 ({len(rec.repeats)} repeats x {cfg.solver.generations} generations): "
+          f"{wall:.1f} s; {hits}/{len(rec.repeats)} reach |surplus| <= {limit:.2e} J; "
+          f"converged at generation median {int(np.median(gens))}, max {max(gens)}")
+
+
+def main() -> None:
+    vectorised_vs_loop(VcbProblem(_load().case))
+    degr_vs_scipy()
+    full_protocol()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,359 @@
+"""12 kV VCB closing mechanism: cam + closing springs (step 1), then four-bar (step 2).
+
+Kang, Huang & Yang (2023), Machines 11:150 (``shared/papers/000_*.txt``).
+
+Kinematic chain: the closing springs (fixed end G, crank Q on the cam shaft at
+l8 from O) turn the cam; the cam pushes the roller of follower BD (input link 2 of
+the four-bar B-D-L-E); output link LE carries the arm EM that lifts the insulated
+rod. Step 1 varies the follower's cubic motion (a1, a2, a3) and the spring rates;
+step 2 varies the linkage (l1, l3, l4, l5, theta1) under the step-1 cam.
+
+The paper's force arms r1..r6 (Eqs 19-24) come from figures we do not have; the
+general output force is computed by virtual work instead: Fo = T / (ds1/dtheta),
+with T the closing springs' torque on the cam. That is exactly Eq 24's arm ratio.
+Every array is (population, cam position); nothing loops over individuals.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from camopt.config.models import CamDesign, VcbConfig
+from camopt.mechanics import cam, fourbar, hertz
+from camopt.problem import Evaluation, Problem, Variable
+
+MM = 1e-3
+DEG = np.pi / 180
+
+
+@dataclass(frozen=True)
+class Loads:
+    """Load model at the rod: resisting springs, free-contact force, efficiency (SI)."""
+
+    opening_k: float
+    opening_arm: NDArray | float
+    opening_stretch_open: NDArray | float  # opening-spring stretch in the opened state
+    wipe_k: float  # all contact springs together
+    wipe_preload: NDArray | float  # contact-spring compression at touch
+    gap: float
+    free_contact: NDArray | float
+    efficiency: float
+
+    def resistant_force(self, s1: NDArray) -> NDArray:
+        """General resistant force Fr (Eq 24) at rod travel s1 (N)."""
+        opening = self.opening_arm * self.opening_k * (
+            self.opening_stretch_open + self.opening_arm * s1)
+        touched = s1 >= self.gap
+        wipe = np.where(touched, self.wipe_k * (self.wipe_preload + s1 - self.gap), 0.0)
+        return opening + wipe - np.where(touched, 0.0, self.free_contact)
+
+
+class VcbModel:
+    """Geometry and loads of the VCB mechanism in SI, vectorised over designs."""
+
+    def __init__(self, c: VcbConfig) -> None:
+        self.c = c
+        self.B = np.array(c.pivot_b_mm) * MM
+        self.G = np.array(c.pivot_g_mm) * MM
+        self.l2, self.l6 = c.l2_mm * MM, float(np.hypot(*self.B))
+        self.rb, self.rf = c.rb_mm * MM, c.rf_mm * MM
+        self.xi = float(cam.base_angle(self.l2, self.l6, self.rb + self.rf))  # Eq 10
+        self.theta_bo = float(np.arctan2(-self.B[1], -self.B[0]))  # direction B -> O
+        end = c.node_cam_deg[-1] * DEG
+        self.theta_c = np.linspace(0.0, end, c.positions + 1)  # Ns intervals (Eq 39)
+        self.dtheta = end / c.positions
+        self.spring_ext, self.spring_rate = self._closing_spring_geometry()
+        self.vendor_link = np.array([c.l1_mm * MM, c.l3_mm * MM, c.l4_mm * MM,
+                                     c.l5_mm * MM, c.theta1_deg * DEG])
+        self.vendor_a = self.node_cubic(self.vendor_link)
+
+    # ---- geometry ---------------------------------------------------------------
+    def _closing_spring_geometry(self) -> tuple[NDArray, NDArray]:
+        """Spring extension from the opened state and dL/dtheta along the stroke.
+
+        The springs act along GQ, Q on the cam shaft at l8 and angle QOX + theta,
+        theta = theta0 + theta_c (Sec 2.2 Step 8); counter-clockwise turns Q away
+        from its dead centre toward G, so the charged springs extend.
+        """
+        c = self.c
+        l8 = c.crank_l8_mm * MM
+        angle = c.preset_qox_deg * DEG + c.theta0_deg * DEG + self.theta_c
+        q = l8 * np.stack([np.cos(angle), np.sin(angle)])
+        dq = l8 * np.stack([-np.sin(angle), np.cos(angle)])
+        gq = self.G[:, None] - q
+        length = np.hypot(*gq)
+        q_open = l8 * np.array([np.cos(c.preset_qox_deg * DEG), np.sin(c.preset_qox_deg * DEG)])
+        return length - np.hypot(*(self.G - q_open)), -(gq * dq).sum(axis=0) / length
+
+    def phi0(self) -> float:
+        """Follower angle at theta_c = 0 with the node clearance (Eq 8)."""
+        rp = self.rb + self.rf + self.c.node_clearance_mm * MM
+        return float(cam.base_angle(self.l2, self.l6, rp) - self.xi)
+
+    def node_cubic(self, link: NDArray) -> NDArray:
+        """a0..a3 from the vendor data (Eqs 1-8, Step 9) in the reading that reproduces
+        the printed coefficients: node clearance 1 mm in Eqs 2 and 8, theta1 from Table 7,
+        theta_4i = 2 asin(f_i s2bar / 2 l4) (Eq 4 applied to each node's displacement),
+        the output link turning clockwise, and phi_i = |theta_2i - theta_20| (Eq 7)."""
+        c = self.c
+        l1, l3, l4, l5, th1 = link
+        s2bar = (l4 / l5) * c.s1_bar_mm * MM / c.alpha + (c.beta_mm + c.gamma_mm) * MM  # Eq 1
+        rp = self.rb + self.rf + c.node_clearance_mm * MM
+        th20 = np.arctan(self.B[1] / self.B[0]) - cam.base_angle(self.l2, self.l6, rp)  # Eq 2
+        th40 = fourbar.output_angle(l1, self.l2, l3, l4, th1, th20, 1.0)  # Eq 3
+        frac = np.asarray(c.node_fractions[1:])
+        th4i = 2 * np.arcsin(frac * s2bar / (2 * l4))  # Eq 4
+        th2i = fourbar.input_angle(l1, self.l2, l3, l4, th1, th40 - th4i, -1.0)  # Eq 5
+        phi = np.r_[self.phi0(), np.abs(th2i - th20)]  # Eqs 7-8
+        nodes = np.asarray(c.node_cam_deg) * DEG
+        return np.linalg.solve(np.vander(nodes, 4, increasing=True), phi)  # Step 9
+
+    # ---- kinematics and forces ----------------------------------------------------
+    def kinematics(self, A: NDArray, link: NDArray, rod_offset: NDArray | float
+                   ) -> dict[str, NDArray]:
+        """Follower, linkage and rod motion, (n, m) arrays; ``A`` (n, 4), ``link`` (n, 5).
+
+        The follower swing turns link 2 clockwise: theta2 = angle(BO) - (xi + phi), so
+        cos and sin of theta2 follow from those of xi + phi without more trigonometry.
+        """
+        f = cam.Follower.cubic(A, self.theta_c, self.xi)
+        if np.all(link == link[0]):  # shared linkage (step 1): scalars broadcast fastest
+            l1, l3, l4, l5, th1 = (float(v) for v in link[0])
+        else:
+            l1, l3, l4, l5, th1 = (link[:, i : i + 1] for i in range(5))
+        cb, sb = np.cos(self.theta_bo), np.sin(self.theta_bo)
+        c2, s2 = cb * f.cos_a + sb * f.sin_a, sb * f.cos_a - cb * f.sin_a
+        c4, s4, rate = fourbar.output_motion(l1, self.l2, l3, l4, np.cos(th1), np.sin(th1),
+                                             c2, s2, 1.0)  # Eq 3
+        co, so = np.cos(rod_offset), np.sin(rod_offset)
+        # arm EM at theta4 + pi + offset: it points away from L
+        y_m = -l5 * (s4 * co + c4 * so)
+        ds1 = -l5 * (c4 * co - s4 * so) * rate * (-f.dphi)
+        return {"follower": f, "phi": f.phi, "dphi": f.dphi, "cos4": c4, "sin4": s4,
+                "s1": y_m - y_m[:, :1], "ds1": ds1}
+
+    def closing_torque(self, kc: NDArray) -> NDArray:
+        """Torque of both closing springs on the cam, (n, m) N m; kc (n, 2) N/m."""
+        c = self.c
+        per_rate = np.stack([(c.kc1_precompression_mm * MM - self.spring_ext),
+                             (c.kc2_precompression_mm * MM - self.spring_ext)]) * self.spring_rate
+        return kc @ per_rate
+
+    def loads(self, rod_travel_vendor: NDArray | float, opening_arm: NDArray | float,
+              free_contact: NDArray | float) -> Loads:
+        """Resisting loads; spring preloads follow from Table 2's closed-state values on
+        the vendor design, so they are properties of the breaker, not of a design."""
+        c = self.c
+        return Loads(
+            opening_k=c.opening_k_n_per_mm * 1e3, opening_arm=opening_arm,
+            opening_stretch_open=c.opening_stretch_closed_mm * MM
+            - opening_arm * rod_travel_vendor,
+            wipe_k=c.wipe_count * c.wipe_k_n_per_mm * 1e3,
+            wipe_preload=c.wipe_compression_closed_mm * MM
+            - (rod_travel_vendor - c.contact_gap_mm * MM),
+            gap=c.contact_gap_mm * MM, free_contact=free_contact, efficiency=c.efficiency)
+
+    def balance(self, kin: dict[str, NDArray], torque: NDArray, loads: Loads
+                ) -> dict[str, NDArray]:
+        """Fo, Fr along the stroke and the works of Eqs 23-26 (J), at positions i = 1..Ns.
+
+        Fo ds is evaluated as T dtheta (virtual work), which stays finite where the
+        follower dwells and Fo itself is unbounded.
+        """
+        s1, ds1 = kin["s1"][:, 1:], kin["ds1"][:, 1:]
+        T = torque[:, 1:]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            fo = T / ds1  # Eq 24 by virtual work
+        fr = loads.resistant_force(s1)
+        driving = T.sum(axis=1) * self.dtheta
+        resistant = (fr * ds1).sum(axis=1) * self.dtheta
+        return {"fo": fo, "fr": fr, "driving": driving, "resistant": resistant,
+                "surplus": driving - resistant / loads.efficiency}  # Eq 26
+
+    def abs_sum(self, bal: dict[str, NDArray]) -> NDArray:
+        """Eq 39 as printed: sum over positions of |Fo - Fr / eps| (N)."""
+        return np.abs(bal["fo"] - bal["fr"] / self.c.efficiency).sum(axis=1)
+
+    def contact(self, f: cam.Follower, torque: NDArray) -> dict[str, NDArray]:
+        """Pitch curve, curvature, normal force and Hertz stresses."""
+        c = self.c
+        xp, yp, dxp, dyp = cam.pitch_curve(self.l2, self.l6, f)
+        rho = cam.curvature_radius(self.l2, self.l6, f, self.rf)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            # arm of the common normal about O: |r x n| for the pitch point (Eq 19 by moments)
+            arm = np.abs(xp * dxp + yp * dyp) / np.sqrt(dxp * dxp + dyp * dyp)
+            fn = np.abs(torque) / arm
+        e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * 1e9, c.poisson,
+                                        c.cam_modulus_gpa * 1e9, c.poisson)
+        _, sigma, tau = hertz.line_contact(fn, rho, self.rf, c.contact_length_mm * MM, e_eq)
+        return {"xp": xp, "yp": yp, "dxp": dxp, "dyp": dyp,
+                "curvature": rho, "normal_force": fn, "sigma": sigma, "tau": tau}
+
+
+def _max(a: NDArray) -> NDArray:
+    """Row maximum where NaN (no valid Hertz contact) counts as infinite."""
+    top = np.max(a, axis=1)  # NaN propagates through max
+    return np.where(np.isnan(top), np.inf, top)
+
+
+class VcbProblem(Problem):
+    """Step 1 (cam + springs) or step 2 (four-bar) of the VCB design; minimise Eq 39."""
+
+    def __init__(self, config: VcbConfig) -> None:
+        self.config = c = config
+        self.model = m = VcbModel(config)
+        self.rod_offset = c.rod_arm_offset_deg * DEG
+        vendor = m.kinematics(m.vendor_a[None, :], m.vendor_link[None, :], self.rod_offset)
+        self.vendor_travel = float(vendor["s1"][0, -1])
+        self.load = m.loads(self.vendor_travel, c.opening_arm_ratio, c.free_contact_force_n)
+        self.objective_name = "objective_j" if c.objective_form == "net" else "objective_n"
+        if c.step == "cam":
+            self.variables = (
+                Variable("a1", c.a1_bounds.lower, c.a1_bounds.upper),
+                Variable("a2", c.a2_bounds.lower, c.a2_bounds.upper),
+                Variable("a3", c.a3_bounds.lower, c.a3_bounds.upper),
+                Variable("kc1_n_per_mm", c.kc1_bounds_n_per_mm.lower * 1e3,
+                         c.kc1_bounds_n_per_mm.upper * 1e3, 1e-3),
+                Variable("kc2_n_per_mm", c.kc2_bounds_n_per_mm.lower * 1e3,
+                         c.kc2_bounds_n_per_mm.upper * 1e3, 1e-3),
+            )
+            self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly")
+        else:
+            if c.cam_design is None:
+                raise ValueError("case.cam_design: step 'fourbar' needs the step-1 design "
+                                 "(cam_design or cam_archive)")
+            self.cam_a, self.cam_kc = self._cam(c.cam_design)
+            self.variables = tuple(
+                Variable(name, b.lower * f, b.upper * f, 1 / f)
+                for name, b, f in (("l1_mm", c.l1_bounds_mm, MM), ("l3_mm", c.l3_bounds_mm, MM),
+                                   ("l4_mm", c.l4_bounds_mm, MM), ("l5_mm", c.l5_bounds_mm, MM),
+                                   ("theta1_deg", c.theta1_bounds_deg, DEG)))
+            self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly",
+                                     "grashof")
+        if c.stress_constraint:
+            self.constraint_names += ("shear_yield",)
+
+    def _cam(self, d: CamDesign) -> tuple[NDArray, NDArray]:
+        a0 = self.model.phi0() if d.a0 is None else d.a0
+        return np.array([a0, d.a1, d.a2, d.a3]), np.array([d.kc1_n_per_mm, d.kc2_n_per_mm]) * 1e3
+
+    def designs(self, X: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """Cubic coefficients (n, 4), spring rates (n, 2) and linkage (n, 5) of each row."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        n = len(X)
+        if self.config.step == "cam":
+            A = np.column_stack([np.full(n, self.model.phi0()), X[:, :3]])
+            return A, X[:, 3:5], np.tile(self.model.vendor_link, (n, 1))
+        return np.tile(self.cam_a, (n, 1)), np.tile(self.cam_kc, (n, 1)), X[:, :5]
+
+    def vendor_x(self) -> NDArray:
+        """The vendor's design in this step's variables (initial design of Tables 6, 7)."""
+        if self.config.step == "cam":
+            c = self.config
+            return np.r_[self.model.vendor_a[1:], c.kc1_n_per_mm * 1e3, c.kc2_n_per_mm * 1e3]
+        return self.model.vendor_link.copy()
+
+    def evaluate(self, X: NDArray) -> Evaluation:
+        """Objective and constraints, with the metrics the search needs (hot path)."""
+        return self._evaluate(X, detail=False)
+
+    def describe(self, X: NDArray) -> Evaluation:
+        """As :meth:`evaluate`, plus descriptive metrics (pressure angle, curvature,
+        normal force, output range) for tables and reports."""
+        return self._evaluate(X, detail=True)
+
+    def _evaluate(self, X: NDArray, detail: bool) -> Evaluation:
+        c, m = self.config, self.model
+        A, kc, link = self.designs(X)
+        kin = m.kinematics(A, link, self.rod_offset)
+        torque = m.closing_torque(kc)
+        bal = m.balance(kin, torque, self.load)
+        con = m.contact(kin["follower"], torque)
+        phi_max = np.max(kin["phi"], axis=1) / DEG
+        lo, hi = c.phi_max_deg
+        sigma_max = _max(con["sigma"])
+        tau_max = 0.304 * sigma_max  # Eq 31
+        g = {
+            "phi_max_low": 1 - phi_max / lo,  # Eq 40
+            "phi_max_high": phi_max / hi - 1,  # Eq 40
+            "monotonic": -np.min(kin["dphi"], axis=1),
+            "assembly": np.isnan(kin["cos4"]).mean(axis=1),
+            "grashof": -fourbar.grashof_margin(link[:, 0], m.l2, link[:, 1], link[:, 2]) / m.l2,
+            "shear_yield": tau_max / (c.shear_yield_mpa * 1e6) - 1,
+        }
+        G = np.column_stack([g[name] for name in self.constraint_names])
+        G = np.where(np.isnan(G), np.inf, G)
+        violation = np.clip(G, 0, None).sum(axis=1)
+        base = np.abs(bal["surplus"]) if c.objective_form == "net" else m.abs_sum(bal)
+        f = np.where(np.isfinite(base) & np.isfinite(violation),
+                     base + c.penalty * violation, np.inf)  # Eq 39
+        extras = {
+            "phi_max_deg": phi_max, "sigma_max_mpa": sigma_max / 1e6,
+            "tau_max_mpa": tau_max / 1e6,
+            "driving_work_j": bal["driving"], "resistant_work_j": bal["resistant"],
+            "surplus_work_j": bal["surplus"], "rod_travel_mm": kin["s1"][:, -1] / MM,
+        }
+        if detail:
+            ends = np.arctan2(kin["sin4"][:, [0, -1]], kin["cos4"][:, [0, -1]]) / DEG
+            psi = cam.pressure_angle(m.l2, m.l6, m.xi, kin["follower"])
+            extras.update({
+                "a0": A[:, 0], "a1": A[:, 1], "a2": A[:, 2], "a3": A[:, 3],
+                "pressure_angle_max_deg": np.max(np.abs(psi), axis=1) / DEG,
+                "curvature_min_mm": np.min(con["curvature"], axis=1) / MM,
+                "normal_force_max_n": _max(con["normal_force"]),
+                "force_gap_n": m.abs_sum(bal),
+                "output_start_deg": ends[:, 0], "output_end_deg": ends[:, 1],
+            })
+        return Evaluation(f=f, g=G, extras=extras)
+
+    # ---- single-design output ----------------------------------------------------
+    def _metrics_of(self, x: NDArray) -> dict[str, object]:
+        ev = self.describe(x[None, :])
+        out: dict[str, object] = {k: float(v[0]) for k, v in ev.extras.items()}
+        ends = [out.pop("output_start_deg"), out.pop("output_end_deg")]
+        out["output_range_deg"] = [min(ends), max(ends)]
+        out["feasible"] = float(ev.feasible[0])
+        return out
+
+    def metrics(self, x: NDArray) -> dict[str, object]:
+        """Headline metrics of the design and, prefixed ``initial_``, of the vendor's."""
+        out = self._metrics_of(np.asarray(x, dtype=float))
+        vendor = self._metrics_of(self.vendor_x())
+        out.update({f"initial_{k}": v for k, v in vendor.items()})
+        out["initial_objective"] = float(self.evaluate(self.vendor_x()[None, :]).f[0])
+        return out
+
+    def curves(self, x: NDArray) -> dict[str, NDArray]:
+        """Analysis curves of one design along the closing stroke (display units)."""
+        m = self.model
+        A, kc, link = self.designs(x)
+        kin = m.kinematics(A, link, self.rod_offset)
+        torque = m.closing_torque(kc)
+        bal = m.balance(kin, torque, self.load)
+        con = m.contact(kin["follower"], torque)
+        xc, yc = cam.profile(con["xp"], con["yp"], con["dxp"], con["dyp"], m.rf)
+        ds = kin["ds1"][0, 1:] * m.dtheta
+        return {
+            "cam_angle_deg": m.theta_c / DEG,
+            "pitch_x_mm": con["xp"][0] / MM, "pitch_y_mm": con["yp"][0] / MM,
+            "profile_x_mm": xc[0] / MM, "profile_y_mm": yc[0] / MM,
+            "follower_angle_deg": kin["phi"][0] / DEG,
+            "pressure_angle_deg": cam.pressure_angle(m.l2, m.l6, m.xi, kin["follower"])[0] / DEG,
+            "curvature_mm": con["curvature"][0] / MM,
+            "normal_force_n": con["normal_force"][0],
+            "sigma_max_mpa": con["sigma"][0] / 1e6, "tau_max_mpa": con["tau"][0] / 1e6,
+            "output_angle_deg": np.arctan2(kin["sin4"][0], kin["cos4"][0]) / DEG,
+            "rod_travel_mm": kin["s1"][0] / MM,
+            "fo_n": np.r_[np.nan, bal["fo"][0]], "fr_n": np.r_[np.nan, bal["fr"][0]],
+            "driving_work_j": np.r_[0.0, np.cumsum(torque[0, 1:] * m.dtheta)],
+            "resistant_work_j": np.r_[0.0, np.cumsum(bal["fr"][0] * ds)],
+        }
+
+    def analysis(self, x: NDArray) -> dict[str, NDArray]:
+        """Curves of the design and of the vendor's initial design (``initial_`` prefix)."""
+        out = self.curves(np.asarray(x, dtype=float))
+        out.update({f"initial_{k}": v for k, v in self.curves(self.vendor_x()).items()})
+        return out

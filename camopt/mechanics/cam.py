@@ -1,0 +1,96 @@
+"""Disc cam with an oscillating roller follower (Kang 2023 Eqs 6-15).
+
+Cam pivot O, follower pivot B at distance l6, follower arm l2, roller radius rf,
+base circle rb. phi is the follower swing measured from the base-circle position
+(xi, Eq 10). Everything broadcasts over (population, cam angle); the cosine and
+sine of xi + phi are computed once in :class:`Follower` and shared.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+
+def base_angle(l2: ArrayLike, l6: ArrayLike, distance: ArrayLike) -> NDArray:
+    """Angle at B between BO and BD when the roller centre is ``distance`` from O
+    (Eq 10 with distance = rb + rf; Eqs 2 and 8 with other distances)."""
+    return np.arccos((l2**2 + l6**2 - np.square(distance)) / (2 * l2 * l6))
+
+
+def cubic_motion(a: ArrayLike, theta_c: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
+    """phi, phi' and phi'' of phi = a0 + a1 t + a2 t^2 + a3 t^3 (Eqs 6, 12, 15).
+
+    ``a`` has shape (..., 4); theta_c (rad) broadcasts against a[..., :1].
+    """
+    a = np.asarray(a, dtype=float)
+    a0, a1, a2, a3 = (a[..., i : i + 1] for i in range(4))
+    t = np.asarray(theta_c, dtype=float)
+    phi = a0 + t * (a1 + t * (a2 + t * a3))
+    return phi, a1 + t * (2 * a2 + 3 * a3 * t), 2 * a2 + 6 * a3 * t
+
+
+@dataclass(frozen=True)
+class Follower:
+    """Follower motion on a cam-angle grid with cos and sin of (xi + phi)."""
+
+    theta_c: NDArray
+    phi: NDArray
+    dphi: NDArray
+    ddphi: NDArray
+    cos_a: NDArray
+    sin_a: NDArray
+
+    @classmethod
+    def cubic(cls, a: NDArray, theta_c: NDArray, xi: float) -> Follower:
+        """Cubic motion (Eq 6) for coefficient rows ``a`` (n, 4) on a 1-D grid ``theta_c``,
+        as one matrix product per derivative."""
+        t = np.ravel(theta_c)
+        one, zero = np.ones_like(t), np.zeros_like(t)
+        phi = a @ np.stack([one, t, t * t, t**3])
+        dphi = a @ np.stack([zero, one, 2 * t, 3 * t * t])
+        ddphi = a @ np.stack([zero, zero, 2 * one, 6 * t])
+        angle = phi + xi
+        return cls(t[None, :], phi, dphi, ddphi, np.cos(angle), np.sin(angle))
+
+
+def pitch_curve(l2: float, l6: float, f: Follower) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """Pitch curve (xp, yp) and its derivatives with respect to theta_c (Eqs 9, 12)."""
+    ct, st = np.cos(f.theta_c), np.sin(f.theta_c)
+    cu = ct * f.cos_a + st * f.sin_a  # u = theta_c - xi - phi
+    su = st * f.cos_a - ct * f.sin_a
+    w = l2 * (1 - f.dphi)
+    return l6 * ct - l2 * cu, l6 * st - l2 * su, -l6 * st + w * su, l6 * ct - w * cu
+
+
+def profile(xp: ArrayLike, yp: ArrayLike, dxp: ArrayLike, dyp: ArrayLike,
+            rf: ArrayLike) -> tuple[NDArray, NDArray]:
+    """Cam profile, the pitch curve offset by the roller radius (Eq 11)."""
+    norm = np.hypot(dxp, dyp)
+    return xp - rf * dyp / norm, yp + rf * dxp / norm
+
+
+def pressure_angle(l2: float, l6: float, xi: float, f: Follower) -> NDArray:
+    """Pressure angle psi = pi/2 - eta - xi - phi (Eqs 13-14), rad."""
+    oi = l6 * f.dphi / (1 - f.dphi)
+    id_ = np.sqrt(l2**2 + (oi + l6) ** 2 - 2 * l2 * (oi + l6) * f.cos_a)
+    eta = np.arcsin(np.clip(l2 * f.sin_a / id_, -1.0, 1.0))
+    return np.pi / 2 - eta - xi - f.phi
+
+
+def curvature_radius(l2: float, l6: float, f: Follower, rf: float) -> NDArray:
+    """Radius of curvature of the cam profile (Eq 15): pitch radius minus rf."""
+    w = 1 - f.dphi
+    w2 = w * w
+    cw = f.cos_a * w
+    base = l6**2 - (2 * l2 * l6) * cw + l2**2 * w2
+    den = (l6**2 - (l2 * l6) * (2 - f.dphi) * cw - (l2 * l6) * f.ddphi * f.sin_a
+           + l2**2 * w2 * w)
+    return base * np.sqrt(base) / den - rf
+
+
+def roller_distance(l2: float, l6: float, f: Follower) -> NDArray:
+    """Distance |OD| from the cam pivot to the roller centre."""
+    return np.sqrt(l2**2 + l6**2 - 2 * l2 * l6 * f.cos_a)

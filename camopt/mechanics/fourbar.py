@@ -1,0 +1,80 @@
+"""Planar four-bar linkage, position and velocity (Kang 2023 Eqs 3, 5, 43; Freudenstein).
+
+Input link 2 (length l2) pivots at the origin, the fixed link 1 (l1) points at angle
+theta1 to the output pivot, output link 4 (l4) pivots there, coupler 3 (l3) joins the
+moving ends. Loop: l2 e^{i th2} + l3 e^{i th3} = l1 e^{i th1} + l4 e^{i th4}.
+Angles in rad; arrays broadcast. An assembly that cannot close gives NaN.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+
+def output_angle(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
+                 theta1: ArrayLike, theta2: ArrayLike, branch: float = 1.0) -> NDArray:
+    """theta4 from theta2 (Eq 3); ``branch`` is the sign before the square root."""
+    A = 2 * l1 * l4 * np.cos(theta1) - 2 * l2 * l4 * np.cos(theta2)
+    B = 2 * l1 * l4 * np.sin(theta1) - 2 * l2 * l4 * np.sin(theta2)
+    C = l3**2 - l1**2 - l4**2 - l2**2 + 2 * l1 * l2 * np.cos(theta2 - theta1)
+    with np.errstate(invalid="ignore"):
+        return 2 * np.arctan((B + branch * np.sqrt(A**2 + B**2 - C**2)) / (A + C))
+
+
+def input_angle(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
+                theta1: ArrayLike, theta4: ArrayLike, branch: float = -1.0) -> NDArray:
+    """theta2 from theta4 (Eq 5); the printed branch is the minus sign."""
+    A = -2 * l1 * l2 * np.cos(theta1) - 2 * l2 * l4 * np.cos(theta4)
+    B = -2 * l1 * l2 * np.sin(theta1) - 2 * l2 * l4 * np.sin(theta4)
+    C = l3**2 - l1**2 - l4**2 - l2**2 - 2 * l1 * l4 * np.cos(theta4 - theta1)
+    with np.errstate(invalid="ignore"):
+        return 2 * np.arctan((B + branch * np.sqrt(A**2 + B**2 - C**2)) / (A + C))
+
+
+def coupler_angle(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
+                  theta1: ArrayLike, theta2: ArrayLike, theta4: ArrayLike) -> NDArray:
+    """theta3 from the closed loop."""
+    z = (l1 * np.exp(1j * np.asarray(theta1)) + l4 * np.exp(1j * np.asarray(theta4))
+         - l2 * np.exp(1j * np.asarray(theta2)))
+    return np.angle(z)
+
+
+def output_rate(l2: ArrayLike, l4: ArrayLike, theta2: ArrayLike, theta3: ArrayLike,
+                theta4: ArrayLike) -> NDArray:
+    """d theta4 / d theta2 = l2 sin(th2 - th3) / (l4 sin(th4 - th3)) (velocity loop)."""
+    return l2 * np.sin(theta2 - theta3) / (l4 * np.sin(theta4 - theta3))
+
+
+def grashof_margin(*lengths: ArrayLike) -> NDArray:
+    """(p + q) - (s + l) for four link lengths (Eq 43); > 0 means Grashof."""
+    L = np.sort(np.stack(np.broadcast_arrays(*lengths)), axis=0)
+    return (L[1] + L[2]) - (L[0] + L[3])
+
+
+def output_motion(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
+                  c1: ArrayLike, s1: ArrayLike, c2: ArrayLike, s2: ArrayLike,
+                  branch: float = 1.0) -> tuple[NDArray, NDArray, NDArray]:
+    """cos theta4, sin theta4 and d theta4 / d theta2 from the cosines and sines of
+    theta1 and theta2: Eq 3 through the half-angle t = tan(theta4 / 2), and the
+    velocity loop with the coupler vector, so the hot path needs no trigonometry."""
+    # coefficients are formed on the small operands first: each full-size operation counts
+    k24 = 2 * l2 * l4
+    A = 2 * l1 * l4 * c1 - k24 * c2
+    B = 2 * l1 * l4 * s1 - k24 * s2
+    C = (l3**2 - l1**2 - l4**2 - l2**2) + (2 * l1 * l2 * c1) * c2 + (2 * l1 * l2 * s1) * s2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        root = A * A
+        root += B * B
+        root -= C * C
+        np.sqrt(root, out=root)
+        t = B + branch * root if branch != 1.0 else B + root
+        t /= A + C
+        tt = t * t
+        den = 1 + tt
+        c4 = (1 - tt) / den
+        s4 = 2 * t / den
+        zx = (l1 * c1) + l4 * c4 - l2 * c2  # coupler vector l3 e^{i theta3}
+        zy = (l1 * s1) + l4 * s4 - l2 * s2
+        rate = (l2 / l4) * (s2 * zx - c2 * zy) / (s4 * zx - c4 * zy)
+    return c4, s4, rate
