@@ -55,7 +55,8 @@ def degr_vs_scipy(seeds: int = 5) -> None:
         theirs.append((time.perf_counter() - t0, float(res.fun)))
     ours_t, ours_f = np.array(ours).T
     sc_t, sc_f = np.array(theirs).T
-    print(f"de_gr : {ours_t.mean():.2f} s/run, best objectives {np.array2string(ours_f, precision=3)}")
+    print(f"de_gr : {ours_t.mean():.2f} s/run, best objectives "
+          f"{np.array2string(ours_f, precision=3)}")
     print(f"scipy : {sc_t.mean():.2f} s/run, best objectives {np.array2string(sc_f, precision=3)}")
     print(f"wall-time ratio scipy/de_gr = {sc_t.mean() / ours_t.mean():.2f} (target >= 1)")
 
