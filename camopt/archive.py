@@ -109,7 +109,7 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
         grp.attrs.update({"spawn_key": json.dumps(list(r.spawn_key)), "seed": r.seed,
                           "objective": r.fun, "feasible": r.feasible, "violation": r.violation,
                           "nfev": r.nfev, "nit": r.nit, "wall_s": r.wall_s, "message": r.message,
-                          "converged_nit": r.converged_nit})
+                          "converged_nit": r.converged_nit, "notes": json.dumps(r.notes)})
         grp.create_dataset("x", data=r.x)
         grp.create_dataset("g", data=r.g)
         hist = grp.create_group("history")
@@ -179,6 +179,7 @@ def load_run(path: str | Path) -> dict[str, Any]:
                             "feasible": bool(a["feasible"]), "nfev": int(a["nfev"]),
                             "wall_s": float(a["wall_s"]),
                             "converged_nit": int(a["converged_nit"]),
+                            "notes": json.loads(a["notes"]),
                             "spawn_key": json.loads(a["spawn_key"]),
                             "x": dict(zip(names, (grp["x"][()] * scale).tolist()))})
             histories.append({k: v[()] for k, v in grp["history"].items()})

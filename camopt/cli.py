@@ -188,6 +188,9 @@ def _print_show(run_data: dict[str, Any], rows: int | None = None) -> None:
     for r in doc["repeats"]:
         reps.add_row(*(_fmt(r[c]) for c in columns))
     out.print(reps)
+    for i, r in enumerate(doc["repeats"]):
+        for note in r["notes"]:
+            out.print(f"[bold]note[/] (repeat {i}): {note}")
     if doc["table"]:
         columns = ["label", *best["x"], run_data["extra"]["objective_name"], "feasible",
                    "active", "violated"]

@@ -53,6 +53,7 @@ class RepeatRecord:
     converged_nit: int
     history: dict[str, NDArray]
     table: list[dict[str, Any]] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -115,7 +116,7 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
         wall_s=time.perf_counter() - start, message=reason.value,
         history={"nfev": np.array(nfev, dtype=np.int64), "best_objective": np.array(best_f),
                  "mean_objective": np.array(mean_f), "best_violation": np.array(best_v)},
-        table=solver.table(),
+        table=solver.table(), notes=solver.notes(),
     )
 
 

@@ -25,7 +25,8 @@ def jsonable(value: Any) -> Any:
 
 def show(run: dict[str, Any]) -> dict[str, Any]:
     """The ``show --format json`` document: exactly case, solver, best, repeats, table."""
-    keys = ("seed", "objective", "feasible", "nfev", "wall_s", "converged_nit", "spawn_key")
+    keys = ("seed", "objective", "feasible", "nfev", "wall_s", "converged_nit", "spawn_key",
+            "notes")
     repeats = [{k: r[k] for k in keys}
                for r in run["repeats"]]
     doc = {"case": run["case"], "solver": run["solver"], "best": run["best"],

@@ -26,12 +26,20 @@ def _vcb_identify(config: CaseConfig) -> Problem:
     return VcbIdentification(config)  # type: ignore[arg-type]
 
 
+def _opening_spring(config: CaseConfig) -> Problem:
+    from camopt.cases.opening_spring import OpeningSpringProblem
+
+    return OpeningSpringProblem(config)  # type: ignore[arg-type]
+
+
 CASE_BUILDERS: dict[str, Callable[[CaseConfig], Problem]] = {
+    "opening_spring": _opening_spring,
     "fast_switch": _fast_switch,
     "vcb": _vcb,
     "vcb_identify": _vcb_identify,
 }
 CASE_CLASSES: dict[str, str] = {
+    "opening_spring": "camopt.cases.opening_spring:OpeningSpringProblem",
     "fast_switch": "camopt.cases.fast_switch:FastSwitchProblem",
     "vcb": "camopt.cases.vcb:VcbProblem",
     "vcb_identify": "camopt.cases.vcb_identify:VcbIdentification",
@@ -51,5 +59,6 @@ def case_class(kind: str) -> type[Problem]:
     return getattr(importlib.import_module(module), name)
 
 DEFAULT_SOLVER: dict[str, str] = {"fast_switch": "enumeration", "vcb": "de_gr",
+                                 "opening_spring": "newton_pp",
                                  "vcb_identify": "de_gr"}
 """The solver a new case file of each kind starts with (the paper's method)."""

@@ -33,6 +33,7 @@ class Solver(ABC):
     Options: ClassVar[type[SolverOptions]]
     requires: ClassVar[tuple[str, ...]] = ()
     summary: ClassVar[str] = ""
+    integers: ClassVar[bool] = True  # whether the solver handles integer variables
 
     def __init__(self, problem: Problem, options: SolverOptions, rng: np.random.Generator):
         missing = [cap for cap in self.requires if not callable(getattr(problem, cap, None))]
@@ -41,6 +42,10 @@ class Solver(ABC):
                 f"solver '{self.name}' needs a case that offers {', '.join(missing)}; "
                 f"'{type(problem).__name__}' does not"
             )
+        if not self.integers and problem.integer.any():
+            names = [v.name for v in problem.variables if v.integer]
+            raise SolverError(f"solver '{self.name}' handles continuous variables only; "
+                              f"integer: {', '.join(names)}")
         self.problem, self.options, self.rng = problem, options, rng
         self.nfev = 0
         self.nit = 0
@@ -72,6 +77,10 @@ class Solver(ABC):
 
     def table(self) -> list[dict[str, Any]]:
         """Rows of a table the solver produces for the archive (empty for most)."""
+        return []
+
+    def notes(self) -> list[str]:
+        """Plain-language findings for the run's summary (e.g. non-unique optima)."""
         return []
 
 

@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 from camopt.driver import run_repeat
-from camopt.errors import SolverError
+from camopt.errors import ConfigError, SolverError
 from camopt.solvers import get_solver, solvers
 from camopt.solvers.registry import register_solver
 from tests.conftest import SphereConfig, SphereProblem
 
 GENERIC = [name for name, cls in solvers().items() if not cls.requires and name != "evaluate"]
-BUDGET = {"de_gr": {"population": 30, "generations": 150}}
+BUDGET = {"de_gr": {"population": 30, "generations": 150}, "simplex": {"starts": 3}}
 
 
 class _Cfg:
@@ -42,6 +42,12 @@ def test_finds_sphere_optimum(name):
 
 @pytest.mark.parametrize("name", GENERIC)
 def test_respects_bounds_and_integers(name):
+    if not get_solver(name).integers:
+        with pytest.raises(ConfigError, match="continuous variables only"):
+            _run(name, integer_first=True)
+        problem, rec = _run(name)
+        assert np.all(rec.x >= problem.lower) and np.all(rec.x <= problem.upper)
+        return
     problem, rec = _run(name, integer_first=True)
     assert np.all(rec.x >= problem.lower) and np.all(rec.x <= problem.upper)
     assert rec.x[0] == np.rint(rec.x[0]) and rec.x[0] == 0.0
@@ -60,10 +66,12 @@ def test_same_seed_same_result_other_seed_other_path(name):
 @pytest.mark.parametrize("name", GENERIC)
 def test_stays_in_budget(name):
     _, rec = _run(name)
-    opts = BUDGET[name]
-    assert rec.nfev == opts["population"] * opts["generations"]
-    assert len(rec.history["best_objective"]) == opts["generations"]
-    assert np.all(np.diff(rec.history["best_objective"]) <= 0)  # elitist
+    solver = get_solver(name).Options(**BUDGET[name])
+    iterations = getattr(solver, "generations", getattr(solver, "starts", None))
+    assert rec.nit == iterations == len(rec.history["best_objective"])
+    if name == "de_gr":
+        assert rec.nfev == solver.population * solver.generations
+    assert np.all(np.diff(rec.history["best_objective"]) <= 0)  # the best never worsens
 
 
 def test_enumeration_refuses_case_without_family():

@@ -1,0 +1,266 @@
+"""40 kA VCB opening spring by the energy method — Ahn, Cho, Park & Kim.
+
+``shared/papers/001_*.txt``. The follower turns by theta about O; two symmetric
+springs (stiffness k each, free length l0) join ground point A(U, V) to link
+point B(s, t); three moving contacts ride on a lever d. The desired opening
+motion is Eq 7; the design equations are the work-energy balance Eq 5 between
+precision points; the check is the equation of motion from the same energies.
+
+Eq 8 as printed disagrees with Eq 5 (see docs/assumptions.md); the equation of
+motion here is Lagrange's equation for exactly the energies of Eq 5:
+
+    J(th) th'' + J'(th) th'^2 / 2 = -dV/dth + Q,   J = I_o + n_c m_c (d cos th)^2,
+    V = (n_s/2) k (L - l0)^2 + m_f g C_f sin(psi + th) - n_c m_c g d sin th,
+    Q = -n_c F_r d cos th  (the self-closing force resists opening).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.integrate import solve_ivp
+
+from camopt.config.models import OpeningSpringConfig
+from camopt.problem import Evaluation, Problem, Variable
+
+MM = 1e-3
+# parameter -> (config bounds field, factor from the TOML unit to SI)
+PARAMETERS = {
+    "k_n_per_mm": ("k_bounds_n_per_mm", 1e3),
+    "l0_mm": ("l0_bounds_mm", MM),
+    "u_mm": ("u_bounds_mm", MM),
+    "v_mm": ("v_bounds_mm", MM),
+    "s_mm": ("s_bounds_mm", MM),
+    "inertia_kg_m2": ("inertia_bounds_kg_m2", 1.0),
+    "self_closing_force_n": ("self_closing_bounds_n", 1.0),
+}
+
+
+@dataclass(frozen=True)
+class Motion:
+    """A simulated opening: time (s), angle, rate, and the travel event times."""
+
+    t: NDArray
+    theta: NDArray
+    rate: NDArray
+    time_9mm: float
+    time_10mm: float
+
+
+class OpeningSpringProblem(Problem):
+    """Spring design (or lumped-parameter identification) for a specified opening motion."""
+
+    def __init__(self, config: OpeningSpringConfig) -> None:
+        self.config = c = config
+        self.c3 = np.asarray(c.desired_coefficients, dtype=float)
+        self.t0, self.ts = c.t0_ms * MM, c.ts_ms * MM
+        self.theta0, self.rate0 = self.desired(self.t0)
+        theta_s = self.desired(self.ts)[0]
+        # Eq 6: the contacts travel the gap D between t0 and ts; travel = d (sin th - sin th0)
+        self.d = (c.lever_arm_mm * MM if c.lever_arm_mm is not None
+                  else c.gap_mm * MM / (np.sin(theta_s) - np.sin(self.theta0)))
+        self.points_t = np.asarray(c.precision_points_ms, dtype=float) * MM
+        self.points_theta, self.points_rate = self.desired(self.points_t)
+        self.variables = tuple(
+            Variable(name, getattr(c, PARAMETERS[name][0]).lower * PARAMETERS[name][1],
+                     getattr(c, PARAMETERS[name][0]).upper * PARAMETERS[name][1],
+                     1 / PARAMETERS[name][1]) for name in c.free)
+        self.constraint_names = ("tension", "reachable")
+        self.objective_name = ("velocity_error_sq" if c.mode == "design"
+                               else "energy_misfit_sq")
+        self.energy_scale = 0.5 * c.inertia_kg_m2 * self.rate0**2
+
+    # ---- desired motion ---------------------------------------------------------------
+    def desired(self, t: NDArray | float) -> tuple[NDArray, NDArray]:
+        """theta and theta' of Eq 7."""
+        c0, c1, c2, c3 = self.c3
+        t = np.asarray(t, dtype=float)
+        return c0 + t * (c1 + t * (c2 + t * c3)), c1 + t * (2 * c2 + 3 * c3 * t)
+
+    # ---- parameters -------------------------------------------------------------------
+    def params(self, X: NDArray) -> dict[str, NDArray]:
+        """Every parameter in SI as (n, 1) columns: the free ones from X, the rest fixed."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        c = self.config
+        out = {name: np.full((len(X), 1), getattr(c, name) * f)
+               for name, (_, f) in PARAMETERS.items()}
+        for i, name in enumerate(c.free):
+            out[name] = X[:, i : i + 1]
+        out["t_mm"] = np.full((len(X), 1), c.t_mm * MM)
+        return out
+
+    def initial_x(self) -> NDArray:
+        """The config's values of the free parameters (SI)."""
+        return np.array([getattr(self.config, n) * PARAMETERS[n][1] for n in self.config.free])
+
+    def x_of(self, values: dict[str, float]) -> NDArray:
+        """SI design of the free parameters from a {name: TOML-unit value} dict; parameters
+        not given take the config's values."""
+        return np.array([values.get(n, getattr(self.config, n)) * PARAMETERS[n][1]
+                         for n in self.config.free])
+
+    # ---- energies (Eq 5) -------------------------------------------------------------
+    def spring_length(self, p: dict[str, NDArray], theta: NDArray) -> tuple[NDArray, NDArray]:
+        """l' and dl'/dtheta of one spring (Eq 5)."""
+        s, t = p["s_mm"], p["t_mm"]
+        x = s * np.cos(theta) - t * np.sin(theta)
+        y = s * np.sin(theta) + t * np.cos(theta)
+        dx_, dy_ = p["u_mm"] - x, p["v_mm"] - y
+        length = np.sqrt(dx_ * dx_ + dy_ * dy_)
+        return length, (dx_ * y - dy_ * x) / length
+
+    def inertia(self, p: dict[str, NDArray], theta: NDArray) -> NDArray:
+        c = self.config
+        return p["inertia_kg_m2"] + c.contact_count * c.contact_mass_kg * (
+            self.d * np.cos(theta)) ** 2
+
+    def potential(self, p: dict[str, NDArray], theta: NDArray) -> NDArray:
+        """V_e + V_g (Eq 5), with the contacts falling as the breaker opens (Eq 8's sign)."""
+        c = self.config
+        length, _ = self.spring_length(p, theta)
+        elastic = 0.5 * c.spring_count * p["k_n_per_mm"] * (length - p["l0_mm"]) ** 2
+        gravity = (c.follower_mass_kg * c.gravity * c.follower_centroid_mm * MM
+                   * np.sin(np.radians(c.follower_centroid_deg) + theta)
+                   - c.contact_count * c.contact_mass_kg * c.gravity * self.d * np.sin(theta))
+        return elastic + gravity
+
+    def work_nc(self, p: dict[str, NDArray], theta: NDArray) -> NDArray:
+        """Work of the self-closing forces from theta0 (Eq 5 with Eq 8's sign)."""
+        c = self.config
+        return -c.contact_count * p["self_closing_force_n"] * self.d * (
+            np.sin(theta) - np.sin(self.theta0))
+
+    def energy_balance(self, p: dict[str, NDArray], theta: NDArray, rate: NDArray) -> NDArray:
+        """Left side of Eq 5 at (theta, rate) against the initial point; zero when satisfied."""
+        kinetic = 0.5 * self.inertia(p, theta) * rate**2
+        kinetic0 = 0.5 * self.inertia(p, self.theta0) * self.rate0**2
+        return (self.potential(p, self.theta0) - self.potential(p, theta)
+                + self.work_nc(p, theta) - (kinetic - kinetic0))  # Eq 5
+
+    def rate_from_energy(self, p: dict[str, NDArray], theta: NDArray) -> NDArray:
+        """theta' at theta that Eq 5 gives; negative when the energy cannot reach theta."""
+        kinetic0 = 0.5 * self.inertia(p, self.theta0) * self.rate0**2
+        kinetic = (kinetic0 + self.potential(p, self.theta0) - self.potential(p, theta)
+                   + self.work_nc(p, theta))
+        sq = 2 * kinetic / self.inertia(p, theta)
+        return np.sign(sq) * np.sqrt(np.abs(sq))
+
+    # ---- Problem interface ----------------------------------------------------------
+    def residuals(self, X: NDArray) -> NDArray:
+        """Eq 5 at precision points 1..P-1, divided by the initial kinetic energy (n, P-1)."""
+        p = self.params(X)
+        th, rate = self.points_theta[None, 1:], self.points_rate[None, 1:]
+        return self.energy_balance(p, th, rate) / self.energy_scale
+
+    def evaluate(self, X: NDArray) -> Evaluation:
+        c = self.config
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        p = self.params(X)
+        th = self.points_theta[None, :]
+        rate = self.rate_from_energy(p, th)
+        if c.mode == "design":
+            f = np.sum((self.points_rate[None, :] - rate) ** 2, axis=1)  # Eq 4
+            if c.regularization > 0:
+                ref = self.x_of(c.original)
+                f = f + c.regularization * np.sum(((X - ref) / ref) ** 2, axis=1)
+        else:
+            f = np.sum(self.residuals(X) ** 2, axis=1)
+        stroke = np.linspace(self.theta0, self.points_theta.max(), 25)[None, :]
+        length, _ = self.spring_length(p, stroke)
+        g = np.column_stack([
+            (p["l0_mm"][:, 0] - np.min(length, axis=1)) / p["l0_mm"][:, 0],  # stays extended
+            -np.min(rate, axis=1) / self.rate0,  # the energy reaches every point
+        ])
+        extras = {"energy_residual_rel": np.max(np.abs(self.residuals(X)), axis=1)
+                  if len(self.points_t) > 1 else np.zeros(len(X))}
+        return Evaluation(f=np.where(np.isfinite(f), f, np.inf), g=g, extras=extras)
+
+    # ---- simulation -----------------------------------------------------------------
+    def simulate(self, x: NDArray, t_max: float = 0.05) -> Motion:
+        """Integrate the equation of motion from (theta0, theta0') at t0 with solve_ivp until
+        the contacts have travelled the gap (event), recording 9 mm and 10 mm."""
+        c = self.config
+        p = {k: v[0, 0] for k, v in self.params(x[None, :]).items()}
+        n_c, m_c, d = c.contact_count, c.contact_mass_kg, self.d
+        psi = np.radians(c.follower_centroid_deg)
+
+        def rhs(_t: float, y: NDArray) -> list[float]:
+            th, w = y
+            length, dlen = self.spring_length(p, th)
+            dV = (c.spring_count * p["k_n_per_mm"] * (length - p["l0_mm"]) * dlen
+                  + c.follower_mass_kg * c.gravity * c.follower_centroid_mm * MM
+                  * np.cos(psi + th) - n_c * m_c * c.gravity * d * np.cos(th))
+            q = -n_c * p["self_closing_force_n"] * d * np.cos(th)
+            J = p["inertia_kg_m2"] + n_c * m_c * (d * np.cos(th)) ** 2
+            dJ = -2 * n_c * m_c * d * d * np.cos(th) * np.sin(th)
+            return [w, (-dV + q - 0.5 * dJ * w * w) / J]
+
+        def travel(mm: float):
+            def event(_t: float, y: NDArray) -> float:
+                return d * (np.sin(y[0]) - np.sin(self.theta0)) - mm * MM
+            event.direction = 1  # type: ignore[attr-defined]
+            return event
+
+        stop = travel(c.gap_mm)
+        stop.terminal = True  # type: ignore[attr-defined]
+        sol = solve_ivp(rhs, (self.t0, self.t0 + t_max), [self.theta0, self.rate0],
+                        method="DOP853", events=[travel(0.9 * c.gap_mm), stop],
+                        rtol=1e-10, atol=1e-12, max_step=2e-4)
+        times = [float(e[0] - self.t0) if e.size else np.nan for e in sol.t_events]
+        return Motion(sol.t, sol.y[0], sol.y[1], times[0], times[1])
+
+    def tracking(self, x: NDArray) -> dict[str, float]:
+        """Velocity error of the simulated motion against Eq 7 over the desired angles."""
+        motion = self.simulate(np.asarray(x, dtype=float))
+        t = np.linspace(self.t0, self.ts, 400)
+        th_d, rate_d = self.desired(t)
+        reached = th_d <= motion.theta.max() + 1e-9  # the stop event lands on theta_s
+        rate_sim = np.where(reached, np.interp(th_d, motion.theta, motion.rate), 0.0)
+        err = rate_sim - rate_d
+        return {
+            "rms_velocity_error_rad_s": float(np.sqrt(np.mean(err**2))),
+            "max_velocity_error_rad_s": float(np.max(np.abs(err))),
+            "travel_time_9mm_ms": motion.time_9mm / MM,
+            "travel_time_10mm_ms": motion.time_10mm / MM,
+            "avg_opening_velocity_m_s": 0.9 * self.config.gap_mm * MM / motion.time_9mm,
+        }
+
+    def design_values(self, x: NDArray) -> dict[str, float]:
+        """All spring and lumped parameters of a design, in TOML units."""
+        p = self.params(x[None, :])
+        return {name: float(p[name][0, 0] / PARAMETERS[name][1]) for name in PARAMETERS}
+
+    def metrics(self, x: NDArray) -> dict[str, object]:
+        """Tracking of the design and of the original (``original_`` prefix)."""
+        x = np.asarray(x, dtype=float)
+        ev = self.evaluate(x[None, :])
+        out: dict[str, object] = {**self.design_values(x), **self.tracking(x),
+                                  "energy_residual_rel": float(ev.extras["energy_residual_rel"][0]),
+                                  "lever_arm_mm": self.d / MM}
+        if self.config.mode == "design":
+            original = self.x_of(self.config.original)
+            out.update({f"original_{k}": v for k, v in self.tracking(original).items()})
+        return out
+
+    def describe(self, X: NDArray) -> Evaluation:
+        """Evaluation plus each design's simulated tracking (tables; one ODE per design)."""
+        ev = self.evaluate(X)
+        rows = [self.tracking(x) for x in np.atleast_2d(X)]
+        extras = dict(ev.extras)
+        for key in rows[0]:
+            extras[key] = np.array([r[key] for r in rows])
+        return Evaluation(ev.f, ev.g, extras)
+
+    def analysis(self, x: NDArray) -> dict[str, NDArray]:
+        """Desired and simulated theta(t), theta'(t) for the design and the original."""
+        t = np.linspace(self.t0, self.ts, 200)
+        th_d, rate_d = self.desired(t)
+        out = {"desired_time_ms": t / MM, "desired_theta_rad": th_d, "desired_rate_rad_s": rate_d}
+        for label, design in (("design", np.asarray(x, dtype=float)),
+                              ("original", self.x_of(self.config.original))):
+            motion = self.simulate(design)
+            out.update({f"{label}_time_ms": motion.t / MM, f"{label}_theta_rad": motion.theta,
+                        f"{label}_rate_rad_s": motion.rate})
+        return out

@@ -1,0 +1,132 @@
+"""Shared machinery of the local solvers that scipy already provides (root, Nelder-Mead).
+
+Each ask() runs one complete local solve from one start, inside scipy, and returns its
+end point; the driver then evaluates that point like any other candidate. Starts are
+the case's initial design (when it offers ``initial_x``) and uniform draws within the
+bounds from the run's generator. Distinct end points are clustered in coordinates
+normalised by the bounds.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from camopt.problem import Evaluation
+from camopt.solvers.base import Solver, StopReason, best_index
+
+
+class MultiStart(Solver):
+    """Base of solvers that run one scipy local solve per start."""
+
+    integers = False
+
+    def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
+        super().__init__(problem, options, rng)
+        self.lo, self.hi = problem.lower, problem.upper
+        self.starts = self._starts()
+        self.results: list[dict[str, Any]] = []
+        self.X: list[NDArray] = []
+        self.ev: Evaluation | None = None
+
+    def _starts(self) -> NDArray:
+        n = self.options.starts
+        first = []
+        if self.options.x0 is not None:
+            first.append(self.problem.from_display(self.options.x0))
+        elif callable(getattr(self.problem, "initial_x", None)):
+            first.append(np.asarray(self.problem.initial_x(), dtype=float))
+        rand = self.lo + self.rng.random((max(n - len(first), 0), self.problem.n_var)) * (
+            self.hi - self.lo)
+        return np.vstack([*(f[None, :] for f in first), rand])[:n]
+
+    def max_iterations(self) -> int:
+        return len(self.starts)
+
+    def normalise(self, x: NDArray) -> NDArray:
+        return (x - self.lo) / (self.hi - self.lo)
+
+    def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:  # pragma: no cover
+        raise NotImplementedError
+
+    def ask(self) -> NDArray:
+        x, info = self.local_solve(self.starts[self.nit])
+        self.results.append(info)
+        self.nfev += info.pop("nfev", 0)
+        return x[None, :]
+
+    def tell(self, X: NDArray, ev: Evaluation) -> None:
+        self.nfev += len(X)
+        self.nit += 1
+        self.X.append(X[0])
+        if self.ev is None:
+            self.ev = ev
+        else:
+            self.ev = Evaluation(np.r_[self.ev.f, ev.f], np.vstack([self.ev.g, ev.g]),
+                                 {k: np.r_[v, ev.extras[k]] for k, v in self.ev.extras.items()})
+
+    def best(self) -> tuple[NDArray, Evaluation]:
+        assert self.ev is not None
+        ok = np.array([r["success"] for r in self.results])
+        ev = self.ev
+        f = np.where(ok, ev.f, np.inf) if ok.any() else ev.f
+        i = best_index(Evaluation(f, ev.g, ev.extras))
+        return self.X[i].copy(), ev.take(i)
+
+    def stop_reason(self) -> StopReason | None:
+        return StopReason.EXHAUSTED if self.nit >= len(self.starts) else None
+
+    def reached(self) -> NDArray:
+        """Which starts count as having reached an optimum (subclasses refine)."""
+        return np.array([r["success"] for r in self.results], dtype=bool)
+
+    def clusters(self) -> NDArray:
+        """Cluster id of each end point that reached an optimum (-1 for the others)."""
+        ids = np.full(len(self.X), -1)
+        centres: list[NDArray] = []
+        ok = self.reached()
+        for i, x in enumerate(self.X):
+            if not ok[i]:
+                continue
+            u = self.normalise(x)
+            for j, centre in enumerate(centres):
+                if np.max(np.abs(u - centre)) <= self.options.distinct_tol:
+                    ids[i] = j
+                    break
+            else:
+                centres.append(u)
+                ids[i] = len(centres) - 1
+        return ids
+
+    def table(self) -> list[dict[str, Any]]:
+        assert self.ev is not None
+        ids = self.clusters()
+        rows = []
+        for i, (x, r) in enumerate(zip(self.X, self.results)):
+            row: dict[str, Any] = {"start": i, "cluster": int(ids[i])}
+            row.update({f"start_{k}": v for k, v in
+                        self.problem.to_display(self.starts[i]).items()})
+            row.update(self.problem.to_display(x))
+            row[self.problem.objective_name] = float(self.ev.f[i])
+            row["feasible"] = bool(self.ev.feasible[i])
+            row.update(r)
+            rows.append(row)
+        return rows
+
+    def distinct_summary(self, what: str, missed: str) -> str:
+        """One line: how many distinct end points the starts reached, and their spread."""
+        ids = self.clusters()
+        found = len(set(ids[ids >= 0].tolist()))
+        text = f"{found} distinct {what} from {len(self.X)} starts"
+        failed = int(np.sum(ids < 0))
+        if failed:
+            text += f" ({failed} {missed})"
+        if found > 1:
+            ends = np.array([x for x, i in zip(self.X, ids) if i >= 0])
+            spread = ", ".join(
+                f"{v.name} {lo * v.scale:.4g}..{hi * v.scale:.4g}"
+                for v, lo, hi in zip(self.problem.variables, ends.min(0), ends.max(0)))
+            text += f": not unique ({spread})"
+        return text

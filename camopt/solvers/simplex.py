@@ -1,0 +1,70 @@
+"""``simplex``: the modified simplex method, i.e. scipy's Nelder-Mead with bounds
+(adaptive parameters), as a generic local optimiser from one or several starts."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import Field
+from scipy.optimize import minimize
+
+from camopt.config.models import SolverOptions
+from camopt.solvers.multistart import MultiStart
+from camopt.solvers.registry import register_solver
+
+
+class SimplexOptions(SolverOptions):
+    """Options of ``simplex``."""
+
+    name: Literal["simplex"] = "simplex"
+    starts: int = Field(1, ge=1, description="starts: the case's design (or x0), then random")
+    x0: dict[str, float] | None = Field(None, description="first start (display units)")
+    maxiter: int = Field(4000, ge=1, description="iterations per start")
+    xatol: float = Field(1e-9, gt=0, description="normalised step tolerance")
+    fatol: float = Field(1e-14, gt=0, description="objective tolerance")
+    adaptive: bool = Field(True, description="dimension-adapted Nelder-Mead parameters")
+    initial_step: float = Field(0.1, gt=0, le=0.5, description="simplex edge, normalised")
+    penalty: float = Field(1e6, ge=0, description="weight of the constraint violation")
+    distinct_tol: float = Field(1e-3, gt=0, description="optima closer (normalised) are one")
+    optimum_tol: float = Field(
+        1e-6, ge=0, description="end points within this of the best objective reached it")
+
+
+@register_solver
+class Simplex(MultiStart):
+    """Nelder-Mead (scipy) on the objective plus a violation penalty, in bounds-normalised
+    coordinates; reports how many distinct optima the starts reach."""
+
+    name = "simplex"
+    Options = SimplexOptions
+    summary = "modified simplex: scipy Nelder-Mead with bounds, multi-start (generic)"
+
+    def _objective(self, u: NDArray) -> float:
+        ev = self.problem.evaluate((self.lo + u * (self.hi - self.lo))[None, :])
+        return float(ev.f[0] + self.options.penalty * ev.violation[0])
+
+    def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:
+        o = self.options
+        u0 = np.clip(self.normalise(x0), 0.0, 1.0)
+        # scipy's default simplex is 5 % of each coordinate: degenerate near a bound
+        step = np.where(u0 + o.initial_step <= 1.0, o.initial_step, -o.initial_step)
+        simplex = np.vstack([u0, u0 + np.diag(step)])
+        res = minimize(self._objective, u0, method="Nelder-Mead",
+                       bounds=[(0.0, 1.0)] * self.problem.n_var,
+                       options={"maxiter": o.maxiter, "xatol": o.xatol, "fatol": o.fatol,
+                                "adaptive": o.adaptive, "initial_simplex": simplex})
+        x = self.lo + res.x * (self.hi - self.lo)
+        return x, {"success": bool(res.success), "message": str(res.message),
+                   "nfev": int(res.nfev)}
+
+    def reached(self) -> NDArray:
+        """Starts whose end point is feasible and within optimum_tol of the best objective
+        (Nelder-Mead's own flag only says whether its tolerances were met in maxiter)."""
+        assert self.ev is not None
+        best = np.min(np.where(self.ev.feasible, self.ev.f, np.inf))
+        return self.ev.feasible & (self.ev.f <= best + self.options.optimum_tol)
+
+    def notes(self) -> list[str]:
+        return [self.distinct_summary("optima", "starts ended above the best objective")]
