@@ -32,13 +32,21 @@ def _opening_spring(config: CaseConfig) -> Problem:
     return OpeningSpringProblem(config)  # type: ignore[arg-type]
 
 
+def _emb_cam(config: CaseConfig) -> Problem:
+    from camopt.cases.emb_cam import EmbCamProblem
+
+    return EmbCamProblem(config)  # type: ignore[arg-type]
+
+
 CASE_BUILDERS: dict[str, Callable[[CaseConfig], Problem]] = {
+    "emb_cam": _emb_cam,
     "opening_spring": _opening_spring,
     "fast_switch": _fast_switch,
     "vcb": _vcb,
     "vcb_identify": _vcb_identify,
 }
 CASE_CLASSES: dict[str, str] = {
+    "emb_cam": "camopt.cases.emb_cam:EmbCamProblem",
     "opening_spring": "camopt.cases.opening_spring:OpeningSpringProblem",
     "fast_switch": "camopt.cases.fast_switch:FastSwitchProblem",
     "vcb": "camopt.cases.vcb:VcbProblem",
@@ -60,5 +68,6 @@ def case_class(kind: str) -> type[Problem]:
 
 DEFAULT_SOLVER: dict[str, str] = {"fast_switch": "enumeration", "vcb": "de_gr",
                                  "opening_spring": "newton_pp",
+                                 "emb_cam": "pso",
                                  "vcb_identify": "de_gr"}
 """The solver a new case file of each kind starts with (the paper's method)."""

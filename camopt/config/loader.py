@@ -167,6 +167,9 @@ def load_config(
     source = str(path)
     text, data = _read_extended(path)
     parsed = parse_overrides(overrides)
+    new_solver = dict(parsed).get("solver.name")
+    if new_solver is not None and data.get("solver", {}).get("name") != new_solver:
+        data["solver"] = {}  # another solver: the file's options belong to the old one
     for key, value in parsed:
         if key.split(".")[0] not in SECTIONS:
             expected = ", ".join(SECTIONS)

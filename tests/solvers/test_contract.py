@@ -12,7 +12,8 @@ from camopt.solvers.registry import register_solver
 from tests.conftest import SphereConfig, SphereProblem
 
 GENERIC = [name for name, cls in solvers().items() if not cls.requires and name != "evaluate"]
-BUDGET = {"de_gr": {"population": 30, "generations": 150}, "simplex": {"starts": 3}}
+BUDGET = {"de_gr": {"population": 30, "generations": 150}, "simplex": {"starts": 3},
+          "pso": {"particles": 30, "iterations": 200}}
 
 
 class _Cfg:
@@ -67,7 +68,8 @@ def test_same_seed_same_result_other_seed_other_path(name):
 def test_stays_in_budget(name):
     _, rec = _run(name)
     solver = get_solver(name).Options(**BUDGET[name])
-    iterations = getattr(solver, "generations", getattr(solver, "starts", None))
+    iterations = next(getattr(solver, k) for k in ("generations", "iterations", "starts")
+                      if hasattr(solver, k))
     assert rec.nit == iterations == len(rec.history["best_objective"])
     if name == "de_gr":
         assert rec.nfev == solver.population * solver.generations

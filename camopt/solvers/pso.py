@@ -1,0 +1,119 @@
+"""``pso``: particle swarm optimisation with linearly decreasing inertia (Yan et al. 2023,
+Eqs 38-41), personal and global bests, velocity limits and bound handling.
+
+Generic. When the case offers ``repair(X, rng, probability)`` and ``repair = true``,
+the swarm is corrected after each move with probabilities that decay linearly from
+the first to the last iteration (the paper's "improved PSO", Sec 3.3.4);
+``repair = false`` gives plain PSO. Written here because scipy has no PSO.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import Field
+
+from camopt.config.models import SolverOptions
+from camopt.problem import Evaluation
+from camopt.solvers.base import Solver, StopReason, best_index, better, snap
+from camopt.solvers.registry import register_solver
+
+
+class PSOOptions(SolverOptions):
+    """Options of ``pso``."""
+
+    name: Literal["pso"] = "pso"
+    particles: int = Field(60, ge=2, description="swarm size")
+    iterations: int = Field(300, ge=1, description="iterations (i_max of Eq 40)")
+    c1: float = Field(1.5, ge=0, description="cognitive learning factor (Eq 38)")
+    c2: float = Field(1.5, ge=0, description="social learning factor (Eq 38)")
+    w_max: float = Field(0.9, ge=0, description="initial inertia (Eq 40)")
+    w_min: float = Field(0.4, ge=0, description="final inertia (Eq 40)")
+    v_max: float = Field(0.2, gt=0, le=1, description="velocity limit, fraction of the range")
+    repair: bool = Field(True, description="apply the case's corrections (improved PSO)")
+    repair_probability: dict[str, tuple[float, float]] | None = Field(
+        None, description="per correction: trigger probability at the first and last "
+        "iteration; None takes the case's defaults")
+
+
+@register_solver
+class PSO(Solver):
+    """Particle swarm with optional case repair; ranks particles by Deb's rules."""
+
+    name = "pso"
+    Options = PSOOptions
+    summary = "particle swarm, decreasing inertia, optional case corrections (generic)"
+
+    def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
+        super().__init__(problem, options, rng)
+        self.lo, self.hi = problem.lower, problem.upper
+        self.vmax = options.v_max * (self.hi - self.lo)
+        self.repairing = options.repair and callable(getattr(problem, "repair", None))
+        defaults = getattr(problem, "repair_defaults", {})
+        self.schedule = {k: tuple(v) for k, v in
+                         (options.repair_probability or defaults).items()}
+        self.X: NDArray | None = None
+        self.V: NDArray | None = None
+        self.P: NDArray | None = None
+        self.pev: Evaluation | None = None
+        self.cur_f: NDArray | None = None
+
+    def max_iterations(self) -> int:
+        return self.options.iterations
+
+    def probabilities(self) -> dict[str, float]:
+        """Correction probabilities at the current iteration (linear decay)."""
+        frac = self.nit / max(self.options.iterations - 1, 1)
+        return {k: a + (b - a) * frac for k, (a, b) in self.schedule.items()}
+
+    def _repair(self, X: NDArray) -> NDArray:
+        if not self.repairing:
+            return X
+        return snap(self.problem, self.problem.repair(X, self.rng, self.probabilities()))
+
+    def ask(self) -> NDArray:
+        o, n, d = self.options, self.options.particles, self.problem.n_var
+        if self.X is None:
+            X = self.lo + self.rng.random((n, d)) * (self.hi - self.lo)
+            self.V = (self.rng.random((n, d)) * 2 - 1) * self.vmax
+            return self._repair(snap(self.problem, X))
+        assert self.P is not None and self.V is not None and self.pev is not None
+        w = o.w_max - self.nit / o.iterations * (o.w_max - o.w_min)  # Eq 40
+        g = self.P[best_index(self.pev)]
+        r1, r2 = self.rng.random((n, d)), self.rng.random((n, d))
+        desired = o.c1 * r1 * (self.P - self.X) + o.c2 * r2 * (g - self.X)  # Eq 38
+        V = np.clip(w * self.V + desired, -self.vmax, self.vmax)  # Eq 39, speed limit
+        X = self.X + V  # Eq 41
+        out = (X < self.lo) | (X > self.hi)
+        V[out] = 0.0  # absorbing walls
+        self.V = V
+        return self._repair(snap(self.problem, X))
+
+    def tell(self, X: NDArray, ev: Evaluation) -> None:
+        self.nfev += len(X)
+        self.nit += 1
+        if self.X is not None:
+            self.V = np.where(np.isfinite(X - self.X), self.V, 0.0)
+        self.X, self.cur_f = X.copy(), ev.f
+        if self.P is None or self.pev is None:
+            self.P, self.pev = X.copy(), ev
+            return
+        win = better(ev.f, ev.violation, self.pev.f, self.pev.violation)
+        self.P = np.where(win[:, None], X, self.P)
+        self.pev = Evaluation(
+            f=np.where(win, ev.f, self.pev.f), g=np.where(win[:, None], ev.g, self.pev.g),
+            extras={k: np.where(win, ev.extras[k], v) for k, v in self.pev.extras.items()})
+
+    def best(self) -> tuple[NDArray, Evaluation]:
+        assert self.P is not None and self.pev is not None
+        i = best_index(self.pev)
+        return self.P[i].copy(), self.pev.take(i)
+
+    def population_objectives(self) -> NDArray:
+        assert self.cur_f is not None
+        return self.cur_f
+
+    def stop_reason(self) -> StopReason | None:
+        return StopReason.BUDGET if self.nit >= self.options.iterations else None
