@@ -52,7 +52,7 @@ def check_writable(path: Path, force: bool) -> None:
     os.unlink(probe)
 
 
-def _versions() -> dict[str, str]:
+def versions() -> dict[str, str]:
     import scipy
 
     return {"camopt_version": camopt.__version__, "python_version": platform.python_version(),
@@ -60,7 +60,8 @@ def _versions() -> dict[str, str]:
             "h5py_version": h5py.__version__}
 
 
-def _write_columns(group: h5py.Group, rows: list[dict[str, Any]]) -> None:
+def write_table(group: h5py.Group, rows: list[dict[str, Any]]) -> None:
+    """A list of row dicts as one dataset per column (lists and strings as JSON text)."""
     columns: list[str] = []
     for row in rows:
         columns += [k for k in row if k not in columns]
@@ -77,7 +78,8 @@ def _write_columns(group: h5py.Group, rows: list[dict[str, Any]]) -> None:
             group[col].attrs["json"] = True
 
 
-def _read_columns(group: h5py.Group) -> list[dict[str, Any]]:
+def read_table(group: h5py.Group) -> list[dict[str, Any]]:
+    """Rows written by :func:`write_table`."""
     columns = json.loads(group.attrs["columns"])
     data = {}
     for col in columns:
@@ -93,7 +95,7 @@ def _read_columns(group: h5py.Group) -> list[dict[str, Any]]:
 def _write(f: h5py.File, rec: RunRecord) -> None:
     cfg, problem = rec.config, rec.problem
     attrs = {
-        **_versions(), "schema_version": SCHEMA_VERSION, "config_toml": cfg.text,
+        **versions(), "schema_version": SCHEMA_VERSION, "config_toml": cfg.text,
         "config_path": cfg.path, "overrides": json.dumps(list(cfg.overrides)),
         "config_effective": json.dumps(cfg.effective()), "case_kind": cfg.case.kind,
         "solver": cfg.solver.name, "run_name": cfg.run.name, "seed_entropy": str(rec.seed),
@@ -126,27 +128,33 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
     analysis = f.create_group("analysis")
     for key, value in rec.analysis.items():
         analysis.create_dataset(key, data=np.asarray(value))
-    _write_columns(f.create_group("table"), rec.best.table)
+    write_table(f.create_group("table"), rec.best.table)
     summary = [{"repeat": r.index, "seed": r.seed, "objective": r.fun, "feasible": r.feasible,
                 "nfev": r.nfev, "converged_nit": r.converged_nit, "wall_s": r.wall_s}
                for r in rec.repeats]
-    _write_columns(f.create_group("summary"), summary)
+    write_table(f.create_group("summary"), summary)
+
+
+def atomic_write(path: Path, write: Any) -> Path:
+    """Call ``write(h5py.File)`` on a temporary file beside ``path``, then rename it into
+    place: readers see the old complete file or the new one, never a partial one."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        with h5py.File(tmp, "w") as f:
+            write(f)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
 
 
 def write_run(rec: RunRecord, path: str | Path, force: bool = False) -> Path:
     """Write ``rec`` to a temporary file beside ``path`` and rename it when complete."""
     path = Path(path)
     check_writable(path, force)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        with h5py.File(tmp, "w") as f:
-            _write(f, rec)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return atomic_write(path, lambda f: _write(f, rec))
 
 
 def open_run(path: str | Path) -> h5py.File:
@@ -164,9 +172,17 @@ def open_run(path: str | Path) -> h5py.File:
     return f
 
 
+def archive_kind(path: str | Path) -> str:
+    """'run' or 'sweep'."""
+    with open_run(path) as f:
+        return str(f.attrs.get("archive_kind", "run"))
+
+
 def load_run(path: str | Path) -> dict[str, Any]:
     """An archive as plain data: the ``show --format json`` structure plus ``extra``."""
     with open_run(path) as f:
+        if f.attrs.get("archive_kind", "run") != "run":
+            raise ArchiveError(f"{path}: file: a sweep archive, not a run archive")
         names = json.loads(f.attrs["variables"])
         scale = np.asarray(f.attrs["variable_scale"])
         best = f["best"]
@@ -194,7 +210,7 @@ def load_run(path: str | Path) -> dict[str, Any]:
                 "metrics": {k: _plain(v) for k, v in best["metrics"].attrs.items()},
             },
             "repeats": repeats,
-            "table": _read_columns(f["table"]),
+            "table": read_table(f["table"]),
             "extra": {
                 "path": str(path), "run": config["run"],
                 "objective_name": str(f.attrs["objective_name"]),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -16,6 +17,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from camopt import archive, report
+from camopt import sweep as sweep_mod
 from camopt.cases import DEFAULT_SOLVER, case_class
 from camopt.config import CASE_CONFIGS, load_config, template
 from camopt.driver import execute, prepare
@@ -214,13 +216,23 @@ def _print_rows(title: str, rows: list[dict[str, Any]], columns: list[str],
 
 
 @app.command()
-def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...", help="run archives")],
+def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
+                                                       help="run archives, or one sweep")],
             fmt: Format = "table") -> None:
-    """Compare runs: config differences, best designs and repeat statistics side by side."""
+    """Compare runs (config differences, designs, statistics, a significance test for two)
+    or rank the grid points of a sweep."""
     with _errors():
         _check_format(fmt)
+        if len(runs) == 1 and archive.archive_kind(runs[0]) == "sweep":
+            spec, results = sweep_mod.load_sweep(runs[0])
+            doc = report.rank_sweep(spec, results)
+            if fmt == "json":
+                sys.stdout.write(json.dumps(doc, indent=2) + "\n")
+            else:
+                _print_ranking(doc)
+            return
         if len(runs) < 2:
-            raise CamoptError("compare: RUN: give at least two run archives")
+            raise CamoptError("compare: RUN: give at least two run archives, or one sweep")
         doc = report.compare([archive.load_run(p) for p in runs])
     if fmt == "json":
         sys.stdout.write(json.dumps(doc, indent=2) + "\n")
@@ -240,6 +252,126 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...", help="r
     for stat in ("repeats", "best", "median", "worst", "feasible_fraction"):
         table.add_row(f"repeats: {stat}", *(_fmt(s[stat]) for s in doc["statistics"]))
     out.print(table)
+    for test in doc["tests"]:
+        out.print(f"A = {names[0]}, B = {names[1]}: Mann-Whitney p = {test['p_value']:.3g}, "
+                  f"P(A better) = {test['p_a_better']:.2f}; success A "
+                  f"{_rate(test['success_a'])}, B {_rate(test['success_b'])}")
+        out.print(f"[bold]{test['verdict']}[/]")
+
+
+def _rate(s: dict[str, float]) -> str:
+    return f"{s['rate']:.0%} [{s['ci_low']:.0%}, {s['ci_high']:.0%}]"
+
+
+def _print_ranking(doc: dict[str, Any]) -> None:
+    table = Table(title=f"sweep {doc['sweep']}: grid points ranked")
+    for col in ("rank", "point", "runs", "success", "best", "median", "worst",
+                "nfev to target", "vs best"):
+        table.add_column(col, justify="right" if col != "point" else "left")
+    for r in doc["ranking"]:
+        vs = r.get("vs_best")
+        table.add_row(str(r["rank"]), r["label"], str(r["runs"]),
+                      _fmt(r["success_rate"]), _fmt(r["best"]), _fmt(r["median"]),
+                      _fmt(r["worst"]), _fmt(r["median_nfev_to_target"]),
+                      f"p = {vs['p_value']:.3g}" if vs else "-")
+    out.print(table)
+    for r in doc["ranking"]:
+        if r.get("vs_best"):
+            out.print(r["vs_best"]["verdict"])
+
+
+@app.command()
+def sweep(
+    case: Annotated[Path | None, typer.Argument(help="case file (TOML)")] = None,
+    seeds: Annotated[str, typer.Option(help="seed indices START:STOP")] = "0:5",
+    grid: Annotated[list[str] | None, typer.Option(
+        "--grid", help="key=v1,v2,... (repeatable; Cartesian product)")] = None,
+    jobs: Annotated[int | None, typer.Option(min=1, help="local workers (default: cores)")]
+    = None,
+    out_path: Annotated[Path | None, typer.Option("--out", help="sweep archive path")] = None,
+    resume: Annotated[Path | None, typer.Option(help="finish an interrupted sweep")] = None,
+    executor: Annotated[str, typer.Option(help="local or dask")] = "local",
+    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address")] = None,
+    set_: Annotated[list[str] | None, typer.Option("--set", help="section.key=value")] = None,
+    check: Annotated[bool, typer.Option(help="exit 1 below run.min_success_rate")] = False,
+    force: Annotated[bool, typer.Option(help="overwrite an existing --out")] = False,
+    quiet: Annotated[bool, typer.Option(help="no progress bar")] = False,
+) -> None:
+    """Run every grid point x seed; one sweep archive with a summary per grid point."""
+    with _errors():
+        if executor not in ("local", "dask"):
+            raise CamoptError(f"--executor: {executor!r}: expected local or dask")
+        spec, results, path = _sweep_setup(case, seeds, grid or [], set_ or [], out_path,
+                                           resume, force)
+        try:
+            with _cell_progress(quiet) as progress:
+                sweep_mod.run_sweep(spec, path, results, jobs=jobs or os.cpu_count() or 1,
+                                    executor=executor, scheduler=scheduler,
+                                    progress=progress)
+        except sweep_mod.SweepInterrupted as exc:
+            print(f"interrupted: {exc}; finish with: camopt sweep --resume {path}",
+                  file=sys.stderr)
+            raise typer.Exit(130) from None
+    rows = sweep_mod.summary(spec, results.values())
+    if not quiet:
+        _print_rows(f"sweep {path}", rows, list(rows[0]), None)
+    else:
+        out.print(str(path))
+    if check:
+        _check_success(spec, rows)
+
+
+def _sweep_setup(case: Path | None, seeds: str, grid: list[str], overrides: list[str],
+                 out_path: Path | None, resume: Path | None, force: bool) -> Any:
+    if resume is not None:
+        spec, results = sweep_mod.load_sweep(resume)
+        if case is not None:
+            fresh = sweep_mod.SweepSpec(_load(case, overrides).effective(), str(case), "",
+                                        sweep_mod.parse_grid(grid), sweep_mod.parse_seeds(seeds))
+            if fresh.to_json() != spec.to_json():
+                raise CamoptError(f"{resume}: --resume: the case, grid or seeds differ from "
+                                  "the sweep in the archive")
+        return spec, results, resume
+    if case is None:
+        raise CamoptError("sweep: CASE: give a case file (or --resume ARCHIVE)")
+    config = _load(case, overrides)
+    spec = sweep_mod.SweepSpec(config.effective(), str(case), config.text,
+                               sweep_mod.parse_grid(grid), sweep_mod.parse_seeds(seeds))
+    try:
+        spec.validate()
+    except ValidationError as exc:
+        raise CamoptError(f"{case}: --grid: {str(exc).splitlines()[0]}") from None
+    path = out_path or archive.default_path(f"{config.run.name}-sweep")
+    if out_path is None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    archive.check_writable(path, force)
+    return spec, {}, path
+
+
+def _check_success(spec: Any, rows: list[dict[str, Any]]) -> None:
+    floor = spec.data["run"].get("min_success_rate")
+    if floor is None:
+        print("error: --check: run.min_success_rate is not set in the case file",
+              file=sys.stderr)
+        raise typer.Exit(2)
+    failing = [r for r in rows if not r["success_rate"] >= floor]
+    for r in failing:
+        print(f"check failed: grid point {r['point']} success rate {r['success_rate']:.0%} "
+              f"< {floor:.0%}", file=sys.stderr)
+    if failing:
+        raise typer.Exit(1)
+    out.print(f"check passed: every grid point succeeds in >= {floor:.0%} of runs")
+
+
+@contextlib.contextmanager
+def _cell_progress(quiet: bool) -> Iterator[Any]:
+    if quiet or not err.is_terminal:
+        yield None
+        return
+    with Progress(TextColumn("cells"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=err, transient=True) as bar:
+        task = bar.add_task("cells", total=None)
+        yield lambda done, total: bar.update(task, completed=done, total=total)
 
 
 def main() -> None:

@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from camopt import stats
+
 SHOW_KEYS = ("case", "solver", "best", "repeats", "table")
 
 
@@ -50,8 +52,28 @@ def repeat_statistics(run: dict[str, Any]) -> dict[str, Any]:
             "worst": float(np.max(f)), "feasible_fraction": float(feasible.mean())}
 
 
+def _finals(run: dict[str, Any]) -> tuple[np.ndarray, int]:
+    """Final objectives (infeasible as +inf) and the number of successes against
+    ``run.target`` (feasible, and at or below the target when one is set)."""
+    target = run["extra"]["run"].get("target")
+    f = np.array([r["objective"] if r["feasible"] else np.inf for r in run["repeats"]])
+    ok = np.isfinite(f) & (f <= target if target is not None else True)
+    return f, int(np.sum(ok))
+
+
+def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarray,
+                 k_b: int) -> dict[str, Any]:
+    """Mann-Whitney test, effect size, success rates with CIs and the verdict line."""
+    test = stats.compare_objectives(a, b)
+    return {"a": name_a, "b": name_b, **test,
+            "success_a": stats.success_rate(k_a, len(a)),
+            "success_b": stats.success_rate(k_b, len(b)),
+            "verdict": stats.verdict(name_a, name_b, test)}
+
+
 def compare(runs: list[dict[str, Any]]) -> dict[str, Any]:
-    """Config differences, best objectives, variables, metrics and repeat statistics."""
+    """Config differences, best objectives, variables, metrics and repeat statistics;
+    for two runs with repeats, a significance test of their final objectives."""
     flat = []
     for run in runs:
         cfg: dict[str, Any] = {}
@@ -76,4 +98,43 @@ def compare(runs: list[dict[str, Any]]) -> dict[str, Any]:
         "x": side_by_side("x"),
         "metrics": side_by_side("metrics"),
         "statistics": [repeat_statistics(run) for run in runs],
+        "tests": _pairwise(runs),
     })
+
+
+def _pairwise(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    if len(runs) != 2 or min(len(r["repeats"]) for r in runs) < 2:
+        return []
+    (fa, ka), (fb, kb) = _finals(runs[0]), _finals(runs[1])
+    return [significance("A", fa, ka, "B", fb, kb)]
+
+
+def rank_sweep(spec: Any, results: dict) -> dict[str, Any]:
+    """Grid points ranked by success rate, then median objective; each tested against
+    the best point."""
+    from camopt.sweep import summary
+
+    rows = summary(spec, results.values())
+    order = sorted(rows, key=lambda r: (-r["success_rate"], r["median"]))
+    finals = {}
+    for r in results.values():
+        finals.setdefault(r.point, []).append(r.objective if r.feasible else np.inf)
+    best = order[0]
+    ranking = []
+    for rank, row in enumerate(order, 1):
+        label = _point_label(spec, row["point"])
+        entry = {"rank": rank, "label": label, **row}
+        if row is not best:
+            b = np.array(finals.get(best["point"], []))
+            a = np.array(finals.get(row["point"], []))
+            entry["vs_best"] = significance(label, a, row["successes"],
+                                            _point_label(spec, best["point"]), b,
+                                            best["successes"])
+        ranking.append(entry)
+    return jsonable({"sweep": spec.source, "grid": spec.grid, "seeds": list(spec.seeds),
+                     "ranking": ranking})
+
+
+def _point_label(spec: Any, index: int) -> str:
+    point = spec.points()[index]
+    return ", ".join(f"{k}={v}" for k, v in point.items()) or "base"

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from camopt.config.loader import LoadedConfig, load_config, parse_overrides
+from camopt.config.loader import LoadedConfig, load_config, parse_overrides, validate_data
 from camopt.config.models import CASE_CONFIGS, CaseConfig, RunSection, SolverOptions, template
 
 __all__ = [
@@ -14,4 +14,5 @@ __all__ = [
     "load_config",
     "parse_overrides",
     "template",
+    "validate_data",
 ]

@@ -64,7 +64,8 @@ def parse_overrides(items: Sequence[str]) -> list[tuple[str, Any]]:
     return parsed
 
 
-def _apply(data: dict[str, Any], key: str, value: Any) -> None:
+def apply_override(data: dict[str, Any], key: str, value: Any) -> None:
+    """Set ``section.key`` in parsed case-file data."""
     parts = key.split(".")
     node = data
     for part in parts[:-1]:
@@ -174,8 +175,21 @@ def load_config(
         if key.split(".")[0] not in SECTIONS:
             expected = ", ".join(SECTIONS)
             raise ConfigError("--set", key, f"unknown section; expected one of {expected}")
-        _apply(data, key, value)
-    overridden = {key for key, _ in parsed}
+        apply_override(data, key, value)
+    return validate_data(data, solvers, source, text, tuple(overrides),
+                         {key for key, _ in parsed})
+
+
+def validate_data(
+    data: dict[str, Any],
+    solvers: Mapping[str, type[SolverOptions]],
+    source: str = "<data>",
+    text: str = "",
+    overrides: tuple[str, ...] = (),
+    overridden: set[str] | None = None,
+) -> LoadedConfig:
+    """Validate already-parsed case-file data (a sweep cell's config, for instance)."""
+    overridden = overridden or set()
     for key in data:
         if key not in SECTIONS:
             raise ConfigError(source, key, f"unknown key; expected {', '.join(SECTIONS)}")
@@ -187,7 +201,7 @@ def load_config(
     return LoadedConfig(
         path=source,
         text=text,
-        overrides=tuple(overrides),
+        overrides=overrides,
         case=_validate(case_model, data["case"], "case", source, overridden),
         solver=_validate(solver_model, data["solver"], "solver", source, overridden),
         run=_validate(RunSection, data.get("run", {}), "run", source, overridden),

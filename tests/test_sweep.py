@@ -1,0 +1,176 @@
+"""Sweeps: jobs-independence, interruption and resume, executors, statistics, CI gate."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from camopt import sweep as sweep_mod
+from camopt.cli import app
+from tests.conftest import CONFIGS
+
+runner = CliRunner()
+VCB = str(CONFIGS / "vcb.toml")
+SMALL = ["--set", "solver.generations=25", "--set", "run.repeats=1"]
+VOLATILE = {"wall_s", "wall_s_median"}
+
+
+def sweep(tmp_path, name, *args):
+    out = tmp_path / name
+    r = runner.invoke(app, ["sweep", VCB, "--out", str(out), "--quiet", *SMALL, *args])
+    assert r.exit_code == 0, r.output
+    return out
+
+
+def stable_summary(path):
+    spec, results = sweep_mod.load_sweep(path)
+    rows = sweep_mod.summary(spec, results.values())
+    # as JSON text: NaN (no run reached the target) compares equal to itself
+    return json.dumps([{k: v for k, v in row.items() if k not in VOLATILE} for row in rows],
+                      sort_keys=True)
+
+
+def cells(path):
+    _, results = sweep_mod.load_sweep(path)
+    return {k: {f: v for f, v in vars(r).items() if f != "wall_s"} for k, r in results.items()}
+
+
+def test_jobs_do_not_change_results(tmp_path):
+    """A 3 x 5 sweep (populations x seeds) gives the same summary with 1 and 2 workers."""
+    grid = ["--seeds", "0:5", "--grid", "solver.population=10,20,40"]
+    a = sweep(tmp_path, "j1.h5", *grid, "--jobs", "1")
+    b = sweep(tmp_path, "j2.h5", *grid, "--jobs", "2")
+    sa, sb = stable_summary(a), stable_summary(b)
+    rows = json.loads(sa)
+    assert len(rows) == 3 and all(r["runs"] == 5 for r in rows)
+    assert sa == sb
+    assert cells(a) == cells(b)
+
+
+def _start(tmp_path, out, *extra):
+    cmd = [sys.executable, "-m", "camopt", "sweep", VCB, "--out", str(out), "--quiet",
+           "--seeds", "0:8", "--grid", "solver.population=30,60", "--jobs", "1",
+           "--set", "solver.generations=60", *extra]
+    return subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+
+
+def _wait_for_cells(out, n, proc, timeout=60.0):
+    """Poll the archive while it is being written: every read must succeed."""
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        if out.exists():
+            spec, results = sweep_mod.load_sweep(out)  # never half-written
+            if len(results) >= n:
+                return len(results)
+        if proc.poll() is not None:
+            break
+        time.sleep(0.05)
+    raise AssertionError("sweep did not progress")
+
+
+@pytest.mark.slow
+def test_interrupt_kill_and_resume_equal_uninterrupted(tmp_path):
+    out = tmp_path / "sweep.h5"
+    proc = _start(tmp_path, out)
+    _wait_for_cells(out, 2, proc)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert b"--resume" in err
+    done_after_int = len(sweep_mod.load_sweep(out)[1])
+    assert done_after_int >= 2
+    # resume, then SIGKILL mid-way: nothing finished is lost
+    proc = subprocess.Popen([sys.executable, "-m", "camopt", "sweep", "--resume", str(out),
+                             "--quiet", "--jobs", "1"], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    _wait_for_cells(out, done_after_int + 2, proc)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    done_after_kill = len(sweep_mod.load_sweep(out)[1])
+    assert done_after_kill >= done_after_int + 2
+    r = runner.invoke(app, ["sweep", "--resume", str(out), "--quiet", "--jobs", "2"])
+    assert r.exit_code == 0, r.output
+    full = tmp_path / "full.h5"
+    proc = _start(tmp_path, full)
+    assert proc.wait(timeout=300) == 0
+    assert cells(out) == cells(full)
+    assert stable_summary(out) == stable_summary(full)
+
+
+@pytest.mark.slow
+def test_dask_local_cluster_matches_local_pool(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    grid = ["--seeds", "0:3", "--grid", "solver.population=10,20"]
+    local = sweep(tmp_path, "local.h5", *grid, "--jobs", "1")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=None) as cluster:
+        dask = sweep(tmp_path, "dask.h5", *grid, "--executor", "dask",
+                     "--scheduler", cluster.scheduler_address)
+    assert stable_summary(local) == stable_summary(dask)
+
+
+@pytest.mark.slow
+def test_compare_detects_population_difference_and_none_between_seeds(tmp_path):
+    def run(name, *args):
+        out = tmp_path / name
+        r = runner.invoke(app, ["run", VCB, "--out", str(out), "--quiet",
+                                "--set", "solver.generations=40", "--repeats", "8", *args])
+        assert r.exit_code == 0, r.output
+        return str(out)
+
+    small = run("p10.h5", "--set", "solver.population=10")
+    large = run("p100.h5", "--set", "solver.population=100")
+    other_seed = run("p100b.h5", "--set", "solver.population=100", "--seed", "99")
+    r = runner.invoke(app, ["compare", small, large, "--format", "json"])
+    test = json.loads(r.stdout)["tests"][0]
+    assert test["p_value"] < 0.05 and test["verdict"].startswith("B is better than A")
+    r = runner.invoke(app, ["compare", large, other_seed, "--format", "json"])
+    test = json.loads(r.stdout)["tests"][0]
+    assert test["p_value"] >= 0.05 and test["verdict"].startswith("no significant")
+
+
+def test_compare_ranks_sweep_points(tmp_path):
+    out = sweep(tmp_path, "rank.h5", "--seeds", "0:6", "--grid", "solver.population=6,60",
+                "--jobs", "1")
+    r = runner.invoke(app, ["compare", str(out), "--format", "json"])
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    assert doc["ranking"][0]["label"] == "solver.population=60"
+    assert "vs_best" in doc["ranking"][1]
+
+
+def test_check_gate(tmp_path):
+    ok = runner.invoke(app, ["sweep", VCB, "--quiet", "--out", str(tmp_path / "a.h5"),
+                             "--seeds", "0:2", "--set", "solver.generations=150",
+                             "--set", "solver.population=60", "--check", "--jobs", "1"])
+    assert ok.exit_code == 0, ok.output
+    bad = runner.invoke(app, ["sweep", VCB, "--quiet", "--out", str(tmp_path / "b.h5"),
+                              "--seeds", "0:2", "--set", "solver.generations=3",
+                              "--set", "solver.population=5", "--check", "--jobs", "1"])
+    assert bad.exit_code == 1
+    assert "check failed" in bad.stderr
+
+
+def test_bad_grid_and_seeds(tmp_path):
+    r = runner.invoke(app, ["sweep", VCB, "--grid", "solver.popsize=3", "--out",
+                            str(tmp_path / "x.h5")])
+    assert r.exit_code == 2 and "unknown key" in r.stderr
+    assert not (tmp_path / "x.h5").exists()
+    r = runner.invoke(app, ["sweep", VCB, "--seeds", "5:2"])
+    assert r.exit_code == 2 and "--seeds" in r.stderr
+
+
+def test_seeds_are_children_of_one_sequence():
+    cell = sweep_mod.CellSpec({}, "x", 7, 3, 0)
+    child = np.random.SeedSequence(cell.entropy, spawn_key=(cell.seed,))
+    assert child.generate_state(4).tolist() == \
+        np.random.SeedSequence(7).spawn(5)[3].generate_state(4).tolist()
+    assert os.cpu_count()
