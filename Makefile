@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-$(shell cat pyproject.toml | cksum | cut -d' ' -f1)
 RUN_CASE ?= configs/vcb.toml
 
-.PHONY: install run test lint bench clean
+.PHONY: install run test lint bench sweep-ci clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -26,6 +26,18 @@ lint: install
 
 bench: install
 	$(BIN)/python -m bench
+
+# a small sweep of each case, failing when a grid point's success rate drops below
+# run.min_success_rate (the CI gate; see .github/workflows/sweep-ci.yml)
+sweep-ci: install
+	mkdir -p runs
+	$(BIN)/camopt sweep configs/vcb.toml --seeds 0:4 --grid solver.population=60,100 \
+		--set solver.generations=150 --check --quiet --force --out runs/ci-vcb.h5
+	$(BIN)/camopt sweep configs/fast_switch_de.toml --seeds 0:4 --set solver.generations=400 \
+		--check --quiet --force --out runs/ci-fast_switch.h5
+	$(BIN)/camopt sweep configs/emb.toml --seeds 0:4 --check --quiet --force --out runs/ci-emb.h5
+	$(BIN)/camopt sweep configs/opening_spring_lse6.toml --seeds 0:2 --set solver.starts=4 \
+		--check --quiet --force --out runs/ci-opening_spring.h5
 
 clean:
 	rm -rf $(VENV) .pytest_cache

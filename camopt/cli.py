@@ -374,6 +374,41 @@ def _cell_progress(quiet: bool) -> Iterator[Any]:
         yield lambda done, total: bar.update(task, completed=done, total=total)
 
 
+@app.command()
+def plot(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="archive")],
+         out_dir: Annotated[Path | None, typer.Option("--out", help="folder for the PNGs")]
+         = None) -> None:
+    """Write PNG figures: convergence and the case's curves."""
+    from camopt import plots
+
+    with _errors():
+        folder = out_dir or path.parent / f"{path.stem}-plots"
+        if archive.archive_kind(path) == "sweep":
+            figures = plots.sweep_figures(*sweep_mod.load_sweep(path))
+        else:
+            figures = plots.run_figures(archive.load_run(path))
+        written = plots.save(figures, folder, path.stem)
+    for p in written:
+        out.print(str(p))
+
+
+@app.command()
+def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run archive")],
+           fmt: Format = "csv",
+           out_dir: Annotated[Path | None, typer.Option("--out", help="output folder")] = None
+           ) -> None:
+    """Export the summary and analysis curves (csv or json) and cam profile point files."""
+    from camopt.export import export_run
+
+    with _errors():
+        if fmt not in ("csv", "json"):
+            raise CamoptError(f"--format: {fmt!r}: expected csv or json")
+        run_data = archive.load_run(run_path)
+        written = export_run(run_data, out_dir or run_path.parent, run_path.stem, fmt)
+    for p in written:
+        out.print(str(p))
+
+
 def main() -> None:
     """Console-script entry point."""
     app()

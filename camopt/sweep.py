@@ -258,7 +258,7 @@ def load_sweep(path: str | Path) -> tuple[SweepSpec, dict[tuple[int, int], CellR
             raise ArchiveError(f"{path}: file: a run archive, not a sweep archive")
         spec = SweepSpec.from_json(str(f.attrs["spec"]), str(f.attrs["config_toml"]))
         results = {}
-        for name, g in f["cells"].items():
+        for g in f["cells"].values():
             a = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in g.attrs.items()}
             r = CellResult(**a, x=g["x"][()].tolist(),
                            history={k: v[()].tolist() for k, v in g["history"].items()})
