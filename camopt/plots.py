@@ -174,8 +174,11 @@ def _opening_spring(run: dict[str, Any]) -> dict[str, Figure]:
                    "follower angle theta (rad)", "angular velocity theta' (rad/s)")
     ax.plot(a["desired_theta_rad"], a["desired_rate_rad_s"], "k-", linewidth=2,
             label="desired (Eq 7)")
-    ax.plot(a["design_theta_rad"], a["design_rate_rad_s"], "--", label="this design")
-    ax.plot(a["original_theta_rad"], a["original_rate_rad_s"], ":", label="original design")
+    labels = [k.removesuffix("_theta_rad") for k in a
+              if k.endswith("_theta_rad") and not k.startswith("desired")]
+    for label, style in zip(labels, ("--", ":", "-.", (0, (3, 1, 1, 1)), (0, (5, 2)))):
+        name = "this design" if label == "design" else label.replace("_", " ")
+        ax.plot(a[f"{label}_theta_rad"], a[f"{label}_rate_rad_s"], linestyle=style, label=name)
     ax.plot([paper["theta_rad"][0]], [paper["thetadot_t0_rad_s"]], "o", color="crimson",
             label="Eq 6: theta(t0), theta'(t0)")
     for i, th in enumerate(paper["theta_rad"][1:]):
@@ -183,8 +186,9 @@ def _opening_spring(run: dict[str, Any]) -> dict[str, Figure]:
     ax.legend()
     fig2, ax2 = _fig("Follower angle against time", "time (ms)", "follower angle theta (rad)")
     ax2.plot(a["desired_time_ms"], a["desired_theta_rad"], "k-", label="desired (Eq 7)")
-    ax2.plot(a["design_time_ms"], a["design_theta_rad"], "--", label="this design")
-    ax2.plot(a["original_time_ms"], a["original_theta_rad"], ":", label="original design")
+    for label in labels:
+        name = "this design" if label == "design" else label.replace("_", " ")
+        ax2.plot(a[f"{label}_time_ms"], a[f"{label}_theta_rad"], "--", label=name)
     ax2.legend()
     return {"theta_thetadot": fig, "theta_time": fig2}
 

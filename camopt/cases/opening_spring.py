@@ -232,16 +232,29 @@ class OpeningSpringProblem(Problem):
         p = self.params(x[None, :])
         return {name: float(p[name][0, 0] / PARAMETERS[name][1]) for name in PARAMETERS}
 
+    def others(self) -> dict[str, tuple[OpeningSpringProblem, NDArray]]:
+        """The original design and the config's compare_designs, each as (problem, x)."""
+        c = self.config
+        if c.mode != "design":
+            return {}
+        designs = {"original": c.original, **c.compare_designs}
+        out = {}
+        for label, values in designs.items():
+            variant = OpeningSpringProblem(c.model_copy(update={"free": list(values),
+                                                                "compare_designs": {}}))
+            out[label] = (variant, variant.x_of(values))
+        return out
+
     def metrics(self, x: NDArray) -> dict[str, object]:
-        """Tracking of the design and of the original (``original_`` prefix)."""
+        """Tracking of the design and, prefixed by their labels, of the original and the
+        config's compare_designs (e.g. Table 1's columns)."""
         x = np.asarray(x, dtype=float)
         ev = self.evaluate(x[None, :])
         out: dict[str, object] = {**self.design_values(x), **self.tracking(x),
                                   "energy_residual_rel": float(ev.extras["energy_residual_rel"][0]),
                                   "lever_arm_mm": self.d / MM}
-        if self.config.mode == "design":
-            original = self.x_of(self.config.original)
-            out.update({f"original_{k}": v for k, v in self.tracking(original).items()})
+        for label, (problem, design) in self.others().items():
+            out.update({f"{label}_{k}": v for k, v in problem.tracking(design).items()})
         return out
 
     def describe(self, X: NDArray) -> Evaluation:
@@ -258,9 +271,9 @@ class OpeningSpringProblem(Problem):
         t = np.linspace(self.t0, self.ts, 200)
         th_d, rate_d = self.desired(t)
         out = {"desired_time_ms": t / MM, "desired_theta_rad": th_d, "desired_rate_rad_s": rate_d}
-        for label, design in (("design", np.asarray(x, dtype=float)),
-                              ("original", self.x_of(self.config.original))):
-            motion = self.simulate(design)
+        runs = {"design": (self, np.asarray(x, dtype=float)), **self.others()}
+        for label, (problem, design) in runs.items():
+            motion = problem.simulate(design)
             out.update({f"{label}_time_ms": motion.t / MM, f"{label}_theta_rad": motion.theta,
                         f"{label}_rate_rad_s": motion.rate})
         return out

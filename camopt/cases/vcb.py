@@ -277,14 +277,15 @@ class VcbProblem(Problem):
         sigma_max = _max(con["sigma"])
         tau_max = 0.304 * sigma_max  # Eq 31
         g = {
-            "phi_max_low": 1 - phi_max / lo,  # Eq 40
-            "phi_max_high": phi_max / hi - 1,  # Eq 40
-            "monotonic": -np.min(kin["dphi"], axis=1),
-            "assembly": np.isnan(kin["cos4"]).mean(axis=1),
-            "grashof": -fourbar.grashof_margin(link[:, 0], m.l2, link[:, 1], link[:, 2]) / m.l2,
-            "shear_yield": tau_max / (c.shear_yield_mpa * 1e6) - 1,
+            "phi_max_low": lambda: 1 - phi_max / lo,  # Eq 40
+            "phi_max_high": lambda: phi_max / hi - 1,  # Eq 40
+            "monotonic": lambda: -np.min(kin["dphi"], axis=1),
+            "assembly": lambda: np.isnan(kin["cos4"]).mean(axis=1),
+            "grashof": lambda: -fourbar.grashof_margin(link[:, 0], m.l2, link[:, 1],
+                                                       link[:, 2]) / m.l2,  # Eq 43
+            "shear_yield": lambda: tau_max / (c.shear_yield_mpa * 1e6) - 1,
         }
-        G = np.column_stack([g[name] for name in self.constraint_names])
+        G = np.column_stack([g[name]() for name in self.constraint_names])
         G = np.where(np.isnan(G), np.inf, G)
         violation = np.clip(G, 0, None).sum(axis=1)
         base = np.abs(bal["surplus"]) if c.objective_form == "net" else m.abs_sum(bal)

@@ -284,6 +284,9 @@ class OpeningSpringConfig(CaseConfig):
     original: dict[str, float] = Field(
         {"k_n_per_mm": 14.59, "l0_mm": 128.0, "u_mm": 83.0, "v_mm": 207.0, "s_mm": 135.0},
         description="Table 1 original design (regularisation target and comparison)")
+    compare_designs: dict[str, dict[str, float]] = Field(
+        default_factory=dict, description="more designs to simulate beside this one, "
+        "{label = {k_n_per_mm = ..., ...}}; unlisted parameters take the values above")
     k_bounds_n_per_mm: Bounds = Field(Bounds(lower=5, upper=60), description="search bounds")
     l0_bounds_mm: Bounds = Field(Bounds(lower=50, upper=250), description="search bounds")
     u_bounds_mm: Bounds = Field(Bounds(lower=0, upper=200), description="search bounds")

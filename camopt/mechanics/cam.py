@@ -53,7 +53,14 @@ class Follower:
         dphi = a @ np.stack([zero, one, 2 * t, 3 * t * t])
         ddphi = a @ np.stack([zero, zero, 2 * one, 6 * t])
         angle = phi + xi
-        return cls(t[None, :], phi, dphi, ddphi, np.cos(angle), np.sin(angle))
+        cos_a = np.cos(angle)
+        # sin from cos on (0, pi), where it is non-negative: one transcendental call
+        # instead of two (they dominate the swarm's cost); np.sin where outside
+        sin_a = np.sqrt(np.clip(1.0 - cos_a * cos_a, 0.0, None))
+        outside = (angle <= 0.0) | (angle >= np.pi)
+        if outside.any():
+            sin_a[outside] = np.sin(angle[outside])
+        return cls(t[None, :], phi, dphi, ddphi, cos_a, sin_a)
 
 
 def pitch_curve(l2: float, l6: float, f: Follower) -> tuple[NDArray, NDArray, NDArray, NDArray]:
