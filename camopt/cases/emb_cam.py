@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.special import erf
 
 from camopt.config.models import EmbCamConfig
 from camopt.mechanics import polar_cam as pc
@@ -43,6 +44,24 @@ def _interp_rows(x: NDArray, y: NDArray, level: float) -> NDArray:
     return np.where(above.any(axis=1), out, np.nan)
 
 
+def knot_warp(x: NDArray, density: tuple[float, float, float] | None
+              ) -> tuple[NDArray, NDArray, NDArray]:
+    """Profile-angle fraction w(x) of spline parameter fraction x, with w' and w''.
+
+    Uniform (w = x) reproduces Eq 25; otherwise the key points' density is
+    1 + (peak - 1) exp(-((x - centre)/width)^2), integrated in closed form (erf).
+    """
+    x = np.asarray(x, dtype=float)
+    if density is None:
+        return x, np.ones_like(x), np.zeros_like(x)
+    c, peak, s = density
+    k = (peak - 1.0)
+    total = 1.0 + k * s * np.sqrt(np.pi) / 2 * (erf((1 - c) / s) + erf(c / s))
+    g = np.exp(-(((x - c) / s) ** 2))
+    w = (x + k * s * np.sqrt(np.pi) / 2 * (erf((x - c) / s) + erf(c / s))) / total
+    return w, (1 + k * g) / total, k * g * (-2 * (x - c) / s**2) / total
+
+
 class EmbCamProblem(Problem):
     """Cam profile of the EMB; minimise Eq 27 under Eq 28 with Eqs 29-30's penalty."""
 
@@ -59,6 +78,8 @@ class EmbCamProblem(Problem):
         self.u = np.linspace(0, n - 1, (n - 1) * c.samples_per_segment + 1)
         self.knots = np.arange(0, self.u.size, c.samples_per_segment)
         self.spline = ClampedNaturalSpline(n, self.u)
+        self.w, self.dw, self.ddw = knot_warp(self.u / (n - 1), c.knot_density)
+        self.knot_w = knot_warp(np.arange(n) / (n - 1), c.knot_density)[0]
         self.kappa_max = float(np.arccos(self.r_st / (2 * self.rg)))  # Eq 21
         kb = c.kappa_bounds or None
         rb = c.radius_bounds_mm
@@ -87,21 +108,29 @@ class EmbCamProblem(Problem):
 
     def boundary(self, r: NDArray, kappa: NDArray, e: NDArray
                  ) -> tuple[NDArray, NDArray, NDArray]:
-        """|OA| at the start, theta0 and the key-point spacing dtheta (Eqs 22-24)."""
+        """|OA| at the start, theta0 and the total profile angle theta_a (Eqs 22-24)."""
         oa0 = pc.start_distance(self.r_st, self.rg, kappa)  # Eq 22
         theta_a = pc.total_profile_angle(oa0, self.r_st, r[:, -1], self.rg)  # Eq 23
         theta0 = pc.initial_profile_angle(oa0, self.r_st, e, self.rg)  # Eq 24
-        return oa0, theta0, theta_a / (self.n - 1)  # key points j dtheta apart (Eq 25)
+        return oa0, theta0, theta_a
+
+    def knot_steps(self, theta_a: NDArray) -> NDArray:
+        """Profile-angle steps between adjacent key points, (P, N - 1) (Eq 25)."""
+        return theta_a[:, None] * np.diff(self.knot_w)[None, :]
 
     def profile(self, X: NDArray) -> dict[str, NDArray]:
         """Every quantity of Sec 2.3 along the working profile, (P, K) arrays (SI)."""
         r_keys, kappa, e = self.unpack(X)
-        oa0, theta0, dtheta = self.boundary(r_keys, kappa, e)
-        slope0 = self.r_st * np.tan(kappa) * dtheta  # Eq 20 in per-u units
+        oa0, theta0, theta_a = self.boundary(r_keys, kappa, e)
+        span = theta_a[:, None] / (self.n - 1)
+        th_u = span * self.dw[None, :]  # d theta / du along the samples
+        th_uu = span / (self.n - 1) * self.ddw[None, :]
+        slope0 = self.r_st * np.tan(kappa) * th_u[:, 0]  # Eq 20 in per-u units
         S, dS, ddS = self.spline(r_keys, slope0)
-        dth = dtheta[:, None]
-        r, dr, ddr = S, dS / dth, ddS / (dth * dth)
-        theta = theta0[:, None] + self.u[None, :] * dth
+        r, dr = S, dS / th_u
+        ddr = (ddS - dS * th_uu / th_u) / (th_u * th_u)
+        theta = theta0[:, None] + theta_a[:, None] * self.w[None, :]
+        dtheta = theta_a / (self.n - 1)
         e_col = e[:, None]
         with np.errstate(invalid="ignore", divide="ignore"):
             l = pc.normal_arm(r, dr)  # Eq 8
@@ -241,9 +270,10 @@ class EmbCamProblem(Problem):
         and shift the following ones by the same amount (Eq 35)."""
         n = self.n
         r, kappa, e = self.unpack(X)
-        oa0, _, dtheta = self.boundary(r, kappa, e)
+        oa0, _, theta_a = self.boundary(r, kappa, e)
+        steps = self.knot_steps(theta_a)
         for j in range(1, n):
-            cap = self._cap(r, j, oa0, dtheta)
+            cap = self._cap(r, j, oa0, steps)
             lo = r[:, j - 1]
             hi = np.minimum(np.where(np.isfinite(cap), cap, self.rg + e), self.rg + e)
             bad = (r[:, j] <= lo) | (r[:, j] >= hi)
@@ -256,20 +286,21 @@ class EmbCamProblem(Problem):
         X[:, : n - 1] = r[:, 1:]
         return X
 
-    def _cap(self, r: NDArray, j: int, oa0: NDArray, dtheta: NDArray) -> NDArray:
-        """|OB_jmax| (Eq 32 for j = 1, Appendix A.3 for j >= 2)."""
+    def _cap(self, r: NDArray, j: int, oa0: NDArray, steps: NDArray) -> NDArray:
+        """|OB_jmax| (Eq 32 for j = 1, Appendix A.3 for j >= 2); ``steps`` (P, N-1) are
+        the profile-angle steps between key points (all equal with uniform key points)."""
         rg = self.rg
         with np.errstate(invalid="ignore", divide="ignore"):
             if j == 1:
-                angle = pc.angle_to_center(oa0, self.r_st, rg) - dtheta  # Eq 31
+                angle = pc.angle_to_center(oa0, self.r_st, rg) - steps[:, 0]  # Eq 31
                 return pc.max_radius_on_ring(oa0, angle, rg)  # Eq 32
             a, b = r[:, j - 2], r[:, j - 1]
-            chord = np.sqrt(a * a + b * b - 2 * a * b * np.cos(dtheta))
+            chord = np.sqrt(a * a + b * b - 2 * a * b * np.cos(steps[:, j - 2]))
             ob_b = np.arccos(np.clip((chord**2 + b * b - a * a) / (2 * chord * b), -1, 1))
             ab_m = np.arccos(np.clip(chord / (2 * rg), -1, 1))
             ob_a = ab_m - ob_b
             oa = np.sqrt(b * b + rg * rg - 2 * b * rg * np.cos(ob_a))
-            angle = pc.angle_to_center(oa, b, rg) - dtheta
+            angle = pc.angle_to_center(oa, b, rg) - steps[:, j - 1]
             return pc.max_radius_on_ring(oa, angle, rg)
 
     # ---- single-design output ------------------------------------------------------

@@ -338,6 +338,10 @@ class EmbCamConfig(CaseConfig):
     torque_ramp_rms_max_pct: Positive | None = Field(
         None, description="optional cap on the torque's RMS deviation from a straight line "
         "over the clamping section, % of the peak")
+    knot_density: tuple[float, float, float] | None = Field(
+        None, description="None: key points evenly spaced in profile angle (Eq 25); "
+        "[centre, peak, width]: their density peaks 'peak' times higher around the fraction "
+        "'centre' of the profile (Gaussian of that width)")
     penalty_p1: float = Field(100.0, ge=0, description="P1 of Eq 30")
     penalty_p2: float = Field(100.0, ge=0, description="P2 of Eq 30 (per unit of err)")
     kappa_bounds: Bounds | None = Field(
