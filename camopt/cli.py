@@ -53,7 +53,8 @@ def _load(case: Path, overrides: list[str] | None = None) -> Any:
 def run(
     case: Annotated[Path, typer.Argument(help="case file (TOML)")],
     out_path: Annotated[Path | None, typer.Option("--out", help="archive path")] = None,
-    seed: Annotated[int | None, typer.Option(help="root seed (overrides run.seed)")] = None,
+    seed: Annotated[int | None, typer.Option(min=0, help="root seed (overrides run.seed)")]
+    = None,
     repeats: Annotated[int | None, typer.Option(min=1, help="repeats (overrides run.repeats)")]
     = None,
     set_: Annotated[list[str] | None, typer.Option("--set", help="override: section.key=value")]
@@ -136,8 +137,8 @@ def list_solvers() -> None:
     for col in ("name", "what", "options", "cases"):
         table.add_column(col)
     for name, cls in solvers().items():
-        options = "\n".join(f"{k} = {v.default!r}" for k, v in cls.Options.model_fields.items()
-                            if k != "name")
+        options = "\n".join(f"{k} = {v.get_default(call_default_factory=True)!r}"
+                            for k, v in cls.Options.model_fields.items() if k != "name")
         cases = ", ".join(k for k in sorted(CASE_CONFIGS) if cls.supports(case_class(k)))
         table.add_row(name, cls.summary, options or "-", cases or "-")
     out.print(table)

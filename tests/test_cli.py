@@ -92,6 +92,16 @@ def test_validate_init_solvers(tmp_path):
     assert r.exit_code == 0 and "de_gr" in r.stdout and "fast_switch" in r.stdout
 
 
+@pytest.mark.parametrize("kind", ["fast_switch", "vcb", "vcb_identify", "opening_spring",
+                                  "emb_cam"])
+def test_init_template_validates_for_every_kind(tmp_path, kind):
+    path = tmp_path / f"{kind}.toml"
+    r = invoke("init", kind, "--out", path)
+    assert r.exit_code == 0, r.output
+    r = invoke("validate", path)
+    assert r.exit_code == 0, r.output
+
+
 def test_python_m_camopt():
     import subprocess
     import sys

@@ -361,8 +361,15 @@ CASE_CONFIGS: dict[str, type[CaseConfig]] = {
 
 
 def _toml_value(value: object) -> str:
+    """One TOML value on one line (tables inline, so every field stays a single line)."""
     import tomli_w
 
+    if isinstance(value, BaseModel):
+        value = value.model_dump(mode="json", exclude_none=True)
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + " }"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     return tomli_w.dumps({"v": value}).split("=", 1)[1].strip()
 
 
@@ -372,6 +379,9 @@ def _section(title: str, model: BaseModel) -> list[str]:
         value = getattr(model, name)
         if isinstance(value, Bounds):
             value = value.as_list()
+        if isinstance(value, dict) and not value:
+            lines += [f"# {info.description}", f"# {name} = {{ }}"] if info.description else []
+            continue
         if info.description:
             lines.append(f"# {info.description}")
         if value is None:
