@@ -199,12 +199,18 @@ class VcbModel:
         root per design instead of per sample; no Hertz contact counts as infinite.
         (float32 was tried and rejected: cancellation near a dwell cost 5 % in sigma.)"""
         c = self.c
-        xp, yp, dxp, dyp = cam.pitch_curve(self.l2, self.l6, f)
-        rho = cam.curvature_radius(self.l2, self.l6, f, self.rf)
+        l2, l6 = self.l2, self.l6
+        w = l2 * (1 - f.dphi)
+        # |dp/dtheta|^2 of the pitch curve (Eq 12) = Eq 15's numerator base; and
+        # p . dp/dtheta = l6 l2 sin(xi + phi) phi' (derivative of |OD|^2 / 2)
+        speed_sq = l6 * l6 + w * w - (2 * l6) * w * f.cos_a
+        den = (l6 * l6 - (l2 * l6) * (2 - f.dphi) * (1 - f.dphi) * f.cos_a
+               - (l2 * l6) * f.ddphi * f.sin_a + l2 * w * (1 - f.dphi) * (1 - f.dphi))
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            speed = np.sqrt(speed_sq)
+            rho = speed_sq * speed / den - self.rf  # Eq 15
             inv = 1.0 / rho + 1.0 / self.rf  # 1 / rho_e (Eq 28)
-            load = (np.abs(torque) * np.sqrt(dxp * dxp + dyp * dyp)
-                    / np.abs(xp * dxp + yp * dyp))  # Fn (Eq 19 by moments)
+            load = np.abs(torque) * speed / np.abs((l6 * l2) * f.sin_a * f.dphi)  # Eq 19
             q = np.where(inv > 0, load * inv, np.inf)
         top = np.max(q, axis=1)
         top = np.where(np.isnan(top), np.inf, top)
