@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -173,4 +172,3 @@ def test_seeds_are_children_of_one_sequence():
     child = np.random.SeedSequence(cell.entropy, spawn_key=(cell.seed,))
     assert child.generate_state(4).tolist() == \
         np.random.SeedSequence(7).spawn(5)[3].generate_state(4).tolist()
-    assert os.cpu_count()
