@@ -20,17 +20,6 @@ def base_angle(l2: ArrayLike, l6: ArrayLike, distance: ArrayLike) -> NDArray:
     return np.arccos((l2**2 + l6**2 - np.square(distance)) / (2 * l2 * l6))
 
 
-def cubic_motion(a: ArrayLike, theta_c: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
-    """phi, phi' and phi'' of phi = a0 + a1 t + a2 t^2 + a3 t^3 (Eqs 6, 12, 15).
-
-    ``a`` has shape (..., 4); theta_c (rad) broadcasts against a[..., :1].
-    """
-    a = np.asarray(a, dtype=float)
-    a0, a1, a2, a3 = (a[..., i : i + 1] for i in range(4))
-    t = np.asarray(theta_c, dtype=float)
-    phi = a0 + t * (a1 + t * (a2 + t * a3))
-    return phi, a1 + t * (2 * a2 + 3 * a3 * t), 2 * a2 + 6 * a3 * t
-
 
 @dataclass(frozen=True)
 class Follower:
@@ -45,8 +34,8 @@ class Follower:
 
     @classmethod
     def cubic(cls, a: NDArray, theta_c: NDArray, xi: float) -> Follower:
-        """Cubic motion (Eq 6) for coefficient rows ``a`` (n, 4) on a 1-D grid ``theta_c``,
-        as one matrix product per derivative."""
+        """Cubic motion phi, phi', phi'' (Eqs 6, 12, 15) for coefficient rows ``a`` (n, 4)
+        on a 1-D grid ``theta_c``, as one matrix product per derivative."""
         t = np.ravel(theta_c)
         one, zero = np.ones_like(t), np.zeros_like(t)
         phi = a @ np.stack([one, t, t * t, t**3])
@@ -96,8 +85,3 @@ def curvature_radius(l2: float, l6: float, f: Follower, rf: float) -> NDArray:
     den = (l6**2 - (l2 * l6) * (2 - f.dphi) * cw - (l2 * l6) * f.ddphi * f.sin_a
            + l2**2 * w2 * w)
     return base * np.sqrt(base) / den - rf
-
-
-def roller_distance(l2: float, l6: float, f: Follower) -> NDArray:
-    """Distance |OD| from the cam pivot to the roller centre."""
-    return np.sqrt(l2**2 + l6**2 - 2 * l2 * l6 * f.cos_a)

@@ -32,18 +32,6 @@ def input_angle(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
         return 2 * np.arctan((B + branch * np.sqrt(A**2 + B**2 - C**2)) / (A + C))
 
 
-def coupler_angle(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
-                  theta1: ArrayLike, theta2: ArrayLike, theta4: ArrayLike) -> NDArray:
-    """theta3 from the closed loop."""
-    z = (l1 * np.exp(1j * np.asarray(theta1)) + l4 * np.exp(1j * np.asarray(theta4))
-         - l2 * np.exp(1j * np.asarray(theta2)))
-    return np.angle(z)
-
-
-def output_rate(l2: ArrayLike, l4: ArrayLike, theta2: ArrayLike, theta3: ArrayLike,
-                theta4: ArrayLike) -> NDArray:
-    """d theta4 / d theta2 = l2 sin(th2 - th3) / (l4 sin(th4 - th3)) (velocity loop)."""
-    return l2 * np.sin(theta2 - theta3) / (l4 * np.sin(theta4 - theta3))
 
 
 def grashof_margin(*lengths: ArrayLike) -> NDArray:
