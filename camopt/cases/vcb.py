@@ -44,11 +44,13 @@ class Loads:
 
     def resistant_force(self, s1: NDArray) -> NDArray:
         """General resistant force Fr (Eq 24) at rod travel s1 (N)."""
-        opening = self.opening_arm * self.opening_k * (
-            self.opening_stretch_open + self.opening_arm * s1)
-        touched = s1 >= self.gap
-        wipe = np.where(touched, self.wipe_k * (self.wipe_preload + s1 - self.gap), 0.0)
-        return opening + wipe - np.where(touched, 0.0, self.free_contact)
+        arm_k = self.opening_arm * self.opening_k  # coefficients first: few full-size ops
+        opening = s1 * (arm_k * self.opening_arm) + arm_k * self.opening_stretch_open
+        # contact springs once the contacts touch, the free-contact force before
+        contact = np.where(s1 >= self.gap,
+                           s1 * self.wipe_k + self.wipe_k * (self.wipe_preload - self.gap),
+                           -self.free_contact)
+        return opening + contact
 
 
 class VcbModel:
@@ -116,24 +118,34 @@ class VcbModel:
                    ) -> dict[str, NDArray]:
         """Follower, linkage and rod motion, (n, m) arrays; ``A`` (n, 4), ``link`` (n, 5).
 
-        The follower swing turns link 2 clockwise: theta2 = angle(BO) - (xi + phi), so
-        cos and sin of theta2 follow from those of xi + phi without more trigonometry.
+        The follower swing turns link 2 clockwise: theta2 = angle(BO) - (xi + phi). The
+        four-bar is solved in the frame turned by angle(BO) and mirrored (y -> -y),
+        where theta2 is xi + phi itself: no trigonometry, rotation or sign change is
+        spent on the grid, and mirroring swaps the assembly branch. ``cos4``/``sin4``
+        are in that frame (:meth:`output_angle` turns them back).
         """
         f = cam.Follower.cubic(A, self.theta_c, self.xi)
         if np.all(link == link[0]):  # shared linkage (step 1): scalars broadcast fastest
             l1, l3, l4, l5, th1 = (float(v) for v in link[0])
         else:
             l1, l3, l4, l5, th1 = (link[:, i : i + 1] for i in range(5))
-        cb, sb = np.cos(self.theta_bo), np.sin(self.theta_bo)
-        c2, s2 = cb * f.cos_a + sb * f.sin_a, sb * f.cos_a - cb * f.sin_a
-        c4, s4, rate = fourbar.output_motion(l1, self.l2, l3, l4, np.cos(th1), np.sin(th1),
-                                             c2, s2, 1.0)  # Eq 3
-        co, so = np.cos(rod_offset), np.sin(rod_offset)
-        # arm EM at theta4 + pi + offset: it points away from L
-        y_m = -l5 * (s4 * co + c4 * so)
-        ds1 = -l5 * (c4 * co - s4 * so) * rate * (-f.dphi)
+        frame = self.theta_bo - th1  # theta1 in the mirrored frame
+        c4, s4, rate = fourbar.output_motion(l1, self.l2, l3, l4, np.cos(frame),
+                                             np.sin(frame), f.cos_a, f.sin_a, -1.0)  # Eq 3
+        # arm EM at theta4 + pi + offset: it points away from L; rod height
+        # y_m = -l5 sin(theta4 + offset) with theta4 = angle(BO) - theta4', and
+        # d theta4 / d theta_c = -rate phi'
+        beta = rod_offset + self.theta_bo
+        p, q = l5 * np.cos(beta), l5 * np.sin(beta)
+        y_m = s4 * p - c4 * q
+        ds1 = (s4 * q + c4 * p) * rate * f.dphi
         return {"follower": f, "phi": f.phi, "dphi": f.dphi, "cos4": c4, "sin4": s4,
                 "s1": y_m - y_m[:, :1], "ds1": ds1}
+
+    def output_angle(self, kin: dict[str, NDArray]) -> NDArray:
+        """Output-link angle theta4 (rad, in (-pi, pi]) in the mechanism's frame."""
+        th4 = self.theta_bo - np.arctan2(kin["sin4"], kin["cos4"])
+        return np.arctan2(np.sin(th4), np.cos(th4))
 
     def closing_torque(self, kc: NDArray) -> NDArray:
         """Torque of both closing springs on the cam, (n, m) N m; kc (n, 2) N/m."""
@@ -163,19 +175,25 @@ class VcbModel:
         Fo ds is evaluated as T dtheta (virtual work), which stays finite where the
         follower dwells and Fo itself is unbounded.
         """
-        s1, ds1 = kin["s1"][:, 1:], kin["ds1"][:, 1:]
-        T = torque[:, 1:]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            fo = T / ds1  # Eq 24 by virtual work
+        # whole contiguous rows, then position 0 taken off the sums: operations on
+        # the [:, 1:] views cost three times as much
+        s1, ds1 = kin["s1"], kin["ds1"]
         fr = loads.resistant_force(s1)
-        driving = T.sum(axis=1) * self.dtheta
-        resistant = (fr * ds1).sum(axis=1) * self.dtheta
-        return {"fo": fo, "fr": fr, "driving": driving, "resistant": resistant,
+        driving = (torque.sum(axis=1) - torque[:, 0]) * self.dtheta
+        resistant = (np.einsum("ij,ij->i", fr, ds1) - fr[:, 0] * ds1[:, 0]) * self.dtheta
+        return {"T": torque[:, 1:], "ds1": ds1[:, 1:], "fr": fr[:, 1:],
+                "driving": driving, "resistant": resistant,
                 "surplus": driving - resistant / loads.efficiency}  # Eq 26
+
+    @staticmethod
+    def output_force(bal: dict[str, NDArray]) -> NDArray:
+        """General output force Fo (Eq 24) by virtual work, T / (ds1 / dtheta) (N)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return bal["T"] / bal["ds1"]
 
     def abs_sum(self, bal: dict[str, NDArray]) -> NDArray:
         """Eq 39 as printed: sum over positions of |Fo - Fr / eps| (N)."""
-        return np.abs(bal["fo"] - bal["fr"] / self.c.efficiency).sum(axis=1)
+        return np.abs(self.output_force(bal) - bal["fr"] / self.c.efficiency).sum(axis=1)
 
     def contact(self, f: cam.Follower, torque: NDArray) -> dict[str, NDArray]:
         """Pitch curve, curvature, normal force and Hertz stresses."""
@@ -199,24 +217,36 @@ class VcbModel:
         root per design instead of per sample; no Hertz contact counts as infinite.
         (float32 was tried and rejected: cancellation near a dwell cost 5 % in sigma.)"""
         c = self.c
-        l2, l6 = self.l2, self.l6
+        l2, l6, rf = self.l2, self.l6, self.rf
         w = l2 * (1 - f.dphi)
-        # |dp/dtheta|^2 of the pitch curve (Eq 12) = Eq 15's numerator base; and
-        # p . dp/dtheta = l6 l2 sin(xi + phi) phi' (derivative of |OD|^2 / 2)
-        speed_sq = l6 * l6 + w * w - (2 * l6) * w * f.cos_a
-        den = (l6 * l6 - (l2 * l6) * (2 - f.dphi) * (1 - f.dphi) * f.cos_a
-               - (l2 * l6) * f.ddphi * f.sin_a + l2 * w * (1 - f.dphi) * (1 - f.dphi))
+        lc = l6 * f.cos_a
+        v = w - lc
+        # |dp/dtheta|^2 of the pitch curve (Eq 12), Eq 15's numerator base, and Eq 15's
+        # denominator rewritten as speed_sq - phi' w (w - l6 cos) - l2 l6 phi'' sin
+        speed_sq = w * (v - lc) + l6 * l6
+        den = speed_sq - f.dphi * w * v - (l2 * l6) * f.ddphi * f.sin_a
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            speed = np.sqrt(speed_sq)
-            rho = speed_sq * speed / den - self.rf  # Eq 15
-            inv = 1.0 / rho + 1.0 / self.rf  # 1 / rho_e (Eq 28)
-            load = np.abs(torque) * speed / np.abs((l6 * l2) * f.sin_a * f.dphi)  # Eq 19
-            q = np.where(inv > 0, load * inv, np.inf)
-        top = np.max(q, axis=1)
-        top = np.where(np.isnan(top), np.inf, top)
+            # with rho_p = |dp|^3 / den (Eq 15) and rho = rho_p - rf, Fn (1/rho + 1/rf)
+            # (Eqs 19, 28, p . dp = l6 l2 sin phi') = |T| |dp|^4 / (|p . dp| rf gap),
+            # gap = (rho_p - rf) den; Hertz contact needs 1/rho + 1/rf > 0: gap > 0.
+            # Its reciprocal is minimised, so a gap <= 0 anywhere shows as a minimum <= 0
+            gap = speed_sq * np.sqrt(speed_sq) - rf * den
+            r = np.abs(f.sin_a * f.dphi) * gap / (np.abs(torque) * (speed_sq * speed_sq))
+            low = np.min(r, axis=1)
+            top = np.where(low > 0, 1 / (low * ((l6 * l2) * rf)), np.inf)
         e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * 1e9, c.poisson,
                                         c.cam_modulus_gpa * 1e9, c.poisson)
         return np.sqrt(top * e_eq / (2 * np.pi * c.contact_length_mm * MM))
+
+
+def _unassembled(cos4: NDArray, work: NDArray) -> NDArray:
+    """Fraction of the stroke where the four-bar cannot be assembled, per design; only
+    rows whose work sum is not finite can have any (NaN propagates into the sum)."""
+    frac = np.zeros(len(cos4))
+    rows = ~np.isfinite(work)
+    if rows.any():
+        frac[rows] = np.isnan(cos4[rows]).mean(axis=1)
+    return frac
 
 
 def _max(a: NDArray) -> NDArray:
@@ -309,7 +339,7 @@ class VcbProblem(Problem):
             "phi_max_low": lambda: 1 - phi_max / lo,  # Eq 40
             "phi_max_high": lambda: phi_max / hi - 1,  # Eq 40
             "monotonic": lambda: -np.min(kin["dphi"], axis=1),
-            "assembly": lambda: np.isnan(kin["cos4"]).mean(axis=1),
+            "assembly": lambda: _unassembled(kin["cos4"], bal["resistant"]),
             "grashof": lambda: -fourbar.grashof_margin(link[:, 0], m.l2, link[:, 1],
                                                        link[:, 2]) / m.l2,  # Eq 43
             "shear_yield": lambda: tau_max / (c.shear_yield_mpa * 1e6) - 1,
@@ -327,7 +357,7 @@ class VcbProblem(Problem):
             "surplus_work_j": bal["surplus"], "rod_travel_mm": kin["s1"][:, -1] / MM,
         }
         if detail:
-            ends = np.arctan2(kin["sin4"][:, [0, -1]], kin["cos4"][:, [0, -1]]) / DEG
+            ends = m.output_angle({k: kin[k][:, [0, -1]] for k in ("cos4", "sin4")}) / DEG
             psi = cam.pressure_angle(m.l2, m.l6, m.xi, kin["follower"])
             extras.update({
                 "a0": A[:, 0], "a1": A[:, 1], "a2": A[:, 2], "a3": A[:, 3],
@@ -375,9 +405,9 @@ class VcbProblem(Problem):
             "curvature_mm": con["curvature"][0] / MM,
             "normal_force_n": con["normal_force"][0],
             "sigma_max_mpa": con["sigma"][0] / 1e6, "tau_max_mpa": con["tau"][0] / 1e6,
-            "output_angle_deg": np.arctan2(kin["sin4"][0], kin["cos4"][0]) / DEG,
+            "output_angle_deg": m.output_angle(kin)[0] / DEG,
             "rod_travel_mm": kin["s1"][0] / MM,
-            "fo_n": np.r_[np.nan, bal["fo"][0]], "fr_n": np.r_[np.nan, bal["fr"][0]],
+            "fo_n": np.r_[np.nan, m.output_force(bal)[0]], "fr_n": np.r_[np.nan, bal["fr"][0]],
             "driving_work_j": np.r_[0.0, np.cumsum(torque[0, 1:] * m.dtheta)],
             "resistant_work_j": np.r_[0.0, np.cumsum(bal["fr"][0] * ds)],
         }

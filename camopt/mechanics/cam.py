@@ -3,7 +3,7 @@
 Cam pivot O, follower pivot B at distance l6, follower arm l2, roller radius rf,
 base circle rb. phi is the follower swing measured from the base-circle position
 (xi, Eq 10). Everything broadcasts over (population, cam angle); the cosine and
-sine of xi + phi are computed once in :class:`Follower` and shared.
+sine of xi + phi are computed once in :class:`Follower` (by :func:`sincos`) and shared.
 """
 
 from __future__ import annotations
@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from camopt.mechanics.trig import sincos
 
 
 def base_angle(l2: ArrayLike, l6: ArrayLike, distance: ArrayLike) -> NDArray:
@@ -38,17 +40,13 @@ class Follower:
         on a 1-D grid ``theta_c``, as one matrix product per derivative."""
         t = np.ravel(theta_c)
         one, zero = np.ones_like(t), np.zeros_like(t)
-        phi = a @ np.stack([one, t, t * t, t**3])
+        powers = np.stack([one, t, t * t, t**3])
+        phi = a @ powers
         dphi = a @ np.stack([zero, one, 2 * t, 3 * t * t])
         ddphi = a @ np.stack([zero, zero, 2 * one, 6 * t])
-        angle = phi + xi
-        cos_a = np.cos(angle)
-        # sin from cos on (0, pi), where it is non-negative: one transcendental call
-        # instead of two (they dominate the swarm's cost); np.sin where outside
-        sin_a = np.sqrt(np.clip(1.0 - cos_a * cos_a, 0.0, None))
-        outside = (angle <= 0.0) | (angle >= np.pi)
-        if outside.any():
-            sin_a[outside] = np.sin(angle[outside])
+        # |xi + phi| <= |xi| + sum |a_k| max |t|^k: spares sincos its range check
+        bound = float(np.max(np.abs(a) @ np.abs(powers).max(axis=1))) + abs(xi)
+        cos_a, sin_a = sincos(phi + xi, bound if np.isfinite(bound) else None)
         return cls(t[None, :], phi, dphi, ddphi, cos_a, sin_a)
 
 

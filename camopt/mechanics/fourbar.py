@@ -44,25 +44,31 @@ def output_motion(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
                   c1: ArrayLike, s1: ArrayLike, c2: ArrayLike, s2: ArrayLike,
                   branch: float = 1.0) -> tuple[NDArray, NDArray, NDArray]:
     """cos theta4, sin theta4 and d theta4 / d theta2 from the cosines and sines of
-    theta1 and theta2: Eq 3 through the half-angle t = tan(theta4 / 2), and the
-    velocity loop with the coupler vector, so the hot path needs no trigonometry."""
+    theta1 and theta2, without trigonometry: Eq 3 is A cos4 + B sin4 = C, solved as
+    (A C - b B r, B C + b A r) / (A^2 + B^2) with r = sqrt(A^2 + B^2 - C^2) (the
+    half-angle form's branch b), and differentiating it gives the rate over b r."""
     # coefficients are formed on the small operands first: each full-size operation counts
     k24 = 2 * l2 * l4
+    k12 = 2 * l1 * l2
     A = 2 * l1 * l4 * c1 - k24 * c2
     B = 2 * l1 * l4 * s1 - k24 * s2
-    C = (l3**2 - l1**2 - l4**2 - l2**2) + (2 * l1 * l2 * c1) * c2 + (2 * l1 * l2 * s1) * s2
+    C = (l3**2 - l1**2 - l4**2 - l2**2) + (k12 * c1) * c2 + (k12 * s1) * s2
+    if branch not in (1.0, -1.0):
+        raise ValueError(f"branch must be +1 or -1, not {branch}")
     with np.errstate(invalid="ignore", divide="ignore"):
-        root = A * A
-        root += B * B
-        root -= C * C
+        norm = A * A
+        norm += B * B
+        root = norm - C * C
         np.sqrt(root, out=root)
-        t = B + branch * root if branch != 1.0 else B + root
-        t /= A + C
-        tt = t * t
-        den = 1 + tt
-        c4 = (1 - tt) / den
-        s4 = 2 * t / den
-        zx = (l1 * c1) + l4 * c4 - l2 * c2  # coupler vector l3 e^{i theta3}
-        zy = (l1 * s1) + l4 * s4 - l2 * s2
-        rate = (l2 / l4) * (s2 * zx - c2 * zy) / (s4 * zx - c4 * zy)
+        inv = 1 / norm
+        # d/dtheta2 of A c4 + B s4 - C = 0, with B c4 - A s4 = -b r; the branch sign
+        # is written into the formulas rather than multiplied into the array
+        if branch == 1.0:
+            c4 = (A * C - B * root) * inv
+            s4 = (B * C + A * root) * inv
+            rate = (k24 * (s2 * c4 - c2 * s4) + (k12 * c1) * s2 - (k12 * s1) * c2) / root
+        else:
+            c4 = (A * C + B * root) * inv
+            s4 = (B * C - A * root) * inv
+            rate = (k24 * (c2 * s4 - s2 * c4) + (k12 * s1) * c2 - (k12 * c1) * s2) / root
     return c4, s4, rate
