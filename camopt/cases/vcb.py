@@ -45,12 +45,14 @@ class Loads:
     def resistant_force(self, s1: NDArray) -> NDArray:
         """General resistant force Fr (Eq 24) at rod travel s1 (N)."""
         arm_k = self.opening_arm * self.opening_k  # coefficients first: few full-size ops
-        opening = s1 * (arm_k * self.opening_arm) + arm_k * self.opening_stretch_open
         # contact springs once the contacts touch, the free-contact force before
-        contact = np.where(s1 >= self.gap,
-                           s1 * self.wipe_k + self.wipe_k * (self.wipe_preload - self.gap),
-                           -self.free_contact)
-        return opening + contact
+        touching = np.multiply(s1, self.wipe_k)
+        touching += self.wipe_k * (self.wipe_preload - self.gap)
+        force = np.where(s1 >= self.gap, touching, -self.free_contact)
+        opening = np.multiply(s1, arm_k * self.opening_arm, out=touching)
+        opening += arm_k * self.opening_stretch_open
+        force += opening
+        return force
 
 
 class VcbModel:
@@ -137,10 +139,15 @@ class VcbModel:
         # d theta4 / d theta_c = -rate phi'
         beta = rod_offset + self.theta_bo
         p, q = l5 * np.cos(beta), l5 * np.sin(beta)
-        y_m = s4 * p - c4 * q
-        ds1 = (s4 * q + c4 * p) * rate * f.dphi
-        return {"follower": f, "phi": f.phi, "dphi": f.dphi, "cos4": c4, "sin4": s4,
-                "s1": y_m - y_m[:, :1], "ds1": ds1}
+        tmp = np.multiply(c4, q)
+        s1 = np.multiply(s4, p)
+        s1 -= tmp  # y_m, in place (hot path)
+        s1 -= s1[:, :1].copy()  # travel from the opened position
+        ds1 = np.multiply(s4, q)
+        ds1 += np.multiply(c4, p, out=tmp)
+        ds1 *= rate
+        ds1 *= f.dphi
+        return {"follower": f, "dphi": f.dphi, "cos4": c4, "sin4": s4, "s1": s1, "ds1": ds1}
 
     def output_angle(self, kin: dict[str, NDArray]) -> NDArray:
         """Output-link angle theta4 (rad, in (-pi, pi]) in the mechanism's frame."""
@@ -218,22 +225,39 @@ class VcbModel:
         (float32 was tried and rejected: cancellation near a dwell cost 5 % in sigma.)"""
         c = self.c
         l2, l6, rf = self.l2, self.l6, self.rf
-        w = l2 * (1 - f.dphi)
-        lc = l6 * f.cos_a
-        v = w - lc
-        # |dp/dtheta|^2 of the pitch curve (Eq 12), Eq 15's numerator base, and Eq 15's
-        # denominator rewritten as speed_sq - phi' w (w - l6 cos) - l2 l6 phi'' sin
-        speed_sq = w * (v - lc) + l6 * l6
-        den = speed_sq - f.dphi * w * v - (l2 * l6) * f.ddphi * f.sin_a
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            # in place where possible (hot path: fewer bytes through the cache)
+            w = np.multiply(f.dphi, -l2)
+            w += l2  # l2 (1 - phi')
+            lc = np.multiply(f.cos_a, l6)
+            v = np.subtract(w, lc)  # w - l6 cos
+            # |dp/dtheta|^2 of the pitch curve (Eq 12), Eq 15's numerator base
+            speed_sq = np.subtract(v, lc, out=lc)
+            speed_sq *= w
+            speed_sq += l6 * l6
+            # Eq 15's denominator, rewritten: speed_sq - phi' w v - l2 l6 phi'' sin
+            den = np.multiply(f.ddphi, f.sin_a)
+            den *= -(l2 * l6)
+            den += speed_sq
+            w *= f.dphi
+            w *= v
+            den -= w
             # with rho_p = |dp|^3 / den (Eq 15) and rho = rho_p - rf, Fn (1/rho + 1/rf)
             # (Eqs 19, 28, p . dp = l6 l2 sin phi') = |T| |dp|^4 / (|p . dp| rf gap),
             # gap = (rho_p - rf) den; Hertz contact needs 1/rho + 1/rf > 0: gap > 0.
             # Its reciprocal is minimised, so a gap <= 0 anywhere shows as a minimum <= 0
-            gap = speed_sq * np.sqrt(speed_sq) - rf * den
-            r = np.abs(f.sin_a * f.dphi) * gap / (np.abs(torque) * (speed_sq * speed_sq))
+            gap = np.sqrt(speed_sq, out=v)
+            gap *= speed_sq
+            den *= rf
+            gap -= den
+            r = np.multiply(f.sin_a, f.dphi, out=den)
+            np.abs(r, out=r)
+            r *= gap
+            np.square(speed_sq, out=speed_sq)
+            speed_sq *= np.abs(torque, out=gap)
+            r /= speed_sq
             low = np.min(r, axis=1)
-            top = np.where(low > 0, 1 / (low * ((l6 * l2) * rf)), np.inf)
+            top = np.where(low > 0, 1 / (low * ((l6 * l2) * rf)), np.inf)  # NaN too
         e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * 1e9, c.poisson,
                                         c.cam_modulus_gpa * 1e9, c.poisson)
         return np.sqrt(top * e_eq / (2 * np.pi * c.contact_length_mm * MM))
@@ -327,7 +351,7 @@ class VcbProblem(Problem):
         kin = m.kinematics(A, link, self.rod_offset)
         torque = m.closing_torque(kc)
         bal = m.balance(kin, torque, self.load)
-        phi_max = np.max(kin["phi"], axis=1) / DEG
+        phi_max = (np.max(kin["follower"].angle, axis=1) - m.xi) / DEG
         lo, hi = c.phi_max_deg
         if detail:
             con = m.contact(kin["follower"], torque)
@@ -358,7 +382,7 @@ class VcbProblem(Problem):
         }
         if detail:
             ends = m.output_angle({k: kin[k][:, [0, -1]] for k in ("cos4", "sin4")}) / DEG
-            psi = cam.pressure_angle(m.l2, m.l6, m.xi, kin["follower"])
+            psi = cam.pressure_angle(m.l2, m.l6, kin["follower"])
             extras.update({
                 "a0": A[:, 0], "a1": A[:, 1], "a2": A[:, 2], "a3": A[:, 3],
                 "pressure_angle_max_deg": np.max(np.abs(psi), axis=1) / DEG,
@@ -400,8 +424,8 @@ class VcbProblem(Problem):
             "cam_angle_deg": m.theta_c / DEG,
             "pitch_x_mm": con["xp"][0] / MM, "pitch_y_mm": con["yp"][0] / MM,
             "profile_x_mm": xc[0] / MM, "profile_y_mm": yc[0] / MM,
-            "follower_angle_deg": kin["phi"][0] / DEG,
-            "pressure_angle_deg": cam.pressure_angle(m.l2, m.l6, m.xi, kin["follower"])[0] / DEG,
+            "follower_angle_deg": kin["follower"].phi[0] / DEG,
+            "pressure_angle_deg": cam.pressure_angle(m.l2, m.l6, kin["follower"])[0] / DEG,
             "curvature_mm": con["curvature"][0] / MM,
             "normal_force_n": con["normal_force"][0],
             "sigma_max_mpa": con["sigma"][0] / 1e6, "tau_max_mpa": con["tau"][0] / 1e6,

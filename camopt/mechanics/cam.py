@@ -25,14 +25,20 @@ def base_angle(l2: ArrayLike, l6: ArrayLike, distance: ArrayLike) -> NDArray:
 
 @dataclass(frozen=True)
 class Follower:
-    """Follower motion on a cam-angle grid with cos and sin of (xi + phi)."""
+    """Follower motion on a cam-angle grid: the angle xi + phi with its cos and sin."""
 
     theta_c: NDArray
-    phi: NDArray
+    xi: float
+    angle: NDArray  # xi + phi
     dphi: NDArray
     ddphi: NDArray
     cos_a: NDArray
     sin_a: NDArray
+
+    @property
+    def phi(self) -> NDArray:
+        """Follower swing from the base-circle position (Eq 6), rad."""
+        return self.angle - self.xi
 
     @classmethod
     def cubic(cls, a: NDArray, theta_c: NDArray, xi: float) -> Follower:
@@ -41,13 +47,14 @@ class Follower:
         t = np.ravel(theta_c)
         one, zero = np.ones_like(t), np.zeros_like(t)
         powers = np.stack([one, t, t * t, t**3])
-        phi = a @ powers
+        angle = a @ powers
+        angle += xi  # after the product: a row's value must not depend on the batch
         dphi = a @ np.stack([zero, one, 2 * t, 3 * t * t])
         ddphi = a @ np.stack([zero, zero, 2 * one, 6 * t])
         # |xi + phi| <= |xi| + sum |a_k| max |t|^k: spares sincos its range check
         bound = float(np.max(np.abs(a) @ np.abs(powers).max(axis=1))) + abs(xi)
-        cos_a, sin_a = sincos(phi + xi, bound if np.isfinite(bound) else None)
-        return cls(t[None, :], phi, dphi, ddphi, cos_a, sin_a)
+        cos_a, sin_a = sincos(angle, bound if np.isfinite(bound) else None)
+        return cls(t[None, :], xi, angle, dphi, ddphi, cos_a, sin_a)
 
 
 def pitch_curve(l2: float, l6: float, f: Follower) -> tuple[NDArray, NDArray, NDArray, NDArray]:
@@ -66,12 +73,12 @@ def profile(xp: ArrayLike, yp: ArrayLike, dxp: ArrayLike, dyp: ArrayLike,
     return xp - rf * dyp / norm, yp + rf * dxp / norm
 
 
-def pressure_angle(l2: float, l6: float, xi: float, f: Follower) -> NDArray:
+def pressure_angle(l2: float, l6: float, f: Follower) -> NDArray:
     """Pressure angle psi = pi/2 - eta - xi - phi (Eqs 13-14), rad."""
     oi = l6 * f.dphi / (1 - f.dphi)
     id_ = np.sqrt(l2**2 + (oi + l6) ** 2 - 2 * l2 * (oi + l6) * f.cos_a)
     eta = np.arcsin(np.clip(l2 * f.sin_a / id_, -1.0, 1.0))
-    return np.pi / 2 - eta - xi - f.phi
+    return np.pi / 2 - eta - f.angle
 
 
 def curvature_radius(l2: float, l6: float, f: Follower, rf: float) -> NDArray:

@@ -6,8 +6,8 @@ call costs ~8 ns per element, 50 multiplications' worth, and the VCB swarm needs
 both for every individual and cam angle. Each angle is split into the nearest
 table angle b = k h (h = 2 pi / 2048) and a remainder |d| <= h / 2, where
 three-term series of cos d and sin d are exact to rounding; one table look-up
-each and an angle-sum rotation give both within a few ulp of libm, for about
-two thirds of the cost of np.cos alone.
+each and an angle-sum rotation give both within a few ulp of libm, for a
+little over half the cost of np.cos alone (60 against 108 us for 100 x 141).
 """
 
 from __future__ import annotations
@@ -42,11 +42,26 @@ def sincos(angle: NDArray, bound: float | None = None) -> tuple[NDArray, NDArray
 
 def _reduced(angle: NDArray) -> tuple[NDArray, NDArray]:
     """sincos for |angle| < _LIMIT."""
-    k = np.rint(angle * (1 / _STEP))
-    d = angle - k * _STEP
+    k = np.multiply(angle, 1 / _STEP)
+    np.rint(k, out=k)
     index = k.astype(np.intp)  # negative k index from the end, as stored
+    d = np.multiply(k, _STEP, out=k)
+    np.subtract(angle, d, out=d)
     cb, sb = np.take(_COS, index), np.take(_SIN, index)
-    d2 = d * d
-    cd = 1.0 + d2 * (d2 * (1 / 24) - 0.5)  # next term d^6/720 < 2e-20
-    sd = d - d * d2 * (1 / 6)  # next term d^5/120 < 1e-16
-    return cb * cd - sb * sd, sb * cd + cb * sd
+    # cos d = 1 - d^2/2 + d^4/24 (next term d^6/720 < 2e-20), sin d = d - d^3/6
+    # (next term d^5/120 < 1e-16); written in place (hot path)
+    d2 = np.multiply(d, d)
+    cd = np.multiply(d2, 1 / 24)
+    cd -= 0.5
+    cd *= d2
+    cd += 1.0
+    d2 *= d
+    d2 *= 1 / 6
+    sd = np.subtract(d, d2, out=d2)
+    cos = np.multiply(cb, cd)
+    sin = np.multiply(sb, cd, out=cd)
+    sb *= sd
+    cos -= sb
+    cb *= sd
+    sin += cb
+    return cos, sin
