@@ -23,6 +23,7 @@ import camopt
 from camopt.config import LoadedConfig
 from camopt.driver import RunRecord
 from camopt.errors import ArchiveError, ConfigError
+from camopt.problem import ACTIVE_TOL
 
 SCHEMA_VERSION = 1
 _STR = h5py.string_dtype()
@@ -208,6 +209,8 @@ def load_run(path: str | Path) -> dict[str, Any]:
                 "feasible": bool(best.attrs["feasible"]),
                 "x": dict(zip(names, (best["x"][()] * scale).tolist())),
                 "metrics": {k: _plain(v) for k, v in best["metrics"].attrs.items()},
+                "active": [c for c, gi in zip(json.loads(f.attrs["constraints"]), best["g"][()])
+                           if abs(gi) <= ACTIVE_TOL],
             },
             "repeats": repeats,
             "table": read_table(f["table"]),

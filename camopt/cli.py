@@ -181,6 +181,7 @@ def _print_show(run_data: dict[str, Any], rows: int | None = None) -> None:
     head = Table(title="best design", show_header=False)
     head.add_row("objective", _fmt(best["objective"]))
     head.add_row("feasible", _fmt(best["feasible"]))
+    head.add_row("active constraints", ", ".join(best.get("active", [])) or "none")
     for k, v in {**best["x"], **best["metrics"]}.items():
         head.add_row(k, _fmt(v))
     out.print(head)

@@ -52,7 +52,8 @@ def test_show_json_has_exactly_the_documented_keys(two_runs):
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)
     assert list(doc) == ["case", "solver", "best", "repeats", "table"]
-    assert set(doc["best"]) == {"objective", "feasible", "x", "metrics"}
+    assert set(doc["best"]) == {"objective", "feasible", "x", "metrics", "active"}
+    assert isinstance(doc["best"]["active"], list)
     for key in ("closure_time_ms", "closure_time_exact_ms", "coils"):
         assert key in doc["best"]["metrics"]
     assert {"seed", "objective", "feasible", "nfev", "wall_s"} <= set(doc["repeats"][0])
@@ -228,3 +229,10 @@ def test_show_compare_reject_non_archives(tmp_path, command, two_runs):
     junk.write_text("not hdf5")
     args = [junk] if command == "show" else [two_runs[0], junk]
     assert_bad(invoke(command, *args), "notes.h5: file: not a camopt archive")
+
+
+def test_polish_of_an_unknown_metric_is_bad_input(tmp_path):
+    out = tmp_path / "r.h5"
+    r = invoke("run", DE, "--out", out, *SMALL_DE, "--set", "solver.polish.minimise=torque")
+    assert_bad(r, "fast_switch_de.toml", "solver", "polish.minimise: no metric 'torque'",
+               folder=tmp_path)

@@ -18,6 +18,7 @@ from pydantic import Field
 from camopt.config.models import SolverOptions
 from camopt.problem import Evaluation
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
+from camopt.solvers.polish import Polishing, PolishOptions
 from camopt.solvers.registry import register_solver
 
 
@@ -32,10 +33,13 @@ class DEGROptions(SolverOptions):
     tolerance: float = Field(
         0.0, ge=0, description="stop early when the population's objective spread is below this"
     )
+    polish: PolishOptions | None = Field(
+        None, description="[solver.polish] table (minimise, limits, margin, maxiter, ftol): "
+        "SLSQP from the best design after the last generation")
 
 
 @register_solver
-class DEGR(Solver):
+class DEGR(Polishing, Solver):
     """Differential evolution DE/best/1 with binomial crossover and bound reflection."""
 
     name = "de_gr"
@@ -48,11 +52,14 @@ class DEGR(Solver):
         self.pop: NDArray | None = None
         self.ev: Evaluation | None = None
         self._trial = False
+        self.check_polish()
 
     def max_iterations(self) -> int:
-        return self.options.generations
+        return self.options.generations + (self.options.polish is not None)
 
     def ask(self) -> NDArray:
+        if self.polish_pending():
+            return self.polish_ask()
         n, d = self.options.population, self.problem.n_var
         if self.pop is None:
             return snap(self.problem, self.lo + self.rng.random((n, d)) * (self.hi - self.lo))
@@ -70,6 +77,8 @@ class DEGR(Solver):
         return snap(self.problem, trial)
 
     def tell(self, X: NDArray, ev: Evaluation) -> None:
+        if self.polish_tell(X, ev):
+            return
         self.nfev += len(X)
         self.nit += 1
         if self.pop is None:
@@ -88,19 +97,30 @@ class DEGR(Solver):
         assert self.ev is not None
         return best_index(self.ev)
 
-    def best(self) -> tuple[NDArray, Evaluation]:
+    def population_best(self) -> tuple[NDArray, Evaluation]:
         i = self._best_index()
         assert self.pop is not None and self.ev is not None
         return self.pop[i].copy(), self.ev.take(i)
+
+    def best(self) -> tuple[NDArray, Evaluation]:
+        return self.with_polish(*self.population_best())
+
+    def notes(self) -> list[str]:
+        return self.polish_notes()
 
     def population_objectives(self) -> NDArray:
         assert self.ev is not None
         return self.ev.f
 
-    def stop_reason(self) -> StopReason | None:
+    def budget_spent(self) -> bool:
         if self.nit >= self.options.generations:
+            return True
+        return bool(self.options.tolerance > 0 and self.ev is not None
+                    and self.ev.feasible.all() and np.ptp(self.ev.f) <= self.options.tolerance)
+
+    def stop_reason(self) -> StopReason | None:
+        if not self.budget_spent() or self.polish_pending():
+            return None
+        if self.nit >= self.options.generations + (self._polished is not None):
             return StopReason.BUDGET
-        if self.options.tolerance > 0 and self.ev is not None and self.ev.feasible.all():
-            if np.ptp(self.ev.f) <= self.options.tolerance:
-                return StopReason.CONVERGED
-        return None
+        return StopReason.CONVERGED

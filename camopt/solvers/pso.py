@@ -18,6 +18,7 @@ from pydantic import Field
 from camopt.config.models import SolverOptions
 from camopt.problem import Evaluation
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
+from camopt.solvers.polish import Polishing, PolishOptions
 from camopt.solvers.registry import register_solver
 
 
@@ -36,10 +37,13 @@ class PSOOptions(SolverOptions):
     repair_probability: dict[str, tuple[float, float]] | None = Field(
         None, description="per correction: trigger probability at the first and last "
         "iteration; None takes the case's defaults")
+    polish: PolishOptions | None = Field(
+        None, description="[solver.polish] table (minimise, limits, margin, maxiter, ftol): "
+        "SLSQP from the best design after the last iteration")
 
 
 @register_solver
-class PSO(Solver):
+class PSO(Polishing, Solver):
     """Particle swarm with optional case repair; ranks particles by Deb's rules."""
 
     name = "pso"
@@ -59,9 +63,13 @@ class PSO(Solver):
         self.P: NDArray | None = None
         self.pev: Evaluation | None = None
         self.cur_f: NDArray | None = None
+        self.check_polish()
 
     def max_iterations(self) -> int:
-        return self.options.iterations
+        return self.options.iterations + (self.options.polish is not None)
+
+    def budget_spent(self) -> bool:
+        return self.nit >= self.options.iterations
 
     def probabilities(self) -> dict[str, float]:
         """Correction probabilities at the current iteration (linear decay)."""
@@ -74,6 +82,8 @@ class PSO(Solver):
         return snap(self.problem, self.problem.repair(X, self.rng, self.probabilities()))
 
     def ask(self) -> NDArray:
+        if self.polish_pending():
+            return self.polish_ask()
         o, n, d = self.options, self.options.particles, self.problem.n_var
         if self.X is None:
             X = self.lo + self.rng.random((n, d)) * (self.hi - self.lo)
@@ -92,6 +102,8 @@ class PSO(Solver):
         return self._repair(snap(self.problem, X))
 
     def tell(self, X: NDArray, ev: Evaluation) -> None:
+        if self.polish_tell(X, ev):
+            return
         self.nfev += len(X)
         self.nit += 1
         if self.X is not None:
@@ -106,14 +118,20 @@ class PSO(Solver):
             f=np.where(win, ev.f, self.pev.f), g=np.where(win[:, None], ev.g, self.pev.g),
             extras={k: np.where(win, ev.extras[k], v) for k, v in self.pev.extras.items()})
 
-    def best(self) -> tuple[NDArray, Evaluation]:
+    def population_best(self) -> tuple[NDArray, Evaluation]:
         assert self.P is not None and self.pev is not None
         i = best_index(self.pev)
         return self.P[i].copy(), self.pev.take(i)
+
+    def best(self) -> tuple[NDArray, Evaluation]:
+        return self.with_polish(*self.population_best())
+
+    def notes(self) -> list[str]:
+        return self.polish_notes()
 
     def population_objectives(self) -> NDArray:
         assert self.cur_f is not None
         return self.cur_f
 
     def stop_reason(self) -> StopReason | None:
-        return StopReason.BUDGET if self.nit >= self.options.iterations else None
+        return StopReason.BUDGET if self.budget_spent() and not self.polish_pending() else None

@@ -1,0 +1,147 @@
+"""A gradient polish of a population solver's best design (scipy's SLSQP).
+
+The same idea as ``polish=True`` in scipy's differential_evolution: the swarm finds
+the basin, a local constrained solver walks to its bottom. Two options make it an
+epsilon-constraint method as well: ``minimise`` picks one of the case's reported
+metrics as the objective, and ``limits`` caps other metrics; every case constraint
+is kept, ``margin`` inside its bound so the end point is strictly feasible.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field
+from scipy.optimize import minimize
+
+from camopt.errors import SolverError
+from camopt.problem import Evaluation, Problem
+from camopt.solvers.base import better
+
+_BAD = 1e6  # stands for a non-finite objective or constraint inside SLSQP
+
+
+class PolishOptions(BaseModel):
+    """``[solver.polish]``: SLSQP from the best design once the budget is spent."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    minimise: str | None = Field(
+        None, description="metric to minimise (the objective's name or one the case "
+        "reports); default the objective")
+    limits: dict[str, float] = Field(
+        default_factory=dict, description="upper limits on the objective or reported metrics, "
+        "kept as constraints")
+    margin: float = Field(
+        1e-7, ge=0, description="normalised distance kept inside each bound (well above the "
+        "1e-9 feasibility round-off, below the 1e-6 that reports a constraint as active)")
+    maxiter: int = Field(500, ge=1, description="SLSQP iterations")
+    ftol: float = Field(1e-10, gt=0, description="SLSQP objective tolerance")
+
+
+def polish(problem: Problem, x0: NDArray, options: PolishOptions
+           ) -> tuple[NDArray, int, str]:
+    """SLSQP in bounds-normalised coordinates from ``x0``: end point, evaluations and
+    scipy's message."""
+    lo, hi = problem.lower, problem.upper
+    cache: dict[bytes, Evaluation] = {}
+
+    def evaluate(u: NDArray) -> Evaluation:
+        key = u.tobytes()
+        if key not in cache:
+            cache.clear()  # SLSQP asks for f and then g at the same point
+            cache[key] = problem.evaluate((lo + u * (hi - lo))[None, :])
+        return cache[key]
+
+    def metric(ev: Evaluation, name: str | None) -> float:
+        own = name is None or name == problem.objective_name
+        return float(ev.f[0] if own else ev.extras[name][0])
+
+    def objective(u: NDArray) -> float:
+        v = metric(evaluate(u), options.minimise)
+        return v if np.isfinite(v) else _BAD
+
+    def constraints(u: NDArray) -> NDArray:
+        ev = evaluate(u)
+        caps = [1 - metric(ev, k) / cap if cap else -metric(ev, k)
+                for k, cap in options.limits.items()]
+        c = np.r_[-ev.g[0], caps] - options.margin
+        return np.where(np.isfinite(c), c, -_BAD)
+
+    res = minimize(objective, np.clip((x0 - lo) / (hi - lo), 0, 1), method="SLSQP",
+                   bounds=[(0.0, 1.0)] * problem.n_var,
+                   constraints=[{"type": "ineq", "fun": constraints}],
+                   options={"maxiter": options.maxiter, "ftol": options.ftol})
+    return lo + np.clip(res.x, 0, 1) * (hi - lo), int(res.nfev), str(res.message)
+
+
+class Polishing:
+    """Mixin for population solvers with a ``polish`` option: after the budget, one more
+    iteration runs :func:`polish` from the best design; the end point replaces the best
+    when Deb's rules prefer it."""
+
+    problem: Problem
+    options: Any
+    nfev: int
+    nit: int
+    _polished: tuple[NDArray, Evaluation] | None = None
+    _polishing = False
+    polish_message = ""
+
+    def budget_spent(self) -> bool:  # pragma: no cover - each solver says
+        raise NotImplementedError
+
+    def population_best(self) -> tuple[NDArray, Evaluation]:  # pragma: no cover
+        raise NotImplementedError
+
+    def check_polish(self) -> None:
+        """Fail at construction, not after the budget, on metric names the case lacks."""
+        o = self.options.polish
+        if o is None:
+            return
+        mid = (self.problem.lower + self.problem.upper) / 2
+        known = [self.problem.objective_name, *self.problem.evaluate(mid[None, :]).extras]
+        for key, name in [("minimise", o.minimise), *(("limits", k) for k in o.limits)]:
+            if name is not None and name not in known:
+                raise SolverError(f"polish.{key}: no metric '{name}'; the case reports "
+                                  f"{', '.join(known)}")
+
+    def polish_pending(self) -> bool:
+        return (self.options.polish is not None and self.budget_spent()
+                and self._polished is None)
+
+    def polish_ask(self) -> NDArray:
+        x, _ = self.population_best()
+        end, nfev, self.polish_message = polish(self.problem, x, self.options.polish)
+        self.nfev += nfev
+        self._polishing = True
+        return end[None, :]
+
+    def polish_tell(self, X: NDArray, ev: Evaluation) -> bool:
+        """Take the polished point if this tell is the polish's; True when it was."""
+        if not self._polishing:
+            return False
+        self._polishing = False
+        self.nfev += len(X)
+        self.nit += 1
+        self._polished = (X[0].copy(), ev.take(0))
+        return True
+
+    def with_polish(self, x: NDArray, ev: Evaluation) -> tuple[NDArray, Evaluation]:
+        """The better of the population's best and the polished design."""
+        if self._polished is None:
+            return x, ev
+        px, pev = self._polished
+        if better(pev.f, pev.violation, ev.f, ev.violation)[0]:
+            return px.copy(), pev
+        return x, ev
+
+    def polish_notes(self) -> list[str]:
+        if self._polished is None:
+            return []
+        x, ev = self.population_best()
+        kept = self.with_polish(x, ev)[1] is not ev
+        return [f"polish (SLSQP): {self.polish_message}; "
+                f"{'replaced' if kept else 'did not improve on'} the population's best"]

@@ -1,0 +1,55 @@
+"""The SLSQP polish stage of the population solvers, on the sphere case."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from camopt.driver import run_repeat
+from camopt.errors import SolverError
+from camopt.solvers import get_solver
+from camopt.solvers.polish import PolishOptions, polish
+from tests.conftest import SphereConfig, SphereProblem
+
+
+class _Cfg:
+    path = "test.toml"
+
+    def __init__(self, name: str, **opts):
+        self.solver = get_solver(name).Options(**opts)
+
+
+SHORT = {"pso": {"particles": 10, "iterations": 5}, "de_gr": {"population": 10, "generations": 5}}
+
+
+@pytest.mark.parametrize("name", ["pso", "de_gr"])
+def test_polish_takes_a_short_search_to_the_optimum(name):
+    """Five iterations leave the sphere's best far from x = 0.3; the polish finishes it."""
+    problem = SphereProblem(SphereConfig())
+    plain = run_repeat(problem, get_solver(name), _Cfg(name, **SHORT[name]),
+                       np.random.SeedSequence(0), 0, 1)
+    polished = run_repeat(problem, get_solver(name),
+                          _Cfg(name, **SHORT[name], polish={}), np.random.SeedSequence(0), 0, 1)
+    assert plain.fun > 1e-3
+    assert polished.fun < 1e-8 and polished.feasible
+    assert polished.nit == plain.nit + 1 and polished.nfev > plain.nfev
+    assert any("replaced" in n for n in polished.notes)
+    np.testing.assert_allclose(polished.x, 0.3, atol=1e-4)
+
+
+def test_polish_minimises_a_metric_under_limits_and_keeps_a_margin():
+    """Epsilon-constraint use: minimise |x| subject to f <= 0.01 (and x0 + x1 <= 1.5)."""
+    problem = SphereProblem(SphereConfig(n_var=2))
+    opts = PolishOptions(minimise="norm", limits={"f": 0.01}, margin=1e-6)
+    x, nfev, _ = polish(problem, np.array([0.3, 0.3]), opts)
+    ev = problem.evaluate(x[None, :])
+    # closest point to the origin on the circle |x - 0.3| = 0.1: along the diagonal
+    np.testing.assert_allclose(ev.extras["norm"][0], np.hypot(0.3, 0.3) - 0.1, rtol=1e-4)
+    assert ev.f[0] <= 0.01 * (1 - 1e-6) + 1e-12 and nfev > 0  # the margin held
+
+
+def test_polish_rejects_unknown_metrics_before_the_search():
+    problem = SphereProblem(SphereConfig())
+    with pytest.raises(SolverError, match="polish.minimise: no metric 'torque'"):
+        get_solver("pso")(problem, get_solver("pso").Options(polish={"minimise": "torque"}),
+                          np.random.default_rng(0))
