@@ -65,7 +65,7 @@ def polish(problem: Problem, x0: NDArray, options: PolishOptions
 
     def constraints(u: NDArray) -> NDArray:
         ev = evaluate(u)
-        caps = [1 - metric(ev, k) / cap if cap else -metric(ev, k)
+        caps = [(cap - metric(ev, k)) / abs(cap) if cap else -metric(ev, k)
                 for k, cap in options.limits.items()]
         c = np.r_[-ev.g[0], caps] - options.margin
         return np.where(np.isfinite(c), c, -_BAD)
@@ -107,6 +107,10 @@ class Polishing:
             if name is not None and name not in known:
                 raise SolverError(f"polish.{key}: no metric '{name}'; the case reports "
                                   f"{', '.join(known)}")
+        if self.problem.integer.any():
+            names = [v.name for v in self.problem.variables if v.integer]
+            raise SolverError(f"polish: SLSQP handles continuous variables only; integer: "
+                              f"{', '.join(names)}")
 
     def polish_pending(self) -> bool:
         return (self.options.polish is not None and self.budget_spent()
