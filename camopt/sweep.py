@@ -14,7 +14,6 @@ import copy
 import itertools
 import json
 import re
-import sys
 from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass, field
@@ -28,16 +27,11 @@ import numpy as np
 
 from camopt import archive
 from camopt.config import LoadedConfig, validate_data
-from camopt.config.loader import apply_override
+from camopt.config.loader import apply_override, parse_value
 from camopt.driver import prepare, run_repeat
 from camopt.errors import ArchiveError, ConfigError
 from camopt.perf import tune_allocator
 from camopt.solvers import solvers
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 SCHEMA_VERSION = 1
 
@@ -79,11 +73,9 @@ def parse_grid(items: Iterable[str]) -> list[tuple[str, list[Any]]]:
         values = []
         for part in _split_top(raw):
             try:
-                values.append(tomllib.loads(f"v = {part.strip()}")["v"])
-            except tomllib.TOMLDecodeError:
-                if not re.fullmatch(r"[A-Za-z_][\w.\-]*", part.strip()):
-                    raise ConfigError("--grid", key, f"cannot parse value {part!r}") from None
-                values.append(part.strip())
+                values.append(parse_value(part))
+            except ValueError:
+                raise ConfigError("--grid", key, f"cannot parse value {part!r}") from None
         grid.append((key, values))
     return grid
 

@@ -264,13 +264,15 @@ class VcbModel:
 
 
 def _unassembled(cos4: NDArray, work: NDArray) -> NDArray:
-    """Fraction of the stroke where the four-bar cannot be assembled, per design; only
-    rows whose work sum is not finite can have any (NaN propagates into the sum)."""
-    frac = np.zeros(len(cos4))
+    """Assembly constraint per design: the fraction of the stroke where the four-bar
+    cannot be assembled, or -1 where it assembles everywhere (satisfied, never "active");
+    only rows whose work sum is not finite can fail (NaN propagates into the sum)."""
+    g = np.full(len(cos4), -1.0)
     rows = ~np.isfinite(work)
     if rows.any():
-        frac[rows] = np.isnan(cos4[rows]).mean(axis=1)
-    return frac
+        frac = np.isnan(cos4[rows]).mean(axis=1)
+        g[rows] = np.where(frac > 0, frac, -1.0)
+    return g
 
 
 def _max(a: NDArray) -> NDArray:

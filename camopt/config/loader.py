@@ -21,7 +21,8 @@ else:  # pragma: no cover
 
 SECTIONS = ("case", "solver", "run")
 EXTENDS = "extends"
-_BARE_WORD = re.compile(r"^[A-Za-z_][\w.\-]*$")
+# a bare word taken as a string: names and paths (runs/vcb-1.h5, /tmp/a.h5, ~/x.h5)
+_BARE_WORD = re.compile(r"^[A-Za-z_./~][\w./~\-+:]*$")
 
 
 @dataclass(frozen=True)
@@ -53,15 +54,23 @@ def parse_overrides(items: Sequence[str]) -> list[tuple[str, Any]]:
         key = key.strip()
         if not sep or not key or not re.fullmatch(r"[A-Za-z_][\w]*(\.[A-Za-z_]\w*)+", key):
             raise ConfigError("--set", item, "expected section.key=value, e.g. run.seed=3")
-        raw = raw.strip()
         try:
-            value = tomllib.loads(f"v = {raw}")["v"]
-        except tomllib.TOMLDecodeError:
-            if not _BARE_WORD.fullmatch(raw):
-                raise ConfigError("--set", key, f"cannot parse value {raw!r}") from None
-            value = raw
-        parsed.append((key, value))
+            parsed.append((key, parse_value(raw)))
+        except ValueError:
+            raise ConfigError("--set", key, f"cannot parse value {raw.strip()!r}") from None
     return parsed
+
+
+def parse_value(raw: str) -> Any:
+    """A command-line value: TOML (3, 1.5, true, [1, 2], {a = 1}, "text"), or a bare
+    word or path taken as a string; ValueError otherwise."""
+    raw = raw.strip()
+    try:
+        return tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        if not _BARE_WORD.fullmatch(raw):
+            raise ValueError(raw) from None
+        return raw
 
 
 def apply_override(data: dict[str, Any], key: str, value: Any) -> None:
