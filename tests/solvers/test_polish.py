@@ -79,3 +79,22 @@ def test_a_negative_limit_caps_from_above():
     y, _, _ = polish(_Lowered(SphereConfig(n_var=2)), np.array([0.3, 0.3]),
                      PolishOptions(**opts, limits={"f": -0.01}))
     np.testing.assert_allclose(y, x, atol=1e-5)
+
+
+class _Staircase(SphereProblem):
+    """Maximise x0 + x1 under x0 + x1 <= 1 measured in steps of 1e-4, like a measure
+    taken on samples: finite differences see a flat constraint and SLSQP overshoots."""
+
+    def evaluate(self, X):
+        X = np.atleast_2d(X)
+        s = X[:, 0] + X[:, 1]
+        g = np.ceil((s - 1.0) / 1e-4) * 1e-4
+        return Evaluation(-s, g[:, None], {"norm": np.linalg.norm(X, axis=1)})
+
+
+def test_polish_restores_feasibility_when_slsqp_stops_outside():
+    problem = _Staircase(SphereConfig(n_var=2))
+    x, _, message = polish(problem, np.array([0.2, 0.2]), PolishOptions())
+    ev = problem.evaluate(x[None, :])
+    assert ev.feasible[0], message
+    assert x.sum() == pytest.approx(1.0, abs=2e-4)
