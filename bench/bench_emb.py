@@ -1,9 +1,11 @@
 """EMB cam: swarm evaluation with the batched spline vs a per-particle loop with scipy
-splines; improved PSO (corrections) vs plain PSO over 10 seeds each."""
+splines; improved PSO (corrections) vs plain PSO over 10 seeds each; the straight-ramp
+design (configs/emb_linear.toml) with and without its SLSQP polish."""
 
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -15,11 +17,12 @@ from camopt.driver import execute
 from camopt.perf import tune_allocator
 from camopt.solvers import solvers
 
-CONFIG = Path(__file__).resolve().parents[1] / "configs" / "emb.toml"
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 
 
-def _load(*overrides: str):
-    return load_config(CONFIG, {n: c.Options for n, c in solvers().items()}, list(overrides))
+def _load(*overrides: str, name: str = "emb.toml"):
+    return load_config(CONFIGS / name, {n: c.Options for n, c in solvers().items()},
+                       list(overrides))
 
 
 class ScipySplines:
@@ -71,10 +74,28 @@ def improved_vs_plain(seeds: int = 10) -> None:
               f"{np.median(found) if found else 'never'} ({len(found)}/{seeds} runs found one)")
 
 
+def ramp_with_and_without_polish() -> None:
+    """The config's 6 repeats; success = feasible with a peak torque <= 5.5 N m."""
+    polished = _load(name="emb_linear.toml")
+    alone = replace(polished, solver=polished.solver.model_copy(update={"polish": None}))
+    for label, cfg in (("swarm alone         ", alone), ("swarm + SLSQP polish", polished)):
+        t0 = time.perf_counter()
+        rec = execute(cfg)
+        wall = time.perf_counter() - t0
+        peaks = np.array([rec.problem.evaluate(r.x[None, :]).extras["peak_torque_nm"][0]
+                          for r in rec.repeats])
+        feas = np.array([r.feasible for r in rec.repeats])
+        ok = feas & (peaks <= 5.5)
+        best = f"{peaks[feas].min():.2f} N m" if feas.any() else "none"
+        print(f"ramp design, {label}: feasible {feas.sum()}/{feas.size}, peak <= 5.5 N m "
+              f"in {ok.sum()}/{ok.size}, best feasible peak {best}, {wall:.0f} s")
+
+
 def main() -> None:
     tune_allocator()
     evaluation_cost()
     improved_vs_plain()
+    ramp_with_and_without_polish()
 
 
 if __name__ == "__main__":
