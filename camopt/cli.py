@@ -10,6 +10,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Annotated, Any
 
+import numpy as np
 import typer
 from pydantic import ValidationError
 from rich.console import Console
@@ -20,7 +21,7 @@ from camopt import archive, report
 from camopt import sweep as sweep_mod
 from camopt.cases import DEFAULT_SOLVER, case_class
 from camopt.config import CASE_CONFIGS, load_config, template
-from camopt.driver import execute, prepare
+from camopt.driver import build_solver, execute, prepare
 from camopt.errors import CamoptError
 from camopt.solvers import solvers
 
@@ -107,6 +108,7 @@ def validate(case: Annotated[Path, typer.Argument(help="case file (TOML)")],
     with _errors():
         config = _load(case, set_)
         problem, solver_cls = prepare(config)
+        build_solver(problem, solver_cls, config, np.random.default_rng(0))  # its own checks
     out.print(f"ok: {case}: case '{config.case.kind}' ({problem.n_var} variables, "
               f"{problem.n_constr} constraints), solver '{solver_cls.name}'")
 

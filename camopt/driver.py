@@ -82,15 +82,22 @@ def prepare(config: LoadedConfig) -> tuple[Problem, type[Solver]]:
     return problem, solver_cls
 
 
+def build_solver(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
+                 rng: np.random.Generator) -> Solver:
+    """The solver for one repeat; what it refuses (options the case cannot meet) is
+    reported as bad input against the case file."""
+    try:
+        return solver_cls(problem, config.solver, rng)
+    except SolverError as exc:
+        raise ConfigError(config.path, "solver", str(exc)) from None
+
+
 def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
                child: np.random.SeedSequence, index: int, repeats: int,
                callback: Callable[[Progress], None] | None = None) -> RepeatRecord:
     """Run one repeat of the solver to its stop reason."""
     start = time.perf_counter()
-    try:
-        solver = solver_cls(problem, config.solver, np.random.default_rng(child))
-    except SolverError as exc:
-        raise ConfigError(config.path, "solver", str(exc)) from None
+    solver = build_solver(problem, solver_cls, config, np.random.default_rng(child))
     nfev, best_f, mean_f, best_v = [], [], [], []
     while (reason := solver.stop_reason()) is None:
         X = solver.ask()

@@ -236,3 +236,8 @@ def test_polish_of_an_unknown_metric_is_bad_input(tmp_path):
     r = invoke("run", DE, "--out", out, *SMALL_DE, "--set", "solver.polish.minimise=torque")
     assert_bad(r, "fast_switch_de.toml", "solver", "polish.minimise: no metric 'torque'",
                folder=tmp_path)
+
+
+def test_validate_runs_the_solver_checks_too():
+    r = invoke("validate", DE, "--set", "solver.polish.minimise=torque")
+    assert_bad(r, "fast_switch_de.toml", "solver", "polish.minimise: no metric 'torque'")
