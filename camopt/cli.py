@@ -187,12 +187,14 @@ def _print_show(run_data: dict[str, Any], rows: int | None = None) -> None:
     for k, v in {**best["x"], **best["metrics"]}.items():
         head.add_row(k, _fmt(v))
     out.print(head)
-    reps = Table(title="repeats")
-    columns = ("seed", "objective", "feasible", "nfev", "converged_nit", "wall_s")
-    for col in columns:
+    # the 19-digit seeds are in --format json; the table names repeats by spawn key
+    reps = Table(title="repeats (spawn key k: SeedSequence(run.seed).spawn(n)[k])")
+    columns = ("objective", "feasible", "nfev", "converged_nit")
+    for col in ("repeat", *columns, "wall_s"):
         reps.add_column(col, justify="right")
     for r in doc["repeats"]:
-        reps.add_row(*(_fmt(r[c]) for c in columns))
+        reps.add_row(_fmt(r["spawn_key"]), *(_fmt(r[c]) for c in columns),
+                     f"{r['wall_s']:.2f}")
     out.print(reps)
     for i, r in enumerate(doc["repeats"]):
         for note in r["notes"]:
