@@ -188,7 +188,7 @@ def _print_show(run_data: dict[str, Any], rows: int | None = None) -> None:
         head.add_row(k, _fmt(v))
     out.print(head)
     # the 19-digit seeds are in --format json; the table names repeats by spawn key
-    reps = Table(title="repeats (spawn key k: SeedSequence(run.seed).spawn(n)[k])")
+    reps = Table(title="repeats (repeat k: child k of SeedSequence(run.seed))")
     columns = ("objective", "feasible", "nfev", "converged_nit")
     for col in ("repeat", *columns, "wall_s"):
         reps.add_column(col, justify="right")
