@@ -52,6 +52,10 @@ def output_motion(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
     # than fresh temporaries at population size (fewer bytes through the cache)
     if branch not in (1.0, -1.0):
         raise ValueError(f"branch must be +1 or -1, not {branch}")
+    if np.broadcast(l1, l2, l3, l4, c1, s1, c2, s2).ndim == 0:  # out= needs arrays
+        c4, s4, rate = output_motion(l1, l2, l3, l4, c1, s1, np.atleast_1d(c2),
+                                     np.atleast_1d(s2), branch)
+        return c4[0], s4[0], rate[0]
     k24 = 2 * l2 * l4
     k12 = 2 * l1 * l2
     b = 1.0 if branch == 1.0 else -1.0

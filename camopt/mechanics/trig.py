@@ -30,6 +30,9 @@ def sincos(angle: NDArray, bound: float | None = None) -> tuple[NDArray, NDArray
     NaN and infinities give NaN as numpy does. A caller that knows |angle| <= ``bound``
     saves the range check."""
     angle = np.asarray(angle, dtype=float)
+    if angle.ndim == 0:  # the in-place arithmetic needs arrays
+        cos, sin = sincos(angle[None], bound)
+        return cos[0], sin[0]
     if bound is not None and bound < _LIMIT:
         return _reduced(angle)
     far = ~(np.abs(angle) < _LIMIT)

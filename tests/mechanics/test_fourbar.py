@@ -23,6 +23,14 @@ def test_output_motion_matches_eq3_and_its_derivative(branch):
     np.testing.assert_allclose(rate, fd, rtol=1e-6)
 
 
+def test_output_motion_takes_scalars():
+    th2 = np.radians(5.0)
+    c4, s4, _ = fourbar.output_motion(L1, L2, L3, L4, np.cos(TH1), np.sin(TH1),
+                                      np.cos(th2), np.sin(th2))
+    assert np.ndim(c4) == 0
+    assert np.arctan2(s4, c4) == pytest.approx(fourbar.output_angle(L1, L2, L3, L4, TH1, th2))
+
+
 def test_output_motion_rejects_other_branches():
     with pytest.raises(ValueError, match="branch"):
         fourbar.output_motion(L1, L2, L3, L4, 1.0, 0.0, 1.0, 0.0, 0.5)

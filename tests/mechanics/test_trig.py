@@ -29,3 +29,7 @@ def test_sincos_of_non_finite_angles_is_nan_like_numpy():
         cos, sin = sincos(np.array([np.nan, np.inf, -np.inf, 0.0]))
     assert np.isnan(cos[:3]).all() and np.isnan(sin[:3]).all()
     assert (cos[3], sin[3]) == (1.0, 0.0)
+
+
+def test_sincos_of_a_scalar():
+    assert sincos(0.5) == pytest.approx((np.cos(0.5), np.sin(0.5)), abs=5e-16)
