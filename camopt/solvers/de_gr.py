@@ -15,14 +15,13 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
-from camopt.config.models import SolverOptions
 from camopt.problem import Evaluation
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
-from camopt.solvers.polish import Polishing, PolishOptions
+from camopt.solvers.polish import PolishableOptions, Polishing
 from camopt.solvers.registry import register_solver
 
 
-class DEGROptions(SolverOptions):
+class DEGROptions(PolishableOptions):
     """Options of ``de_gr``."""
 
     name: Literal["de_gr"] = "de_gr"
@@ -33,9 +32,6 @@ class DEGROptions(SolverOptions):
     tolerance: float = Field(
         0.0, ge=0, description="stop early when the population's objective spread is below this"
     )
-    polish: PolishOptions | None = Field(
-        None, description="[solver.polish] table (minimise, limits, margin, maxiter, ftol): "
-        "SLSQP from the best design after the last generation")
 
 
 @register_solver
@@ -52,7 +48,6 @@ class DEGR(Polishing, Solver):
         self.pop: NDArray | None = None
         self.ev: Evaluation | None = None
         self._trial = False
-        self.check_polish()
 
     def max_iterations(self) -> int:
         return self.options.generations + (self.options.polish is not None)
@@ -101,12 +96,6 @@ class DEGR(Polishing, Solver):
         i = self._best_index()
         assert self.pop is not None and self.ev is not None
         return self.pop[i].copy(), self.ev.take(i)
-
-    def best(self) -> tuple[NDArray, Evaluation]:
-        return self.with_polish(*self.population_best())
-
-    def notes(self) -> list[str]:
-        return self.polish_notes()
 
     def population_objectives(self) -> NDArray:
         assert self.ev is not None

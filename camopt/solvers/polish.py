@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 from scipy.optimize import minimize
 
+from camopt.config.models import SolverOptions
 from camopt.errors import SolverError
 from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import better
@@ -40,6 +41,14 @@ class PolishOptions(BaseModel):
         "end point with ten and a hundred times the margin")
     maxiter: int = Field(500, ge=1, description="SLSQP iterations")
     ftol: float = Field(1e-10, gt=0, description="SLSQP objective tolerance")
+
+
+class PolishableOptions(SolverOptions):
+    """Options of a population solver that can end with a polish."""
+
+    polish: PolishOptions | None = Field(
+        None, description="[solver.polish] table (minimise, limits, margin, maxiter, ftol): "
+        "SLSQP from the best design once the budget is spent")
 
 
 def polish(problem: Problem, x0: NDArray, options: PolishOptions
@@ -128,6 +137,10 @@ class Polishing:
     _polishing = False
     polish_message = ""
 
+    def __init__(self, problem: Problem, options: Any, rng: np.random.Generator) -> None:
+        super().__init__(problem, options, rng)  # type: ignore[call-arg]
+        self.check_polish()
+
     def budget_spent(self) -> bool:  # pragma: no cover - each solver says
         raise NotImplementedError
 
@@ -179,6 +192,12 @@ class Polishing:
         if better(pev.f, pev.violation, ev.f, ev.violation)[0]:
             return px.copy(), pev
         return x, ev
+
+    def best(self) -> tuple[NDArray, Evaluation]:
+        return self.with_polish(*self.population_best())
+
+    def notes(self) -> list[str]:
+        return self.polish_notes()
 
     def polish_notes(self) -> list[str]:
         if self._polished is None:

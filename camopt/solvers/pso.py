@@ -15,14 +15,13 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
-from camopt.config.models import SolverOptions
 from camopt.problem import Evaluation
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
-from camopt.solvers.polish import Polishing, PolishOptions
+from camopt.solvers.polish import PolishableOptions, Polishing
 from camopt.solvers.registry import register_solver
 
 
-class PSOOptions(SolverOptions):
+class PSOOptions(PolishableOptions):
     """Options of ``pso``."""
 
     name: Literal["pso"] = "pso"
@@ -37,9 +36,6 @@ class PSOOptions(SolverOptions):
     repair_probability: dict[str, tuple[float, float]] | None = Field(
         None, description="per correction: trigger probability at the first and last "
         "iteration; None takes the case's defaults")
-    polish: PolishOptions | None = Field(
-        None, description="[solver.polish] table (minimise, limits, margin, maxiter, ftol): "
-        "SLSQP from the best design after the last iteration")
 
 
 @register_solver
@@ -63,7 +59,6 @@ class PSO(Polishing, Solver):
         self.P: NDArray | None = None
         self.pev: Evaluation | None = None
         self.cur_f: NDArray | None = None
-        self.check_polish()
 
     def max_iterations(self) -> int:
         return self.options.iterations + (self.options.polish is not None)
@@ -122,12 +117,6 @@ class PSO(Polishing, Solver):
         assert self.P is not None and self.pev is not None
         i = best_index(self.pev)
         return self.P[i].copy(), self.pev.take(i)
-
-    def best(self) -> tuple[NDArray, Evaluation]:
-        return self.with_polish(*self.population_best())
-
-    def notes(self) -> list[str]:
-        return self.polish_notes()
 
     def population_objectives(self) -> NDArray:
         assert self.cur_f is not None
