@@ -12,17 +12,14 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from camopt.cases.emb_cam import EmbCamProblem
-from camopt.config import load_config
-from camopt.driver import execute
+from camopt.driver import execute, load
 from camopt.perf import tune_allocator
-from camopt.solvers import solvers
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 
 
 def _load(*overrides: str, name: str = "emb.toml"):
-    return load_config(CONFIGS / name, {n: c.Options for n, c in solvers().items()},
-                       list(overrides))
+    return load(CONFIGS / name, list(overrides))
 
 
 class ScipySplines:

@@ -6,8 +6,7 @@ import time
 
 import numpy as np
 
-from camopt.cases.fast_switch import FastSwitchProblem
-from camopt.config.models import FastSwitchConfig
+from camopt.cases.fast_switch import FastSwitchConfig, FastSwitchProblem
 
 
 def main(n_pop: int = 2000) -> None:

@@ -9,14 +9,14 @@ import time
 from pathlib import Path
 
 from camopt import sweep as sw
-from camopt.config import load_config
-from camopt.solvers import solvers
+from camopt.driver import load
+from camopt.sweep.run import run_sweep
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "vcb.toml"
 
 
 def main() -> None:
-    cfg = load_config(CONFIG, {n: c.Options for n, c in solvers().items()})
+    cfg = load(CONFIG)
     spec = sw.SweepSpec(cfg.effective(), str(CONFIG), cfg.text,
                         sw.parse_grid(["solver.population=50,100,200"]), (0, 5))
     times, tables = {}, {}
@@ -24,7 +24,7 @@ def main() -> None:
         for jobs in (1, 2):
             path = Path(tmp) / f"jobs{jobs}.h5"
             t0 = time.perf_counter()
-            results = sw.run_sweep(spec, path, {}, jobs=jobs)
+            results = run_sweep(spec, path, {}, jobs=jobs)
             times[jobs] = time.perf_counter() - t0
             rows = sw.summary(spec, results.values())
             tables[jobs] = json.dumps([{k: v for k, v in r.items() if not k.startswith("wall")}

@@ -10,16 +10,14 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from camopt.cases.vcb import VcbProblem
-from camopt.config import load_config
-from camopt.driver import execute
+from camopt.driver import execute, load
 from camopt.perf import tune_allocator
-from camopt.solvers import solvers
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "vcb.toml"
 
 
 def _load(*overrides: str):
-    return load_config(CONFIG, {n: c.Options for n, c in solvers().items()}, list(overrides))
+    return load(CONFIG, list(overrides))
 
 
 def _time(run) -> float:

@@ -7,20 +7,19 @@ any repeat can be re-run alone from the archived entropy and spawn key.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.cases import build_problem
-from camopt.config import LoadedConfig
+from camopt.cases import build_problem, case_configs
+from camopt.config import LoadedConfig, load_config, validate_data
 from camopt.errors import ConfigError, SolverError
-from camopt.perf import tune_allocator
-from camopt.problem import Problem
-from camopt.solvers import Solver, get_solver
-from camopt.solvers.base import better
+from camopt.problem import Problem, deb_best
+from camopt.solvers import Solver, StopReason, get_solver, solvers
 
 
 @dataclass(frozen=True)
@@ -69,16 +68,34 @@ class RunRecord:
     analysis: dict[str, NDArray]
 
 
+def solver_options() -> dict[str, Any]:
+    """Solver names to their Options models (what the loader validates ``[solver]`` with)."""
+    return {name: cls.Options for name, cls in solvers().items()}
+
+
+def load(path: str | Path, overrides: Sequence[str] = ()) -> LoadedConfig:
+    """Load and validate a case file against every registered case and solver."""
+    return load_config(path, solver_options(), case_configs(), overrides)
+
+
+def validate(data: dict[str, Any], source: str = "<data>") -> LoadedConfig:
+    """Validate parsed case-file data (a sweep cell's) against the registries."""
+    return validate_data(data, solver_options(), case_configs(), source)
+
+
 def prepare(config: LoadedConfig) -> tuple[Problem, type[Solver]]:
-    """Build the case's problem and check the solver can run on it."""
+    """Build the case's problem and check the solver can run on it with these options
+    (a capability the case lacks is bad input against ``solver``)."""
     problem = build_problem(config.case)
     solver_cls = get_solver(config.solver.name)
-    if not solver_cls.supports(type(problem)):
-        raise ConfigError(
-            config.path, "solver.name",
-            f"solver '{solver_cls.name}' cannot run case '{config.case.kind}': it needs "
-            f"{', '.join(solver_cls.requires)}",
-        )
+    try:
+        solver_cls.check(type(problem), config.solver)
+    except SolverError as exc:
+        # a capability every run of the solver needs is the solver's name's fault; one
+        # that only some options need is the options' fault
+        key = "solver.name" if not solver_cls.supports(type(problem)) else "solver"
+        raise ConfigError(config.path, key, f"cannot run case '{config.case.kind}': "
+                          f"{exc}") from None
     return problem, solver_cls
 
 
@@ -95,17 +112,19 @@ def build_solver(problem: Problem, solver_cls: type[Solver], config: LoadedConfi
 def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
                child: np.random.SeedSequence, index: int, repeats: int,
                callback: Callable[[Progress], None] | None = None) -> RepeatRecord:
-    """Run one repeat of the solver to its stop reason."""
+    """Run one repeat of the solver to its stop reason, or to the run's own limits
+    (``run.max_evaluations``, ``run.max_seconds``), whichever comes first."""
     start = time.perf_counter()
     solver = build_solver(problem, solver_cls, config, np.random.default_rng(child))
+    max_nfev, max_s = config.run.max_evaluations, config.run.max_seconds
     nfev, best_f, mean_f, best_v = [], [], [], []
-    while (reason := solver.stop_reason()) is None:
+    while (reason := _stop(solver, start, max_nfev, max_s)) is None:
         X = solver.ask()
         ev = problem.evaluate(X)
         solver.tell(X, ev)
         _, bev = solver.best()
-        population = getattr(solver, "population_objectives", None)
-        pop_f = population() if population else ev.f
+        pop_f = solver.population_objectives()
+        pop_f = ev.f if pop_f is None else pop_f
         finite = pop_f[np.isfinite(pop_f)]
         nfev.append(solver.nfev)
         best_f.append(float(bev.f[0]))
@@ -127,6 +146,18 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
     )
 
 
+def _stop(solver: Solver, start: float, max_nfev: int | None, max_s: float | None
+          ) -> StopReason | None:
+    """The solver's own stop reason, else the run's limits (checked between iterations)."""
+    reason = solver.stop_reason()
+    if reason is None and solver.nit > 0:
+        if max_nfev is not None and solver.nfev >= max_nfev:
+            return StopReason.MAX_EVALUATIONS
+        if max_s is not None and time.perf_counter() - start >= max_s:
+            return StopReason.MAX_SECONDS
+    return reason
+
+
 CONVERGENCE_TOL = 1e-6
 
 
@@ -143,19 +174,16 @@ def converged_iteration(best_f: NDArray, best_v: NDArray, tol: float = CONVERGEN
 
 
 def best_repeat(records: list[RepeatRecord]) -> RepeatRecord:
-    """The best repeat by Deb's rules (least violation, then lowest objective)."""
-    best = records[0]
-    for rec in records[1:]:
-        if better(np.array(rec.fun), np.array(rec.violation),
-                  np.array(best.fun), np.array(best.violation)):
-            best = rec
-    return best
+    """The best repeat by Deb's rules (least violation, then lowest objective; the first
+    of equals)."""
+    return records[deb_best([r.fun for r in records], [r.violation for r in records])]
 
 
 def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None = None,
             callback: Callable[[Progress], None] | None = None) -> RunRecord:
-    """Run a validated config: every repeat, then the best design's metrics and analysis."""
-    tune_allocator()
+    """Run a validated config: every repeat, then the best design's metrics and analysis.
+    ``seed`` and ``repeats`` override the config's (prefer setting ``run.seed`` and
+    ``run.repeats`` in the config, so the archive records the config as run)."""
     problem, solver_cls = prepare(config)
     seed = config.run.seed if seed is None else seed
     repeats = config.run.repeats if repeats is None else repeats
@@ -163,10 +191,5 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
     records = [run_repeat(problem, solver_cls, config, child, i, repeats, callback)
                for i, child in enumerate(children)]
     best = best_repeat(records)
-    if callable(getattr(problem, "metrics", None)):
-        metrics = dict(problem.metrics(best.x))  # type: ignore[attr-defined]
-    else:
-        ev = problem.evaluate(best.x[None, :])
-        metrics = {k: float(v[0]) for k, v in ev.extras.items()}
-    analysis = dict(getattr(problem, "analysis", lambda x: {})(best.x))
-    return RunRecord(config, problem, seed, records, best, metrics, analysis)
+    return RunRecord(config, problem, seed, records, best, dict(problem.metrics(best.x)),
+                     dict(problem.analysis(best.x)))

@@ -6,30 +6,22 @@ from __future__ import annotations
 import csv
 import json
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from camopt import report
-
-PROFILES = {  # case kind -> (file suffix, x curve, y curve), in drawing order
-    "vcb": [("cam-profile", "profile_x_mm", "profile_y_mm"),
-            ("cam-pitch-curve", "pitch_x_mm", "pitch_y_mm")],
-    "emb_cam": [("cam-profile", ("profile_x_mm", "nonworking_x_mm"),
-                 ("profile_y_mm", "nonworking_y_mm"))],
-}
+from camopt.cases import get_case
+from camopt.runview import RunView
 
 
-def _series(analysis: dict[str, np.ndarray], key: Any) -> np.ndarray:
-    if isinstance(key, tuple):
-        return np.concatenate([np.asarray(analysis[k]) for k in key])
-    return np.asarray(analysis[key])
+def _series(analysis: dict[str, np.ndarray], keys: tuple[str, ...]) -> np.ndarray:
+    return np.concatenate([np.asarray(analysis[k]) for k in keys])
 
 
-def export_run(run: dict[str, Any], out_dir: Path, stem: str, fmt: str) -> list[Path]:
+def export_run(run: RunView, out_dir: Path, stem: str, fmt: str) -> list[Path]:
     """Write the export files; returns their paths."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    analysis = run["extra"]["analysis"]
+    analysis = run.analysis
     doc = report.show(run)
     written = []
     if fmt == "json":
@@ -58,10 +50,12 @@ def export_run(run: dict[str, Any], out_dir: Path, stem: str, fmt: str) -> list[
                 w.writerow(keys)
                 w.writerows(np.column_stack([np.asarray(analysis[k]) for k in keys]).tolist())
             written.append(path)
-    for suffix, xk, yk in PROFILES.get(run["case"]["kind"], []):
-        x, y = _series(analysis, xk), _series(analysis, yk)
+    for curve in get_case(run.kind).profiles:
+        if not all(k in analysis for k in (*curve.x, *curve.y)):
+            continue
+        x, y = _series(analysis, curve.x), _series(analysis, curve.y)
         ok = np.isfinite(x) & np.isfinite(y)
-        path = out_dir / f"{stem}-{suffix}.txt"
+        path = out_dir / f"{stem}-{curve.name}.txt"
         np.savetxt(path, np.column_stack([x[ok], y[ok], np.zeros(ok.sum())]), fmt="%.6f",
                    delimiter=",")
         written.append(path)

@@ -7,7 +7,7 @@ engineering units while the models stay SI.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,7 +22,9 @@ FEASIBILITY_TOL = 1e-9
 
 @dataclass(frozen=True)
 class Variable:
-    """One design variable: SI bounds, display name with unit, and the SI-to-display factor."""
+    """One design variable: SI bounds, display name with unit, and the SI-to-display factor
+    (``display = SI * scale``); ``integer`` variables take whole values; ``symbol`` is the
+    paper's name for it (``x9``)."""
 
     name: str
     lower: float
@@ -35,7 +37,8 @@ class Variable:
 @dataclass(frozen=True)
 class Evaluation:
     """Objective ``f`` (n_pop,), normalised constraints ``g`` (n_pop, n_constr), feasible iff
-    all ``g <= 0``; ``extras`` holds per-candidate metrics keyed by unit-carrying names."""
+    all ``g <= 0``; ``extras`` holds per-candidate metrics (n_pop,) keyed by unit-carrying
+    names (``tau_max_mpa``)."""
 
     f: NDArray
     g: NDArray
@@ -43,12 +46,14 @@ class Evaluation:
 
     @property
     def violation(self) -> NDArray:
-        """Sum of constraint excesses over FEASIBILITY_TOL; NaN counts as infinitely violated."""
+        """Sum of constraint excesses over FEASIBILITY_TOL, (n_pop,); NaN counts as
+        infinitely violated."""
         g = np.where(np.isnan(self.g), np.inf, self.g)
         return np.clip(g - FEASIBILITY_TOL, 0.0, None).sum(axis=1)
 
     @property
     def feasible(self) -> NDArray:
+        """(n_pop,) bool: no constraint violated and a finite objective."""
         return (self.violation == 0.0) & np.isfinite(self.f)
 
     def take(self, index: NDArray | int) -> Evaluation:
@@ -56,13 +61,39 @@ class Evaluation:
         idx = np.atleast_1d(index)
         return Evaluation(self.f[idx], self.g[idx], {k: v[idx] for k, v in self.extras.items()})
 
+    def where(self, mask: NDArray, other: Evaluation) -> Evaluation:
+        """Row-wise choice: this evaluation's rows where ``mask`` (n_pop,) is true, else
+        ``other``'s (same population size, same extras)."""
+        return Evaluation(
+            f=np.where(mask, self.f, other.f),
+            g=np.where(mask[:, None], self.g, other.g),
+            extras={k: np.where(mask, v, other.extras[k]) for k, v in self.extras.items()},
+        )
+
+    @staticmethod
+    def concat(evaluations: Sequence[Evaluation]) -> Evaluation:
+        """The evaluations of several batches as one, in order (extras of the first)."""
+        first = evaluations[0]
+        return Evaluation(
+            f=np.concatenate([e.f for e in evaluations]),
+            g=np.concatenate([e.g for e in evaluations]),
+            extras={k: np.concatenate([e.extras[k] for e in evaluations])
+                    for k in first.extras},
+        )
+
+
+def deb_best(f: NDArray, violation: NDArray) -> int:
+    """Index of the best candidate by Deb's rules: least violation, then lowest objective
+    (the one ranking camopt uses for populations, starts and repeats alike)."""
+    return int(np.lexsort((np.asarray(f, dtype=float), np.asarray(violation, dtype=float)))[0])
+
 
 class Problem:
     """Base of every case's problem: bounded variables, constraints, ``evaluate``.
 
-    Optional capabilities a solver may look for: ``family()`` (enumeration),
-    ``repair(X, rng, progress)`` (PSO corrections), ``residuals(X)`` (Newton),
-    ``metrics(x)`` and ``analysis(x)`` (detailed single-design output for archives).
+    Optional capabilities a solver may need are Protocols in
+    :mod:`camopt.capabilities` that a case's Problem subclasses to declare them.
+    The single-design outputs below have generic defaults that a case refines.
     """
 
     variables: tuple[Variable, ...] = ()
@@ -83,10 +114,12 @@ class Problem:
 
     @property
     def lower(self) -> NDArray:
+        """SI lower bounds, (n_var,)."""
         return np.array([v.lower for v in self.variables], dtype=float)
 
     @property
     def upper(self) -> NDArray:
+        """SI upper bounds, (n_var,)."""
         return np.array([v.upper for v in self.variables], dtype=float)
 
     @property
@@ -98,8 +131,42 @@ class Problem:
         return np.array([v.scale for v in self.variables], dtype=float)
 
     def evaluate(self, X: NDArray) -> Evaluation:  # pragma: no cover - abstract
+        """Objective, constraints and search metrics of designs ``X`` (n_pop, n_var), SI."""
         raise NotImplementedError
 
+    # ---- the unit cube ----------------------------------------------------------------
+    def to_unit(self, X: NDArray) -> NDArray:
+        """SI designs to bounds-normalised coordinates (0 at the lower, 1 at the upper bound)."""
+        return (np.asarray(X, dtype=float) - self.lower) / (self.upper - self.lower)
+
+    def from_unit(self, U: NDArray) -> NDArray:
+        """Bounds-normalised coordinates back to SI designs: ``lower + U (upper - lower)``."""
+        return self.lower + np.asarray(U, dtype=float) * (self.upper - self.lower)
+
+    def sample(self, rng: np.random.Generator, n: int) -> NDArray:
+        """``n`` designs drawn uniformly within the bounds, (n, n_var), SI (integers not
+        rounded: solvers snap)."""
+        return self.from_unit(rng.random((n, self.n_var)))
+
+    # ---- single-design output (generic defaults) --------------------------------------
+    def describe(self, X: NDArray) -> Evaluation:
+        """As :meth:`evaluate`, plus descriptive metrics for tables (not the hot path)."""
+        return self.evaluate(X)
+
+    def metrics(self, x: NDArray) -> dict[str, object]:
+        """Headline metrics of one design ``x`` (n_var,) for the archive's ``/best``."""
+        ev = self.describe(np.asarray(x, dtype=float)[None, :])
+        return {k: float(v[0]) for k, v in ev.extras.items()}
+
+    def analysis(self, x: NDArray) -> dict[str, NDArray]:
+        """Curves of one design for the archive's ``/analysis`` (none by default)."""
+        return {}
+
+    def initial_x(self) -> NDArray | None:
+        """The case's own starting design (SI) for local solvers, or None."""
+        return None
+
+    # ---- display units ----------------------------------------------------------------
     def to_display(self, x: NDArray) -> dict[str, float]:
         """A single SI design as ``{name_with_unit: value}``."""
         return {v.name: float(xi * v.scale) for v, xi in zip(self.variables, x)}
@@ -120,3 +187,7 @@ class Problem:
     def active(self, g_row: NDArray) -> list[str]:
         """Names of the constraints at their bound (within ACTIVE_TOL) for one candidate."""
         return [n for n, gi in zip(self.constraint_names, g_row) if abs(gi) <= ACTIVE_TOL]
+
+    def violated(self, g_row: NDArray) -> list[str]:
+        """Names of the constraints a candidate violates (NaN counts as violated)."""
+        return [n for n, gi in zip(self.constraint_names, g_row) if not gi <= FEASIBILITY_TOL]

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import math
+from dataclasses import asdict
 from typing import Any
 
 import numpy as np
 
 from camopt import stats
+from camopt.runview import RunView
 
 SHOW_KEYS = ("case", "solver", "best", "repeats", "table")
 
@@ -25,14 +27,16 @@ def jsonable(value: Any) -> Any:
     return value
 
 
-def show(run: dict[str, Any]) -> dict[str, Any]:
+REPEAT_KEYS = ("seed", "objective", "feasible", "nfev", "wall_s", "converged_nit", "spawn_key",
+               "notes")
+
+
+def show(run: RunView) -> dict[str, Any]:
     """The ``show --format json`` document: exactly case, solver, best, repeats, table."""
-    keys = ("seed", "objective", "feasible", "nfev", "wall_s", "converged_nit", "spawn_key",
-            "notes")
-    repeats = [{k: r[k] for k in keys}
-               for r in run["repeats"]]
-    doc = {"case": run["case"], "solver": run["solver"], "best": run["best"],
-           "repeats": repeats, "table": run["table"]}
+    repeats = [{k: getattr(r, k) for k in REPEAT_KEYS} for r in run.repeats]
+    best = {k: v for k, v in asdict(run.best).items() if k != "repeat"}
+    doc = {"case": run.case, "solver": run.solver, "best": best, "repeats": repeats,
+           "table": run.table}
     return jsonable(doc)
 
 
@@ -44,21 +48,16 @@ def _flatten(prefix: str, value: Any, out: dict[str, Any]) -> None:
         out[prefix] = value
 
 
-def repeat_statistics(run: dict[str, Any]) -> dict[str, Any]:
-    """Best, median and worst final objective over repeats and the feasible fraction."""
-    f = np.array([r["objective"] for r in run["repeats"]], dtype=float)
-    feasible = np.array([r["feasible"] for r in run["repeats"]], dtype=bool)
-    return {"repeats": int(f.size), "best": float(np.min(f)), "median": float(np.median(f)),
-            "worst": float(np.max(f)), "feasible_fraction": float(feasible.mean())}
+def repeat_statistics(run: RunView) -> stats.RunStatistics:
+    """Statistics of the final objectives over a run's repeats (infeasible as +inf)."""
+    return stats.run_statistics([r.objective for r in run.repeats],
+                                [r.feasible for r in run.repeats], run.run.get("target"))
 
 
-def _finals(run: dict[str, Any]) -> tuple[np.ndarray, int]:
-    """Final objectives (infeasible as +inf) and the number of successes against
-    ``run.target`` (feasible, and at or below the target when one is set)."""
-    target = run["extra"]["run"].get("target")
-    f = np.array([r["objective"] if r["feasible"] else np.inf for r in run["repeats"]])
-    ok = np.isfinite(f) & (f <= target if target is not None else True)
-    return f, int(np.sum(ok))
+def _finals(run: RunView) -> tuple[np.ndarray, int]:
+    """Final objectives as ranked (infeasible as +inf) and the number of successes."""
+    f = stats.ranked([r.objective for r in run.repeats], [r.feasible for r in run.repeats])
+    return f, repeat_statistics(run).successes
 
 
 def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarray,
@@ -71,14 +70,13 @@ def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarra
             "verdict": stats.verdict(name_a, name_b, test)}
 
 
-def compare(runs: list[dict[str, Any]]) -> dict[str, Any]:
+def compare(runs: list[RunView]) -> dict[str, Any]:
     """Config differences, best objectives, variables, metrics and repeat statistics;
     for two runs with repeats, a significance test of their final objectives."""
     flat = []
     for run in runs:
         cfg: dict[str, Any] = {}
-        _flatten("", {"case": run["case"], "solver": run["solver"], "run": run["extra"]["run"]},
-                 cfg)
+        _flatten("", {"case": run.case, "solver": run.solver, "run": run.run}, cfg)
         flat.append(cfg)
     keys = sorted(set().union(*flat))
     differences = {k: [c.get(k) for c in flat] for k in keys
@@ -87,23 +85,23 @@ def compare(runs: list[dict[str, Any]]) -> dict[str, Any]:
     def side_by_side(section: str) -> dict[str, list[Any]]:
         names: list[str] = []
         for run in runs:
-            names += [n for n in run["best"][section] if n not in names]
-        return {n: [run["best"][section].get(n) for run in runs] for n in names}
+            names += [n for n in getattr(run.best, section) if n not in names]
+        return {n: [getattr(run.best, section).get(n) for run in runs] for n in names}
 
     return jsonable({
-        "runs": [run["extra"]["path"] for run in runs],
+        "runs": [run.path for run in runs],
         "config_differences": differences,
-        "objective": [run["best"]["objective"] for run in runs],
-        "feasible": [run["best"]["feasible"] for run in runs],
+        "objective": [run.best.objective for run in runs],
+        "feasible": [run.best.feasible for run in runs],
         "x": side_by_side("x"),
         "metrics": side_by_side("metrics"),
-        "statistics": [repeat_statistics(run) for run in runs],
+        "statistics": [repeat_statistics(run).as_dict() for run in runs],
         "tests": _pairwise(runs),
     })
 
 
-def _pairwise(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    if len(runs) != 2 or min(len(r["repeats"]) for r in runs) < 2:
+def _pairwise(runs: list[RunView]) -> list[dict[str, Any]]:
+    if len(runs) != 2 or min(len(r.repeats) for r in runs) < 2:
         return []
     (fa, ka), (fb, kb) = _finals(runs[0]), _finals(runs[1])
     return [significance("A", fa, ka, "B", fb, kb)]
@@ -112,13 +110,13 @@ def _pairwise(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
 def rank_sweep(spec: Any, results: dict) -> dict[str, Any]:
     """Grid points ranked by success rate, then median objective; each tested against
     the best point."""
-    from camopt.sweep import summary
+    from camopt.sweep.spec import summary
 
     rows = summary(spec, results.values())
     order = sorted(rows, key=lambda r: (-r["success_rate"], r["median"]))
-    finals = {}
+    finals: dict[int, list[float]] = {}
     for r in results.values():
-        finals.setdefault(r.point, []).append(r.objective if r.feasible else np.inf)
+        finals.setdefault(r.point, []).append(float(stats.ranked([r.objective], [r.feasible])[0]))
     best = order[0]
     ranking = []
     for rank, row in enumerate(order, 1):

@@ -2,13 +2,58 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
 ALPHA = 0.05
+
+
+def ranked(objectives: ArrayLike, feasible: ArrayLike) -> NDArray:
+    """Final objectives as they rank across runs: an infeasible (or NaN) run counts +inf."""
+    f = np.asarray(objectives, dtype=float)
+    return np.where(np.asarray(feasible, dtype=bool) & ~np.isnan(f), f, np.inf)
+
+
+def succeeded(objectives: ArrayLike, feasible: ArrayLike, target: float | None) -> NDArray:
+    """camopt's one definition of a successful run: feasible, and at or below ``target``
+    when the case file sets ``run.target``."""
+    f = ranked(objectives, feasible)
+    return np.isfinite(f) & (f <= target if target is not None else True)
+
+
+@dataclass(frozen=True)
+class RunStatistics:
+    """Statistics of final objectives over runs (repeats of a run, seeds of a sweep
+    point); infeasible runs count +inf in best/median/worst."""
+
+    runs: int
+    best: float
+    median: float
+    worst: float
+    feasible_fraction: float
+    successes: int
+    success_rate: float
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def run_statistics(objectives: Sequence[float], feasible: Sequence[bool],
+                   target: float | None) -> RunStatistics:
+    """:class:`RunStatistics` of a set of runs (NaN statistics when there are none)."""
+    n = len(objectives)
+    if n == 0:
+        nan = float("nan")
+        return RunStatistics(0, nan, nan, nan, nan, 0, nan)
+    f = ranked(objectives, feasible)
+    ok = int(np.sum(succeeded(objectives, feasible, target)))
+    return RunStatistics(n, float(np.min(f)), float(np.median(f)), float(np.max(f)),
+                         float(np.mean(np.asarray(feasible, dtype=bool))), ok, ok / n)
 
 
 def success_rate(successes: int, runs: int, confidence: float = 0.95) -> dict[str, float]:

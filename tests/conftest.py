@@ -9,7 +9,7 @@ from typing import Literal
 import numpy as np
 import pytest
 
-from camopt import cases
+from camopt.cases import CaseSpec, register_case
 from camopt.config import models
 from camopt.problem import Evaluation, Problem, Variable
 
@@ -57,11 +57,12 @@ class SphereProblem(Problem):
         return Evaluation(f, g, {"norm": np.linalg.norm(X, axis=1)})
 
 
+SPHERE = register_case(CaseSpec(kind="sphere", config=SphereConfig, problem=SphereProblem,
+                                default_solver="de_gr", summary="test-only shifted sphere"))
+"""The test-only case, registered like any plugin case (no monkeypatching)."""
+
+
 @pytest.fixture
-def sphere_case(monkeypatch: pytest.MonkeyPatch) -> type[SphereProblem]:
-    """Register the sphere case kind for the duration of a test."""
-    monkeypatch.setitem(models.CASE_CONFIGS, "sphere", SphereConfig)
-    monkeypatch.setitem(cases.CASE_BUILDERS, "sphere", SphereProblem)
-    monkeypatch.setitem(cases.CASE_CLASSES, "sphere", "tests.conftest:SphereProblem")
-    monkeypatch.setitem(cases.DEFAULT_SOLVER, "sphere", "de_gr")
+def sphere_case() -> type[SphereProblem]:
+    """The sphere case's Problem class (the kind is registered at import)."""
     return SphereProblem

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from camopt.config import LoadedConfig, load_config
-from camopt.solvers import solvers
+from camopt.config import LoadedConfig
+from camopt.driver import load as load_case_file
 
 
 def load(path: str | Path, *overrides: str) -> LoadedConfig:
-    """Load a case file with every registered solver available."""
-    return load_config(path, {n: c.Options for n, c in solvers().items()}, list(overrides))
+    """Load a case file with every registered case and solver available."""
+    return load_case_file(path, list(overrides))

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from camopt import archive
+from camopt.archive import runs
 from camopt.driver import execute
 from camopt.errors import ArchiveError
 from tests.conftest import CONFIGS
@@ -51,7 +52,7 @@ def test_repeats_get_distinct_seeds_from_one_spawn(tmp_path):
     assert len({r.seed for r in rec.repeats}) == 5
     assert len({r.fun for r in rec.repeats}) > 1
     run = archive.load_run(archive.write_run(rec, tmp_path / "r.h5"))
-    assert run["extra"]["seed_entropy"] == "11"
+    assert run.seed_entropy == "11"
     # any repeat re-runs alone from entropy and spawn key
     again = execute(_de(), repeats=5, seed=11).repeats[3]
     assert again.fun == rec.repeats[3].fun
@@ -60,10 +61,10 @@ def test_repeats_get_distinct_seeds_from_one_spawn(tmp_path):
 def test_round_trip_has_what_show_needs(tmp_path):
     rec = execute(_de("run.repeats=2"))
     run = archive.load_run(archive.write_run(rec, tmp_path / "x.h5"))
-    assert run["best"]["objective"] == rec.best.fun
-    assert set(run["best"]["x"]) == set(rec.problem.names)
-    assert len(run["repeats"]) == 2 and len(run["extra"]["histories"]) == 2
-    assert run["extra"]["config_toml"] == (CONFIGS / "fast_switch_de.toml").read_text()
+    assert run.best.objective == rec.best.fun
+    assert set(run.best.x) == set(rec.problem.names)
+    assert len(run.repeats) == 2 and len(run.histories()) == 2
+    assert run.config_toml == (CONFIGS / "fast_switch_de.toml").read_text()
     with h5py.File(tmp_path / "x.h5", "r") as f:
         for key in ("python_version", "numpy_version", "scipy_version", "h5py_version"):
             assert f.attrs[key]
@@ -77,7 +78,7 @@ def test_interrupted_write_leaves_nothing(tmp_path, monkeypatch):
         f.attrs["partial"] = 1
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(archive, "_write", boom)
+    monkeypatch.setattr(runs, "_write", boom)
     with pytest.raises(KeyboardInterrupt):
         archive.write_run(rec, tmp_path / "x.h5")
     assert list(tmp_path.iterdir()) == []

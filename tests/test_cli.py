@@ -8,6 +8,7 @@ import os
 import pytest
 from typer.testing import CliRunner
 
+from camopt.cases import cases
 from camopt.cli import app
 from tests.conftest import CONFIGS
 
@@ -52,7 +53,7 @@ def test_show_json_has_exactly_the_documented_keys(two_runs):
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)
     assert list(doc) == ["case", "solver", "best", "repeats", "table"]
-    assert set(doc["best"]) == {"objective", "feasible", "x", "metrics", "active"}
+    assert set(doc["best"]) == {"objective", "feasible", "x", "metrics", "active", "violated"}
     assert isinstance(doc["best"]["active"], list)
     for key in ("closure_time_ms", "closure_time_exact_ms", "coils"):
         assert key in doc["best"]["metrics"]
@@ -74,9 +75,9 @@ def test_compare_two_runs(two_runs):
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)
     assert doc["config_differences"]["solver.name"] == ["enumeration", "de_gr"]
-    assert doc["statistics"][1]["repeats"] == 3
-    assert set(doc["statistics"][0]) == {"repeats", "best", "median", "worst",
-                                         "feasible_fraction"}
+    assert doc["statistics"][1]["runs"] == 3
+    assert set(doc["statistics"][0]) == {"runs", "best", "median", "worst",
+                                         "feasible_fraction", "successes", "success_rate"}
     assert len(doc["metrics"]["closure_time_ms"]) == 2
     r = invoke("compare", *two_runs)
     assert r.exit_code == 0 and "feasible_fraction" in r.stdout
@@ -93,8 +94,7 @@ def test_validate_init_solvers(tmp_path):
     assert r.exit_code == 0 and "de_gr" in r.stdout and "fast_switch" in r.stdout
 
 
-@pytest.mark.parametrize("kind", ["fast_switch", "vcb", "vcb_identify", "opening_spring",
-                                  "emb_cam"])
+@pytest.mark.parametrize("kind", sorted(cases()))
 def test_init_template_validates_for_every_kind(tmp_path, kind):
     path = tmp_path / f"{kind}.toml"
     r = invoke("init", kind, "--out", path)
@@ -241,3 +241,24 @@ def test_polish_of_an_unknown_metric_is_bad_input(tmp_path):
 def test_validate_runs_the_solver_checks_too():
     r = invoke("validate", DE, "--set", "solver.polish.minimise=torque")
     assert_bad(r, "fast_switch_de.toml", "solver", "polish.minimise: no metric 'torque'")
+
+
+# ---- a solver or option the case cannot serve: exit 2 at validate, before any work ----
+
+VCB = str(CONFIGS / "vcb.toml")
+
+
+def test_corrections_asked_of_a_case_without_them(tmp_path):
+    r = invoke("validate", VCB, "--set", "solver.name=pso", "--set", "solver.repair=true")
+    assert_bad(r, "solver:", "cannot run case 'vcb'", "repair")
+
+
+def test_misspelt_correction_name(tmp_path):
+    r = invoke("validate", str(CONFIGS / "emb.toml"), "--set",
+               "solver.repair_probability={ adjacnet = [1.0, 0.1] }")
+    assert_bad(r, "repair_probability", "'adjacnet'", "adjacent")
+
+
+def test_step_two_without_a_step_one_design(tmp_path):
+    assert_bad(invoke("validate", VCB, "--set", "case.step=fourbar"), "case:",
+               "cam_design or cam_archive")

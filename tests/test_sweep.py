@@ -13,6 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 from camopt import sweep as sweep_mod
+from camopt.archive.sweeps import load_sweep
 from camopt.cli import app
 from tests.conftest import CONFIGS
 
@@ -30,7 +31,7 @@ def sweep(tmp_path, name, *args):
 
 
 def stable_summary(path):
-    spec, results = sweep_mod.load_sweep(path)
+    spec, results = load_sweep(path)
     rows = sweep_mod.summary(spec, results.values())
     # as JSON text: NaN (no run reached the target) compares equal to itself
     return json.dumps([{k: v for k, v in row.items() if k not in VOLATILE} for row in rows],
@@ -38,7 +39,7 @@ def stable_summary(path):
 
 
 def cells(path):
-    _, results = sweep_mod.load_sweep(path)
+    _, results = load_sweep(path)
     return {k: {f: v for f, v in vars(r).items() if f != "wall_s"} for k, r in results.items()}
 
 
@@ -66,7 +67,7 @@ def _wait_for_cells(out, n, proc, timeout=60.0):
     t0 = time.time()
     while time.time() - t0 < timeout:
         if out.exists():
-            spec, results = sweep_mod.load_sweep(out)  # never half-written
+            spec, results = load_sweep(out)  # never half-written
             if len(results) >= n:
                 return len(results)
         if proc.poll() is not None:
@@ -84,7 +85,7 @@ def test_interrupt_kill_and_resume_equal_uninterrupted(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
     assert b"--resume" in err
-    done_after_int = len(sweep_mod.load_sweep(out)[1])
+    done_after_int = len(load_sweep(out)[1])
     assert done_after_int >= 2
     # resume, then SIGKILL mid-way: nothing finished is lost
     proc = subprocess.Popen([sys.executable, "-m", "camopt", "sweep", "--resume", str(out),
@@ -93,7 +94,7 @@ def test_interrupt_kill_and_resume_equal_uninterrupted(tmp_path):
     _wait_for_cells(out, done_after_int + 2, proc)
     proc.send_signal(signal.SIGKILL)
     proc.wait(timeout=30)
-    done_after_kill = len(sweep_mod.load_sweep(out)[1])
+    done_after_kill = len(load_sweep(out)[1])
     assert done_after_kill >= done_after_int + 2
     r = runner.invoke(app, ["sweep", "--resume", str(out), "--quiet", "--jobs", "2"])
     assert r.exit_code == 0, r.output

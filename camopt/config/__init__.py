@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 from camopt.config.loader import LoadedConfig, load_config, parse_overrides, validate_data
-from camopt.config.models import CASE_CONFIGS, CaseConfig, RunSection, SolverOptions, template
+from camopt.config.models import CaseConfig, RunSection, SolverOptions, template
 
 __all__ = [
-    "CASE_CONFIGS",
     "CaseConfig",
     "LoadedConfig",
     "RunSection",

@@ -11,7 +11,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from camopt.config.models import CASE_CONFIGS, CaseConfig, RunSection, SolverOptions
+from camopt.config.models import CaseConfig, RunSection, SolverOptions
 from camopt.errors import ConfigError
 
 if sys.version_info >= (3, 11):
@@ -21,7 +21,7 @@ else:  # pragma: no cover
 
 SECTIONS = ("case", "solver", "run")
 EXTENDS = "extends"
-# a bare word taken as a string: names and paths (runs/vcb-1.h5, /tmp/a.h5, ~/x.h5)
+# a bare word taken as a string: names and paths (runs/run-1.h5, /tmp/a.h5, ~/x.h5)
 _BARE_WORD = re.compile(r"^[A-Za-z_./~][\w./~\-+:]*$")
 
 
@@ -119,8 +119,11 @@ def _validate(
             what = "missing required key"
         else:
             what = error["msg"].removeprefix("Value error, ")
-            if "input" in error and error["type"] not in ("model_type", "dict_type"):
-                what += f" (got {error['input']!r})"
+            shown = repr(error.get("input"))
+            # the value that failed, when it is one value (a whole table is not shown)
+            if ("input" in error and error["type"] not in ("model_type", "dict_type")
+                    and not isinstance(error["input"], dict) and len(shown) <= 80):
+                what += f" (got {shown})"
         origin = "--set" if any(loc == k or loc.startswith(k + ".") for k in overridden) else source
         raise ConfigError(origin, loc, what) from None
 
@@ -170,9 +173,12 @@ def _read_extended(path: Path, seen: tuple[Path, ...] = ()) -> tuple[str, dict[s
 def load_config(
     path: str | Path,
     solvers: Mapping[str, type[SolverOptions]],
+    cases: Mapping[str, type[CaseConfig]],
     overrides: Sequence[str] = (),
 ) -> LoadedConfig:
-    """Load and validate a case file; ``solvers`` maps solver names to their Options models."""
+    """Load and validate a case file; ``solvers`` maps solver names to their Options models
+    and ``cases`` case kinds to their config models (the registries pass them in: the
+    config layer knows no case or solver)."""
     path = Path(path)
     source = str(path)
     text, data = _read_extended(path)
@@ -185,13 +191,14 @@ def load_config(
             expected = ", ".join(SECTIONS)
             raise ConfigError("--set", key, f"unknown section; expected one of {expected}")
         apply_override(data, key, value)
-    return validate_data(data, solvers, source, text, tuple(overrides),
+    return validate_data(data, solvers, cases, source, text, tuple(overrides),
                          {key for key, _ in parsed})
 
 
 def validate_data(
     data: dict[str, Any],
     solvers: Mapping[str, type[SolverOptions]],
+    cases: Mapping[str, type[CaseConfig]],
     source: str = "<data>",
     text: str = "",
     overrides: tuple[str, ...] = (),
@@ -205,7 +212,7 @@ def validate_data(
     for key in ("case", "solver"):
         if key not in data:
             raise ConfigError(source, key, f"missing [{key}] table")
-    case_model = _select(data["case"], "case", "kind", CASE_CONFIGS, source, "case kind")
+    case_model = _select(data["case"], "case", "kind", cases, source, "case kind")
     solver_model = _select(data["solver"], "solver", "name", solvers, source, "solver")
     return LoadedConfig(
         path=source,

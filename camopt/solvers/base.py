@@ -9,9 +9,10 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.capabilities import capability_name
 from camopt.config.models import SolverOptions
 from camopt.errors import SolverError
-from camopt.problem import FEASIBILITY_TOL, Evaluation, Problem
+from camopt.problem import Evaluation, Problem, deb_best
 
 
 class StopReason(str, enum.Enum):
@@ -20,28 +21,26 @@ class StopReason(str, enum.Enum):
     BUDGET = "iteration budget reached"
     CONVERGED = "converged"
     EXHAUSTED = "search space exhausted"
+    MAX_EVALUATIONS = "run.max_evaluations reached"
+    MAX_SECONDS = "run.max_seconds reached"
 
 
 class Solver(ABC):
     """Ask/tell solver (nevergrad style). No I/O, no console; the driver owns the loop.
 
     Subclasses set ``name``, ``Options`` (a pydantic model with ``name: Literal[...]``)
-    and ``requires`` (names of Problem capabilities they need, e.g. ``"family"``).
+    and ``requires``: the capability Protocols (:mod:`camopt.capabilities`) a case's
+    Problem must declare for the solver to run on it.
     """
 
     name: ClassVar[str]
     Options: ClassVar[type[SolverOptions]]
-    requires: ClassVar[tuple[str, ...]] = ()
+    requires: ClassVar[tuple[type, ...]] = ()
     summary: ClassVar[str] = ""
     integers: ClassVar[bool] = True  # whether the solver handles integer variables
 
     def __init__(self, problem: Problem, options: SolverOptions, rng: np.random.Generator):
-        missing = [cap for cap in self.requires if not callable(getattr(problem, cap, None))]
-        if missing:
-            raise SolverError(
-                f"solver '{self.name}' needs a case that offers {', '.join(missing)}; "
-                f"'{type(problem).__name__}' does not"
-            )
+        self.check(type(problem), options)
         if not self.integers and problem.integer.any():
             names = [v.name for v in problem.variables if v.integer]
             raise SolverError(f"solver '{self.name}' handles continuous variables only; "
@@ -52,8 +51,23 @@ class Solver(ABC):
 
     @classmethod
     def supports(cls, problem_class: type) -> bool:
-        """Whether a Problem class offers every capability this solver needs."""
-        return all(callable(getattr(problem_class, cap, None)) for cap in cls.requires)
+        """Whether a Problem class declares every capability this solver always needs."""
+        return all(issubclass(problem_class, cap) for cap in cls.requires)
+
+    @classmethod
+    def needs(cls, options: SolverOptions) -> tuple[type, ...]:
+        """The capabilities these options need (``requires`` plus option-dependent ones)."""
+        return cls.requires
+
+    @classmethod
+    def check(cls, problem_class: type, options: SolverOptions) -> None:
+        """Raise SolverError when the case lacks a capability the options need (called when
+        a case file is validated, before any work)."""
+        missing = [capability_name(cap) for cap in cls.needs(options)
+                   if not issubclass(problem_class, cap)]
+        if missing:
+            raise SolverError(f"solver '{cls.name}' needs a case that offers "
+                              f"{', '.join(missing)}; '{problem_class.__name__}' does not")
 
     @abstractmethod
     def ask(self) -> NDArray:
@@ -83,6 +97,11 @@ class Solver(ABC):
         """Plain-language findings for the run's summary (e.g. non-unique optima)."""
         return []
 
+    def population_objectives(self) -> NDArray | None:
+        """The current population's objectives, for the archive's mean-objective history
+        (None: the last evaluated batch stands in)."""
+        return None
+
 
 def better(f_a: NDArray, v_a: NDArray, f_b: NDArray, v_b: NDArray) -> NDArray:
     """Deb's feasibility rules: a beats b if less violated, or equally violated and lower f."""
@@ -99,16 +118,15 @@ def snap(problem: Problem, X: NDArray) -> NDArray:
 
 
 def best_index(ev: Evaluation) -> int:
-    """Index of the best candidate by Deb's rules (least violation, then lowest f)."""
-    return int(np.lexsort((ev.f, ev.violation))[0])
+    """Index of the best candidate of an evaluation by Deb's rules."""
+    return deb_best(ev.f, ev.violation)
 
 
-def design_rows(problem: Problem, X: NDArray, ev: Evaluation) -> list[dict[str, Any]]:
-    """One table row per candidate: variables in display units, extras, objective,
-    feasibility, active and violated constraints."""
-    describe = getattr(problem, "describe", None)
-    if callable(describe):  # tables are not a hot path: take the descriptive metrics too
-        ev = describe(X)
+def design_rows(problem: Problem, X: NDArray) -> list[dict[str, Any]]:
+    """One table row per candidate: variables in display units, the case's descriptive
+    metrics (:meth:`Problem.describe`), objective, feasibility, active and violated
+    constraints. Tables are not a hot path."""
+    ev = problem.describe(X)
     rows = []
     for i, x in enumerate(X):
         row: dict[str, Any] = dict(problem.to_display(x))
@@ -116,7 +134,6 @@ def design_rows(problem: Problem, X: NDArray, ev: Evaluation) -> list[dict[str, 
         row[problem.objective_name] = float(ev.f[i])
         row["feasible"] = bool(ev.feasible[i])
         row["active"] = problem.active(ev.g[i])
-        row["violated"] = [n for n, gi in zip(problem.constraint_names, ev.g[i])
-                           if not gi <= FEASIBILITY_TOL]
+        row["violated"] = problem.violated(ev.g[i])
         rows.append(row)
     return rows

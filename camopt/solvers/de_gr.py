@@ -57,7 +57,7 @@ class DEGR(Polishing, Solver):
             return self.polish_ask()
         n, d = self.options.population, self.problem.n_var
         if self.pop is None:
-            return snap(self.problem, self.lo + self.rng.random((n, d)) * (self.hi - self.lo))
+            return snap(self.problem, self.problem.sample(self.rng, n))
         best = self.pop[self._best_index()]
         # three distinct partners different from i: r1, r2 (best/1 needs two)
         idx = np.argsort(self.rng.random((n, n)), axis=1)
@@ -82,17 +82,14 @@ class DEGR(Polishing, Solver):
         assert self.ev is not None
         win = ~better(self.ev.f, self.ev.violation, ev.f, ev.violation)  # trial ties win
         self.pop = np.where(win[:, None], X, self.pop)
-        self.ev = Evaluation(
-            f=np.where(win, ev.f, self.ev.f),
-            g=np.where(win[:, None], ev.g, self.ev.g),
-            extras={k: np.where(win, ev.extras[k], v) for k, v in self.ev.extras.items()},
-        )
+        self.ev = ev.where(win, self.ev)
 
     def _best_index(self) -> int:
         assert self.ev is not None
         return best_index(self.ev)
 
     def population_best(self) -> tuple[NDArray, Evaluation]:
+        """The population's best design by Deb's rules and its evaluation (one row)."""
         i = self._best_index()
         assert self.pop is not None and self.ev is not None
         return self.pop[i].copy(), self.ev.take(i)
@@ -102,6 +99,7 @@ class DEGR(Polishing, Solver):
         return self.ev.f
 
     def budget_spent(self) -> bool:
+        """Whether the generations are spent (or the population has converged)."""
         if self.nit >= self.options.generations:
             return True
         return bool(self.options.tolerance > 0 and self.ev is not None

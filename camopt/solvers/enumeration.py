@@ -12,6 +12,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.capabilities import HasFamily
 from camopt.config.models import SolverOptions
 from camopt.problem import Evaluation
 from camopt.solvers.base import Solver, StopReason, best_index, design_rows
@@ -30,7 +31,7 @@ class Enumeration(Solver):
 
     name = "enumeration"
     Options = EnumerationOptions
-    requires = ("family",)
+    requires = (HasFamily,)
     summary = "evaluates every member of the case's 1-DOF family (monotonicity analysis)"
 
     def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
@@ -42,7 +43,8 @@ class Enumeration(Solver):
         return 1
 
     def ask(self) -> NDArray:
-        return np.atleast_2d(self.problem.family())  # type: ignore[attr-defined]
+        assert isinstance(self.problem, HasFamily)
+        return np.atleast_2d(self.problem.family())
 
     def tell(self, X: NDArray, ev: Evaluation) -> None:
         self.X, self.ev = X, ev
@@ -60,4 +62,4 @@ class Enumeration(Solver):
     def table(self) -> list[dict[str, Any]]:
         """One row per family member with its active constraints."""
         assert self.X is not None and self.ev is not None
-        return design_rows(self.problem, self.X, self.ev)
+        return design_rows(self.problem, self.X)

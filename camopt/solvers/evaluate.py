@@ -66,5 +66,5 @@ class Evaluate(Solver):
         """One row per given design, labelled."""
         assert self.ev is not None
         labels = list(self.options.labels) + [f"design {i}" for i in range(len(self.X))]
-        rows = design_rows(self.problem, self.X, self.ev)
+        rows = design_rows(self.problem, self.X)
         return [{"label": label, **row} for label, row in zip(labels, rows)]

@@ -2,7 +2,7 @@
 
 Each ask() runs one complete local solve from one start, inside scipy, and returns its
 end point; the driver then evaluates that point like any other candidate. Starts are
-the case's initial design (when it offers ``initial_x``) and uniform draws within the
+``x0`` or the case's initial design (``Problem.initial_x``) and uniform draws within the
 bounds from the run's generator. Distinct end points are clustered in coordinates
 normalised by the bounds.
 """
@@ -34,21 +34,19 @@ class MultiStart(Solver):
     def _starts(self) -> NDArray:
         n = self.options.starts
         first = []
+        initial = self.problem.initial_x()
         if self.options.x0 is not None:
             first.append(self.problem.from_display(self.options.x0))
-        elif callable(getattr(self.problem, "initial_x", None)):
-            first.append(np.asarray(self.problem.initial_x(), dtype=float))
-        rand = self.lo + self.rng.random((max(n - len(first), 0), self.problem.n_var)) * (
-            self.hi - self.lo)
+        elif initial is not None:
+            first.append(np.asarray(initial, dtype=float))
+        rand = self.problem.sample(self.rng, max(n - len(first), 0))
         return np.vstack([*(f[None, :] for f in first), rand])[:n]
 
     def max_iterations(self) -> int:
         return len(self.starts)
 
-    def normalise(self, x: NDArray) -> NDArray:
-        return (x - self.lo) / (self.hi - self.lo)
-
     def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:  # pragma: no cover
+        """One scipy local solve from ``x0``: its end point and a record (success, nfev, ...)."""
         raise NotImplementedError
 
     def ask(self) -> NDArray:
@@ -61,11 +59,7 @@ class MultiStart(Solver):
         self.nfev += len(X)
         self.nit += 1
         self.X.append(X[0])
-        if self.ev is None:
-            self.ev = ev
-        else:
-            self.ev = Evaluation(np.r_[self.ev.f, ev.f], np.vstack([self.ev.g, ev.g]),
-                                 {k: np.r_[v, ev.extras[k]] for k, v in self.ev.extras.items()})
+        self.ev = ev if self.ev is None else Evaluation.concat([self.ev, ev])
 
     def best(self) -> tuple[NDArray, Evaluation]:
         assert self.ev is not None
@@ -90,7 +84,7 @@ class MultiStart(Solver):
         for i, x in enumerate(self.X):
             if not ok[i]:
                 continue
-            u = self.normalise(x)
+            u = self.problem.to_unit(x)
             for j, centre in enumerate(centres):
                 if np.max(np.abs(u - centre)) <= self.options.distinct_tol:
                     ids[i] = j

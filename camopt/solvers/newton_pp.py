@@ -10,7 +10,9 @@ from numpy.typing import NDArray
 from pydantic import Field
 from scipy.optimize import root
 
+from camopt.capabilities import HasResiduals
 from camopt.config.models import SolverOptions
+from camopt.errors import SolverError
 from camopt.solvers.multistart import MultiStart
 from camopt.solvers.registry import register_solver
 
@@ -33,38 +35,38 @@ class NewtonPP(MultiStart):
 
     name = "newton_pp"
     Options = NewtonOptions
-    requires = ("residuals",)
+    requires = (HasResiduals,)
     summary = "precision-point equations by scipy.optimize.root from several starts"
 
     def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
         super().__init__(problem, options, rng)
+        assert isinstance(problem, HasResiduals)
+        self.equations: HasResiduals = problem
         n_eq = problem.residuals(self.starts[:1]).shape[1]
         if n_eq != problem.n_var:
-            from camopt.errors import SolverError
-
             raise SolverError(f"newton_pp needs as many equations as unknowns: the case has "
                               f"{n_eq} equations for {problem.n_var} unknowns")
 
     def _residual(self, u: NDArray) -> NDArray:
-        return self.problem.residuals((self.lo + u * (self.hi - self.lo))[None, :])[0]
+        return self.equations.residuals(self.problem.from_unit(u)[None, :])[0]
 
     def jacobian_condition(self, x: NDArray) -> float:
         """Condition number of the residuals' Jacobian (central differences, in the
         bounds-normalised variables), evaluated in one vectorised call."""
-        u = self.normalise(x)
+        u = self.problem.to_unit(x)
         h = 1e-6
         E = np.eye(len(u)) * h
         U = np.vstack([u + E, u - E])
-        R = self.problem.residuals(self.lo + U * (self.hi - self.lo))
+        R = self.equations.residuals(self.problem.from_unit(U))
         J = (R[: len(u)] - R[len(u):]).T / (2 * h)
         return float(np.linalg.cond(J))
 
     def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:
-        sol = root(self._residual, self.normalise(x0), method=self.options.method,
+        sol = root(self._residual, self.problem.to_unit(x0), method=self.options.method,
                    options={"xtol": self.options.xtol} if self.options.method == "hybr"
                    else {"xtol": self.options.xtol, "ftol": 1e-15})
-        x = self.lo + sol.x * (self.hi - self.lo)
-        residual = float(np.max(np.abs(self.problem.residuals(x[None, :])[0])))
+        x = self.problem.from_unit(sol.x)
+        residual = float(np.max(np.abs(self.equations.residuals(x[None, :])[0])))
         success = bool(residual <= self.options.residual_tol and np.all(np.isfinite(x)))
         return x, {"success": success, "residual_max": residual,
                    "jacobian_cond": self.jacobian_condition(x) if success else float("nan"),

@@ -55,14 +55,13 @@ def polish(problem: Problem, x0: NDArray, options: PolishOptions
            ) -> tuple[NDArray, int, str]:
     """SLSQP in bounds-normalised coordinates from ``x0``: end point, evaluations and
     scipy's message."""
-    lo, hi = problem.lower, problem.upper
     cache: dict[bytes, Evaluation] = {}
 
     def evaluate(u: NDArray) -> Evaluation:
         key = u.tobytes()
         if key not in cache:
             cache.clear()  # SLSQP asks for f and then g at the same point
-            cache[key] = problem.evaluate((lo + u * (hi - lo))[None, :])
+            cache[key] = problem.evaluate(problem.from_unit(u)[None, :])
         return cache[key]
 
     def metric(ev: Evaluation, name: str | None) -> float:
@@ -80,7 +79,7 @@ def polish(problem: Problem, x0: NDArray, options: PolishOptions
         c = np.r_[-ev.g[0], caps] - margin
         return np.where(np.isfinite(c), c, -_BAD)
 
-    x, nfev, message = np.clip((x0 - lo) / (hi - lo), 0, 1), 0, ""
+    x, nfev, message = np.clip(problem.to_unit(x0), 0, 1), 0, ""
     for factor in (1.0, 10.0, 100.0):  # rerun, further inside, while it ends outside
         margin = options.margin * factor
         res = minimize(objective, x, method="SLSQP", bounds=[(0.0, 1.0)] * problem.n_var,
@@ -89,7 +88,7 @@ def polish(problem: Problem, x0: NDArray, options: PolishOptions
                        options={"maxiter": options.maxiter, "ftol": options.ftol})
         x, nfev, message = np.clip(res.x, 0, 1), nfev + int(res.nfev), str(res.message)
         if np.all(constraints(x, 0.0) >= 0):
-            return lo + x * (hi - lo), nfev, message
+            return problem.from_unit(x), nfev, message
     # SLSQP's finite-difference gradients can stall a hair outside a bound on cases
     # whose measures are sampled (a sample entering a section makes small jumps).
     # Restore: minimise the squared shortfall from 100 margins inside every bound
@@ -107,11 +106,11 @@ def polish(problem: Problem, x0: NDArray, options: PolishOptions
                     options={"initial_simplex": simplex, "xatol": 1e-10, "fatol": 1e-12,
                              "maxiter": 200 * problem.n_var})
     nfev += int(back.nfev)
-    start = np.clip((x0 - lo) / (hi - lo), 0, 1)
+    start = np.clip(problem.to_unit(x0), 0, 1)
     anchor = next((a for a in (np.clip(back.x, 0, 1), start)
                    if np.all(constraints(a, 0.0) >= 0)), None)  # else: a feasible start
     if anchor is None:
-        return lo + x * (hi - lo), nfev, message + "; could not restore feasibility"
+        return problem.from_unit(x), nfev, message + "; could not restore feasibility"
     inside, outside = 0.0, 1.0  # fractions of the way from the anchor to SLSQP's end
     for _ in range(30):
         t = (inside + outside) / 2
@@ -121,7 +120,7 @@ def polish(problem: Problem, x0: NDArray, options: PolishOptions
             outside = t
     nfev += 30
     x = anchor + inside * (x - anchor)
-    return lo + x * (hi - lo), nfev, message + "; feasibility restored"
+    return problem.from_unit(x), nfev, message + "; feasibility restored"
 
 
 class Polishing:
@@ -164,10 +163,12 @@ class Polishing:
                               f"{', '.join(names)}")
 
     def polish_pending(self) -> bool:
+        """Whether the budget is spent and the polish has not run yet."""
         return (self.options.polish is not None and self.budget_spent()
                 and self._polished is None)
 
     def polish_ask(self) -> NDArray:
+        """Run the polish from the population's best; its end point, (1, n_var)."""
         x, _ = self.population_best()
         end, nfev, self.polish_message = polish(self.problem, x, self.options.polish)
         self.nfev += nfev

@@ -1,10 +1,11 @@
 """``pso``: particle swarm optimisation with linearly decreasing inertia (Yan et al. 2023,
 Eqs 38-41), personal and global bests, velocity limits and bound handling.
 
-Generic. When the case offers ``repair(X, rng, probability)`` and ``repair = true``,
-the swarm is corrected after each move with probabilities that decay linearly from
-the first to the last iteration (the paper's "improved PSO", Sec 3.3.4);
-``repair = false`` gives plain PSO. Written here because scipy has no PSO.
+Generic. When the case declares corrections (:class:`~camopt.capabilities.Repairable`),
+the swarm is corrected after each move with probabilities that change linearly from
+the first to the last iteration (the paper's "improved PSO", Sec 3.3.4). ``repair``
+unset uses them when the case has them, ``true`` requires them (a case without is bad
+input), ``false`` gives plain PSO. Written here because scipy has no PSO.
 """
 
 from __future__ import annotations
@@ -15,6 +16,9 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
+from camopt.capabilities import Repairable
+from camopt.config.models import SolverOptions
+from camopt.errors import SolverError
 from camopt.problem import Evaluation
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
 from camopt.solvers.polish import PolishableOptions, Polishing
@@ -32,10 +36,12 @@ class PSOOptions(PolishableOptions):
     w_max: float = Field(0.9, ge=0, description="initial inertia (Eq 40)")
     w_min: float = Field(0.4, ge=0, description="final inertia (Eq 40)")
     v_max: float = Field(0.2, gt=0, le=1, description="velocity limit, fraction of the range")
-    repair: bool = Field(True, description="apply the case's corrections (improved PSO)")
+    repair: bool | None = Field(
+        None, description="the case's corrections (improved PSO): unset uses them when the "
+        "case has them, true requires them, false is plain PSO")
     repair_probability: dict[str, tuple[float, float]] | None = Field(
         None, description="per correction: trigger probability at the first and last "
-        "iteration; None takes the case's defaults")
+        "iteration; corrections not named keep the case's schedule")
 
 
 @register_solver
@@ -46,14 +52,29 @@ class PSO(Polishing, Solver):
     Options = PSOOptions
     summary = "particle swarm, decreasing inertia, optional case corrections (generic)"
 
+    @classmethod
+    def needs(cls, options: SolverOptions) -> tuple[type, ...]:
+        assert isinstance(options, PSOOptions)
+        asked = options.repair or (options.repair is None and options.repair_probability)
+        return (Repairable,) if asked else ()
+
     def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
         super().__init__(problem, options, rng)
         self.lo, self.hi = problem.lower, problem.upper
         self.vmax = options.v_max * (self.hi - self.lo)
-        self.repairing = options.repair and callable(getattr(problem, "repair", None))
-        defaults = getattr(problem, "repair_defaults", {})
-        self.schedule = {k: tuple(v) for k, v in
-                         (options.repair_probability or defaults).items()}
+        self.repairer: Repairable | None = (
+            problem if options.repair is not False and isinstance(problem, Repairable)
+            else None)
+        self.schedule: dict[str, tuple[float, float]] = {}
+        if self.repairer is not None:
+            self.schedule = {k: tuple(v) for k, v in self.repairer.repair_schedule().items()}
+            given = options.repair_probability or {}
+            unknown = sorted(set(given) - set(self.schedule))
+            if unknown:
+                raise SolverError(f"repair_probability: unknown correction "
+                                  f"{', '.join(map(repr, unknown))}; the case's corrections: "
+                                  f"{', '.join(self.schedule)}")
+            self.schedule.update({k: tuple(v) for k, v in given.items()})
         self.X: NDArray | None = None
         self.V: NDArray | None = None
         self.P: NDArray | None = None
@@ -64,6 +85,7 @@ class PSO(Polishing, Solver):
         return self.options.iterations + (self.options.polish is not None)
 
     def budget_spent(self) -> bool:
+        """Whether the swarm has made its iterations."""
         return self.nit >= self.options.iterations
 
     def probabilities(self) -> dict[str, float]:
@@ -72,16 +94,16 @@ class PSO(Polishing, Solver):
         return {k: a + (b - a) * frac for k, (a, b) in self.schedule.items()}
 
     def _repair(self, X: NDArray) -> NDArray:
-        if not self.repairing:
+        if self.repairer is None:
             return X
-        return snap(self.problem, self.problem.repair(X, self.rng, self.probabilities()))
+        return snap(self.problem, self.repairer.repair(X, self.rng, self.probabilities()))
 
     def ask(self) -> NDArray:
         if self.polish_pending():
             return self.polish_ask()
         o, n, d = self.options, self.options.particles, self.problem.n_var
         if self.X is None:
-            X = self.lo + self.rng.random((n, d)) * (self.hi - self.lo)
+            X = self.problem.sample(self.rng, n)
             self.V = (self.rng.random((n, d)) * 2 - 1) * self.vmax
             return self._repair(snap(self.problem, X))
         assert self.P is not None and self.V is not None and self.pev is not None
@@ -109,9 +131,7 @@ class PSO(Polishing, Solver):
             return
         win = better(ev.f, ev.violation, self.pev.f, self.pev.violation)
         self.P = np.where(win[:, None], X, self.P)
-        self.pev = Evaluation(
-            f=np.where(win, ev.f, self.pev.f), g=np.where(win[:, None], ev.g, self.pev.g),
-            extras={k: np.where(win, ev.extras[k], v) for k, v in self.pev.extras.items()})
+        self.pev = ev.where(win, self.pev)
 
     def population_best(self) -> tuple[NDArray, Evaluation]:
         assert self.P is not None and self.pev is not None

@@ -42,12 +42,12 @@ class Simplex(MultiStart):
     summary = "modified simplex: scipy Nelder-Mead with bounds, multi-start (generic)"
 
     def _objective(self, u: NDArray) -> float:
-        ev = self.problem.evaluate((self.lo + u * (self.hi - self.lo))[None, :])
+        ev = self.problem.evaluate(self.problem.from_unit(u)[None, :])
         return float(ev.f[0] + self.options.penalty * ev.violation[0])
 
     def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:
         o = self.options
-        u0 = np.clip(self.normalise(x0), 0.0, 1.0)
+        u0 = np.clip(self.problem.to_unit(x0), 0.0, 1.0)
         # scipy's default simplex is 5 % of each coordinate: degenerate near a bound
         step = np.where(u0 + o.initial_step <= 1.0, o.initial_step, -o.initial_step)
         simplex = np.vstack([u0, u0 + np.diag(step)])
@@ -55,7 +55,7 @@ class Simplex(MultiStart):
                        bounds=[(0.0, 1.0)] * self.problem.n_var,
                        options={"maxiter": o.maxiter, "xatol": o.xatol, "fatol": o.fatol,
                                 "adaptive": o.adaptive, "initial_simplex": simplex})
-        x = self.lo + res.x * (self.hi - self.lo)
+        x = self.problem.from_unit(res.x)
         return x, {"success": bool(res.success), "message": str(res.message),
                    "nfev": int(res.nfev)}
 

@@ -94,7 +94,7 @@ def test_swarm_evaluation_is_row_independent():
     p = EmbCamProblem(cfg.case)
     rng = np.random.default_rng(1)
     X = p.lower + rng.random((30, p.n_var)) * (p.upper - p.lower)
-    X = p.repair(X, rng, {k: 1.0 for k in p.repair_defaults})
+    X = p.repair(X, rng, {k: 1.0 for k in p.repair_schedule()})
     whole = p.evaluate(X)
     for i in (0, 11, 29):
         one = p.evaluate(X[i : i + 1])

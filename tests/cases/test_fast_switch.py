@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from camopt import archive
-from camopt.cases.fast_switch import FastSwitchProblem
-from camopt.config.models import FastSwitchConfig
+from camopt.cases.fast_switch import FastSwitchConfig, FastSwitchProblem
 from camopt.driver import execute
 from tests.conftest import CONFIGS, DATA
 from tests.helpers import load
@@ -29,7 +28,7 @@ def enumeration_run(tmp_path_factory):
 
 def test_every_row_of_table1_within_0p1_percent(enumeration_run):
     """Table 1: x5, x4 (= x3), x8, x6, x7 and tF for 3..42 coils, each within 0.1 %."""
-    rows = enumeration_run["table"]
+    rows = enumeration_run.table
     assert [int(r["coils"]) for r in rows] == TABLE1[:, 0].astype(int).tolist()
     for col, (key, factor) in COLUMNS.items():
         ours = np.array([r[key] for r in rows]) * factor
@@ -39,16 +38,16 @@ def test_every_row_of_table1_within_0p1_percent(enumeration_run):
 
 def test_optimum_is_7_coils_at_18p90_ms(enumeration_run, reported):
     """Eq 92: 7 coils, tF = 18.9 ms (Table 1: .01890 s), to +-0.01 ms."""
-    best = enumeration_run["best"]
-    assert best["feasible"]
-    assert best["x"]["coils"] == reported["fast_switch"]["optimum_coils"]
-    assert best["objective"] == pytest.approx(18.90, abs=0.01)
-    assert best["metrics"]["closure_time_ms"] == pytest.approx(best["objective"])
+    best = enumeration_run.best
+    assert best.feasible
+    assert best.x["coils"] == reported["fast_switch"]["optimum_coils"]
+    assert best.objective == pytest.approx(18.90, abs=0.01)
+    assert best.metrics["closure_time_ms"] == pytest.approx(best.objective)
 
 
 def test_eq92_angles_and_width(enumeration_run, reported):
     """Eq 92: x10 = 400 mm, x11 = 348.9 deg, x12 = 354.4 deg, x13 = 30 deg (as rounded)."""
-    opt, m = reported["fast_switch"]["optimum"], enumeration_run["best"]["metrics"]
+    opt, m = reported["fast_switch"]["optimum"], enumeration_run.best.metrics
     assert m["g_mm"] == pytest.approx(opt["x10_mm"], abs=0.5)
     assert m["theta3f_deg"] == pytest.approx(opt["x11_deg"], abs=0.05)
     assert m["theta30_deg"] == pytest.approx(opt["x12_deg"], abs=0.1)
@@ -58,14 +57,14 @@ def test_eq92_angles_and_width(enumeration_run, reported):
 
 def test_active_set_at_optimum_matches_paper(enumeration_run):
     """The full model's active constraints at 7 coils are R2, R4, R14, R16, R21."""
-    row = next(r for r in enumeration_run["table"] if r["coils"] == 7)
+    row = next(r for r in enumeration_run.table if r["coils"] == 7)
     assert set(row["active"]) == {"R2", "R4", "R14", "R16", "R21"}
     assert row["violated"] == []
 
 
 def test_infeasible_rows_flagged_not_dropped(enumeration_run):
     """Rows 37-42 need g > 2L (x3 > 2L - p4): the full model flags them, R2 violated."""
-    rows = {int(r["coils"]): r for r in enumeration_run["table"]}
+    rows = {int(r["coils"]): r for r in enumeration_run.table}
     assert len(rows) == 40
     for n in range(37, 43):
         assert not rows[n]["feasible"] and "R2" in rows[n]["violated"]
@@ -75,11 +74,11 @@ def test_infeasible_rows_flagged_not_dropped(enumeration_run):
 def test_exact_dynamics_of_paper_optimum(enumeration_run):
     """The exact 1-DOF motion (Eqs 2-3, I from Eq 106) is slower than Eq 39's constant-m'
     approximation; the archive reports both."""
-    m = enumeration_run["best"]["metrics"]
+    m = enumeration_run.best.metrics
     assert 18.0 < m["closure_time_exact_ms"] < 25.0
     assert m["closure_time_exact_ms"] > m["closure_time_ms"]
-    t = enumeration_run["extra"]["analysis"]["time_ms"]
-    theta = enumeration_run["extra"]["analysis"]["theta2_deg"]
+    t = enumeration_run.analysis["time_ms"]
+    theta = enumeration_run.analysis["theta2_deg"]
     assert theta[0] == pytest.approx(30.0) and theta[-1] == pytest.approx(90.0)
     assert t[-1] == pytest.approx(m["closure_time_exact_ms"])
 
@@ -89,13 +88,13 @@ def test_exact_dynamics_conserves_energy():
     p = FastSwitchProblem(FastSwitchConfig(branch="I"))
     x = p.family()[4]
     travel = p.exact_closure(x)
-    v = p.complete(x[None])
-    r2, r3, k, sud, s0 = (float(v[key][0]) for key in ("x7", "x6", "x8", "x4", "x5"))
+    v = p.complete(x[None]).take(0)
+    r2, r3, k, sud, s0 = (v[key] for key in ("x7", "x6", "x8", "x4", "x5"))
     from camopt.mechanics.slider_crank import coupler_derivatives
 
     _, d3, _, ds, _ = coupler_derivatives(r2, r3, np.pi / 2)
     mass = p.p.M2 * p.p.L**2 / 12 + p.p.M3 * r3**2 / 12 * d3**2 + p.p.M4 * ds**2
-    released = 0.5 * k * ((s0 - sud) ** 2 - (float(v["x3"][0]) - sud) ** 2)
+    released = 0.5 * k * ((s0 - sud) ** 2 - (v["x3"] - sud) ** 2)
     assert 0.5 * mass * travel.speed**2 == pytest.approx(released, rel=1e-7)
 
 

@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camopt.cases.opening_spring import OpeningSpringProblem
-from camopt.config.models import OpeningSpringConfig
+from camopt.cases.opening_spring import OpeningSpringConfig, OpeningSpringProblem
 from camopt.driver import execute
 from tests.conftest import CONFIGS
 from tests.helpers import load

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from camopt import archive
-from camopt.cases.vcb import MM, VcbProblem
-from camopt.config.models import VcbConfig
+from camopt.cases.vcb import VcbConfig, VcbProblem
+from camopt.cases.vcb.model import MM
 from camopt.driver import execute
 from camopt.mechanics import cam
 from tests.conftest import CONFIGS
@@ -107,11 +107,11 @@ def test_step1_reaches_zero_surplus_feasibly(tmp_path):
     for r in rec.repeats:
         assert r.feasible and r.fun <= limit
         assert 0 < r.converged_nit <= 150
-    m = run["best"]["metrics"]
+    m = run.best.metrics
     assert 23 <= m["phi_max_deg"] <= 26 and m["tau_max_mpa"] < 1194
     assert abs(m["surplus_work_j"]) <= limit
-    assert len(run["extra"]["histories"]) == 5
-    assert all(len(h["best_objective"]) == 150 for h in run["extra"]["histories"])
+    assert len(run.histories()) == 5
+    assert all(len(h) == 150 for h in run.histories("best_objective"))
     for key in ("a0", "a1", "a2", "a3", "phi_max_deg", "pressure_angle_max_deg",
                 "curvature_min_mm", "sigma_max_mpa", "tau_max_mpa", "driving_work_j",
                 "resistant_work_j", "surplus_work_j", "output_range_deg"):
@@ -119,7 +119,7 @@ def test_step1_reaches_zero_surplus_feasibly(tmp_path):
     assert len(m["output_range_deg"]) == 2
     for curve in ("profile_x_mm", "pitch_y_mm", "pressure_angle_deg", "curvature_mm",
                   "normal_force_n", "tau_max_mpa", "fo_n", "fr_n", "initial_fo_n"):
-        assert curve in run["extra"]["analysis"], curve
+        assert curve in run.analysis, curve
 
 
 @pytest.mark.slow
@@ -131,7 +131,7 @@ def test_step2_grashof_and_output_range(tmp_path):
                                           "solver.generations=60",
                                           f'case.cam_archive="{step1}"'))
     assert cfg.case.cam_design.a1 == pytest.approx(
-        archive.load_run(step1)["best"]["x"]["a1"])
+        archive.load_run(step1).best.x["a1"])
     rec = execute(cfg)
     assert rec.best.feasible
     names = rec.problem.constraint_names
@@ -153,3 +153,23 @@ def test_identification_reproduces_rod_travel():
     assert x["rod_arm_offset_deg"] == pytest.approx(cfg.rod_arm_offset_deg, abs=0.05)
     assert x["opening_arm_ratio"] == pytest.approx(cfg.opening_arm_ratio, abs=0.01)
     assert x["free_contact_force_n"] == pytest.approx(cfg.free_contact_force_n, abs=1.0)
+
+
+def test_peak_stress_fast_path_equals_the_full_contact_analysis(problem):
+    """The search's closed-form peak Hertz stress (``VcbModel.peak_stress``) equals the
+    maximum over the stroke of the full analysis path (``contact``, Eqs 15, 19, 27-30),
+    and tau_max is Eq 31 of it, for the vendor design and random designs."""
+    m = problem.model
+    rng = np.random.default_rng(3)
+    X = np.vstack([problem.vendor_x(), problem.sample(rng, 40)])
+    A, kc, link = problem.designs(X)
+    kin = m.kinematics(A, link, problem.rod_offset)
+    torque = m.closing_torque(kc)
+    fast = m.peak_stress(kin.follower, torque)
+    full = np.max(m.contact(kin.follower, torque).sigma, axis=1)
+    ok = np.isfinite(full)
+    assert ok.sum() > 10
+    np.testing.assert_allclose(fast[ok], full[ok], rtol=1e-9)
+    assert np.all(np.isinf(fast[~ok]))  # no Hertz contact somewhere: infinite, not NaN
+    ev = problem.describe(X[:1])
+    assert ev.extras["tau_max_mpa"][0] == pytest.approx(0.304 * ev.extras["sigma_max_mpa"][0])

@@ -26,7 +26,7 @@ def test_matches_scipy_clamped_natural():
 
 
 def test_knot_warp_is_a_monotone_map_with_consistent_derivatives():
-    from camopt.cases.emb_cam import knot_warp
+    from camopt.cases.emb_cam.problem import knot_warp
 
     x = np.linspace(0, 1, 2001)
     w, dw, ddw = knot_warp(x, (0.3, 6.0, 0.06))

@@ -5,28 +5,29 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camopt.driver import run_repeat
+from camopt.driver import build_solver, prepare, run_repeat, validate
 from camopt.errors import ConfigError, SolverError
-from camopt.solvers import get_solver, solvers
+from camopt.solvers import StopReason, get_solver, solvers
 from camopt.solvers.registry import register_solver
 from tests.conftest import SphereConfig, SphereProblem
 
+# every registered solver that needs no capability runs on the sphere case
 GENERIC = [name for name, cls in solvers().items() if not cls.requires and name != "evaluate"]
+# a small budget for each (its own option names); unknown solvers run their defaults
 BUDGET = {"de_gr": {"population": 30, "generations": 150}, "simplex": {"starts": 3},
           "pso": {"particles": 30, "iterations": 200}}
 
 
-class _Cfg:
-    path = "test.toml"
+def _config(name: str, run: dict | None = None, **case):
+    data = {"case": {"kind": "sphere", **case}, "solver": {"name": name, **BUDGET.get(name, {})},
+            "run": run or {}}
+    return validate(data, "sphere.toml")
 
-    def __init__(self, name: str, **opts):
-        self.solver = get_solver(name).Options(**opts)
 
-
-def _run(name: str, seed: int = 0, **case):
-    problem = SphereProblem(SphereConfig(**case))
-    cfg = _Cfg(name, **BUDGET.get(name, {}))
-    rec = run_repeat(problem, get_solver(name), cfg, np.random.SeedSequence(seed), 0, 1)
+def _run(name: str, seed: int = 0, run: dict | None = None, **case):
+    cfg = _config(name, run, **case)
+    problem, cls = prepare(cfg)
+    rec = run_repeat(problem, cls, cfg, np.random.SeedSequence(seed), 0, 1)
     return problem, rec
 
 
@@ -66,14 +67,26 @@ def test_same_seed_same_result_other_seed_other_path(name):
 
 @pytest.mark.parametrize("name", GENERIC)
 def test_stays_in_budget(name):
+    """Every solver stops at the iteration budget it announces (``max_iterations``), with
+    one history entry per iteration, and the best objective never worsens."""
+    cfg = _config(name)
+    problem, cls = prepare(cfg)
+    announced = build_solver(problem, cls, cfg, np.random.default_rng(0)).max_iterations()
     _, rec = _run(name)
-    solver = get_solver(name).Options(**BUDGET[name])
-    iterations = next(getattr(solver, k) for k in ("generations", "iterations", "starts")
-                      if hasattr(solver, k))
-    assert rec.nit == iterations == len(rec.history["best_objective"])
-    if name == "de_gr":
-        assert rec.nfev == solver.population * solver.generations
-    assert np.all(np.diff(rec.history["best_objective"]) <= 0)  # the best never worsens
+    assert announced is not None
+    assert rec.nit == announced == len(rec.history["best_objective"])
+    assert rec.history["nfev"][-1] == rec.nfev
+    assert np.all(np.diff(rec.history["best_objective"]) <= 0)
+
+
+@pytest.mark.parametrize("name", GENERIC)
+def test_driver_limits_evaluations(name):
+    """``run.max_evaluations`` stops any solver between iterations, once it is reached."""
+    _, full = _run(name)
+    limit = int(full.history["nfev"][1])  # reached after the second iteration
+    _, rec = _run(name, run={"max_evaluations": limit})
+    assert rec.message == StopReason.MAX_EVALUATIONS.value
+    assert rec.nit == 2 and rec.nfev == limit
 
 
 def test_enumeration_refuses_case_without_family():

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from camopt.config import RunSection
 from camopt.driver import run_repeat
 from camopt.problem import Evaluation, Problem, Variable
 from camopt.solvers import get_solver
@@ -46,6 +47,7 @@ class LineFit(Problem):
 
 
 class _Cfg:
+    run = RunSection()
     path = "test.toml"
 
     def __init__(self, name, **opts):

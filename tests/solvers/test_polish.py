@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from camopt.config import RunSection
 from camopt.driver import run_repeat
 from camopt.errors import SolverError
 from camopt.problem import Evaluation
@@ -14,6 +15,7 @@ from tests.conftest import SphereConfig, SphereProblem
 
 
 class _Cfg:
+    run = RunSection()
     path = "test.toml"
 
     def __init__(self, name: str, **opts):

@@ -10,11 +10,15 @@ analysed at once on a common normalised grid (``mechanics.spline``).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+
 import numpy as np
 from numpy.typing import NDArray
 from scipy.special import erf
 
-from camopt.config.models import EmbCamConfig
+from camopt.capabilities import Repairable
+from camopt.cases.emb_cam.config import EmbCamConfig
 from camopt.mechanics import polar_cam as pc
 from camopt.mechanics.spline import ClampedNaturalSpline
 from camopt.problem import Evaluation, Problem, Variable
@@ -62,11 +66,67 @@ def knot_warp(x: NDArray, density: tuple[float, float, float] | None
     return w, (1 + k * g) / total, k * g * (-2 * (x - c) / s**2) / total
 
 
-class EmbCamProblem(Problem):
+@dataclass(frozen=True)
+class CamProfile:
+    """Every quantity of Sec 2.3 along the working profile, (P, K) arrays in SI (angles in
+    rad), plus the boundary values per particle (P,): polar radius ``r`` and dr/dtheta,
+    profile angle ``theta``, normal arm ``l`` (Eq 8), |OA| ``oa`` (Eq 9), lift ``s``
+    (Eq 11), pressure angle ``alpha`` (Eq 13), cam rotation from the first contact
+    ``rotation`` (Eq 17), clamping force (Eq 18), drive torque (Eq 14), radius of curvature
+    ``rho`` (Eq 16) and Hertz stress ``sigma`` (Eq 15); ``oa0``, ``theta0`` (Eqs 22, 24),
+    the key-point angle step ``dtheta``, offset ``e``, tangent angle ``kappa`` and the key
+    radii ``r_keys`` (P, N)."""
+
+    r: NDArray
+    dr: NDArray
+    theta: NDArray
+    l: NDArray
+    oa: NDArray
+    s: NDArray
+    alpha: NDArray
+    rotation: NDArray
+    force: NDArray
+    torque: NDArray
+    rho: NDArray
+    sigma: NDArray
+    oa0: NDArray
+    theta0: NDArray
+    dtheta: NDArray
+    e: NDArray
+    kappa: NDArray
+    r_keys: NDArray
+
+    def row(self, i: int) -> CamProfile:
+        """Particle ``i`` alone, every field indexed (1-D curves, scalars)."""
+        return CamProfile(*(getattr(self, f.name)[i] for f in fields(self)))
+
+
+@dataclass(frozen=True)
+class CamMeasures:
+    """The terms of Eq 27 and the quantities of Eq 28 per particle, (P,), SI: clearance
+    angle phi_1 (rad), variance of the torque slope over the clamping section, peak torque
+    (N m), curvature steps between key points (m), largest tan(alpha) before and after the
+    clearance is taken up, final lift (m), largest rotation (rad), peak Hertz stress while
+    clamping (Pa), largest radius of curvature (m), and the torque's RMS deviation from a
+    straight line over the clamping section (% of the peak)."""
+
+    clearance_angle: NDArray
+    slope_var: NDArray
+    peak_torque: NDArray
+    curvature_steps: NDArray
+    tan_clearance: NDArray
+    tan_clamping: NDArray
+    lift: NDArray
+    max_rotation: NDArray
+    sigma_max: NDArray
+    rho_max: NDArray
+    ramp_rms_pct: NDArray
+
+
+class EmbCamProblem(Problem, Repairable):
     """Cam profile of the EMB; minimise Eq 27 under Eq 28 with Eqs 29-30's penalty."""
 
     objective_name = "fitness"
-    repair_defaults = REPAIR_DEFAULTS
 
     def __init__(self, config: EmbCamConfig) -> None:
         self.config = c = config
@@ -102,6 +162,7 @@ class EmbCamProblem(Problem):
 
     # ---- geometry --------------------------------------------------------------------
     def unpack(self, X: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """Key radii with r0 = r_st first (P, N), kappa (P,) and e (P,) of particles X (Eq 26)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         r = np.column_stack([np.full(len(X), self.r_st), X[:, : self.n - 1]])
         return r, X[:, self.n - 1], X[:, self.n]
@@ -118,7 +179,7 @@ class EmbCamProblem(Problem):
         """Profile-angle steps between adjacent key points, (P, N - 1) (Eq 25)."""
         return theta_a[:, None] * np.diff(self.knot_w)[None, :]
 
-    def profile(self, X: NDArray) -> dict[str, NDArray]:
+    def profile(self, X: NDArray) -> CamProfile:
         """Every quantity of Sec 2.3 along the working profile, (P, K) arrays (SI)."""
         r_keys, kappa, e = self.unpack(X)
         oa0, theta0, theta_a = self.boundary(r_keys, kappa, e)
@@ -146,15 +207,13 @@ class EmbCamProblem(Problem):
             rho = pc.curvature_radius(r, dr, ddr)  # Eq 16
             sigma = pc.contact_stress(f_b, rho, self.rg, self.config.contact_length_mm * MM,
                                       self.config.z_e_sqrt_mpa * 1e3)  # Eq 15
-        return {"r": r, "dr": dr, "theta": theta, "l": l, "oa": oa, "s": s, "alpha": alpha,
-                "rotation": rotation, "force": force, "torque": torque, "rho": rho,
-                "sigma": sigma, "oa0": oa0, "theta0": theta0, "dtheta": dtheta, "e": e,
-                "kappa": kappa, "r_keys": r_keys}
+        return CamProfile(r, dr, theta, l, oa, s, alpha, rotation, force, torque, rho, sigma,
+                          oa0, theta0, dtheta, e, kappa, r_keys)
 
     # ---- measures --------------------------------------------------------------------
-    def measures(self, p: dict[str, NDArray]) -> dict[str, NDArray]:
+    def measures(self, p: CamProfile) -> CamMeasures:
         """The terms of Eq 27 and the quantities of Eq 28, per particle."""
-        s, rot, T = p["s"], p["rotation"], p["torque"]
+        s, rot, T = p.s, p.rotation, p.torque
         clamping = s > self.x1
         with np.errstate(invalid="ignore", divide="ignore"):
             clearance_angle = _interp_rows(rot, s, self.x1)  # phi_1 = phi at s = x1
@@ -163,20 +222,20 @@ class EmbCamProblem(Problem):
             count = np.maximum(m.sum(axis=1), 1)
             mean = np.where(m, dT, 0).sum(axis=1) / count
             slope_var = np.where(m, (dT - mean[:, None]) ** 2, 0).sum(axis=1) / count
-            rho_keys = p["rho"][:, self.knots]
-            tan_a = np.tan(np.abs(p["alpha"]))
+            rho_keys = p.rho[:, self.knots]
+            tan_a = np.tan(np.abs(p.alpha))
             ramp = self._ramp_rms(rot, T, clamping)
         peak = np.max(np.where(np.isfinite(T), T, np.inf), axis=1)
-        return {
-            "clearance_angle": clearance_angle, "slope_var": slope_var, "peak_torque": peak,
-            "curvature_steps": np.abs(np.diff(rho_keys, axis=1)).sum(axis=1),
-            "tan_clearance": np.max(np.where(~clamping, tan_a, 0), axis=1),
-            "tan_clamping": np.max(np.where(clamping, tan_a, 0), axis=1),
-            "lift": s[:, -1], "max_rotation": rot[:, -1],
-            "sigma_max": np.max(np.where(clamping, p["sigma"], 0), axis=1),
-            "rho_max": np.max(p["rho"], axis=1),
-            "ramp_rms_pct": ramp,
-        }
+        return CamMeasures(
+            clearance_angle=clearance_angle, slope_var=slope_var, peak_torque=peak,
+            curvature_steps=np.abs(np.diff(rho_keys, axis=1)).sum(axis=1),
+            tan_clearance=np.max(np.where(~clamping, tan_a, 0), axis=1),
+            tan_clamping=np.max(np.where(clamping, tan_a, 0), axis=1),
+            lift=s[:, -1], max_rotation=rot[:, -1],
+            sigma_max=np.max(np.where(clamping, p.sigma, 0), axis=1),
+            rho_max=np.max(p.rho, axis=1),
+            ramp_rms_pct=ramp,
+        )
 
     @staticmethod
     def _ramp_rms(rot: NDArray, T: NDArray, mask: NDArray) -> NDArray:
@@ -194,40 +253,47 @@ class EmbCamProblem(Problem):
         return 100 * np.sqrt((resid**2).sum(axis=1) / n) / np.where(peak > 0, peak, np.inf)
 
     def evaluate(self, X: NDArray) -> Evaluation:
+        """Fitness of Eq 29 (Eq 27 plus the penalties of Eq 30), the constraints of Eq 28 and
+        the options (rotation cap, clearance angle, torque ramp), normalised; peak torque,
+        clearance angle, rotation, lift and ramp deviation as extras."""
         c = self.config
         p = self.profile(X)
         m = self.measures(p)
         w = c.weights
-        f = (w[0] * m["clearance_angle"] + w[1] * m["slope_var"] + w[2] * m["peak_torque"]
-             + w[3] * m["curvature_steps"] / MM + w[4] * m["tan_clearance"]
-             + w[5] * m["tan_clamping"])  # Eq 27
-        finite = np.isfinite(p["s"]).all(axis=1) & np.isfinite(p["rotation"]).all(axis=1)
+        f = (w[0] * m.clearance_angle + w[1] * m.slope_var + w[2] * m.peak_torque
+             + w[3] * m.curvature_steps / MM + w[4] * m.tan_clearance
+             + w[5] * m.tan_clamping)  # Eq 27
+        finite = np.isfinite(p.s).all(axis=1) & np.isfinite(p.rotation).all(axis=1)
         g = {
             "valid": np.where(finite & np.isfinite(f), -1.0, 1.0),  # never "active"
-            "contact_stress": m["sigma_max"] / (c.allowable_stress_mpa * 1e6) - 1,
-            "lift": np.abs(m["lift"] - self.s_max) / (c.lift_tolerance_mm * MM) - 1,
-            "distortion": m["rho_max"] / self.rg - 1,
-            "monotonic": np.max(-np.diff(p["s"], axis=1), axis=1) / MM,
+            "contact_stress": m.sigma_max / (c.allowable_stress_mpa * 1e6) - 1,
+            "lift": np.abs(m.lift - self.s_max) / (c.lift_tolerance_mm * MM) - 1,
+            "distortion": m.rho_max / self.rg - 1,
+            "monotonic": np.max(-np.diff(p.s, axis=1), axis=1) / MM,
         }
         if self.phi_cap is not None:
-            g["rotation"] = m["max_rotation"] / self.phi_cap - 1
+            g["rotation"] = m.max_rotation / self.phi_cap - 1
         if c.clearance_angle_max_rad is not None:
-            g["clearance_angle"] = m["clearance_angle"] / c.clearance_angle_max_rad - 1
+            g["clearance_angle"] = m.clearance_angle / c.clearance_angle_max_rad - 1
         if c.torque_ramp_rms_max_pct is not None:
-            g["torque_ramp"] = m["ramp_rms_pct"] / c.torque_ramp_rms_max_pct - 1
+            g["torque_ramp"] = m.ramp_rms_pct / c.torque_ramp_rms_max_pct - 1
         G = np.column_stack([g[k] for k in self.constraint_names])
         G = np.where(np.isfinite(G), G, np.inf)
         err = np.clip(G, 0, None)
         penalty = np.where(err.sum(axis=1) > 0, c.penalty_p1, 0.0) + c.penalty_p2 * np.where(
             np.isfinite(err), err, 1e6).sum(axis=1)  # Eq 30
         fitness = np.where(np.isfinite(f), f, 1e6) + penalty  # Eq 29
-        extras = {"peak_torque_nm": m["peak_torque"], "clearance_angle_rad":
-                  m["clearance_angle"], "max_rotation_rad": m["max_rotation"],
-                  "lift_mm": m["lift"] / MM, "torque_ramp_rms_pct": m["ramp_rms_pct"]}
+        extras = {"peak_torque_nm": m.peak_torque, "clearance_angle_rad":
+                  m.clearance_angle, "max_rotation_rad": m.max_rotation,
+                  "lift_mm": m.lift / MM, "torque_ramp_rms_pct": m.ramp_rms_pct}
         return Evaluation(f=fitness, g=G, extras=extras)
 
     # ---- corrections (Sec 3.3.4, Appendix A.3) ------------------------------------------
-    def repair(self, X: NDArray, rng: np.random.Generator, probability: dict[str, float]
+    def repair_schedule(self) -> Mapping[str, tuple[float, float]]:
+        """Trigger probability of each correction at the first and last iteration."""
+        return REPAIR_DEFAULTS
+
+    def repair(self, X: NDArray, rng: np.random.Generator, probability: Mapping[str, float]
                ) -> NDArray:
         """The paper's three corrections, each applied to a particle with the given
         probability: parameter ranges, adjacent key points (Eqs 31-36), lift stretch (Eq 37)."""
@@ -258,7 +324,7 @@ class EmbCamProblem(Problem):
         # (3) global stretch toward the design lift (Eq 37)
         rows = np.flatnonzero(hit["lift"])
         if rows.size:
-            lift = self.profile(X[rows])["s"][:, -1]
+            lift = self.profile(X[rows]).s[:, -1]
             ok = np.isfinite(lift) & (lift > 0)
             rr = rows[ok]
             X[rr, : n - 1] = (X[rr, : n - 1] - self.r_st) * (self.s_max / lift[ok])[:, None] \
@@ -304,39 +370,40 @@ class EmbCamProblem(Problem):
             return pc.max_radius_on_ring(oa, angle, rg)
 
     # ---- single-design output ------------------------------------------------------
-    def _clamping_curves(self, x: NDArray) -> tuple[dict[str, NDArray], NDArray]:
-        p = {k: v[0] for k, v in self.profile(x[None, :]).items()}
-        return p, p["s"] > self.x1
+    def _clamping_curves(self, x: NDArray) -> tuple[CamProfile, NDArray]:
+        p = self.profile(x[None, :]).row(0)
+        return p, p.s > self.x1
 
     def metrics(self, x: NDArray) -> dict[str, float]:
         """Headline numbers, the ideal-screw comparison (Eqs 45-46) and the physical floor."""
         x = np.asarray(x, dtype=float)
-        m = {k: float(v[0]) for k, v in self.measures(self.profile(x[None, :])).items()}
+        m = self.measures(self.profile(x[None, :]))
+        m = CamMeasures(*(float(getattr(m, f.name)[0]) for f in fields(m)))
         p, clamp = self._clamping_curves(x)
         with np.errstate(invalid="ignore", divide="ignore"):
-            ratio = np.gradient(p["s"], p["rotation"])  # ds/dphi
-            ok = clamp & np.isfinite(ratio) & (p["force"] > 0)
-            t_over_f = p["torque"][ok] / p["force"][ok]
+            ratio = np.gradient(p.s, p.rotation)  # ds/dphi
+            ok = clamp & np.isfinite(ratio) & (p.force > 0)
+            t_over_f = p.torque[ok] / p.force[ok]
             consistency = 100 * np.max(np.abs(t_over_f - ratio[ok])) / np.max(ratio[ok])
-        lead = 2 * np.pi * self.s_max / m["max_rotation"]  # Eq 45
+        lead = 2 * np.pi * self.s_max / m.max_rotation  # Eq 45
         f_max = self.K * self.x2**3
         screw_torque = f_max * lead / (2 * np.pi)  # Eq 46
         screw_clearance = 2 * np.pi * self.x1 / lead
         work = self.K * self.x2**4 / 4  # caliper work over the clamping section
-        left = m["max_rotation"] - m["clearance_angle"]
+        left = m.max_rotation - m.clearance_angle
         out = {
-            "peak_torque_nm": m["peak_torque"], "clearance_angle_rad": m["clearance_angle"],
-            "max_rotation_rad": m["max_rotation"], "lift_mm": m["lift"] / MM,
-            "contact_stress_max_mpa": m["sigma_max"] / 1e6,
-            "curvature_max_mm": m["rho_max"] / MM,
-            "torque_ramp_rms_pct": m["ramp_rms_pct"],
+            "peak_torque_nm": m.peak_torque, "clearance_angle_rad": m.clearance_angle,
+            "max_rotation_rad": m.max_rotation, "lift_mm": m.lift / MM,
+            "contact_stress_max_mpa": m.sigma_max / 1e6,
+            "curvature_max_mm": m.rho_max / MM,
+            "torque_ramp_rms_pct": m.ramp_rms_pct,
             "consistency_error_pct": float(consistency),
             "screw_lead_mm": lead / MM, "screw_torque_nm": screw_torque,
             "screw_clearance_angle_rad": screw_clearance,
-            "torque_ratio_to_screw": m["peak_torque"] / screw_torque,
-            "clearance_ratio_to_screw": m["clearance_angle"] / screw_clearance,
+            "torque_ratio_to_screw": m.peak_torque / screw_torque,
+            "clearance_ratio_to_screw": m.clearance_angle / screw_clearance,
             "torque_floor_flat_nm": work / left, "torque_floor_ramp_nm": 2 * work / left,
-            "kappa_rad": float(p["kappa"]), "e_mm": float(p["e"]) / MM,
+            "kappa_rad": float(p.kappa), "e_mm": float(p.e) / MM,
         }
         return out
 
@@ -344,16 +411,16 @@ class EmbCamProblem(Problem):
         """Profile (working and non-working segments) and the curves against rotation."""
         x = np.asarray(x, dtype=float)
         p, _ = self._clamping_curves(x)
-        r, th = p["r"], p["theta"]
-        gamma = pc.angle_to_center(p["oa0"], self.r_st, self.rg)
-        a0 = float(p["oa0"]) * np.array([np.cos(p["theta0"] + gamma), np.sin(p["theta0"] + gamma)])
+        r, th = p.r, p.theta
+        gamma = pc.angle_to_center(p.oa0, self.r_st, self.rg)
+        a0 = float(p.oa0) * np.array([np.cos(p.theta0 + gamma), np.sin(p.theta0 + gamma)])
         # the non-working arc is the ring at the start: from B_end round to B_st
         b_st = self.r_st * np.array([np.cos(th[0]), np.sin(th[0])])
         b_end = r[-1] * np.array([np.cos(th[-1]), np.sin(th[-1])])
         a_st = np.arctan2(*(b_st - a0)[::-1])
         a_end = np.arctan2(*(b_end - a0)[::-1])
         sweep = np.linspace(a_end, a_st + 2 * np.pi * (a_st <= a_end), 181)
-        rot = p["rotation"]
+        rot = p.rotation
         lead = 2 * np.pi * self.s_max / rot[-1]
         s_screw = rot * lead / (2 * np.pi)
         screw_torque = self.K * np.clip(s_screw - self.x1, 0, None) ** 3 * lead / (2 * np.pi)
@@ -361,9 +428,9 @@ class EmbCamProblem(Problem):
             "profile_x_mm": r * np.cos(th) / MM, "profile_y_mm": r * np.sin(th) / MM,
             "nonworking_x_mm": (a0[0] + self.rg * np.cos(sweep)) / MM,
             "nonworking_y_mm": (a0[1] + self.rg * np.sin(sweep)) / MM,
-            "rotation_rad": rot, "lift_mm": p["s"] / MM,
-            "pressure_angle_deg": np.degrees(p["alpha"]), "torque_nm": p["torque"],
-            "clamping_force_kn": p["force"] / 1e3, "curvature_mm": p["rho"] / MM,
-            "contact_stress_mpa": p["sigma"] / 1e6, "profile_angle_rad": th,
+            "rotation_rad": rot, "lift_mm": p.s / MM,
+            "pressure_angle_deg": np.degrees(p.alpha), "torque_nm": p.torque,
+            "clamping_force_kn": p.force / 1e3, "curvature_mm": p.rho / MM,
+            "contact_stress_mpa": p.sigma / 1e6, "profile_angle_rad": th,
             "screw_torque_nm": screw_torque,
         }

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.cases.vcb import DEG, MM, VcbModel
-from camopt.config.models import VcbIdentifyConfig
+from camopt.cases.vcb.config import VcbIdentifyConfig
+from camopt.cases.vcb.model import DEG, MM, VcbModel
 from camopt.problem import Evaluation, Problem, Variable
 
 
@@ -38,6 +38,8 @@ class VcbIdentification(Problem):
                             [d.kc1_n_per_mm, d.kc2_n_per_mm]]) * 1e3
 
     def evaluate(self, X: NDArray) -> Evaluation:
+        """Squared normalised misfit of (rod travel, vendor surplus, optimum surplus) to
+        the paper's evidence, with each residual and work as extras; no constraints."""
         c, m = self.config, self.model
         X = np.atleast_2d(np.asarray(X, dtype=float))
         n = len(X)
@@ -48,24 +50,24 @@ class VcbIdentification(Problem):
         for label, A, kc in zip(("vendor", "optimum"), self.A, self.kc):
             kin = m.kinematics(np.tile(A, (n, 1)), link, offset)
             if travel is None:
-                travel = kin["s1"][:, -1:]
+                travel = kin.s1[:, -1:]
             loads = m.loads(travel, arm, free)
             bal = m.balance(kin, m.closing_torque(np.tile(kc, (n, 1))), loads)
             out[label] = bal
         assert travel is not None
         r_travel = (travel[:, 0] - c.rod_travel_target_mm * MM) / (c.rod_travel_tolerance_mm * MM)
-        r_vendor = ((out["vendor"]["surplus"] - c.vendor_surplus_target_j)
-                    / out["vendor"]["driving"])
-        r_optimum = ((out["optimum"]["surplus"] - c.optimum_surplus_target_j)
-                     / out["optimum"]["driving"])
+        r_vendor = ((out["vendor"].surplus - c.vendor_surplus_target_j)
+                    / out["vendor"].driving)
+        r_optimum = ((out["optimum"].surplus - c.optimum_surplus_target_j)
+                     / out["optimum"].driving)
         f = r_travel**2 + r_vendor**2 + r_optimum**2
         extras = {
             "rod_travel_mm": travel[:, 0] / MM,
-            "vendor_surplus_j": out["vendor"]["surplus"],
-            "optimum_surplus_j": out["optimum"]["surplus"],
-            "vendor_driving_work_j": out["vendor"]["driving"],
-            "vendor_resistant_work_j": out["vendor"]["resistant"],
-            "optimum_resistant_work_j": out["optimum"]["resistant"],
+            "vendor_surplus_j": out["vendor"].surplus,
+            "optimum_surplus_j": out["optimum"].surplus,
+            "vendor_driving_work_j": out["vendor"].driving,
+            "vendor_resistant_work_j": out["vendor"].resistant,
+            "optimum_resistant_work_j": out["optimum"].resistant,
             "misfit_travel": r_travel, "misfit_vendor": r_vendor, "misfit_optimum": r_optimum,
         }
         return Evaluation(f=np.where(np.isfinite(f), f, np.inf), g=np.zeros((n, 0)),

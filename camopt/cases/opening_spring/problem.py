@@ -22,7 +22,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
-from camopt.config.models import OpeningSpringConfig
+from camopt.capabilities import HasResiduals
+from camopt.cases.opening_spring.config import OpeningSpringConfig
 from camopt.problem import Evaluation, Problem, Variable
 
 MM = 1e-3
@@ -49,7 +50,7 @@ class Motion:
     time_10mm: float
 
 
-class OpeningSpringProblem(Problem):
+class OpeningSpringProblem(Problem, HasResiduals):
     """Spring design (or lumped-parameter identification) for a specified opening motion."""
 
     def __init__(self, config: OpeningSpringConfig) -> None:
@@ -112,6 +113,7 @@ class OpeningSpringProblem(Problem):
         return length, (dx_ * y - dy_ * x) / length
 
     def inertia(self, p: dict[str, NDArray], theta: NDArray) -> NDArray:
+        """Generalised inertia J(theta) = I_o + n_c m_c (d cos theta)^2 (kg m^2, Eq 5)."""
         c = self.config
         return p["inertia_kg_m2"] + c.contact_count * c.contact_mass_kg * (
             self.d * np.cos(theta)) ** 2
@@ -155,6 +157,9 @@ class OpeningSpringProblem(Problem):
         return self.energy_balance(p, th, rate) / self.energy_scale
 
     def evaluate(self, X: NDArray) -> Evaluation:
+        """Design mode: squared velocity error at the precision points (Eq 4, (rad/s)^2,
+        plus the optional regularisation); identify mode: squared energy residuals (Eq 5).
+        Constraints: the springs stay extended and the energy reaches every point."""
         c = self.config
         X = np.atleast_2d(np.asarray(X, dtype=float))
         p = self.params(X)

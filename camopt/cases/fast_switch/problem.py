@@ -15,12 +15,13 @@ the full model with :meth:`FastSwitchProblem.full_model`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.config.models import FastSwitchConfig
+from camopt.capabilities import HasFamily
+from camopt.cases.fast_switch.config import FastSwitchConfig
 from camopt.mechanics import dynamics, springs
 from camopt.mechanics.slider_crank import coupler_angle, coupler_derivatives, crank_angle_for_span
 from camopt.problem import Evaluation, Problem, Variable
@@ -46,6 +47,37 @@ DESIGN_NAMES = {  # x_i -> archive name with its display unit and factor from SI
 
 
 @dataclass(frozen=True)
+class SwitchDesign:
+    """The 13 variables of the full model for a population, each (n,), SI (rad for angles):
+    x1 damping ratio, x2 natural frequency (rad/s), x3 sf, x4 sud, x5 s0, x6 r3, x7 r2,
+    x8 spring rate (N/m), x9 coils, x10 g, x11 theta3f, x12 theta30, x13 theta20; and
+    ``cos20``, cos theta20 before clipping (outside [-1, 1]: the loop cannot close, R9b)."""
+
+    x1: NDArray
+    x2: NDArray
+    x3: NDArray
+    x4: NDArray
+    x5: NDArray
+    x6: NDArray
+    x7: NDArray
+    x8: NDArray
+    x9: NDArray
+    x10: NDArray
+    x11: NDArray
+    x12: NDArray
+    x13: NDArray
+    cos20: NDArray
+
+    def display(self) -> dict[str, NDArray]:
+        """x1..x13 under their archive names in display units (``DESIGN_NAMES``)."""
+        return {name: getattr(self, key) * scale for key, (name, scale) in DESIGN_NAMES.items()}
+
+    def take(self, i: int) -> dict[str, float]:
+        """One design's values as SI floats, by field name."""
+        return {f.name: float(getattr(self, f.name)[i]) for f in fields(self)}
+
+
+@dataclass(frozen=True)
 class SwitchParameters:
     """Nomenclature parameters in SI."""
 
@@ -65,6 +97,7 @@ class SwitchParameters:
 
     @classmethod
     def from_config(cls, c: FastSwitchConfig) -> SwitchParameters:
+        """The Nomenclature parameters of a config, converted to SI."""
         d = c.wire_diameter_mm * 1e-3
         return cls(
             L=c.link2_length_mm * 1e-3, p4=c.half_piston_mm * 1e-3, M2=c.m2_kg, M3=c.m3_kg,
@@ -75,16 +108,20 @@ class SwitchParameters:
         )
 
     def rate(self, coils: NDArray) -> NDArray:
+        """Spring rate (N/m) of each coil count (R13, Eq 21)."""
         return springs.helical_rate(self.d, self.D, self.G, coils)  # R13, Eq 21
 
     def strength(self, k: NDArray, deflection: NDArray) -> NDArray:
+        """Shear-strength use at a deflection (m); <= 1 is safe (R14/R15, Eqs 22-23)."""
         return springs.strength_ratio(k, deflection, self.d, self.D, self.A, self.m,
                                       self.d_strength)  # R14/R15, Eqs 22-23
 
     def effective_mass(self, r2: NDArray) -> NDArray:
+        """Effective mass m' (kg) for crank length r2 (m) (Eq 32)."""
         return self.M4 + 0.083 * self.M2 * self.L**2 / r2**2 + 0.021 * self.M3  # Eq 32
 
     def velocity_coefficient(self, r2: NDArray, r3: NDArray) -> NDArray:
+        """Velocity-dependent coefficient c (kg/s) of the approximate damping (Eq 33)."""
         M2L2 = self.M2 * self.L**2
         return (0.0083 * M2L2 / r2**3 + 0.0042 * self.M3 / r3 + 0.033 * M2L2 / (r2**2 * r3)
                 + 0.067 * self.M3 / r2)  # Eq 33
@@ -104,7 +141,7 @@ def closure_time(xi: NDArray, omega: NDArray, sf: NDArray, sud: NDArray, s0: NDA
     return (np.pi - np.arcsin(v) - phase) / (root * omega)
 
 
-class FastSwitchProblem(Problem):
+class FastSwitchProblem(Problem, HasFamily):
     """Reduced fast-switch problem over (coils, sf, sud, s0, r3, r2); minimise closure time."""
 
     objective_name = "closure_time_ms"
@@ -130,8 +167,9 @@ class FastSwitchProblem(Problem):
         self.constraint_names = PRINTED_CONSTRAINTS if printed else CORRECTED_CONSTRAINTS
 
     # ---- the 13-variable model -------------------------------------------------------
-    def complete(self, X: NDArray) -> dict[str, NDArray]:
-        """x1..x13 from the reduced variables, solving R13, R17, R18, R10, R11, R8, R9 exactly."""
+    def complete(self, X: NDArray) -> SwitchDesign:
+        """x1..x13 from the reduced variables (n, 6), solving R13, R17, R18, R10, R11, R8, R9
+        exactly."""
         p = self.p
         N, x3, x4, x5, x6, x7 = np.asarray(X, dtype=float).T
         x8 = p.rate(N)
@@ -144,15 +182,14 @@ class FastSwitchProblem(Problem):
         cos20 = crank_angle_for_span(x7, x6, span0)  # R8 and R9 at t = 0
         x13 = np.arccos(np.clip(cos20, -1.0, 1.0))
         x12 = coupler_angle(x7, x6, x13, span0)
-        return {"x1": x1, "x2": x2, "x3": x3, "x4": x4, "x5": x5, "x6": x6, "x7": x7,
-                "x8": x8, "x9": N, "x10": x10, "x11": x11, "x12": x12, "x13": x13,
-                "_cos20": cos20}
+        return SwitchDesign(x1, x2, x3, x4, x5, x6, x7, x8, N, x10, x11, x12, x13, cos20)
 
-    def full_model(self, x: dict[str, NDArray]) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
-        """Inequalities R1-R21 (normalised, <= 0 feasible) and equality residuals R8-R18."""
+    def full_model(self, x: SwitchDesign) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
+        """Inequalities R1-R21 (normalised, <= 0 feasible) and equality residuals R8-R18,
+        each (n,), keyed by the paper's constraint names."""
         p = self.p
-        x1, x2, x3, x4, x5, x6, x7 = (x[f"x{i}"] for i in range(1, 8))
-        x8, x9, x10, x11, x12, x13 = (x[f"x{i}"] for i in range(8, 14))
+        x1, x2, x3, x4, x5, x6, x7 = x.x1, x.x2, x.x3, x.x4, x.x5, x.x6, x.x7
+        x8, x9, x10, x11, x12, x13 = x.x8, x.x9, x.x10, x.x11, x.x12, x.x13
         with np.errstate(divide="ignore", invalid="ignore"):
             damped = np.sqrt(1.0 - x1**2)
             g = {
@@ -193,6 +230,9 @@ class FastSwitchProblem(Problem):
 
     # ---- Problem interface ---------------------------------------------------------------
     def evaluate(self, X: NDArray) -> Evaluation:
+        """Closure time in ms (Eq 39 on the right arcsine branch, or Eq 58 as printed), the
+        reduced problem's constraints, and x1..x13 plus the largest equality residual of the
+        full model as extras."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         x = self.complete(X)
         if self.config.reduced_form == "printed":
@@ -200,28 +240,28 @@ class FastSwitchProblem(Problem):
         else:
             f, g = self._corrected(x)
         f = np.where(np.isfinite(f), f, np.inf)
-        extras = {name: x[key] * scale for key, (name, scale) in DESIGN_NAMES.items()}
+        extras = x.display()
         extras["closure_time_ms"] = f * 1e3
         _, h = self.full_model(x)
         extras["equality_residual_max"] = np.max(np.abs(np.stack(list(h.values()))), axis=0)
         return Evaluation(f=f * 1e3, g=g, extras=extras)
 
-    def _corrected(self, x: dict[str, NDArray]) -> tuple[NDArray, NDArray]:
+    def _corrected(self, x: SwitchDesign) -> tuple[NDArray, NDArray]:
         g_full, _ = self.full_model(x)
         with np.errstate(divide="ignore", invalid="ignore"):
             extra = {
-                "R10a": x["x7"] / x["x6"] - 1.0,  # Eq 43
-                "R9b": np.abs(x["_cos20"]) - 1.0,
-                "R3b": x["x5"] / x["x3"] - 1.0,
+                "R10a": x.x7 / x.x6 - 1.0,  # Eq 43
+                "R9b": np.abs(x.cos20) - 1.0,
+                "R3b": x.x5 / x.x3 - 1.0,
             }
-            f = closure_time(x["x1"], x["x2"], x["x3"], x["x4"], x["x5"])
+            f = closure_time(x.x1, x.x2, x.x3, x.x4, x.x5)
         g = np.column_stack([{**g_full, **extra}[name] for name in self.constraint_names])
         return f, g
 
-    def _printed(self, x: dict[str, NDArray]) -> tuple[NDArray, NDArray]:
+    def _printed(self, x: SwitchDesign) -> tuple[NDArray, NDArray]:
         """The 7-variable statement exactly as printed after Eq 57 (including its errors)."""
         p = self.p
-        x1, x3, x4, x5, x6, x7, x8 = (x[k] for k in ("x1", "x3", "x4", "x5", "x6", "x7", "x8"))
+        x1, x3, x4, x5, x6, x7, x8 = x.x1, x.x3, x.x4, x.x5, x.x6, x.x7, x.x8
         with np.errstate(divide="ignore", invalid="ignore"):
             b = np.sqrt(x6**2 - x7**2)
             x10 = b + p.p4 + x3  # Eq 56
@@ -288,9 +328,9 @@ class FastSwitchProblem(Problem):
         (Eq 106); V = k (s - sud)^2 / 2. Link translation inertia is neglected as in the paper.
         """
         p = self.p
-        v = self.complete(np.atleast_2d(x))
-        r2, r3, k, sud = (float(v[key][0]) for key in ("x7", "x6", "x8", "x4"))
-        g, theta20 = float(v["x10"][0]), float(v["x13"][0])
+        v = self.complete(np.atleast_2d(x)).take(0)
+        r2, r3, k, sud = v["x7"], v["x6"], v["x8"], v["x4"]
+        g, theta20 = v["x10"], v["x13"]
         I2, I3 = p.M2 * p.L**2 / 12.0, p.M3 * r3**2 / 12.0
 
         def kinematics(q: float) -> tuple[float, float, float, float, float]:
@@ -315,8 +355,8 @@ class FastSwitchProblem(Problem):
     def analysis(self, x: NDArray) -> dict[str, NDArray]:
         """Curves for the archive: exact motion theta2(t), spring length s(t)."""
         travel = self.exact_closure(x)
-        v = self.complete(np.atleast_2d(x))
-        r2, r3, g = float(v["x7"][0]), float(v["x6"][0]), float(v["x10"][0])
+        v = self.complete(np.atleast_2d(x)).take(0)
+        r2, r3, g = v["x7"], v["x6"], v["x10"]
         th3 = coupler_derivatives(r2, r3, travel.q)[0]
         s = g - self.p.p4 - r2 * np.cos(travel.q) - r3 * np.cos(th3)
         return {"time_ms": travel.t * 1e3, "theta2_deg": np.degrees(travel.q),

@@ -1,4 +1,4 @@
-"""12 kV VCB closing mechanism: cam + closing springs (step 1), then four-bar (step 2).
+"""12 kV VCB closing mechanism, the physics: geometry, kinematics, forces and contact.
 
 Kang, Huang & Yang (2023), Machines 11:150 (``shared/papers/000_*.txt``).
 
@@ -21,12 +21,71 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.config.models import CamDesign, VcbConfig
+from camopt.cases.vcb.config import VcbConfig
 from camopt.mechanics import cam, fourbar, hertz
-from camopt.problem import Evaluation, Problem, Variable
 
 MM = 1e-3
 DEG = np.pi / 180
+
+
+@dataclass(frozen=True)
+class Kinematics:
+    """Follower, linkage and rod motion on the cam-angle grid, (n, m) arrays.
+
+    ``cos4``/``sin4`` are the output link's angle in the frame turned to BO and mirrored
+    (:meth:`VcbModel.output_angle` turns them back); ``s1`` is the rod travel from the
+    opened position (m) and ``ds1`` its rate ds1/dtheta_c (m/rad)."""
+
+    follower: cam.Follower
+    cos4: NDArray
+    sin4: NDArray
+    s1: NDArray
+    ds1: NDArray
+
+    @property
+    def dphi(self) -> NDArray:
+        """Follower rate dphi/dtheta_c, (n, m)."""
+        return self.follower.dphi
+
+    def ends(self) -> Kinematics:
+        """The first and last positions only (n, 2): the opened and closed states."""
+        f = self.follower
+        k = [0, -1]
+        follower = cam.Follower(f.theta_c[:, k], f.xi, f.angle[:, k], f.dphi[:, k],
+                                f.ddphi[:, k], f.cos_a[:, k], f.sin_a[:, k])
+        return Kinematics(follower, self.cos4[:, k], self.sin4[:, k], self.s1[:, k],
+                          self.ds1[:, k])
+
+
+@dataclass(frozen=True)
+class ForceBalance:
+    """Forces along the stroke at positions i = 1..Ns, (n, Ns), and the works of Eqs 23-26
+    per design (n,) in J: closing-spring torque ``torque`` (N m), rod rate ``ds1`` (m/rad),
+    general resistant force ``fr`` (N), driving and resistant work, and the surplus
+    driving - resistant / efficiency (Eq 26)."""
+
+    torque: NDArray
+    ds1: NDArray
+    fr: NDArray
+    driving: NDArray
+    resistant: NDArray
+    surplus: NDArray
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Cam-roller contact along the stroke, (n, m): pitch curve and its derivatives (m,
+    Eqs 9, 12), the profile's radius of curvature (m, Eq 15), normal force (N, Eq 19) and
+    the Hertz peak pressure and maximum shear stress (Pa, Eqs 27-31)."""
+
+    xp: NDArray
+    yp: NDArray
+    dxp: NDArray
+    dyp: NDArray
+    curvature: NDArray
+    normal_force: NDArray
+    sigma: NDArray
+    tau: NDArray
 
 
 @dataclass(frozen=True)
@@ -117,7 +176,7 @@ class VcbModel:
 
     # ---- kinematics and forces ----------------------------------------------------
     def kinematics(self, A: NDArray, link: NDArray, rod_offset: NDArray | float
-                   ) -> dict[str, NDArray]:
+                   ) -> Kinematics:
         """Follower, linkage and rod motion, (n, m) arrays; ``A`` (n, 4), ``link`` (n, 5).
 
         The follower swing turns link 2 clockwise: theta2 = angle(BO) - (xi + phi). The
@@ -147,11 +206,11 @@ class VcbModel:
         ds1 += np.multiply(c4, p, out=tmp)
         ds1 *= rate
         ds1 *= f.dphi
-        return {"follower": f, "dphi": f.dphi, "cos4": c4, "sin4": s4, "s1": s1, "ds1": ds1}
+        return Kinematics(f, c4, s4, s1, ds1)
 
-    def output_angle(self, kin: dict[str, NDArray]) -> NDArray:
-        """Output-link angle theta4 (rad, in (-pi, pi]) in the mechanism's frame."""
-        th4 = self.theta_bo - np.arctan2(kin["sin4"], kin["cos4"])
+    def output_angle(self, kin: Kinematics) -> NDArray:
+        """Output-link angle theta4 (rad, in (-pi, pi]) in the mechanism's frame, (n, m)."""
+        th4 = self.theta_bo - np.arctan2(kin.sin4, kin.cos4)
         return np.arctan2(np.sin(th4), np.cos(th4))
 
     def closing_torque(self, kc: NDArray) -> NDArray:
@@ -175,8 +234,7 @@ class VcbModel:
             - (rod_travel_vendor - c.contact_gap_mm * MM),
             gap=c.contact_gap_mm * MM, free_contact=free_contact, efficiency=c.efficiency)
 
-    def balance(self, kin: dict[str, NDArray], torque: NDArray, loads: Loads
-                ) -> dict[str, NDArray]:
+    def balance(self, kin: Kinematics, torque: NDArray, loads: Loads) -> ForceBalance:
         """Fo, Fr along the stroke and the works of Eqs 23-26 (J), at positions i = 1..Ns.
 
         Fo ds is evaluated as T dtheta (virtual work), which stays finite where the
@@ -184,26 +242,26 @@ class VcbModel:
         """
         # whole contiguous rows, then position 0 taken off the sums: operations on
         # the [:, 1:] views cost three times as much
-        s1, ds1 = kin["s1"], kin["ds1"]
+        s1, ds1 = kin.s1, kin.ds1
         fr = loads.resistant_force(s1)
         driving = (torque.sum(axis=1) - torque[:, 0]) * self.dtheta
         resistant = (np.einsum("ij,ij->i", fr, ds1) - fr[:, 0] * ds1[:, 0]) * self.dtheta
-        return {"T": torque[:, 1:], "ds1": ds1[:, 1:], "fr": fr[:, 1:],
-                "driving": driving, "resistant": resistant,
-                "surplus": driving - resistant / loads.efficiency}  # Eq 26
+        return ForceBalance(torque=torque[:, 1:], ds1=ds1[:, 1:], fr=fr[:, 1:],
+                            driving=driving, resistant=resistant,
+                            surplus=driving - resistant / loads.efficiency)  # Eq 26
 
     @staticmethod
-    def output_force(bal: dict[str, NDArray]) -> NDArray:
+    def output_force(bal: ForceBalance) -> NDArray:
         """General output force Fo (Eq 24) by virtual work, T / (ds1 / dtheta) (N)."""
         with np.errstate(divide="ignore", invalid="ignore"):
-            return bal["T"] / bal["ds1"]
+            return bal.torque / bal.ds1
 
-    def abs_sum(self, bal: dict[str, NDArray]) -> NDArray:
+    def abs_sum(self, bal: ForceBalance) -> NDArray:
         """Eq 39 as printed: sum over positions of |Fo - Fr / eps| (N)."""
-        return np.abs(self.output_force(bal) - bal["fr"] / self.c.efficiency).sum(axis=1)
+        return np.abs(self.output_force(bal) - bal.fr / self.c.efficiency).sum(axis=1)
 
-    def contact(self, f: cam.Follower, torque: NDArray) -> dict[str, NDArray]:
-        """Pitch curve, curvature, normal force and Hertz stresses."""
+    def contact(self, f: cam.Follower, torque: NDArray) -> Contact:
+        """Pitch curve, curvature, normal force and Hertz stresses along the stroke."""
         c = self.c
         xp, yp, dxp, dyp = cam.pitch_curve(self.l2, self.l6, f)
         rho = cam.curvature_radius(self.l2, self.l6, f, self.rf)
@@ -214,10 +272,7 @@ class VcbModel:
         e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * 1e9, c.poisson,
                                         c.cam_modulus_gpa * 1e9, c.poisson)
         _, sigma, tau = hertz.line_contact(fn, rho, self.rf, c.contact_length_mm * MM, e_eq)
-        return {"xp": xp, "yp": yp, "dxp": dxp, "dyp": dyp,
-                "curvature": rho, "normal_force": fn, "sigma": sigma, "tau": tau}
-
-
+        return Contact(xp, yp, dxp, dyp, rho, fn, sigma, tau)
     def peak_stress(self, f: cam.Follower, torque: NDArray) -> NDArray:
         """Peak Hertz pressure over the stroke per design (Eqs 15, 19, 27-30), the search's
         fast path: sigma_max = sqrt(max(Fn (1/rho + 1/rf)) E_e / (2 pi L)), one square
@@ -263,7 +318,7 @@ class VcbModel:
         return np.sqrt(top * e_eq / (2 * np.pi * c.contact_length_mm * MM))
 
 
-def _unassembled(cos4: NDArray, work: NDArray) -> NDArray:
+def unassembled(cos4: NDArray, work: NDArray) -> NDArray:
     """Assembly constraint per design: the fraction of the stroke where the four-bar
     cannot be assembled, or -1 where it assembles everywhere (satisfied, never "active");
     only rows whose work sum is not finite can fail (NaN propagates into the sum)."""
@@ -275,171 +330,7 @@ def _unassembled(cos4: NDArray, work: NDArray) -> NDArray:
     return g
 
 
-def _max(a: NDArray) -> NDArray:
+def row_max(a: NDArray) -> NDArray:
     """Row maximum where NaN (no valid Hertz contact) counts as infinite."""
     top = np.max(a, axis=1)  # NaN propagates through max
     return np.where(np.isnan(top), np.inf, top)
-
-
-class VcbProblem(Problem):
-    """Step 1 (cam + springs) or step 2 (four-bar) of the VCB design; minimise Eq 39."""
-
-    def __init__(self, config: VcbConfig) -> None:
-        self.config = c = config
-        self.model = m = VcbModel(config)
-        self.rod_offset = c.rod_arm_offset_deg * DEG
-        vendor = m.kinematics(m.vendor_a[None, :], m.vendor_link[None, :], self.rod_offset)
-        self.vendor_travel = float(vendor["s1"][0, -1])
-        self.load = m.loads(self.vendor_travel, c.opening_arm_ratio, c.free_contact_force_n)
-        self.objective_name = "objective_j" if c.objective_form == "net" else "objective_n"
-        if c.step == "cam":
-            self.variables = (
-                Variable("a1", c.a1_bounds.lower, c.a1_bounds.upper),
-                Variable("a2", c.a2_bounds.lower, c.a2_bounds.upper),
-                Variable("a3", c.a3_bounds.lower, c.a3_bounds.upper),
-                Variable("kc1_n_per_mm", c.kc1_bounds_n_per_mm.lower * 1e3,
-                         c.kc1_bounds_n_per_mm.upper * 1e3, 1e-3),
-                Variable("kc2_n_per_mm", c.kc2_bounds_n_per_mm.lower * 1e3,
-                         c.kc2_bounds_n_per_mm.upper * 1e3, 1e-3),
-            )
-            self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly")
-        else:
-            if c.cam_design is None:
-                raise ValueError("case.cam_design: step 'fourbar' needs the step-1 design "
-                                 "(cam_design or cam_archive)")
-            self.cam_a, self.cam_kc = self._cam(c.cam_design)
-            self.variables = tuple(
-                Variable(name, b.lower * f, b.upper * f, 1 / f)
-                for name, b, f in (("l1_mm", c.l1_bounds_mm, MM), ("l3_mm", c.l3_bounds_mm, MM),
-                                   ("l4_mm", c.l4_bounds_mm, MM), ("l5_mm", c.l5_bounds_mm, MM),
-                                   ("theta1_deg", c.theta1_bounds_deg, DEG)))
-            self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly",
-                                     "grashof")
-        if c.stress_constraint:
-            self.constraint_names += ("shear_yield",)
-
-    def _cam(self, d: CamDesign) -> tuple[NDArray, NDArray]:
-        a0 = self.model.phi0() if d.a0 is None else d.a0
-        return np.array([a0, d.a1, d.a2, d.a3]), np.array([d.kc1_n_per_mm, d.kc2_n_per_mm]) * 1e3
-
-    def designs(self, X: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-        """Cubic coefficients (n, 4), spring rates (n, 2) and linkage (n, 5) of each row."""
-        X = np.atleast_2d(np.asarray(X, dtype=float))
-        n = len(X)
-        if self.config.step == "cam":
-            A = np.column_stack([np.full(n, self.model.phi0()), X[:, :3]])
-            return A, X[:, 3:5], np.tile(self.model.vendor_link, (n, 1))
-        return np.tile(self.cam_a, (n, 1)), np.tile(self.cam_kc, (n, 1)), X[:, :5]
-
-    def vendor_x(self) -> NDArray:
-        """The vendor's design in this step's variables (initial design of Tables 6, 7)."""
-        if self.config.step == "cam":
-            c = self.config
-            return np.r_[self.model.vendor_a[1:], c.kc1_n_per_mm * 1e3, c.kc2_n_per_mm * 1e3]
-        return self.model.vendor_link.copy()
-
-    def evaluate(self, X: NDArray) -> Evaluation:
-        """Objective and constraints, with the metrics the search needs (hot path)."""
-        return self._evaluate(X, detail=False)
-
-    def describe(self, X: NDArray) -> Evaluation:
-        """As :meth:`evaluate`, plus descriptive metrics (pressure angle, curvature,
-        normal force, output range) for tables and reports."""
-        return self._evaluate(X, detail=True)
-
-    def _evaluate(self, X: NDArray, detail: bool) -> Evaluation:
-        c, m = self.config, self.model
-        A, kc, link = self.designs(X)
-        kin = m.kinematics(A, link, self.rod_offset)
-        torque = m.closing_torque(kc)
-        bal = m.balance(kin, torque, self.load)
-        phi_max = (np.max(kin["follower"].angle, axis=1) - m.xi) / DEG
-        lo, hi = c.phi_max_deg
-        if detail:
-            con = m.contact(kin["follower"], torque)
-            sigma_max = _max(con["sigma"])
-        else:
-            sigma_max = m.peak_stress(kin["follower"], torque)
-        tau_max = 0.304 * sigma_max  # Eq 31
-        g = {
-            "phi_max_low": lambda: 1 - phi_max / lo,  # Eq 40
-            "phi_max_high": lambda: phi_max / hi - 1,  # Eq 40
-            "monotonic": lambda: -np.min(kin["dphi"], axis=1),
-            "assembly": lambda: _unassembled(kin["cos4"], bal["resistant"]),
-            "grashof": lambda: -fourbar.grashof_margin(link[:, 0], m.l2, link[:, 1],
-                                                       link[:, 2]) / m.l2,  # Eq 43
-            "shear_yield": lambda: tau_max / (c.shear_yield_mpa * 1e6) - 1,
-        }
-        G = np.column_stack([g[name]() for name in self.constraint_names])
-        G = np.where(np.isnan(G), np.inf, G)
-        violation = np.clip(G, 0, None).sum(axis=1)
-        base = np.abs(bal["surplus"]) if c.objective_form == "net" else m.abs_sum(bal)
-        f = np.where(np.isfinite(base) & np.isfinite(violation),
-                     base + c.penalty * violation, np.inf)  # Eq 39
-        extras = {
-            "phi_max_deg": phi_max, "sigma_max_mpa": sigma_max / 1e6,
-            "tau_max_mpa": tau_max / 1e6,
-            "driving_work_j": bal["driving"], "resistant_work_j": bal["resistant"],
-            "surplus_work_j": bal["surplus"], "rod_travel_mm": kin["s1"][:, -1] / MM,
-        }
-        if detail:
-            ends = m.output_angle({k: kin[k][:, [0, -1]] for k in ("cos4", "sin4")}) / DEG
-            psi = cam.pressure_angle(m.l2, m.l6, kin["follower"])
-            extras.update({
-                "a0": A[:, 0], "a1": A[:, 1], "a2": A[:, 2], "a3": A[:, 3],
-                "pressure_angle_max_deg": np.max(np.abs(psi), axis=1) / DEG,
-                "curvature_min_mm": np.min(con["curvature"], axis=1) / MM,
-                "normal_force_max_n": _max(con["normal_force"]),
-                "force_gap_n": m.abs_sum(bal),
-                "output_start_deg": ends[:, 0], "output_end_deg": ends[:, 1],
-            })
-        return Evaluation(f=f, g=G, extras=extras)
-
-    # ---- single-design output ----------------------------------------------------
-    def _metrics_of(self, x: NDArray) -> dict[str, object]:
-        ev = self.describe(x[None, :])
-        out: dict[str, object] = {k: float(v[0]) for k, v in ev.extras.items()}
-        ends = [out.pop("output_start_deg"), out.pop("output_end_deg")]
-        out["output_range_deg"] = [min(ends), max(ends)]
-        out["feasible"] = float(ev.feasible[0])
-        return out
-
-    def metrics(self, x: NDArray) -> dict[str, object]:
-        """Headline metrics of the design and, prefixed ``initial_``, of the vendor's."""
-        out = self._metrics_of(np.asarray(x, dtype=float))
-        vendor = self._metrics_of(self.vendor_x())
-        out.update({f"initial_{k}": v for k, v in vendor.items()})
-        out["initial_objective"] = float(self.evaluate(self.vendor_x()[None, :]).f[0])
-        return out
-
-    def curves(self, x: NDArray) -> dict[str, NDArray]:
-        """Analysis curves of one design along the closing stroke (display units)."""
-        m = self.model
-        A, kc, link = self.designs(x)
-        kin = m.kinematics(A, link, self.rod_offset)
-        torque = m.closing_torque(kc)
-        bal = m.balance(kin, torque, self.load)
-        con = m.contact(kin["follower"], torque)
-        xc, yc = cam.profile(con["xp"], con["yp"], con["dxp"], con["dyp"], m.rf)
-        ds = kin["ds1"][0, 1:] * m.dtheta
-        return {
-            "cam_angle_deg": m.theta_c / DEG,
-            "pitch_x_mm": con["xp"][0] / MM, "pitch_y_mm": con["yp"][0] / MM,
-            "profile_x_mm": xc[0] / MM, "profile_y_mm": yc[0] / MM,
-            "follower_angle_deg": kin["follower"].phi[0] / DEG,
-            "pressure_angle_deg": cam.pressure_angle(m.l2, m.l6, kin["follower"])[0] / DEG,
-            "curvature_mm": con["curvature"][0] / MM,
-            "normal_force_n": con["normal_force"][0],
-            "sigma_max_mpa": con["sigma"][0] / 1e6, "tau_max_mpa": con["tau"][0] / 1e6,
-            "output_angle_deg": m.output_angle(kin)[0] / DEG,
-            "rod_travel_mm": kin["s1"][0] / MM,
-            "fo_n": np.r_[np.nan, m.output_force(bal)[0]], "fr_n": np.r_[np.nan, bal["fr"][0]],
-            "driving_work_j": np.r_[0.0, np.cumsum(torque[0, 1:] * m.dtheta)],
-            "resistant_work_j": np.r_[0.0, np.cumsum(bal["fr"][0] * ds)],
-        }
-
-    def analysis(self, x: NDArray) -> dict[str, NDArray]:
-        """Curves of the design and of the vendor's initial design (``initial_`` prefix)."""
-        out = self.curves(np.asarray(x, dtype=float))
-        out.update({f"initial_{k}": v for k, v in self.curves(self.vendor_x()).items()})
-        return out

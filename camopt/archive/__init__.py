@@ -1,0 +1,19 @@
+"""HDF5 archives (h5py only): run archives, sweep archives, their files and tables."""
+
+from __future__ import annotations
+
+from camopt.archive.files import (
+    archive_kind,
+    atomic_write,
+    check_writable,
+    default_path,
+    open_archive,
+    versions,
+)
+from camopt.archive.references import resolve_references
+from camopt.archive.runs import load_run, write_run
+from camopt.archive.tables import read_table, write_table
+
+__all__ = ["archive_kind", "atomic_write", "check_writable", "default_path", "load_run",
+           "open_archive", "read_table", "resolve_references", "versions", "write_run",
+           "write_table"]

@@ -1,0 +1,59 @@
+"""Sweep archives: the spec, every finished cell and a summary per grid point."""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+from datetime import datetime, timezone
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from camopt.archive.files import atomic_write, open_archive, versions
+from camopt.archive.tables import write_table
+from camopt.errors import ArchiveError
+from camopt.sweep.spec import CellResult, SweepSpec, summary
+
+SCHEMA_VERSION = 1
+
+
+def write_sweep(path: Path, spec: SweepSpec, results: dict[tuple[int, int], CellResult],
+                total: int) -> None:
+    """Rewrite the sweep archive atomically with every finished cell."""
+
+    def write(f: h5py.File) -> None:
+        f.attrs.update({
+            **versions(), "schema_version": SCHEMA_VERSION, "archive_kind": "sweep",
+            "config_toml": spec.text, "config_path": spec.source, "spec": spec.to_json(),
+            "seed_entropy": str(spec.entropy), "cells_total": total,
+            "cells_done": len(results), "complete": len(results) == total,
+            "created": datetime.now(timezone.utc).isoformat(),
+        })
+        cells = f.create_group("cells")
+        for key in sorted(results):
+            r = results[key]
+            g = cells.create_group(f"p{r.point:03d}_s{r.seed:05d}")
+            meta = {k: v for k, v in asdict(r).items() if k not in ("x", "history")}
+            g.attrs.update(meta)
+            g.create_dataset("x", data=np.asarray(r.x))
+            hist = g.create_group("history")
+            for k, v in r.history.items():
+                hist.create_dataset(k, data=np.asarray(v), maxshape=(None,), chunks=True)
+        write_table(f.create_group("summary"), summary(spec, results.values()))
+
+    atomic_write(path, write)
+
+
+def load_sweep(path: str | Path) -> tuple[SweepSpec, dict[tuple[int, int], CellResult]]:
+    """A sweep archive's spec and finished cells."""
+    with open_archive(path) as f:
+        if f.attrs.get("archive_kind") != "sweep":
+            raise ArchiveError(f"{path}: file: a run archive, not a sweep archive")
+        spec = SweepSpec.from_json(str(f.attrs["spec"]), str(f.attrs["config_toml"]))
+        results = {}
+        for g in f["cells"].values():
+            a = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in g.attrs.items()}
+            r = CellResult(**a, x=g["x"][()].tolist(),
+                           history={k: v[()].tolist() for k, v in g["history"].items()})
+            results[r.key] = r
+    return spec, results

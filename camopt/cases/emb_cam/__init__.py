@@ -1,0 +1,17 @@
+"""EMB negative-radius roller cam, Yan, Chen, Yan & Hang (2023), Actuators 12:329."""
+
+from __future__ import annotations
+
+from camopt.cases.emb_cam.config import EmbCamConfig
+from camopt.cases.emb_cam.paper import PAPER
+from camopt.cases.emb_cam.problem import EmbCamProblem
+from camopt.cases.registry import CaseSpec, ProfileCurve, register_case
+
+SPEC = register_case(CaseSpec(
+    kind="emb_cam", config=EmbCamConfig, problem=EmbCamProblem, default_solver="pso",
+    summary="negative-radius roller cam of an electromechanical brake",
+    paper_source="Yan, Chen, Yan & Hang (2023), Actuators 12:329",
+    figures="camopt.cases.emb_cam.figures:figures", paper=PAPER,
+    profiles=(ProfileCurve("cam-profile", ("profile_x_mm", "nonworking_x_mm"),
+                           ("profile_y_mm", "nonworking_y_mm")),),
+))

@@ -1,0 +1,16 @@
+"""Fast acting switch, Clauss & Papalambros (1982): minimum closure time of a slider crank."""
+
+from __future__ import annotations
+
+from camopt.cases.fast_switch.config import FastSwitchConfig
+from camopt.cases.fast_switch.paper import PAPER
+from camopt.cases.fast_switch.problem import FastSwitchProblem
+from camopt.cases.registry import CaseSpec, register_case
+
+SPEC = register_case(CaseSpec(
+    kind="fast_switch", config=FastSwitchConfig, problem=FastSwitchProblem,
+    default_solver="enumeration",
+    summary="minimum closure time of a spring-driven slider-crank switch",
+    paper_source="Clauss & Papalambros (1982), UM-MEAM-81-3",
+    figures="camopt.cases.fast_switch.figures:figures", paper=PAPER,
+))

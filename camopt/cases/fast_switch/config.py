@@ -1,0 +1,57 @@
+"""``[case]`` of the fast acting switch (Clauss & Papalambros 1982): Nomenclature parameters."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from camopt.config.models import Bounds, CaseConfig, Positive
+
+
+class FastSwitchConfig(CaseConfig):
+    """Fast acting switch, Clauss & Papalambros (1982): Nomenclature parameters."""
+
+    kind: Literal["fast_switch"] = "fast_switch"
+    link2_length_mm: Positive = Field(200.0, description="L, total length of link 2")
+    half_piston_mm: Positive = Field(50.0, description="p4, one-half piston length")
+    m2_kg: Positive = Field(0.5, description="M2, mass of part 2")
+    m3_kg: Positive = Field(0.75, description="M3, mass of part 3")
+    m4_kg: Positive = Field(0.5, description="M4, mass of part 4 (piston)")
+    spring_diameter_mm: Positive = Field(20.0, description="D, spring coil diameter")
+    wire_diameter_mm: Positive = Field(2.0, description="d, spring wire diameter")
+    wire_strength_a_mpa: Positive = Field(1880.0, description="A, wire strength coefficient")
+    wire_strength_exponent: float = Field(0.186, ge=0, lt=1, description="m, strength exponent")
+    wire_strength_d_unit: Literal["m", "mm"] = Field(
+        "m",
+        description="unit of d inside A*d**-m; 'm' reproduces Table 1, 'mm' is Shigley's "
+        "(see docs/assumptions.md)",
+    )
+    shear_modulus_gpa: Positive = Field(
+        207.0, description="G as printed (207 GPa reproduces Table 1; steel is about 79 GPa)"
+    )
+    max_initial_angle_deg: float = Field(
+        30.0, gt=0, le=90, description="W, largest initial angle of part 2 (arcing)"
+    )
+    max_joint_load_n: Positive = Field(1500.0, description="F_rated, joint strength")
+    min_coils: int = Field(3, ge=1, description="practical least number of coils")
+    max_coils: int = Field(42, ge=1, description="largest coil count searched")
+    branch: Literal["I", "II", "both"] = Field(
+        "both", description="sign of sf - sud allowed: I (sf >= sud), II (sf <= sud) or both"
+    )
+    reduced_form: Literal["corrected", "printed"] = Field(
+        "corrected",
+        description="7-variable statement: 'printed' as in the paper (has errors), or "
+        "'corrected' (loop equations solved exactly, right arcsine branch)",
+    )
+    sf_bounds_mm: Bounds = Field(Bounds(lower=1, upper=400), description="x3 search bounds")
+    sud_bounds_mm: Bounds = Field(Bounds(lower=1, upper=400), description="x4 search bounds")
+    s0_bounds_mm: Bounds = Field(Bounds(lower=1, upper=400), description="x5 search bounds")
+    r3_bounds_mm: Bounds = Field(Bounds(lower=10, upper=600), description="x6 search bounds")
+    r2_bounds_mm: Bounds = Field(Bounds(lower=1, upper=200), description="x7 search bounds")
+
+    @model_validator(mode="after")
+    def _coils_ordered(self) -> FastSwitchConfig:
+        if self.min_coils >= self.max_coils:
+            raise ValueError(f"min_coils {self.min_coils} must be below max_coils {self.max_coils}")
+        return self

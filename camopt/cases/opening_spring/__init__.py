@@ -1,0 +1,16 @@
+"""40 kA VCB opening spring by the energy method, Ahn, Cho, Park & Kim."""
+
+from __future__ import annotations
+
+from camopt.cases.opening_spring.config import OpeningSpringConfig
+from camopt.cases.opening_spring.paper import PAPER
+from camopt.cases.opening_spring.problem import OpeningSpringProblem
+from camopt.cases.registry import CaseSpec, register_case
+
+SPEC = register_case(CaseSpec(
+    kind="opening_spring", config=OpeningSpringConfig, problem=OpeningSpringProblem,
+    default_solver="newton_pp",
+    summary="opening spring of a 40 kA VCB for a specified opening motion (energy method)",
+    paper_source="Ahn, Cho, Park & Kim, design of a spring-actuated linkage",
+    figures="camopt.cases.opening_spring.figures:figures", paper=PAPER,
+))

@@ -1,0 +1,135 @@
+"""Case registry: one :class:`CaseSpec` per mechanism, registered like a solver.
+
+Built-in cases are the sub-packages of :mod:`camopt.cases`, found by listing them (so a
+source checkout without installed metadata works, and no list names them); each
+registers its spec when imported. Packages outside camopt add cases through the
+``camopt.cases`` entry-point group, whose entry points name a ``CaseSpec`` (or a module
+that registers one). Nothing else in camopt names a case kind: the CLI, archive, plots
+and export ask the registry.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from importlib.metadata import entry_points
+from typing import TYPE_CHECKING, Any, Protocol
+
+from camopt.config.models import CaseConfig
+from camopt.errors import ConfigError
+from camopt.problem import Problem
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from camopt.runview import RunView
+
+ENTRY_POINT_GROUP = "camopt.cases"
+
+
+class ArchiveLoader(Protocol):
+    """Loads another run's archive named by a case-file key (``case.cam_archive``); a
+    missing or damaged archive is a ConfigError against that key."""
+
+    def __call__(self, key: str, path: str) -> RunView: ...
+
+
+@dataclass(frozen=True)
+class ProfileCurve:
+    """A planar curve of a case's analysis exported for CAD: a file ``name`` and the
+    analysis curves of its x and y coordinates in mm (several curves are joined in order)."""
+
+    name: str
+    x: tuple[str, ...]
+    y: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class CaseSpec:
+    """Everything camopt needs to know about one mechanism.
+
+    ``figures`` is ``"module:function"``, imported only when figures are drawn (matplotlib
+    is slow to import); the function takes a :class:`~camopt.runview.RunView` and returns
+    ``{name: Figure}``. ``paper`` holds the paper's reported values, used to mark figures
+    only, never by a model. ``resolve`` fills config values that come from other run
+    archives (VCB step 2's cam) before a run.
+    """
+
+    kind: str
+    config: type[CaseConfig]
+    problem: type[Problem]
+    default_solver: str
+    summary: str = ""
+    paper_source: str = ""
+    figures: str | None = None
+    profiles: tuple[ProfileCurve, ...] = ()
+    paper: Mapping[str, Any] = field(default_factory=dict)
+    resolve: Callable[[CaseConfig, ArchiveLoader], CaseConfig] | None = None
+
+    def build(self, config: CaseConfig) -> Problem:
+        """The case's Problem for a validated config of this kind."""
+        return self.problem(config)  # type: ignore[call-arg]
+
+    def draw(self, run: RunView) -> dict[str, Figure]:
+        """The case's figures of a loaded run (empty when the case draws none)."""
+        if self.figures is None:
+            return {}
+        module, _, name = self.figures.partition(":")
+        return getattr(importlib.import_module(module), name)(run)
+
+
+_REGISTRY: dict[str, CaseSpec] = {}
+_loaded = False
+
+
+def register_case(spec: CaseSpec) -> CaseSpec:
+    """Register ``spec`` under its kind; a different spec under a taken kind raises."""
+    existing = _REGISTRY.get(spec.kind)
+    if existing is not None and existing is not spec:
+        raise ConfigError("camopt", "case", f"case kind '{spec.kind}' is registered twice")
+    if spec.config.model_fields["kind"].default != spec.kind:
+        raise ConfigError("camopt", "case", f"case '{spec.kind}': its config model's kind "
+                          f"default is {spec.config.model_fields['kind'].default!r}")
+    _REGISTRY[spec.kind] = spec
+    return spec
+
+
+def _load() -> None:
+    global _loaded
+    if _loaded:
+        return
+    _loaded = True
+    package = importlib.import_module("camopt.cases")
+    for module in pkgutil.iter_modules(package.__path__, "camopt.cases."):
+        if module.ispkg:  # one package per built-in case
+            importlib.import_module(module.name)
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        try:
+            obj = ep.load()
+        except Exception as exc:  # a broken plugin must not break camopt
+            raise ConfigError("camopt", f"case plugin {ep.name}",
+                              f"failed to load ({ep.value}): {exc}") from exc
+        if isinstance(obj, CaseSpec):
+            register_case(obj)
+
+
+def cases() -> dict[str, CaseSpec]:
+    """All registered cases by kind."""
+    _load()
+    return dict(sorted(_REGISTRY.items()))
+
+
+def get_case(kind: str) -> CaseSpec:
+    """The spec of ``kind``; an unknown kind lists the known ones."""
+    known = cases()
+    if kind not in known:
+        raise ConfigError("case", "kind", f"unknown case kind {kind!r}; known: "
+                          f"{', '.join(known)}")
+    return known[kind]
+
+
+def case_configs() -> dict[str, type[CaseConfig]]:
+    """Case kinds to their config models (what the loader validates ``[case]`` with)."""
+    return {kind: spec.config for kind, spec in cases().items()}

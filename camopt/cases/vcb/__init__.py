@@ -1,0 +1,46 @@
+"""12 kV VCB closing mechanism, Kang, Huang & Yang (2023), Machines 11:150: the cam and
+closing springs (step 1), the four-bar (step 2), and the identification of what the paper
+leaves out (kind ``vcb_identify``)."""
+
+from __future__ import annotations
+
+from camopt.cases.registry import ArchiveLoader, CaseSpec, ProfileCurve, register_case
+from camopt.cases.vcb.config import CamDesign, VcbConfig, VcbIdentifyConfig
+from camopt.cases.vcb.identify import VcbIdentification
+from camopt.cases.vcb.paper import PAPER
+from camopt.cases.vcb.problem import VcbProblem
+from camopt.config.models import CaseConfig
+from camopt.errors import ConfigError
+
+SOURCE = "Kang, Huang & Yang (2023), Machines 11:150"
+
+
+def resolve_cam_archive(config: CaseConfig, load: ArchiveLoader) -> CaseConfig:
+    """Step 2 with ``cam_archive``: the step-1 run's best design becomes ``cam_design``."""
+    assert isinstance(config, VcbConfig)
+    if not config.cam_archive:
+        return config
+    run = load("case.cam_archive", config.cam_archive)
+    x = run.best.x
+    if run.kind != "vcb" or run.case.get("step") != "cam" or "a1" not in x:
+        raise ConfigError(config.cam_archive, "case.cam_archive",
+                          "not a VCB step-1 (cam) run archive")
+    design = CamDesign(a0=run.best.metrics["a0"], a1=x["a1"], a2=x["a2"], a3=x["a3"],
+                       kc1_n_per_mm=x["kc1_n_per_mm"], kc2_n_per_mm=x["kc2_n_per_mm"])
+    return config.model_copy(update={"cam_design": design})
+
+
+VCB = register_case(CaseSpec(
+    kind="vcb", config=VcbConfig, problem=VcbProblem, default_solver="de_gr",
+    summary="VCB closing mechanism: cam + closing springs (step 1) or four-bar (step 2)",
+    paper_source=SOURCE, figures="camopt.cases.vcb.figures:figures", paper=PAPER,
+    profiles=(ProfileCurve("cam-profile", ("profile_x_mm",), ("profile_y_mm",)),
+              ProfileCurve("cam-pitch-curve", ("pitch_x_mm",), ("pitch_y_mm",))),
+    resolve=resolve_cam_archive,
+))
+VCB_IDENTIFY = register_case(CaseSpec(
+    kind="vcb_identify", config=VcbIdentifyConfig, problem=VcbIdentification,
+    default_solver="de_gr",
+    summary="fits the VCB parameters the paper omits to the numbers it reports",
+    paper_source=SOURCE,
+))

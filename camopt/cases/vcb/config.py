@@ -1,0 +1,130 @@
+"""``[case]`` of the VCB closing mechanism (Kang, Huang & Yang 2023) and of its identification."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from camopt.config.models import Bounds, CaseConfig, Pair, Positive, Strict
+
+
+class CamDesign(Strict):
+    """A step-1 design: cubic coefficients (rad, per rad^k) and closing spring rates."""
+
+    a0: float | None = Field(None, description="phi at theta_c = 0; None: from Eq 8")
+    a1: float
+    a2: float
+    a3: float
+    kc1_n_per_mm: Positive
+    kc2_n_per_mm: Positive
+
+
+class VcbConfig(CaseConfig):
+    """12 kV VCB cam-linkage closing mechanism, Kang, Huang & Yang (2023)."""
+
+    kind: Literal["vcb"] = "vcb"
+    step: Literal["cam", "fourbar"] = Field(
+        "cam", description="cam: a1, a2, a3, kc1, kc2 (Eq 37); fourbar: l1, l3, l4, l5, "
+        "theta1 (Eq 41)")
+    # four-bar and pivots (Sec 2.3)
+    l1_mm: Positive = Field(139.79, description="fixed link BE")
+    l2_mm: Positive = Field(70.0, description="follower (input) link BD")
+    l3_mm: Positive = Field(124.7, description="coupler DL")
+    l4_mm: Positive = Field(140.0, description="output arm EL")
+    l5_mm: Positive = Field(90.0, description="output arm EM to the insulated rod")
+    theta1_deg: float = Field(-121.98, description="fixed-link angle (Table 7 initial)")
+    pivot_b_mm: Pair = Field((-72.0, -55.0), description="follower pivot B (cam pivot O at 0,0)")
+    pivot_g_mm: Pair = Field((50.0, 200.0), description="closing springs' fixed end G")
+    crank_l8_mm: Positive = Field(25.0, description="closing springs' crank OQ on the cam shaft")
+    preset_qox_deg: float = Field(95.0, description="angle QOX in the opened state")
+    rod_arm_offset_deg: float = Field(
+        0.0, description="angle of EM from the extension of LE beyond E (identified)")
+    # cam (Sec 2.2-2.3)
+    rb_mm: Positive = Field(23.0, description="base circle radius")
+    rf_mm: Positive = Field(15.0, description="roller radius")
+    alpha: Positive = Field(0.95, description="loss coefficient of contact (Eq 1)")
+    beta_mm: float = Field(2.0, ge=0, description="cam-roller clearance (Eq 1)")
+    gamma_mm: float = Field(1.0, ge=0, description="hook-roller clearance (Eq 1)")
+    node_clearance_mm: float = Field(
+        1.0, ge=0, description="clearance in Eqs 2 and 8 that reproduces a0..a3 (not beta)")
+    theta0_deg: float = Field(4.0, ge=0, description="pre-rotation before contact")
+    s1_bar_mm: Positive = Field(16.0, description="overall displacement of M (Eq 1)")
+    node_cam_deg: list[float] = Field([0.0, 70.0, 100.0, 140.0], description="theta_ci (Fig 4)")
+    node_fractions: list[float] = Field([0.0, 0.7, 0.9, 1.0], description="s2i / s2bar (Fig 4)")
+    # springs and loads (Table 2, Sec 3.2)
+    kc1_n_per_mm: Positive = Field(7.72, description="vendor closing spring 1")
+    kc2_n_per_mm: Positive = Field(9.33, description="vendor closing spring 2")
+    kc1_precompression_mm: Positive = Field(140.0, description="spring 1, opened state")
+    kc2_precompression_mm: Positive = Field(100.0, description="spring 2, opened state")
+    opening_k_n_per_mm: Positive = Field(16.6, description="opening spring")
+    opening_stretch_closed_mm: Positive = Field(33.6, description="opening spring, closed state")
+    opening_arm_ratio: Positive = Field(
+        1.0, description="opening-spring elongation per mm of rod travel, r7/r6 (identified)")
+    wipe_k_n_per_mm: Positive = Field(82.4, description="one contact (wipe) spring")
+    wipe_count: int = Field(3, ge=1, description="contact springs, one per phase")
+    wipe_compression_closed_mm: Positive = Field(17.0, description="closed state, vendor")
+    contact_gap_mm: Positive = Field(11.0, description="rod travel where contacts touch")
+    free_contact_force_n: float = Field(
+        0.0, description="self-closing force of the interrupters before touch (identified)")
+    efficiency: float = Field(0.85, gt=0, le=1, description="mechanical efficiency (Eq 26)")
+    # contact stress (Table 1, Eqs 27-31)
+    cam_modulus_gpa: Positive = Field(210.0, description="E of cam and roller (S45C)")
+    poisson: float = Field(0.3, ge=0, lt=0.5, description="Poisson's ratio")
+    contact_length_mm: Positive = Field(15.0, description="cam-roller contact length")
+    shear_yield_mpa: Positive = Field(1194.0, description="tau_y = 0.577 sigma_y")
+    stress_constraint: bool = Field(True, description="require tau_max <= shear_yield")
+    # objective (Eqs 39-40)
+    objective_form: Literal["net", "abs_sum"] = Field(
+        "net", description="net: |sum (Fo - Fr/eps) ds| in J; abs_sum: sum |Fo - Fr/eps| "
+        "in N, as printed")
+    positions: int = Field(140, ge=10, description="Ns, cam positions over 0-140 deg")
+    penalty: float = Field(1e6, ge=0, description="M in Eq 39")
+    phi_max_deg: Pair = Field((23.0, 26.0), description="bounds on the follower's maximum angle")
+    # search bounds
+    a1_bounds: Bounds = Field(Bounds(lower=0, upper=0.5), description="Eq 38")
+    a2_bounds: Bounds = Field(Bounds(lower=0, upper=0.5), description="Eq 38")
+    a3_bounds: Bounds = Field(Bounds(lower=-0.5, upper=0), description="Eq 38")
+    kc1_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10), description="see assumptions")
+    kc2_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10), description="see assumptions")
+    l1_bounds_mm: Bounds = Field(Bounds(lower=70, upper=150), description="Eq 42")
+    l3_bounds_mm: Bounds = Field(Bounds(lower=70, upper=150), description="Eq 42")
+    l4_bounds_mm: Bounds = Field(Bounds(lower=70, upper=150), description="Eq 42")
+    l5_bounds_mm: Bounds = Field(Bounds(lower=50, upper=100), description="Eq 42")
+    theta1_bounds_deg: Bounds = Field(Bounds(lower=-180, upper=-90), description="Eq 42")
+    cam_design: CamDesign | None = Field(None, description="step-1 design used by step 2")
+    cam_archive: str | None = Field(
+        None, description="run archive whose best design is the step-1 design (step 2)")
+
+    @model_validator(mode="after")
+    def _nodes(self) -> VcbConfig:
+        if len(self.node_cam_deg) != 4 or len(self.node_fractions) != 4:
+            raise ValueError("node_cam_deg and node_fractions need four values (Eq 7)")
+        if self.phi_max_deg[0] >= self.phi_max_deg[1]:
+            raise ValueError("phi_max_deg: lower bound must be below upper bound")
+        if (self.kind == "vcb" and self.step == "fourbar" and self.cam_design is None
+                and self.cam_archive is None):
+            raise ValueError("step 'fourbar' needs the step-1 design: set cam_design or "
+                             "cam_archive")
+        return self
+
+
+class VcbIdentifyConfig(VcbConfig):
+    """Fit the VCB parameters the paper leaves out to the results it reports."""
+
+    kind: Literal["vcb_identify"] = "vcb_identify"  # type: ignore[assignment]
+    rod_travel_target_mm: Positive = Field(18.0, description="Sec 3.2: rod travel 18 mm")
+    rod_travel_tolerance_mm: Positive = Field(0.5, description="scale of the travel residual")
+    vendor_surplus_target_j: float = Field(
+        1.75, description="Table 6 vendor objective 1.75e3, read as N mm")
+    optimum_surplus_target_j: float = Field(0.0, description="Table 6 optimum: 1.74e-7")
+    paper_optimum: CamDesign = Field(
+        CamDesign(a1=0.238432, a2=0.000226, a3=-0.011492, kc1_n_per_mm=9.315336,
+                  kc2_n_per_mm=7.788183), description="Table 6 DE-gr design")
+    rod_offset_bounds_deg: Bounds = Field(Bounds(lower=-15, upper=15), description="unknown")
+    opening_arm_bounds: Bounds = Field(
+        Bounds(lower=0.1, upper=1.85), description="r7/r6; above 1.86 the opening spring "
+        "would be compressed in the opened state")
+    free_contact_bounds_n: Bounds = Field(
+        Bounds(lower=0, upper=1000), description="self-closing force of three interrupters; "
+        "it helps closing, so not negative")

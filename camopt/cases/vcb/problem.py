@@ -1,0 +1,176 @@
+"""12 kV VCB closing mechanism as an optimisation problem: step 1 (cam + closing springs)
+or step 2 (four-bar), Kang, Huang & Yang (2023), Eqs 37-43."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from camopt.cases.vcb.config import CamDesign, VcbConfig
+from camopt.cases.vcb.model import DEG, MM, VcbModel, row_max, unassembled
+from camopt.errors import ConfigError
+from camopt.mechanics import cam, fourbar, hertz
+from camopt.problem import Evaluation, Problem, Variable
+
+
+class VcbProblem(Problem):
+    """Step 1 (cam + springs) or step 2 (four-bar) of the VCB design; minimise Eq 39."""
+
+    def __init__(self, config: VcbConfig) -> None:
+        self.config = c = config
+        self.model = m = VcbModel(config)
+        self.rod_offset = c.rod_arm_offset_deg * DEG
+        vendor = m.kinematics(m.vendor_a[None, :], m.vendor_link[None, :], self.rod_offset)
+        self.vendor_travel = float(vendor.s1[0, -1])
+        self.load = m.loads(self.vendor_travel, c.opening_arm_ratio, c.free_contact_force_n)
+        self.objective_name = "objective_j" if c.objective_form == "net" else "objective_n"
+        if c.step == "cam":
+            self.variables = (
+                Variable("a1", c.a1_bounds.lower, c.a1_bounds.upper),
+                Variable("a2", c.a2_bounds.lower, c.a2_bounds.upper),
+                Variable("a3", c.a3_bounds.lower, c.a3_bounds.upper),
+                Variable("kc1_n_per_mm", c.kc1_bounds_n_per_mm.lower * 1e3,
+                         c.kc1_bounds_n_per_mm.upper * 1e3, 1e-3),
+                Variable("kc2_n_per_mm", c.kc2_bounds_n_per_mm.lower * 1e3,
+                         c.kc2_bounds_n_per_mm.upper * 1e3, 1e-3),
+            )
+            self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly")
+        else:
+            if c.cam_design is None:  # cam_archive is read into cam_design before a build
+                raise ConfigError("case", "cam_archive", "the step-1 archive was not read")
+            self.cam_a, self.cam_kc = self._cam(c.cam_design)
+            self.variables = tuple(
+                Variable(name, b.lower * f, b.upper * f, 1 / f)
+                for name, b, f in (("l1_mm", c.l1_bounds_mm, MM), ("l3_mm", c.l3_bounds_mm, MM),
+                                   ("l4_mm", c.l4_bounds_mm, MM), ("l5_mm", c.l5_bounds_mm, MM),
+                                   ("theta1_deg", c.theta1_bounds_deg, DEG)))
+            self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly",
+                                     "grashof")
+        if c.stress_constraint:
+            self.constraint_names += ("shear_yield",)
+
+    def _cam(self, d: CamDesign) -> tuple[NDArray, NDArray]:
+        a0 = self.model.phi0() if d.a0 is None else d.a0
+        return np.array([a0, d.a1, d.a2, d.a3]), np.array([d.kc1_n_per_mm, d.kc2_n_per_mm]) * 1e3
+
+    def designs(self, X: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """Cubic coefficients (n, 4), spring rates (n, 2) and linkage (n, 5) of each row."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        n = len(X)
+        if self.config.step == "cam":
+            A = np.column_stack([np.full(n, self.model.phi0()), X[:, :3]])
+            return A, X[:, 3:5], np.tile(self.model.vendor_link, (n, 1))
+        return np.tile(self.cam_a, (n, 1)), np.tile(self.cam_kc, (n, 1)), X[:, :5]
+
+    def vendor_x(self) -> NDArray:
+        """The vendor's design in this step's variables (initial design of Tables 6, 7)."""
+        if self.config.step == "cam":
+            c = self.config
+            return np.r_[self.model.vendor_a[1:], c.kc1_n_per_mm * 1e3, c.kc2_n_per_mm * 1e3]
+        return self.model.vendor_link.copy()
+
+    def evaluate(self, X: NDArray) -> Evaluation:
+        """Objective and constraints, with the metrics the search needs (hot path)."""
+        return self._evaluate(X, detail=False)
+
+    def describe(self, X: NDArray) -> Evaluation:
+        """As :meth:`evaluate`, plus descriptive metrics (pressure angle, curvature,
+        normal force, output range) for tables and reports."""
+        return self._evaluate(X, detail=True)
+
+    def _evaluate(self, X: NDArray, detail: bool) -> Evaluation:
+        c, m = self.config, self.model
+        A, kc, link = self.designs(X)
+        kin = m.kinematics(A, link, self.rod_offset)
+        torque = m.closing_torque(kc)
+        bal = m.balance(kin, torque, self.load)
+        phi_max = (np.max(kin.follower.angle, axis=1) - m.xi) / DEG
+        lo, hi = c.phi_max_deg
+        if detail:
+            con = m.contact(kin.follower, torque)
+            sigma_max = row_max(con.sigma)
+        else:
+            sigma_max = m.peak_stress(kin.follower, torque)
+        tau_max = hertz.max_shear_stress(sigma_max)  # Eq 31
+        g = {
+            "phi_max_low": lambda: 1 - phi_max / lo,  # Eq 40
+            "phi_max_high": lambda: phi_max / hi - 1,  # Eq 40
+            "monotonic": lambda: -np.min(kin.dphi, axis=1),
+            "assembly": lambda: unassembled(kin.cos4, bal.resistant),
+            "grashof": lambda: -fourbar.grashof_margin(link[:, 0], m.l2, link[:, 1],
+                                                       link[:, 2]) / m.l2,  # Eq 43
+            "shear_yield": lambda: tau_max / (c.shear_yield_mpa * 1e6) - 1,
+        }
+        G = np.column_stack([g[name]() for name in self.constraint_names])
+        G = np.where(np.isnan(G), np.inf, G)
+        violation = np.clip(G, 0, None).sum(axis=1)
+        base = np.abs(bal.surplus) if c.objective_form == "net" else m.abs_sum(bal)
+        f = np.where(np.isfinite(base) & np.isfinite(violation),
+                     base + c.penalty * violation, np.inf)  # Eq 39
+        extras = {
+            "phi_max_deg": phi_max, "sigma_max_mpa": sigma_max / 1e6,
+            "tau_max_mpa": tau_max / 1e6,
+            "driving_work_j": bal.driving, "resistant_work_j": bal.resistant,
+            "surplus_work_j": bal.surplus, "rod_travel_mm": kin.s1[:, -1] / MM,
+        }
+        if detail:
+            ends = m.output_angle(kin.ends()) / DEG
+            psi = cam.pressure_angle(m.l2, m.l6, kin.follower)
+            extras.update({
+                "a0": A[:, 0], "a1": A[:, 1], "a2": A[:, 2], "a3": A[:, 3],
+                "pressure_angle_max_deg": np.max(np.abs(psi), axis=1) / DEG,
+                "curvature_min_mm": np.min(con.curvature, axis=1) / MM,
+                "normal_force_max_n": row_max(con.normal_force),
+                "force_gap_n": m.abs_sum(bal),
+                "output_start_deg": ends[:, 0], "output_end_deg": ends[:, 1],
+            })
+        return Evaluation(f=f, g=G, extras=extras)
+
+    # ---- single-design output ----------------------------------------------------
+    def _metrics_of(self, x: NDArray) -> dict[str, object]:
+        ev = self.describe(x[None, :])
+        out: dict[str, object] = {k: float(v[0]) for k, v in ev.extras.items()}
+        ends = [out.pop("output_start_deg"), out.pop("output_end_deg")]
+        out["output_range_deg"] = [min(ends), max(ends)]
+        out["feasible"] = float(ev.feasible[0])
+        return out
+
+    def metrics(self, x: NDArray) -> dict[str, object]:
+        """Headline metrics of the design and, prefixed ``initial_``, of the vendor's."""
+        out = self._metrics_of(np.asarray(x, dtype=float))
+        vendor = self._metrics_of(self.vendor_x())
+        out.update({f"initial_{k}": v for k, v in vendor.items()})
+        out["initial_objective"] = float(self.evaluate(self.vendor_x()[None, :]).f[0])
+        return out
+
+    def curves(self, x: NDArray) -> dict[str, NDArray]:
+        """Analysis curves of one design along the closing stroke (display units)."""
+        m = self.model
+        A, kc, link = self.designs(x)
+        kin = m.kinematics(A, link, self.rod_offset)
+        torque = m.closing_torque(kc)
+        bal = m.balance(kin, torque, self.load)
+        con = m.contact(kin.follower, torque)
+        xc, yc = cam.profile(con.xp, con.yp, con.dxp, con.dyp, m.rf)
+        ds = kin.ds1[0, 1:] * m.dtheta
+        return {
+            "cam_angle_deg": m.theta_c / DEG,
+            "pitch_x_mm": con.xp[0] / MM, "pitch_y_mm": con.yp[0] / MM,
+            "profile_x_mm": xc[0] / MM, "profile_y_mm": yc[0] / MM,
+            "follower_angle_deg": kin.follower.phi[0] / DEG,
+            "pressure_angle_deg": cam.pressure_angle(m.l2, m.l6, kin.follower)[0] / DEG,
+            "curvature_mm": con.curvature[0] / MM,
+            "normal_force_n": con.normal_force[0],
+            "sigma_max_mpa": con.sigma[0] / 1e6, "tau_max_mpa": con.tau[0] / 1e6,
+            "output_angle_deg": m.output_angle(kin)[0] / DEG,
+            "rod_travel_mm": kin.s1[0] / MM,
+            "fo_n": np.r_[np.nan, m.output_force(bal)[0]], "fr_n": np.r_[np.nan, bal.fr[0]],
+            "driving_work_j": np.r_[0.0, np.cumsum(torque[0, 1:] * m.dtheta)],
+            "resistant_work_j": np.r_[0.0, np.cumsum(bal.fr[0] * ds)],
+        }
+
+    def analysis(self, x: NDArray) -> dict[str, NDArray]:
+        """Curves of the design and of the vendor's initial design (``initial_`` prefix)."""
+        out = self.curves(np.asarray(x, dtype=float))
+        out.update({f"initial_{k}": v for k, v in self.curves(self.vendor_x()).items()})
+        return out

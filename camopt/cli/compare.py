@@ -1,0 +1,81 @@
+"""``camopt compare``: runs side by side with a significance test, or a sweep's ranking."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.table import Table
+
+from camopt import archive, report
+from camopt.archive.sweeps import load_sweep
+from camopt.cli.app import Format, app, errors, fmt, out
+from camopt.errors import CamoptError
+
+
+@app.command()
+def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
+                                                       help="run archives, or one sweep")],
+            format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
+            ) -> None:
+    """Compare runs (config differences, designs, statistics, a significance test for two)
+    or rank the grid points of a sweep."""
+    with errors():
+        if len(runs) == 1 and archive.archive_kind(runs[0]) == "sweep":
+            doc = report.rank_sweep(*load_sweep(runs[0]))
+            if format is Format.json:
+                sys.stdout.write(json.dumps(doc, indent=2) + "\n")
+            else:
+                print_ranking(doc)
+            return
+        if len(runs) < 2:
+            raise CamoptError("compare: RUN: give at least two run archives, or one sweep")
+        doc = report.compare([archive.load_run(p) for p in runs])
+    if format is Format.json:
+        sys.stdout.write(json.dumps(doc, indent=2) + "\n")
+        return
+    names = [Path(p).name for p in doc["runs"]]
+    table = Table(title="compare")
+    table.add_column("")
+    for n in names:
+        table.add_column(n, justify="right", overflow="fold")
+    for key, values in doc["config_differences"].items():
+        table.add_row(f"[dim]{key}[/]", *(fmt(v) for v in values))
+    table.add_row("[bold]objective[/]", *(fmt(v) for v in doc["objective"]))
+    table.add_row("feasible", *(fmt(v) for v in doc["feasible"]))
+    for section in ("x", "metrics"):
+        for key, values in doc[section].items():
+            table.add_row(key, *(fmt(v) for v in values))
+    for stat in ("runs", "best", "median", "worst", "feasible_fraction", "success_rate"):
+        table.add_row(f"repeats: {stat}", *(fmt(s[stat]) for s in doc["statistics"]))
+    out.print(table)
+    for test in doc["tests"]:
+        out.print(f"A = {names[0]}, B = {names[1]}: Mann-Whitney p = {test['p_value']:.3g}, "
+                  f"P(A better) = {test['p_a_better']:.2f}; success A "
+                  f"{_rate(test['success_a'])}, B {_rate(test['success_b'])}")
+        out.print(f"[bold]{test['verdict']}[/]")
+
+
+def _rate(s: dict[str, float]) -> str:
+    return f"{s['rate']:.0%} [{s['ci_low']:.0%}, {s['ci_high']:.0%}]"
+
+
+def print_ranking(doc: dict[str, Any]) -> None:
+    """A sweep's grid points ranked (``report.rank_sweep``) as a rich table."""
+    table = Table(title=f"sweep {doc['sweep']}: grid points ranked")
+    for col in ("rank", "point", "runs", "success", "best", "median", "worst",
+                "nfev to target", "vs best"):
+        table.add_column(col, justify="right" if col != "point" else "left")
+    for r in doc["ranking"]:
+        vs = r.get("vs_best")
+        table.add_row(str(r["rank"]), r["label"], str(r["runs"]),
+                      fmt(r["success_rate"]), fmt(r["best"]), fmt(r["median"]),
+                      fmt(r["worst"]), fmt(r["median_nfev_to_target"]),
+                      f"p = {vs['p_value']:.3g}" if vs else "-")
+    out.print(table)
+    for r in doc["ranking"]:
+        if r.get("vs_best"):
+            out.print(r["vs_best"]["verdict"])

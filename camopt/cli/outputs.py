@@ -1,0 +1,54 @@
+"""``camopt plot`` and ``camopt export``: figures and files from an archive."""
+
+from __future__ import annotations
+
+import enum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from camopt import archive
+from camopt.archive.sweeps import load_sweep
+from camopt.cli.app import app, errors, out
+
+
+class ExportFormat(str, enum.Enum):
+    """Formats of ``camopt export``."""
+
+    csv = "csv"
+    json = "json"
+
+
+@app.command()
+def plot(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="archive")],
+         out_dir: Annotated[Path | None, typer.Option("--out", help="folder for the PNGs")]
+         = None) -> None:
+    """Write PNG figures: convergence and the case's curves."""
+    from camopt import plots
+
+    with errors():
+        folder = out_dir or path.parent / f"{path.stem}-plots"
+        if archive.archive_kind(path) == "sweep":
+            figures = plots.sweep_figures(*load_sweep(path))
+        else:
+            figures = plots.run_figures(archive.load_run(path))
+        written = plots.save(figures, folder, path.stem)
+    for p in written:
+        out.print(str(p))
+
+
+@app.command()
+def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run archive")],
+           format: Annotated[ExportFormat, typer.Option("--format", help="file format")]
+           = ExportFormat.csv,
+           out_dir: Annotated[Path | None, typer.Option("--out", help="output folder")] = None
+           ) -> None:
+    """Export the summary and analysis curves (csv or json) and cam profile point files."""
+    from camopt.export import export_run
+
+    with errors():
+        view = archive.load_run(run_path)
+        written = export_run(view, out_dir or run_path.parent, run_path.stem, format.value)
+    for p in written:
+        out.print(str(p))

@@ -1,0 +1,75 @@
+"""``camopt run``: run a case file and write a run archive."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from camopt import archive
+from camopt.cli.app import app, err, errors, load_case
+from camopt.cli.show import print_show
+from camopt.driver import execute, prepare
+from camopt.perf import tune_allocator
+
+
+@app.command()
+def run(
+    case: Annotated[Path, typer.Argument(help="case file (TOML)")],
+    out_path: Annotated[Path | None, typer.Option("--out", help="archive path")] = None,
+    seed: Annotated[int | None, typer.Option(min=0, help="root seed (sets run.seed)")] = None,
+    repeats: Annotated[int | None, typer.Option(min=1, help="repeats (sets run.repeats)")]
+    = None,
+    set_: Annotated[list[str] | None, typer.Option("--set", help="override: section.key=value")]
+    = None,
+    force: Annotated[bool, typer.Option(help="overwrite an existing --out")] = False,
+    quiet: Annotated[bool, typer.Option(help="no progress bar or summary; print the path")]
+    = False,
+) -> None:
+    """Run a case file and write an HDF5 run archive."""
+    overrides = list(set_ or [])
+    if seed is not None:  # recorded in the archive's config like any override
+        overrides.append(f"run.seed={seed}")
+    if repeats is not None:
+        overrides.append(f"run.repeats={repeats}")
+    with errors():
+        config = load_case(case, overrides)
+        prepare(config)
+        path = out_path or archive.default_path(config.run.name)
+        if out_path is None:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        archive.check_writable(path, force)
+        tune_allocator()
+        with progress(quiet) as callback:
+            record = execute(config, callback=callback)
+        archive.write_run(record, path, force=force)
+    if quiet:
+        print(str(path))  # plain print: a script reads exactly the path, never wrapped
+        return
+    print_show(archive.load_run(path), rows=10)
+
+
+@contextlib.contextmanager
+def progress(quiet: bool) -> Iterator[Any]:
+    """A rich progress bar over repeats x iterations when stderr is a terminal."""
+    if quiet or not err.is_terminal:
+        yield None
+        return
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("best {task.fields[best]}"), TimeElapsedColumn())
+    with Progress(*columns, console=err, transient=True) as bar:
+        task = bar.add_task("solving", total=None, best="-")
+
+        def callback(p: Any) -> None:
+            total = p.repeats * (p.max_iterations or 1)
+            done = p.repeat * (p.max_iterations or 1) + p.iteration
+            bar.update(task, total=total, completed=done, best=f"{p.best_objective:.6g}",
+                       description=f"repeat {p.repeat + 1}/{p.repeats}")
+
+        yield callback
+
+

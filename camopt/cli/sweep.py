@@ -1,0 +1,117 @@
+"""``camopt sweep``: grid points x seeds in one resumable sweep archive."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from pydantic import ValidationError
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from camopt import archive
+from camopt import sweep as sweep_mod
+from camopt.archive.sweeps import load_sweep
+from camopt.cli.app import app, err, errors, load_case, out, print_rows
+from camopt.errors import CamoptError
+from camopt.perf import tune_allocator
+from camopt.sweep import run as sweep_run
+
+
+@app.command()
+def sweep(
+    case: Annotated[Path | None, typer.Argument(help="case file (TOML)")] = None,
+    seeds: Annotated[str, typer.Option(help="seed indices START:STOP")] = "0:5",
+    grid: Annotated[list[str] | None, typer.Option(
+        "--grid", help="key=v1,v2,... (repeatable; Cartesian product)")] = None,
+    jobs: Annotated[int | None, typer.Option(min=1, help="local workers (default: cores)")]
+    = None,
+    out_path: Annotated[Path | None, typer.Option("--out", help="sweep archive path")] = None,
+    resume: Annotated[Path | None, typer.Option(help="finish an interrupted sweep")] = None,
+    executor: Annotated[str, typer.Option(help="local or dask")] = "local",
+    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address")] = None,
+    set_: Annotated[list[str] | None, typer.Option("--set", help="section.key=value")] = None,
+    check: Annotated[bool, typer.Option(help="exit 1 below run.min_success_rate")] = False,
+    force: Annotated[bool, typer.Option(help="overwrite an existing --out")] = False,
+    quiet: Annotated[bool, typer.Option(help="no progress bar")] = False,
+) -> None:
+    """Run every grid point x seed; one sweep archive with a summary per grid point."""
+    with errors():
+        if executor not in ("local", "dask"):
+            raise CamoptError(f"--executor: {executor!r}: expected local or dask")
+        spec, results, path = _sweep_setup(case, seeds, grid or [], set_ or [], out_path,
+                                           resume, force)
+        tune_allocator()
+        try:
+            with _cell_progress(quiet) as progress:
+                sweep_run.run_sweep(spec, path, results, jobs=jobs or os.cpu_count() or 1,
+                                    executor=executor, scheduler=scheduler,
+                                    progress=progress)
+        except sweep_run.SweepInterrupted as exc:
+            print(f"interrupted: {exc}; finish with: camopt sweep --resume {path}",
+                  file=sys.stderr)
+            raise typer.Exit(130) from None
+    rows = sweep_mod.summary(spec, results.values())
+    if not quiet:
+        print_rows(f"sweep {path}", rows, list(rows[0]), None)
+    else:
+        out.print(str(path))
+    if check:
+        _check_success(spec, rows)
+
+
+def _sweep_setup(case: Path | None, seeds: str, grid: list[str], overrides: list[str],
+                 out_path: Path | None, resume: Path | None, force: bool) -> Any:
+    if resume is not None:
+        spec, results = load_sweep(resume)
+        if case is not None:
+            fresh = sweep_mod.SweepSpec(load_case(case, overrides).effective(), str(case), "",
+                                        sweep_mod.parse_grid(grid), sweep_mod.parse_seeds(seeds))
+            if fresh.to_json() != spec.to_json():
+                raise CamoptError(f"{resume}: --resume: the case, grid or seeds differ from "
+                                  "the sweep in the archive")
+        return spec, results, resume
+    if case is None:
+        raise CamoptError("sweep: CASE: give a case file (or --resume ARCHIVE)")
+    config = load_case(case, overrides)
+    spec = sweep_mod.SweepSpec(config.effective(), str(case), config.text,
+                               sweep_mod.parse_grid(grid), sweep_mod.parse_seeds(seeds))
+    try:
+        spec.validate()
+    except ValidationError as exc:
+        raise CamoptError(f"{case}: --grid: {str(exc).splitlines()[0]}") from None
+    path = out_path or archive.default_path(f"{config.run.name}-sweep")
+    if out_path is None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    archive.check_writable(path, force)
+    return spec, {}, path
+
+
+def _check_success(spec: Any, rows: list[dict[str, Any]]) -> None:
+    floor = spec.data["run"].get("min_success_rate")
+    if floor is None:
+        print("error: --check: run.min_success_rate is not set in the case file",
+              file=sys.stderr)
+        raise typer.Exit(2)
+    failing = [r for r in rows if not r["success_rate"] >= floor]
+    for r in failing:
+        print(f"check failed: grid point {r['point']} success rate {r['success_rate']:.0%} "
+              f"< {floor:.0%}", file=sys.stderr)
+    if failing:
+        raise typer.Exit(1)
+    out.print(f"check passed: every grid point succeeds in >= {floor:.0%} of runs")
+
+
+@contextlib.contextmanager
+def _cell_progress(quiet: bool) -> Iterator[Any]:
+    if quiet or not err.is_terminal:
+        yield None
+        return
+    with Progress(TextColumn("cells"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=err, transient=True) as bar:
+        task = bar.add_task("cells", total=None)
+        yield lambda done, total: bar.update(task, completed=done, total=total)

@@ -1,0 +1,79 @@
+"""A run archive as typed data: what ``show``, ``compare``, plots, export and the cases'
+figures read. Pure data (numpy only); :mod:`camopt.archive` builds it from HDF5."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+@dataclass(frozen=True)
+class RepeatView:
+    """One solver repeat: its result (scipy's names where they fit) and its history."""
+
+    index: int
+    spawn_key: tuple[int, ...]
+    seed: int
+    objective: float
+    feasible: bool
+    violation: float
+    nfev: int
+    nit: int
+    wall_s: float
+    converged_nit: int
+    message: str
+    notes: tuple[str, ...]
+    x: dict[str, float]
+    history: dict[str, NDArray] = field(repr=False, default_factory=dict)
+
+
+@dataclass(frozen=True)
+class BestView:
+    """The run's best design: variables in display units, metrics, and the constraints
+    it meets with equality (``active``) or breaks (``violated``)."""
+
+    objective: float
+    feasible: bool
+    x: dict[str, float]
+    metrics: dict[str, Any]
+    active: list[str]
+    violated: list[str]
+    repeat: int
+
+
+@dataclass(frozen=True)
+class RunView:
+    """A loaded run archive.
+
+    ``case``, ``solver`` and ``run`` are the config as run (``--set`` overrides, ``--seed``
+    and ``--repeats`` included); ``analysis`` maps curve names (unit in the name) to 1-D
+    arrays; ``table`` holds the solver's rows (e.g. every coil count, every start)."""
+
+    path: str
+    kind: str
+    case: dict[str, Any]
+    solver: dict[str, Any]
+    run: dict[str, Any]
+    objective_name: str
+    variables: tuple[str, ...]
+    constraints: tuple[str, ...]
+    best: BestView
+    repeats: list[RepeatView]
+    table: list[dict[str, Any]]
+    analysis: dict[str, NDArray] = field(repr=False, default_factory=dict)
+    config_toml: str = ""
+    created: str = ""
+    camopt_version: str = ""
+    seed_entropy: str = ""
+    interrupted: bool = False
+
+    @property
+    def solver_name(self) -> str:
+        return str(self.solver.get("name", ""))
+
+    def histories(self, key: str = "best_objective") -> list[NDArray]:
+        """One history array per repeat (``best_objective``, ``nfev``, ...)."""
+        return [np.asarray(r.history[key]) for r in self.repeats if key in r.history]

@@ -1,0 +1,185 @@
+"""What a sweep runs: the Cartesian product of grid values x seeds, as plain data.
+
+A cell is a plain, picklable spec (validated config data, seed entropy, seed index),
+so the same function runs it inline, in a local process pool or on a Dask cluster,
+and its result does not depend on where it ran. Seed k of every grid point is child k
+of ``SeedSequence(run.seed)``.
+"""
+
+from __future__ import annotations
+
+import copy
+import itertools
+import json
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from camopt.config import LoadedConfig
+from camopt.config.loader import apply_override, parse_value
+from camopt.driver import prepare, validate
+from camopt.errors import ConfigError
+from camopt.stats import run_statistics
+
+
+# ---- specification ------------------------------------------------------------------
+def parse_seeds(text: str) -> tuple[int, int]:
+    """'0:25' -> (0, 25); '7' -> (0, 7)."""
+    m = re.fullmatch(r"\s*(\d+)\s*(?::\s*(\d+)\s*)?", text)
+    if not m:
+        raise ConfigError("--seeds", text, "expected START:STOP (e.g. 0:25) or a count")
+    start, stop = (0, int(m.group(1))) if m.group(2) is None else (int(m.group(1)),
+                                                                    int(m.group(2)))
+    if stop <= start:
+        raise ConfigError("--seeds", text, "STOP must be above START")
+    return start, stop
+
+
+def _split_top(text: str) -> list[str]:
+    parts, depth, cur = [], 0, ""
+    for ch in text:
+        depth += ch in "[{"
+        depth -= ch in "]}"
+        if ch == "," and depth == 0:
+            parts.append(cur)
+            cur = ""
+        else:
+            cur += ch
+    return [*parts, cur]
+
+
+def parse_grid(items: Iterable[str]) -> list[tuple[str, list[Any]]]:
+    """'solver.population=50,100,200' -> [('solver.population', [50, 100, 200])]."""
+    grid = []
+    for item in items:
+        key, sep, raw = item.partition("=")
+        key = key.strip()
+        if not sep or not re.fullmatch(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)+", key):
+            raise ConfigError("--grid", item, "expected section.key=v1,v2,...")
+        values = []
+        for part in _split_top(raw):
+            try:
+                values.append(parse_value(part))
+            except ValueError:
+                raise ConfigError("--grid", key, f"cannot parse value {part!r}") from None
+        grid.append((key, values))
+    return grid
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """What a sweep runs: the base config, the grid, the seed range."""
+
+    data: dict[str, Any]
+    source: str
+    text: str
+    grid: list[tuple[str, list[Any]]]
+    seeds: tuple[int, int]
+
+    @property
+    def entropy(self) -> int:
+        """The root seed every cell's generator derives from (``run.seed``)."""
+        return int(self.data["run"]["seed"])
+
+    def points(self) -> list[dict[str, Any]]:
+        """Every grid point as ``{key: value}`` (one empty point without a grid)."""
+        keys = [k for k, _ in self.grid]
+        return [dict(zip(keys, combo))
+                for combo in itertools.product(*(v for _, v in self.grid))] or [{}]
+
+    def point_data(self, point: dict[str, Any]) -> dict[str, Any]:
+        """The base case-file data with a grid point's values set."""
+        data = copy.deepcopy(self.data)
+        for key, value in point.items():
+            apply_override(data, key, value)
+        return data
+
+    def validate(self) -> list[LoadedConfig]:
+        """Validate every grid point's config now, so a bad grid fails before any work."""
+        out = []
+        for point in self.points():
+            cfg = validate(self.point_data(point), self.source)
+            prepare(cfg)
+            out.append(cfg)
+        return out
+
+    def cells(self) -> list[CellSpec]:
+        return [CellSpec(self.point_data(p), self.source, self.entropy, s, i)
+                for i, p in enumerate(self.points()) for s in range(*self.seeds)]
+
+    def to_json(self) -> str:
+        """The spec as JSON text (stored in the sweep archive)."""
+        return json.dumps({"data": self.data, "source": self.source, "grid": self.grid,
+                           "seeds": list(self.seeds)})
+
+    @classmethod
+    def from_json(cls, text: str, toml_text: str) -> SweepSpec:
+        """A spec from :meth:`to_json` text and the case file's text."""
+        d = json.loads(text)
+        return cls(d["data"], d["source"], toml_text, [tuple(g) for g in d["grid"]],
+                   tuple(d["seeds"]))
+
+
+@dataclass(frozen=True)
+class CellSpec:
+    """One cell: a grid point's config data and one seed index."""
+
+    data: dict[str, Any]
+    source: str
+    entropy: int
+    seed: int
+    point: int
+
+    @property
+    def key(self) -> tuple[int, int]:
+        return (self.point, self.seed)
+
+
+@dataclass
+class CellResult:
+    """What a cell returns (plain data, so it pickles to any worker and back)."""
+
+    point: int
+    seed: int
+    objective: float
+    feasible: bool
+    success: bool
+    nfev: int
+    nit: int
+    wall_s: float
+    converged_nit: int
+    nfev_to_target: int
+    x: list[float]
+    history: dict[str, list[float]] = field(default_factory=dict)
+
+    @property
+    def key(self) -> tuple[int, int]:
+        return (self.point, self.seed)
+
+
+# ---- summary ------------------------------------------------------------------------
+def summary(spec: SweepSpec, results: Iterable[CellResult]) -> list[dict[str, Any]]:
+    """One row per grid point: success rate, objective statistics, evaluations to target."""
+    target = spec.data["run"].get("target")
+    by_point: dict[int, list[CellResult]] = {}
+    for r in results:
+        by_point.setdefault(r.point, []).append(r)
+    rows = []
+    for i, point in enumerate(spec.points()):
+        cells = sorted(by_point.get(i, []), key=lambda r: r.seed)
+        stats = run_statistics([c.objective for c in cells], [c.feasible for c in cells],
+                               target)
+        reach = [c.nfev_to_target for c in cells if c.nfev_to_target >= 0]
+        row: dict[str, Any] = {"point": i, **{k: json.dumps(v) for k, v in point.items()},
+                               "runs": stats.runs, "successes": stats.successes,
+                               "success_rate": stats.success_rate, "best": stats.best,
+                               "median": stats.median, "worst": stats.worst}
+        row.update({
+            "median_nfev_to_target": float(np.median(reach)) if reach else float("nan"),
+            "wall_s_median": float(np.median([c.wall_s for c in cells])) if cells else 0.0,
+        })
+        rows.append(row)
+    return rows

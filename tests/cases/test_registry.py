@@ -1,0 +1,88 @@
+"""The case registry: specs, entry points, and that nothing outside a case names it."""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from camopt.cases import CaseSpec, cases, get_case, register_case
+from camopt.cli import app
+from camopt.errors import ConfigError
+from camopt.solvers import solvers
+from tests.conftest import ROOT, SPHERE, SphereConfig, SphereProblem
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+PACKAGE = ROOT / "camopt"
+BUILT_IN = {k: s for k, s in cases().items() if s.problem.__module__.startswith("camopt.")}
+
+
+def _own_folder(spec: CaseSpec) -> Path:
+    return PACKAGE / Path(*spec.problem.__module__.split(".")[1:-1])
+
+
+def test_every_built_in_case_is_a_package_with_its_own_config():
+    assert set(BUILT_IN) >= {"fast_switch", "vcb", "vcb_identify", "opening_spring", "emb_cam"}
+    for kind, spec in BUILT_IN.items():
+        folder = _own_folder(spec)
+        assert (folder / "__init__.py").is_file(), kind
+        assert spec.config.__module__.startswith(spec.problem.__module__.rsplit(".", 1)[0])
+        assert spec.default_solver in solvers(), kind
+
+
+def test_no_file_outside_a_case_names_its_kind():
+    """Outside its own package no module under camopt/ names a case kind (as a word in
+    code, strings or comments): adding a mechanism touches one place."""
+    pattern = re.compile(r"\b(" + "|".join(map(re.escape, BUILT_IN)) + r")\b")
+    own = {_own_folder(spec) for spec in BUILT_IN.values()}
+    offenders = []
+    for path in PACKAGE.rglob("*.py"):
+        if any(folder in path.parents for folder in own):
+            continue
+        for n, line in enumerate(path.read_text().splitlines(), 1):
+            if pattern.search(line):
+                offenders.append(f"{path.relative_to(ROOT)}:{n}: {line.strip()}")
+    assert not offenders, "\n".join(offenders)
+
+
+def test_pyproject_declares_every_built_in_case_as_an_entry_point():
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    group = project["entry-points"]["camopt.cases"]
+    assert set(group) == set(BUILT_IN)
+    for kind, target in group.items():
+        module, _, name = target.partition(":")
+        obj = getattr(__import__(module, fromlist=[name]), name)
+        assert obj is BUILT_IN[kind]
+
+
+def test_a_kind_registered_twice_raises_and_unknown_kinds_list_the_known():
+    impostor = CaseSpec(kind="sphere", config=SphereConfig, problem=SphereProblem,
+                        default_solver="de_gr")
+    with pytest.raises(ConfigError, match="registered twice"):
+        register_case(impostor)
+    assert register_case(SPHERE) is SPHERE  # the same spec again is no error
+    with pytest.raises(ConfigError, match="known: emb_cam"):
+        get_case("escapement")
+
+
+def test_a_test_only_case_runs_through_the_cli(tmp_path):
+    """The sphere case (registered in conftest with register_case, no monkeypatching)
+    validates, gets a template, and runs through `camopt run` like a built-in case."""
+    runner = CliRunner()
+    case = tmp_path / "sphere.toml"
+    r = runner.invoke(app, ["init", "sphere", "--out", str(case)])
+    assert r.exit_code == 0, r.output
+    assert runner.invoke(app, ["validate", str(case)]).exit_code == 0
+    out = tmp_path / "s.h5"
+    r = runner.invoke(app, ["run", str(case), "--out", str(out), "--quiet",
+                            "--set", "solver.generations=20", "--set", "solver.population=10"])
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(app, ["show", str(out), "--format", "json"])
+    assert r.exit_code == 0 and '"kind": "sphere"' in r.stdout

@@ -1,0 +1,63 @@
+"""The driver: the one loop, the run's own limits, best-of-repeats and reproducibility."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from camopt.driver import (
+    RepeatRecord,
+    best_repeat,
+    converged_iteration,
+    execute,
+    validate,
+)
+from camopt.solvers import StopReason
+
+
+def _config(**run):
+    return validate({"case": {"kind": "sphere"},
+                     "solver": {"name": "de_gr", "population": 12, "generations": 40},
+                     "run": {"seed": 4, "repeats": 3, **run}}, "sphere.toml")
+
+
+def _record(index: int, fun: float, violation: float) -> RepeatRecord:
+    return RepeatRecord(index, (index,), 0, np.zeros(1), fun, violation == 0, violation,
+                        np.zeros(1), 0, 0, 0.0, "", 0, {})
+
+
+def test_best_repeat_follows_deb_rules_and_keeps_the_first_of_equals():
+    recs = [_record(0, 1.0, 0.5), _record(1, 5.0, 0.0), _record(2, 2.0, 0.0),
+            _record(3, 2.0, 0.0)]
+    assert best_repeat(recs).index == 2  # feasible beats less objective; ties: first
+
+
+def test_converged_iteration():
+    f = np.array([5.0, 3.0, 1.0, 1.0, 1.0])
+    assert converged_iteration(f, np.zeros(5)) == 3
+    assert converged_iteration(np.array([]), np.array([])) == 0
+    # still violated at first: converged only once the final violation is reached
+    assert converged_iteration(np.ones(4), np.array([1.0, 0.0, 0.0, 0.0])) == 2
+
+
+def test_execute_is_reproducible_and_reports_progress():
+    seen = []
+    a = execute(_config(), callback=seen.append)
+    b = execute(_config())
+    assert [r.fun for r in a.repeats] == [r.fun for r in b.repeats]
+    assert np.array_equal(a.best.x, b.best.x)
+    assert len(seen) == 3 * 40 and seen[-1].repeat == 2 and seen[-1].iteration == 40
+    assert a.repeats[1].spawn_key == (1,)
+
+
+def test_max_seconds_stops_every_repeat_between_iterations():
+    rec = execute(_config(max_seconds=1e-9))
+    for r in rec.repeats:
+        assert r.message == StopReason.MAX_SECONDS.value and r.nit == 1
+
+
+def test_run_limits_are_validated():
+    from camopt.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="run.max_evaluations"):
+        _config(max_evaluations=0)
