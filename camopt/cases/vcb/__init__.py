@@ -5,8 +5,9 @@ leaves out (kind ``vcb_identify``)."""
 from __future__ import annotations
 
 from camopt.cases.registry import ArchiveLoader, CaseSpec, ProfileCurve, register_case
-from camopt.cases.vcb.config import CamDesign, VcbConfig, VcbIdentifyConfig
-from camopt.cases.vcb.identify import VcbIdentification
+from camopt.cases.vcb.config import (CamDesign, VcbConfig, VcbDynamicsIdentifyConfig,
+                                     VcbIdentifyConfig)
+from camopt.cases.vcb.identify import VcbDynamicsIdentification, VcbIdentification
 from camopt.cases.vcb.paper import PAPER
 from camopt.cases.vcb.problem import VcbProblem
 from camopt.config.models import CaseConfig
@@ -42,5 +43,11 @@ VCB_IDENTIFY = register_case(CaseSpec(
     kind="vcb_identify", config=VcbIdentifyConfig, problem=VcbIdentification,
     default_solver="de_gr",
     summary="fits the VCB parameters the paper omits to the numbers it reports",
+    paper_source=SOURCE,
+))
+VCB_IDENTIFY_DYNAMICS = register_case(CaseSpec(
+    kind="vcb_identify_dynamics", config=VcbDynamicsIdentifyConfig,
+    problem=VcbDynamicsIdentification, default_solver="de_gr",
+    summary="fits the VCB inertias the paper omits to the vendor design's ADAMS results",
     paper_source=SOURCE,
 ))

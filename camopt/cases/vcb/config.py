@@ -68,6 +68,34 @@ class VcbConfig(CaseConfig):
     free_contact_force_n: float = Field(
         0.0, description="self-closing force of the interrupters before touch (identified)")
     efficiency: float = Field(0.85, gt=0, le=1, description="mechanical efficiency (Eq 26)")
+    rod_travel_mm: Positive = Field(
+        18.0, description="rod travel the breaker needs, opened to closed (Sec 3.2)")
+    rod_travel_tolerance_mm: Positive = Field(
+        0.2, description="allowed deviation of the rod travel (constraint, steps 1 and 2)")
+    # closing dynamics (Sec 3.2; inertias identified: configs/vcb_identify_dynamics.toml)
+    cam_inertia_kg_m2: Positive = Field(
+        1.15e-3, description="cam, shaft, crank and closing springs about O (identified)")
+    rod_mass_kg: Positive = Field(
+        3.02, description="follower, four-bar and rods as a mass at the rod (identified)")
+    contacts_mass_kg: Positive = Field(
+        2.15, description="the three moving contacts together (identified)")
+    dynamics_steps: int = Field(
+        400, ge=50, le=100_000, description="graded cam-angle intervals of the work-energy "
+        "integration (independent of positions)")
+    closing_velocity_m_s: Pair | None = Field(
+        None, description="bounds on the average closing velocity (constraint; Sec 2.1 asks "
+        "0.9 +- 0.2 m/s); none: reported only")
+    require_latch: bool = Field(
+        False, description="constraint: the cam reaches the end of the stroke (no stall) "
+        "with at least latch_energy_min_j of kinetic energy left")
+    pressure_angle_max_deg: float | None = Field(
+        None, gt=0, lt=90, description="constraint on the cam's pressure angle (Sec 2.3 names "
+        "45 deg allowable); none: reported only")
+    forbid_lift_off: bool = Field(
+        False, description="constraint: the cam never pulls the roller (torque it passes on "
+        ">= 0 along the closing)")
+    latch_energy_min_j: float = Field(
+        0.0, ge=0, description="kinetic energy the hook needs at the end of the stroke")
     # contact stress (Table 1, Eqs 27-31)
     cam_modulus_gpa: Positive = Field(210.0, description="E of cam and roller (S45C)")
     poisson: float = Field(0.3, ge=0, lt=0.5, description="Poisson's ratio")
@@ -78,7 +106,8 @@ class VcbConfig(CaseConfig):
     objective_form: Literal["net", "abs_sum"] = Field(
         "net", description="net: |sum (Fo - Fr/eps) ds| in J; abs_sum: sum |Fo - Fr/eps| "
         "in N, as printed")
-    positions: int = Field(140, ge=10, description="Ns, cam positions over 0-140 deg")
+    positions: int = Field(140, ge=10, le=1_000_000,
+                           description="Ns, cam positions over 0-140 deg (sampled curves)")
     penalty: float = Field(1e6, ge=0, description="M in Eq 39")
     phi_max_deg: Pair = Field((23.0, 26.0), description="bounds on the follower's maximum angle")
     # search bounds
@@ -102,6 +131,9 @@ class VcbConfig(CaseConfig):
             raise ValueError("node_cam_deg and node_fractions need four values (Eq 7)")
         if self.phi_max_deg[0] >= self.phi_max_deg[1]:
             raise ValueError("phi_max_deg: lower bound must be below upper bound")
+        v = self.closing_velocity_m_s
+        if v is not None and not 0 <= v[0] < v[1]:
+            raise ValueError("closing_velocity_m_s: need 0 <= lower < upper")
         if (self.kind == "vcb" and self.step == "fourbar" and self.cam_design is None
                 and self.cam_archive is None):
             raise ValueError("step 'fourbar' needs the step-1 design: set cam_design or "
@@ -113,8 +145,6 @@ class VcbIdentifyConfig(VcbConfig):
     """Fit the VCB parameters the paper leaves out to the results it reports."""
 
     kind: Literal["vcb_identify"] = "vcb_identify"  # type: ignore[assignment]
-    rod_travel_target_mm: Positive = Field(18.0, description="Sec 3.2: rod travel 18 mm")
-    rod_travel_tolerance_mm: Positive = Field(0.5, description="scale of the travel residual")
     vendor_surplus_target_j: float = Field(
         1.75, description="Table 6 vendor objective 1.75e3, read as N mm")
     optimum_surplus_target_j: float = Field(0.0, description="Table 6 optimum: 1.74e-7")
@@ -128,3 +158,20 @@ class VcbIdentifyConfig(VcbConfig):
     free_contact_bounds_n: Bounds = Field(
         Bounds(lower=0, upper=1000), description="self-closing force of three interrupters; "
         "it helps closing, so not negative")
+
+
+class VcbDynamicsIdentifyConfig(VcbConfig):
+    """Fit the inertias the paper leaves out to the vendor design's ADAMS results (Sec 3.2)."""
+
+    kind: Literal["vcb_identify_dynamics"] = "vcb_identify_dynamics"  # type: ignore[assignment]
+    closing_velocity_target_m_s: Positive = Field(
+        1.71, description="Sec 3.2: average closing velocity of the vendor design")
+    opening_velocity_target_m_s: Positive = Field(
+        2.5, description="Sec 3.2: average opening velocity of the vendor design")
+    departure_time_target_ms: Positive = Field(
+        3.2, description="Sec 3.2: the contacts separate 3.2 ms after the hook lets go")
+    cam_inertia_bounds_kg_m2: Bounds = Field(Bounds(lower=1e-5, upper=0.05),
+                                             description="search range")
+    rod_mass_bounds_kg: Bounds = Field(Bounds(lower=0.1, upper=30.0), description="search range")
+    contacts_mass_bounds_kg: Bounds = Field(Bounds(lower=0.1, upper=15.0),
+                                            description="search range")

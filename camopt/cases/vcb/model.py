@@ -60,16 +60,24 @@ class Kinematics:
 @dataclass(frozen=True)
 class ForceBalance:
     """Forces along the stroke at positions i = 1..Ns, (n, Ns), and the works of Eqs 23-26
-    per design (n,) in J: closing-spring torque ``torque`` (N m), rod rate ``ds1`` (m/rad),
-    general resistant force ``fr`` (N), driving and resistant work, and the surplus
-    driving - resistant / efficiency (Eq 26)."""
+    per design (n,) in J: closing-spring torque ``torque`` (N m), rod travel ``s1`` (m)
+    and rate ``ds1`` (m/rad), general resistant force ``fr`` (N, computed when asked),
+    driving and resistant work, and the surplus driving - resistant / efficiency (Eq 26).
+    The works are exact potential differences (Eq 23's integrals), independent of the
+    number of positions; only the forces are sampled."""
 
     torque: NDArray
+    s1: NDArray
     ds1: NDArray
-    fr: NDArray
+    loads: Loads
     driving: NDArray
     resistant: NDArray
     surplus: NDArray
+
+    @property
+    def fr(self) -> NDArray:
+        """General resistant force Fr (Eq 24) at positions 1..Ns (N), (n, Ns)."""
+        return self.loads.resistant_force(self.s1)
 
 
 @dataclass(frozen=True)
@@ -113,6 +121,20 @@ class Loads:
         force += opening
         return force
 
+    def resistant_energy(self, s1: NDArray) -> NDArray:
+        """Work done against Fr from the opened position to rod travel s1 (J), exactly:
+        Fr depends on s1 alone, so its work is a potential difference (Eqs 23, 24) and
+        needs no sampling. Opening spring 1/2 k ((x0 + r s1)^2 - x0^2) with r = r7/r6;
+        contact springs 1/2 k_w ((s1 - gap + p)^2 - p^2) after touch; the free-contact
+        force -F_fc min(s1, gap) before it."""
+        s1 = np.asarray(s1, dtype=float)
+        x0 = self.opening_stretch_open
+        stretch = x0 + self.opening_arm * s1
+        energy = 0.5 * self.opening_k * (stretch * stretch - x0 * x0)
+        wipe = np.maximum(s1 - self.gap, 0.0) + self.wipe_preload
+        energy = energy + 0.5 * self.wipe_k * (wipe * wipe - self.wipe_preload**2)
+        return energy - self.free_contact * np.minimum(s1, self.gap)
+
 
 class VcbModel:
     """Geometry and loads of the VCB mechanism in SI, vectorised over designs."""
@@ -128,28 +150,33 @@ class VcbModel:
         end = c.node_cam_deg[-1] * DEG
         self.theta_c = np.linspace(0.0, end, c.positions + 1)  # Ns intervals (Eq 39)
         self.dtheta = end / c.positions
-        self.spring_ext, self.spring_rate = self._closing_spring_geometry()
+        self.spring_ext, self.spring_rate = self.closing_spring_geometry(self.theta_c)
         self.vendor_link = np.array([c.l1_mm * MM, c.l3_mm * MM, c.l4_mm * MM,
                                      c.l5_mm * MM, c.theta1_deg * DEG])
         self.vendor_a = self.node_cubic(self.vendor_link)
 
     # ---- geometry ---------------------------------------------------------------
-    def _closing_spring_geometry(self) -> tuple[NDArray, NDArray]:
-        """Spring extension from the opened state and dL/dtheta along the stroke.
+    def closing_spring_geometry(self, theta_c: NDArray, pre_rotation: float | None = None
+                                ) -> tuple[NDArray, NDArray]:
+        """Spring extension from the opened state (m) and its rate dL/dtheta (m/rad) at
+        cam angles ``theta_c`` (any shape).
 
         The springs act along GQ, Q on the cam shaft at l8 and angle QOX + theta,
         theta = theta0 + theta_c (Sec 2.2 Step 8); counter-clockwise turns Q away
-        from its dead centre toward G, so the charged springs extend.
+        from its dead centre toward G, so the charged springs extend. ``pre_rotation``
+        replaces theta0 (0 gives the free rotation before the cam meets the roller).
         """
         c = self.c
         l8 = c.crank_l8_mm * MM
-        angle = c.preset_qox_deg * DEG + c.theta0_deg * DEG + self.theta_c
-        q = l8 * np.stack([np.cos(angle), np.sin(angle)])
-        dq = l8 * np.stack([-np.sin(angle), np.cos(angle)])
-        gq = self.G[:, None] - q
-        length = np.hypot(*gq)
+        theta0 = c.theta0_deg * DEG if pre_rotation is None else pre_rotation
+        theta_c = np.asarray(theta_c, dtype=float)
+        angle = c.preset_qox_deg * DEG + theta0 + theta_c
+        cos, sin = np.cos(angle), np.sin(angle)
+        gx, gy = self.G[0] - l8 * cos, self.G[1] - l8 * sin
+        length = np.hypot(gx, gy)
         q_open = l8 * np.array([np.cos(c.preset_qox_deg * DEG), np.sin(c.preset_qox_deg * DEG)])
-        return length - np.hypot(*(self.G - q_open)), -(gq * dq).sum(axis=0) / length
+        rate = -(gx * (-l8 * sin) + gy * (l8 * cos)) / length
+        return length - np.hypot(*(self.G - q_open)), rate
 
     def phi0(self) -> float:
         """Follower angle at theta_c = 0 with the node clearance (Eq 8)."""
@@ -175,9 +202,10 @@ class VcbModel:
         return np.linalg.solve(np.vander(nodes, 4, increasing=True), phi)  # Step 9
 
     # ---- kinematics and forces ----------------------------------------------------
-    def kinematics(self, A: NDArray, link: NDArray, rod_offset: NDArray | float
-                   ) -> Kinematics:
-        """Follower, linkage and rod motion, (n, m) arrays; ``A`` (n, 4), ``link`` (n, 5).
+    def kinematics(self, A: NDArray, link: NDArray, rod_offset: NDArray | float,
+                   theta_c: NDArray | None = None) -> Kinematics:
+        """Follower, linkage and rod motion, (n, m) arrays; ``A`` (n, 4), ``link`` (n, 5),
+        on the case's grid of Ns + 1 cam angles or on ``theta_c`` (m,) starting at 0.
 
         The follower swing turns link 2 clockwise: theta2 = angle(BO) - (xi + phi). The
         four-bar is solved in the frame turned by angle(BO) and mirrored (y -> -y),
@@ -185,7 +213,8 @@ class VcbModel:
         spent on the grid, and mirroring swaps the assembly branch. ``cos4``/``sin4``
         are in that frame (:meth:`output_angle` turns them back).
         """
-        f = cam.Follower.cubic(A, self.theta_c, self.xi)
+        grid = self.theta_c if theta_c is None else theta_c
+        f = cam.Follower.cubic(A, grid, self.xi)
         if np.all(link == link[0]):  # shared linkage (step 1): scalars broadcast fastest
             l1, l3, l4, l5, th1 = (float(v) for v in link[0])
         else:
@@ -213,6 +242,14 @@ class VcbModel:
         th4 = self.theta_bo - np.arctan2(kin.sin4, kin.cos4)
         return np.arctan2(np.sin(th4), np.cos(th4))
 
+    def closing_energy(self, kc: NDArray, extension: NDArray) -> NDArray:
+        """Elastic energy of both closing springs (J), (n, m), at spring ``extension`` (m,)
+        from the opened state; kc (n, 2) N/m; compressions from Table 2."""
+        c = self.c
+        left = np.stack([(c.kc1_precompression_mm * MM - extension) ** 2,
+                         (c.kc2_precompression_mm * MM - extension) ** 2])
+        return 0.5 * (kc @ left.reshape(2, -1)).reshape((len(kc), *np.shape(extension)))
+
     def closing_torque(self, kc: NDArray) -> NDArray:
         """Torque of both closing springs on the cam, (n, m) N m; kc (n, 2) N/m."""
         c = self.c
@@ -234,20 +271,27 @@ class VcbModel:
             - (rod_travel_vendor - c.contact_gap_mm * MM),
             gap=c.contact_gap_mm * MM, free_contact=free_contact, efficiency=c.efficiency)
 
-    def balance(self, kin: Kinematics, torque: NDArray, loads: Loads) -> ForceBalance:
-        """Fo, Fr along the stroke and the works of Eqs 23-26 (J), at positions i = 1..Ns.
+    def driving_work(self, kc: NDArray) -> NDArray:
+        """Work of the closing springs over the stroke theta_c = 0 .. 140 deg (J), (n,):
+        their elastic energy at the start less that at the end (Eq 23's first integral,
+        exactly: the springs are conservative)."""
+        ends = self.spring_ext[[0, -1]]
+        energy = self.closing_energy(kc, ends)
+        return energy[:, 0] - energy[:, 1]
 
-        Fo ds is evaluated as T dtheta (virtual work), which stays finite where the
-        follower dwells and Fo itself is unbounded.
+    def balance(self, kin: Kinematics, kc: NDArray, torque: NDArray, loads: Loads
+                ) -> ForceBalance:
+        """Fo, Fr along the stroke at positions i = 1..Ns and the works of Eqs 23-26 (J).
+
+        The works are potential differences between the opened and closed states, so
+        they do not depend on Ns (the right-endpoint sum of Eq 25 charges the whole
+        interval that contains the contacts' touch with the contact springs' 2.5 kN
+        step and converges only as 1/Ns).
         """
-        # whole contiguous rows, then position 0 taken off the sums: operations on
-        # the [:, 1:] views cost three times as much
-        s1, ds1 = kin.s1, kin.ds1
-        fr = loads.resistant_force(s1)
-        driving = (torque.sum(axis=1) - torque[:, 0]) * self.dtheta
-        resistant = (np.einsum("ij,ij->i", fr, ds1) - fr[:, 0] * ds1[:, 0]) * self.dtheta
-        return ForceBalance(torque=torque[:, 1:], ds1=ds1[:, 1:], fr=fr[:, 1:],
-                            driving=driving, resistant=resistant,
+        driving = self.driving_work(kc)
+        resistant = loads.resistant_energy(kin.s1[:, -1])
+        return ForceBalance(torque=torque[:, 1:], s1=kin.s1[:, 1:], ds1=kin.ds1[:, 1:],
+                            loads=loads, driving=driving, resistant=resistant,
                             surplus=driving - resistant / loads.efficiency)  # Eq 26
 
     @staticmethod
@@ -257,7 +301,8 @@ class VcbModel:
             return bal.torque / bal.ds1
 
     def abs_sum(self, bal: ForceBalance) -> NDArray:
-        """Eq 39 as printed: sum over positions of |Fo - Fr / eps| (N)."""
+        """Eq 39 as printed: the sum over the Ns positions of |Fo - Fr / eps| (N). It grows
+        with Ns (a sum, not a force): divide by Ns for the mean gap per position."""
         return np.abs(self.output_force(bal) - bal.fr / self.c.efficiency).sum(axis=1)
 
     def contact(self, f: cam.Follower, torque: NDArray) -> Contact:
@@ -273,10 +318,13 @@ class VcbModel:
                                         c.cam_modulus_gpa * 1e9, c.poisson)
         _, sigma, tau = hertz.line_contact(fn, rho, self.rf, c.contact_length_mm * MM, e_eq)
         return Contact(xp, yp, dxp, dyp, rho, fn, sigma, tau)
-    def peak_stress(self, f: cam.Follower, torque: NDArray) -> NDArray:
+    def peak_stress(self, A: NDArray, f: cam.Follower, torque: NDArray) -> NDArray:
         """Peak Hertz pressure over the stroke per design (Eqs 15, 19, 27-30), the search's
         fast path: sigma_max = sqrt(max(Fn (1/rho + 1/rf)) E_e / (2 pi L)), one square
-        root per design instead of per sample; no Hertz contact counts as infinite.
+        root per design instead of per sample; no Hertz contact counts as infinite, and so
+        does a follower that dwells inside the stroke (phi' = 0: Fn unbounded). The
+        sampled extreme is refined by a parabola (:func:`refined_min`), so the value does
+        not depend on the sample count. ``A`` (n, 4) are the cubic's coefficients.
         (float32 was tried and rejected: cancellation near a dwell cost 5 % in sigma.)"""
         c = self.c
         l2, l6, rf = self.l2, self.l6, self.rf
@@ -311,19 +359,83 @@ class VcbModel:
             np.square(speed_sq, out=speed_sq)
             speed_sq *= np.abs(torque, out=gap)
             r /= speed_sq
-            low = np.min(r, axis=1)
+            low = refined_min(r)
+            # where phi' = 0 inside the stroke the common normal passes through O: the
+            # arm of Fn vanishes and Fn = T / arm is unbounded whatever the grid
+            low[np.isfinite(follower_dwell(A, self.theta_c[-1]))] = 0.0
             top = np.where(low > 0, 1 / (low * ((l6 * l2) * rf)), np.inf)  # NaN too
         e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * 1e9, c.poisson,
                                         c.cam_modulus_gpa * 1e9, c.poisson)
         return np.sqrt(top * e_eq / (2 * np.pi * c.contact_length_mm * MM))
 
 
-def unassembled(cos4: NDArray, work: NDArray) -> NDArray:
+def refined_min(r: NDArray) -> NDArray:
+    """Row minimum of samples on a uniform grid, refined by the parabola through the
+    smallest sample and its neighbours (error O(h^3) for a smooth interior minimum, so the
+    peak stress does not depend on the sample count); end samples are exact."""
+    low = np.min(r, axis=1)
+    m = r.shape[1]
+    if m < 3:
+        return low
+    rows = np.arange(len(r))
+    j = np.clip(np.argmin(r, axis=1), 1, m - 2)
+    r0, r1, r2 = r[rows, j - 1], r[rows, j], r[rows, j + 1]
+    curv = r0 - 2 * r1 + r2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        vertex = r1 - (r2 - r0) ** 2 / (8 * curv)
+    interior = (curv > 0) & (r1 <= r0) & (r1 <= r2)
+    return np.where(interior & np.isfinite(vertex), np.minimum(low, vertex), low)
+
+
+def follower_dwell(A: NDArray, end: float) -> NDArray:
+    """First cam angle in [0, end] where the cubic follower's rate phi' = a1 + 2 a2 t +
+    3 a3 t^2 (Eq 12) vanishes (rad), NaN where it does not; exact, from the coefficients
+    ``A`` (n, 4)."""
+    return first_root_in(A[:, 1:] * np.array([1.0, 2.0, 3.0]), end)
+
+
+def phi_max(A: NDArray, end: float) -> NDArray:
+    """Largest follower swing over 0 <= theta_c <= end (rad), exactly: the cubic's value at
+    the ends and at the interior zeros of phi'."""
+    roots = np.stack([first_root_in(A[:, 1:] * np.array([1.0, 2.0, 3.0]), end),
+                      last_root_in(A[:, 1:] * np.array([1.0, 2.0, 3.0]), end)], axis=1)
+    t = np.concatenate([np.zeros((len(A), 1)), np.full((len(A), 1), end), roots], axis=1)
+    values = A[:, :1] + t * (A[:, 1:2] + t * (A[:, 2:3] + t * A[:, 3:4]))
+    return np.nanmax(values, axis=1)
+
+
+def _roots_in(coef: NDArray, end: float) -> NDArray:
+    """Both roots of c0 + c1 t + c2 t^2 per row of ``coef`` (n, 3), inf where not real or
+    outside [0, end]."""
+    c0, c1, c2 = coef.T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        disc = np.sqrt(c1 * c1 - 4 * c2 * c0)
+        quad = np.stack([(-c1 - disc) / (2 * c2), (-c1 + disc) / (2 * c2)], axis=1)
+        linear = -c0 / c1
+    flat = np.abs(c2) <= 1e-12 * (np.abs(c1) + np.abs(c0))
+    roots = np.where(flat[:, None], np.stack([linear, linear], axis=1), quad)
+    return np.where((roots >= 0) & (roots <= end), roots, np.inf)
+
+
+def first_root_in(coef: NDArray, end: float) -> NDArray:
+    """First root in [0, end] of c0 + c1 t + c2 t^2 per row of ``coef`` (n, 3), NaN if none."""
+    first = _roots_in(coef, end).min(axis=1)
+    return np.where(np.isfinite(first), first, np.nan)
+
+
+def last_root_in(coef: NDArray, end: float) -> NDArray:
+    """Last root in [0, end] of c0 + c1 t + c2 t^2 per row, NaN if none."""
+    roots = _roots_in(coef, end)
+    last = np.where(np.isfinite(roots), roots, -np.inf).max(axis=1)
+    return np.where(np.isfinite(last), last, np.nan)
+
+
+def unassembled(cos4: NDArray, rate: NDArray) -> NDArray:
     """Assembly constraint per design: the fraction of the stroke where the four-bar
     cannot be assembled, or -1 where it assembles everywhere (satisfied, never "active");
-    only rows whose work sum is not finite can fail (NaN propagates into the sum)."""
+    only rows whose rod rate ``rate`` (n, m) has a NaN can fail (one row sum finds them)."""
     g = np.full(len(cos4), -1.0)
-    rows = ~np.isfinite(work)
+    rows = ~np.isfinite(rate.sum(axis=1))
     if rows.any():
         frac = np.isnan(cos4[rows]).mean(axis=1)
         g[rows] = np.where(frac > 0, frac, -1.0)

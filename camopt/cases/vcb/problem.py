@@ -7,7 +7,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import CamDesign, VcbConfig
-from camopt.cases.vcb.model import DEG, MM, VcbModel, row_max, unassembled
+from camopt.cases.vcb.dynamics import ClosingMotion, Inertia, closing_motion
+from camopt.cases.vcb.model import (DEG, MM, VcbModel, follower_dwell, phi_max, row_max,
+                                    unassembled)
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, fourbar, hertz
 from camopt.problem import Evaluation, Problem, Variable
@@ -34,7 +36,8 @@ class VcbProblem(Problem):
                 Variable("kc2_n_per_mm", c.kc2_bounds_n_per_mm.lower * 1e3,
                          c.kc2_bounds_n_per_mm.upper * 1e3, 1e-3),
             )
-            self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly")
+            self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly",
+                                     "rod_travel")
         else:
             if c.cam_design is None:  # cam_archive is read into cam_design before a build
                 raise ConfigError("case", "cam_archive", "the step-1 archive was not read")
@@ -45,9 +48,20 @@ class VcbProblem(Problem):
                                    ("l4_mm", c.l4_bounds_mm, MM), ("l5_mm", c.l5_bounds_mm, MM),
                                    ("theta1_deg", c.theta1_bounds_deg, DEG)))
             self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly",
-                                     "grashof")
+                                     "rod_travel", "grashof")
         if c.stress_constraint:
             self.constraint_names += ("shear_yield",)
+        if c.closing_velocity_m_s is not None:
+            self.constraint_names += ("closing_velocity_low", "closing_velocity_high")
+        if c.require_latch:
+            self.constraint_names += ("latch",)
+        if c.forbid_lift_off:
+            self.constraint_names += ("lift_off",)
+        if c.pressure_angle_max_deg is not None:
+            self.constraint_names += ("pressure_angle",)
+        self.inertia = Inertia(c.cam_inertia_kg_m2, c.rod_mass_kg, c.contacts_mass_kg)
+        self.search_dynamics = (c.closing_velocity_m_s is not None or c.require_latch
+                                or c.forbid_lift_off)
 
     def _cam(self, d: CamDesign) -> tuple[NDArray, NDArray]:
         a0 = self.model.phi0() if d.a0 is None else d.a0
@@ -78,29 +92,54 @@ class VcbProblem(Problem):
         normal force, output range) for tables and reports."""
         return self._evaluate(X, detail=True)
 
+    def motion(self, X: NDArray) -> ClosingMotion:
+        """Closing dynamics of each row of ``X`` (:mod:`camopt.cases.vcb.dynamics`)."""
+        A, kc, link = self.designs(X)
+        return closing_motion(self.model, A, kc, link, self.rod_offset, self.load,
+                              self.inertia, self.config.dynamics_steps)
+
     def _evaluate(self, X: NDArray, detail: bool) -> Evaluation:
         c, m = self.config, self.model
         A, kc, link = self.designs(X)
         kin = m.kinematics(A, link, self.rod_offset)
         torque = m.closing_torque(kc)
-        bal = m.balance(kin, torque, self.load)
-        phi_max = (np.max(kin.follower.angle, axis=1) - m.xi) / DEG
+        bal = m.balance(kin, kc, torque, self.load)
+        end = m.theta_c[-1]
+        phi_top = phi_max(A, end) / DEG  # exact, not the sampled maximum
+        travel = kin.s1[:, -1]
         lo, hi = c.phi_max_deg
-        if detail:
-            con = m.contact(kin.follower, torque)
-            sigma_max = row_max(con.sigma)
-        else:
-            sigma_max = m.peak_stress(kin.follower, torque)
+        sigma_max = m.peak_stress(A, kin.follower, torque)
         tau_max = hertz.max_shear_stress(sigma_max)  # Eq 31
+        motion = self.motion(X) if (detail or self.search_dynamics) else None
+        if motion is not None:  # over the part of the stroke the cam reaches
+            cam_torque_min = np.min(np.where(np.isfinite(motion.time), motion.cam_torque,
+                                             np.inf), axis=1)
+        if detail or c.pressure_angle_max_deg is not None:
+            psi_max = np.max(np.abs(cam.pressure_angle(m.l2, m.l6, kin.follower)), axis=1) / DEG
         g = {
-            "phi_max_low": lambda: 1 - phi_max / lo,  # Eq 40
-            "phi_max_high": lambda: phi_max / hi - 1,  # Eq 40
+            "phi_max_low": lambda: 1 - phi_top / lo,  # Eq 40
+            "phi_max_high": lambda: phi_top / hi - 1,  # Eq 40
             "monotonic": lambda: -np.min(kin.dphi, axis=1),
-            "assembly": lambda: unassembled(kin.cos4, bal.resistant),
+            "assembly": lambda: unassembled(kin.cos4, kin.ds1),
+            # normalised by the travel itself, as the other limits are by their bound (a
+            # scale of the tolerance made far-off designs' violations dwarf the others)
+            "rod_travel": lambda: (np.abs(travel / MM - c.rod_travel_mm)
+                                   - c.rod_travel_tolerance_mm) / c.rod_travel_mm,
             "grashof": lambda: -fourbar.grashof_margin(link[:, 0], m.l2, link[:, 1],
                                                        link[:, 2]) / m.l2,  # Eq 43
             "shear_yield": lambda: tau_max / (c.shear_yield_mpa * 1e6) - 1,
+            "closing_velocity_low": lambda: 1 - motion.closing_velocity_avg
+            / c.closing_velocity_m_s[0],
+            "closing_velocity_high": lambda: motion.closing_velocity_avg
+            / c.closing_velocity_m_s[1] - 1,
+            # continuous across the limit: the kinetic energy left (share of the driving
+            # work) when the cam latches, the share of the stroke it misses when it stalls
+            "latch": lambda: np.where(motion.latched, c.latch_energy_min_j - motion.final_kinetic,
+                                      c.latch_energy_min_j + bal.driving * (1 - motion.reach))
+            / bal.driving,
         }
+        g["lift_off"] = lambda: -cam_torque_min * end / bal.driving
+        g["pressure_angle"] = lambda: psi_max / c.pressure_angle_max_deg - 1
         G = np.column_stack([g[name]() for name in self.constraint_names])
         G = np.where(np.isnan(G), np.inf, G)
         violation = np.clip(G, 0, None).sum(axis=1)
@@ -108,20 +147,36 @@ class VcbProblem(Problem):
         f = np.where(np.isfinite(base) & np.isfinite(violation),
                      base + c.penalty * violation, np.inf)  # Eq 39
         extras = {
-            "phi_max_deg": phi_max, "sigma_max_mpa": sigma_max / 1e6,
+            "phi_max_deg": phi_top, "sigma_max_mpa": sigma_max / 1e6,
             "tau_max_mpa": tau_max / 1e6,
             "driving_work_j": bal.driving, "resistant_work_j": bal.resistant,
-            "surplus_work_j": bal.surplus, "rod_travel_mm": kin.s1[:, -1] / MM,
+            "surplus_work_j": bal.surplus, "rod_travel_mm": travel / MM,
         }
+        if motion is not None:
+            extras.update({
+                "closing_velocity_avg_m_s": motion.closing_velocity_avg,
+                "closing_time_ms": motion.closing_time * 1e3,
+                "touch_velocity_m_s": motion.touch_velocity,
+                "touch_time_ms": motion.touch_time * 1e3,
+                "cam_contact_time_ms": motion.cam_contact_time * 1e3,
+                "latch_kinetic_energy_j": motion.final_kinetic,
+                "cam_torque_min_nm": cam_torque_min,
+                "latched": motion.latched.astype(float),
+            })
         if detail:
+            con = m.contact(kin.follower, torque)
             ends = m.output_angle(kin.ends()) / DEG
-            psi = cam.pressure_angle(m.l2, m.l6, kin.follower)
+            dwell = follower_dwell(A, end) / DEG
+            eq39 = m.abs_sum(bal)
             extras.update({
                 "a0": A[:, 0], "a1": A[:, 1], "a2": A[:, 2], "a3": A[:, 3],
-                "pressure_angle_max_deg": np.max(np.abs(psi), axis=1) / DEG,
+                "pressure_angle_max_deg": psi_max,
                 "curvature_min_mm": np.min(con.curvature, axis=1) / MM,
-                "normal_force_max_n": row_max(con.normal_force),
-                "force_gap_n": m.abs_sum(bal),
+                # unbounded where the follower dwells (Fn = T / arm, arm = 0 there)
+                "normal_force_max_n": np.where(np.isfinite(dwell), np.inf,
+                                               row_max(con.normal_force)),
+                "follower_dwell_deg": dwell,
+                "eq39_sum_n": eq39, "eq39_mean_n": eq39 / c.positions,
                 "output_start_deg": ends[:, 0], "output_end_deg": ends[:, 1],
             })
         return Evaluation(f=f, g=G, extras=extras)
@@ -149,10 +204,9 @@ class VcbProblem(Problem):
         A, kc, link = self.designs(x)
         kin = m.kinematics(A, link, self.rod_offset)
         torque = m.closing_torque(kc)
-        bal = m.balance(kin, torque, self.load)
+        bal = m.balance(kin, kc, torque, self.load)
         con = m.contact(kin.follower, torque)
         xc, yc = cam.profile(con.xp, con.yp, con.dxp, con.dyp, m.rf)
-        ds = kin.ds1[0, 1:] * m.dtheta
         return {
             "cam_angle_deg": m.theta_c / DEG,
             "pitch_x_mm": con.xp[0] / MM, "pitch_y_mm": con.yp[0] / MM,
@@ -165,8 +219,25 @@ class VcbProblem(Problem):
             "output_angle_deg": m.output_angle(kin)[0] / DEG,
             "rod_travel_mm": kin.s1[0] / MM,
             "fo_n": np.r_[np.nan, m.output_force(bal)[0]], "fr_n": np.r_[np.nan, bal.fr[0]],
-            "driving_work_j": np.r_[0.0, np.cumsum(torque[0, 1:] * m.dtheta)],
-            "resistant_work_j": np.r_[0.0, np.cumsum(bal.fr[0] * ds)],
+            # works along the stroke as exact potential differences
+            "driving_work_j": m.closing_energy(kc, m.spring_ext)[0, 0]
+            - m.closing_energy(kc, m.spring_ext)[0],
+            "resistant_work_j": self.load.resistant_energy(kin.s1[0]),
+            **self._motion_curves(x),
+        }
+
+    def _motion_curves(self, x: NDArray) -> dict[str, NDArray]:
+        """Closing dynamics of one design against time (display units)."""
+        mo = self.motion(x)
+        shown = np.isfinite(mo.time[0])
+        return {
+            "time_ms": mo.time[0, shown] * 1e3,
+            "dyn_cam_angle_deg": mo.theta_c[shown] / DEG,
+            "dyn_rod_travel_mm": mo.rod[0, shown] / MM,
+            "dyn_rod_velocity_m_s": mo.rod_velocity[0, shown],
+            "dyn_contact_travel_mm": mo.contact[0, shown] / MM,
+            "dyn_contact_velocity_m_s": mo.contact_velocity[0, shown],
+            "dyn_cam_torque_nm": mo.cam_torque[0, shown],
         }
 
     def analysis(self, x: NDArray) -> dict[str, NDArray]:
