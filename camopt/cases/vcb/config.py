@@ -104,7 +104,7 @@ class VcbConfig(CaseConfig):
     stress_constraint: bool = Field(True, description="require tau_max <= shear_yield")
     # objective (Eqs 39-40)
     objective_form: Literal["net", "abs_sum"] = Field(
-        "net", description="net: |sum (Fo - Fr/eps) ds| in J; abs_sum: sum |Fo - Fr/eps| "
+        "net", description="net: |surplus| of Eq 26 in J, exact; abs_sum: sum |Fo - Fr/eps| "
         "in N, as printed")
     positions: int = Field(140, ge=10, le=1_000_000,
                            description="Ns, cam positions over 0-140 deg (sampled curves)")

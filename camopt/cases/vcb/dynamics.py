@@ -112,18 +112,22 @@ class OpeningMotion:
 
 
 def graded_grid(end: float, steps: int) -> tuple[NDArray, NDArray]:
-    """theta = end u^2 on u = 0..1 in ``steps`` intervals, and dtheta/du, (steps + 1,)."""
+    """theta = end (3 u^2 - 2 u^3) on u = 0..1 in ``steps`` intervals, and dtheta/du,
+    (steps + 1,): fine at both ends, where the motion starts and may come almost to rest
+    at the latch (dt = dtheta / omega stays integrable: omega ~ sqrt(distance) there)."""
     u = np.linspace(0.0, 1.0, steps + 1)
-    return end * u * u, 2 * end * u
+    return end * u * u * (3 - 2 * u), 6 * end * u * (1 - u)
 
 
 def _cumulative_time(dtheta_du: NDArray, omega: NDArray, du: float) -> NDArray:
-    """Cumulative integral of dtheta / omega over u by the trapezoid rule, (n, m). At u = 0
-    dtheta/du = 0: the integrand is 0 if omega > 0 there, and its limit (taken as the next
-    node's value) if the motion starts from rest."""
+    """Cumulative integral of dtheta / omega over u by the trapezoid rule, (n, m). Where
+    dtheta/du = 0 at an end the integrand is 0 if omega > 0 there, and its limit (taken as
+    the neighbouring node's value) if the motion is at rest there."""
     with np.errstate(divide="ignore", invalid="ignore"):
         g = dtheta_du / omega
-    g[:, 0] = np.where(omega[:, 0] > 0, 0.0, g[:, 1])
+    for end, inner in ((0, 1), (-1, -2)):
+        if np.all(np.broadcast_to(dtheta_du, g.shape)[:, end] == 0):
+            g[:, end] = np.where(omega[:, end] > 0, 0.0, g[:, inner])
     out = np.zeros_like(g)
     np.cumsum(0.5 * (g[:, 1:] + g[:, :-1]) * du, axis=1, out=out[:, 1:])
     return out
@@ -189,7 +193,17 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     gap = loads.gap
     k, w = _crossing(s1, gap)
     touched = k > 0
-    v_touch = np.where(touched, _at(ds1, k, w) * _at(omega_before, k, w), np.nan)
+    rows = np.arange(len(A))
+    # the touch instant from smooth quantities only (Fr steps there, so omega_before at
+    # the next node is no smooth continuation to interpolate)
+    theta_touch = _at(np.broadcast_to(theta, s1.shape), k, w)
+    ds1_touch = _at(ds1, k, w)
+    ke_touch = (kinetic + eps * (spring[:, 0] - _at(spring, k, w))
+                - loads.resistant_energy(np.full((len(A), 1), gap))[:, 0])
+    with np.errstate(invalid="ignore"):
+        omega_touch = np.sqrt(np.maximum(
+            2 * ke_touch / (inertia.cam_kg_m2[:, 0] + moving[:, 0] * ds1_touch**2), 0.0))
+    v_touch = np.where(touched, ds1_touch * omega_touch, np.nan)
     loss = np.where(touched, 0.5 * inertia.contacts_kg[:, 0] * np.nan_to_num(v_touch) ** 2,
                     0.0)
     # 3. after the touch the contacts rest; the rod goes on against the contact springs
@@ -206,10 +220,11 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     # 4. time: before the touch from omega_before; after it from the touch instant on
     du = 1.0 / steps
     t_before = t_free[:, None] + _cumulative_time(dtheta_du[None, :], omega_before, du)
-    t_touch = np.where(touched, _at(t_before, k, w), np.nan)
-    rows = np.arange(len(A))
-    theta_touch = _at(np.broadcast_to(theta, s1.shape), k, w)
-    omega_touch = _at(omega_before, k, w)
+    km = np.maximum(k - 1, 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        last_cell = (theta_touch - theta[km]) * 0.5 * (1 / omega_before[rows, km]
+                                                       + 1 / omega_touch)
+    t_touch = np.where(touched, t_before[rows, km] + last_cell, np.nan)
     with np.errstate(divide="ignore", invalid="ignore"):
         first_cell = (theta[k] - theta_touch) * 0.5 * (1 / omega_touch + 1 / omega_after[rows, k])
     t_k = t_touch + first_cell

@@ -289,7 +289,8 @@ class VcbModel:
         step and converges only as 1/Ns).
         """
         driving = self.driving_work(kc)
-        resistant = loads.resistant_energy(kin.s1[:, -1])
+        # an (n, 1) column: loads may hold one value per design (identification)
+        resistant = loads.resistant_energy(kin.s1[:, -1:])[:, 0]
         return ForceBalance(torque=torque[:, 1:], s1=kin.s1[:, 1:], ds1=kin.ds1[:, 1:],
                             loads=loads, driving=driving, resistant=resistant,
                             surplus=driving - resistant / loads.efficiency)  # Eq 26
@@ -360,9 +361,13 @@ class VcbModel:
             speed_sq *= np.abs(torque, out=gap)
             r /= speed_sq
             low = refined_min(r)
-            # where phi' = 0 inside the stroke the common normal passes through O: the
-            # arm of Fn vanishes and Fn = T / arm is unbounded whatever the grid
-            low[np.isfinite(follower_dwell(A, self.theta_c[-1]))] = 0.0
+            # where p . dp = l6 l2 sin(xi + phi) phi' vanishes inside the stroke the common
+            # normal passes through O: the arm of Fn is zero and Fn = T / arm unbounded
+            # whatever the grid; phi' = 0 is found exactly, sin(xi + phi) = 0 by a sign
+            # change between samples (the swing would have to pass pi twice in one step)
+            dwell = np.isfinite(follower_dwell(A, self.theta_c[-1]))
+            dwell |= np.any(f.sin_a[:, 1:] * f.sin_a[:, :-1] <= 0, axis=1)
+            low[dwell] = 0.0
             top = np.where(low > 0, 1 / (low * ((l6 * l2) * rf)), np.inf)  # NaN too
         e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * 1e9, c.poisson,
                                         c.cam_modulus_gpa * 1e9, c.poisson)
