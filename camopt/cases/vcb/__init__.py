@@ -5,8 +5,12 @@ leaves out (kind ``vcb_identify``)."""
 from __future__ import annotations
 
 from camopt.cases.registry import ArchiveLoader, CaseSpec, ProfileCurve, register_case
-from camopt.cases.vcb.config import (CamDesign, VcbConfig, VcbDynamicsIdentifyConfig,
-                                     VcbIdentifyConfig)
+from camopt.cases.vcb.config import (
+    CamDesign,
+    VcbConfig,
+    VcbDynamicsIdentifyConfig,
+    VcbIdentifyConfig,
+)
 from camopt.cases.vcb.identify import VcbDynamicsIdentification, VcbIdentification
 from camopt.cases.vcb.paper import PAPER
 from camopt.cases.vcb.problem import VcbProblem

@@ -56,6 +56,29 @@ def figures(run: RunView) -> dict[str, Figure]:
     fo = np.abs(a["fo_n"][np.isfinite(a["fo_n"])])
     if fo.size:
         ax.set_ylim(0, 3 * np.percentile(np.r_[fo, a["fr_n"][np.isfinite(a["fr_n"])]], 95))
+    if "contact_gap_mm" in run.case:
+        ax.axvline(run.case["contact_gap_mm"], color="k", lw=0.8, ls="--",
+                   label="contacts touch")
     ax.legend()
     figs["forces"] = fig
+    if "time_ms" in a:
+        figs.update(_dynamics(a))
+    return figs
+
+
+def _dynamics(a: dict) -> dict[str, Figure]:
+    """Closing against time: displacements and velocities of rod and movable contact."""
+    figs = {}
+    for key, title, ylabel in (
+        ("travel_mm", "Closing: rod and movable contact against time", "displacement (mm)"),
+        ("velocity_m_s", "Closing: rod and movable contact velocity", "velocity (m/s)"),
+    ):
+        fig, ax = new_figure(title, "time from the springs' release (ms)", ylabel)
+        for prefix, label, style in DESIGNS:
+            t = a[prefix + "time_ms"]
+            ax.plot(t, a[prefix + "dyn_rod_" + key], style, label=f"rod, {label}")
+            ax.plot(t, a[prefix + "dyn_contact_" + key], style, lw=2.5, alpha=0.5,
+                    label=f"movable contact, {label}")
+        ax.legend(fontsize=8)
+        figs["closing_" + key.split("_")[0]] = fig
     return figs

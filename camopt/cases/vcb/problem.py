@@ -8,8 +8,7 @@ from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import CamDesign, VcbConfig
 from camopt.cases.vcb.dynamics import ClosingMotion, Inertia, closing_motion
-from camopt.cases.vcb.model import (DEG, MM, VcbModel, follower_dwell, phi_max, row_max,
-                                    unassembled)
+from camopt.cases.vcb.model import DEG, MM, VcbModel, follower_dwell, phi_max, row_max, unassembled
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, fourbar, hertz
 from camopt.problem import Evaluation, Problem, Variable
