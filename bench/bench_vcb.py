@@ -89,11 +89,35 @@ def full_protocol() -> None:
           f"converged at generation median {int(np.median(gens))}, max {max(gens)}")
 
 
+def velocity_protocol() -> None:
+    """Cost of the closing dynamics in the search (the velocity design evaluates them for
+    every candidate; step 1 only for reports), and configs/vcb_velocity.toml in full."""
+    plain = VcbProblem(_load().case)
+    velocity_cfg = load(CONFIG.parent / "vcb_velocity.toml", [])
+    dynamic = VcbProblem(velocity_cfg.case)
+    X = plain.sample(np.random.default_rng(0), 100)
+    for p in (plain, dynamic):
+        p.evaluate(X)
+    t_plain = np.median([_time(lambda: plain.evaluate(X)) for _ in range(20)])
+    t_dyn = np.median([_time(lambda: dynamic.evaluate(X)) for _ in range(20)])
+    print(f"population of 100: step 1 {t_plain * 1e3:.2f} ms, with closing dynamics "
+          f"{t_dyn * 1e3:.2f} ms ({t_dyn / t_plain:.1f}x)")
+    t0 = time.perf_counter()
+    rec = execute(velocity_cfg)
+    wall = time.perf_counter() - t0
+    ok = sum(r.feasible for r in rec.repeats)
+    m = rec.metrics
+    print(f"vcb_velocity ({len(rec.repeats)} repeats): {wall:.1f} s; {ok}/{len(rec.repeats)} "
+          f"feasible; best {m['closing_velocity_avg_m_s']:.3f} m/s, surplus "
+          f"{m['surplus_work_j']:.2f} J, tau {m['tau_max_mpa']:.0f} MPa")
+
+
 def main() -> None:
     tune_allocator()
     vectorised_vs_loop(VcbProblem(_load().case))
     degr_vs_scipy()
     full_protocol()
+    velocity_protocol()
 
 
 if __name__ == "__main__":
