@@ -42,8 +42,7 @@ def _lagrange(problem, x):
         theta, omega = y
         s1, ds1 = rod(theta)
         ext, rate = m.closing_spring_geometry(np.array([theta]))
-        torque = (kc @ np.array([c.kc1_precompression_mm * 1e-3 - ext,
-                                 c.kc2_precompression_mm * 1e-3 - ext]) * rate)[0, 0]
+        torque = m.closing_torque(kc, (ext, rate))[0, 0]
         h = 1e-6
         dj = (inertia(theta + h) - inertia(theta - h)) / (2 * h)
         force = loads.resistant_force(np.array([s1]))[0]

@@ -246,8 +246,7 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     rod_velocity = ds1 * omega
     contact_velocity = np.where(after, 0.0, rod_velocity)
     # torque the cam passes on: eps T - J_cam omega domega/dtheta (negative: lift-off)
-    torque = eps * (kc @ np.stack([c.kc1_precompression_mm * 1e-3 - extension,
-                                   c.kc2_precompression_mm * 1e-3 - extension]) * rate)
+    torque = eps * model.closing_torque(kc, (extension, rate))
     accel = 0.5 * np.gradient(omega * omega, theta, axis=1)
     cam_torque = torque - inertia.cam_kg_m2 * accel
     return ClosingMotion(

@@ -250,11 +250,14 @@ class VcbModel:
                          (c.kc2_precompression_mm * MM - extension) ** 2])
         return 0.5 * (kc @ left.reshape(2, -1)).reshape((len(kc), *np.shape(extension)))
 
-    def closing_torque(self, kc: NDArray) -> NDArray:
-        """Torque of both closing springs on the cam, (n, m) N m; kc (n, 2) N/m."""
+    def closing_torque(self, kc: NDArray, geometry: tuple[NDArray, NDArray] | None = None
+                       ) -> NDArray:
+        """Torque of both closing springs on the cam, (n, m) N m; kc (n, 2) N/m; on the
+        case's grid or at the (extension, rate) of :meth:`closing_spring_geometry`."""
         c = self.c
-        per_rate = np.stack([(c.kc1_precompression_mm * MM - self.spring_ext),
-                             (c.kc2_precompression_mm * MM - self.spring_ext)]) * self.spring_rate
+        ext, rate = (self.spring_ext, self.spring_rate) if geometry is None else geometry
+        per_rate = np.stack([(c.kc1_precompression_mm * MM - ext),
+                             (c.kc2_precompression_mm * MM - ext)]) * rate
         return kc @ per_rate
 
     def loads(self, rod_travel_vendor: NDArray | float, opening_arm: NDArray | float,
