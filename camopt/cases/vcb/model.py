@@ -151,6 +151,9 @@ class VcbModel:
         self.theta_c = np.linspace(0.0, end, c.positions + 1)  # Ns intervals (Eq 39)
         self.dtheta = end / c.positions
         self.spring_ext, self.spring_rate = self.closing_spring_geometry(self.theta_c)
+        # driving work per N/m of each spring over the stroke (J per N/m): exact, linear
+        ends = self.closing_energy(np.eye(2), self.spring_ext[[0, -1]])
+        self.unit_work = ends[:, 0] - ends[:, 1]
         self.vendor_link = np.array([c.l1_mm * MM, c.l3_mm * MM, c.l4_mm * MM,
                                      c.l5_mm * MM, c.theta1_deg * DEG])
         self.vendor_a = self.node_cubic(self.vendor_link)
@@ -278,9 +281,7 @@ class VcbModel:
         """Work of the closing springs over the stroke theta_c = 0 .. 140 deg (J), (n,):
         their elastic energy at the start less that at the end (Eq 23's first integral,
         exactly: the springs are conservative)."""
-        ends = self.spring_ext[[0, -1]]
-        energy = self.closing_energy(kc, ends)
-        return energy[:, 0] - energy[:, 1]
+        return kc @ self.unit_work
 
     def balance(self, kin: Kinematics, kc: NDArray, torque: NDArray, loads: Loads
                 ) -> ForceBalance:
@@ -322,7 +323,8 @@ class VcbModel:
                                         c.cam_modulus_gpa * 1e9, c.poisson)
         _, sigma, tau = hertz.line_contact(fn, rho, self.rf, c.contact_length_mm * MM, e_eq)
         return Contact(xp, yp, dxp, dyp, rho, fn, sigma, tau)
-    def peak_stress(self, A: NDArray, f: cam.Follower, torque: NDArray) -> NDArray:
+    def peak_stress(self, A: NDArray, f: cam.Follower, torque: NDArray,
+                    zeros: NDArray | None = None) -> NDArray:
         """Peak Hertz pressure over the stroke per design (Eqs 15, 19, 27-30), the search's
         fast path: sigma_max = sqrt(max(Fn (1/rho + 1/rf)) E_e / (2 pi L)), one square
         root per design instead of per sample; no Hertz contact counts as infinite, and so
@@ -368,7 +370,7 @@ class VcbModel:
             # normal passes through O: the arm of Fn is zero and Fn = T / arm unbounded
             # whatever the grid; phi' = 0 is found exactly, sin(xi + phi) = 0 by a sign
             # change between samples (the swing would have to pass pi twice in one step)
-            dwell = np.isfinite(follower_dwell(A, self.theta_c[-1]))
+            dwell = np.isfinite(follower_dwell(A, self.theta_c[-1], zeros))
             dwell |= np.any(f.sin_a[:, 1:] * f.sin_a[:, :-1] <= 0, axis=1)
             low[dwell] = 0.0
             top = np.where(low > 0, 1 / (low * ((l6 * l2) * rf)), np.inf)  # NaN too
@@ -395,47 +397,38 @@ def refined_min(r: NDArray) -> NDArray:
     return np.where(interior & np.isfinite(vertex), np.minimum(low, vertex), low)
 
 
-def follower_dwell(A: NDArray, end: float) -> NDArray:
-    """First cam angle in [0, end] where the cubic follower's rate phi' = a1 + 2 a2 t +
-    3 a3 t^2 (Eq 12) vanishes (rad), NaN where it does not; exact, from the coefficients
+def rate_zeros(A: NDArray, end: float) -> NDArray:
+    """Zeros in [0, end] of the cubic follower's rate phi' = a1 + 2 a2 t + 3 a3 t^2 (Eq 12),
+    (n, 2) in ascending order, NaN where there is none; exact, from the coefficients
     ``A`` (n, 4)."""
-    return first_root_in(A[:, 1:] * np.array([1.0, 2.0, 3.0]), end)
-
-
-def phi_max(A: NDArray, end: float) -> NDArray:
-    """Largest follower swing over 0 <= theta_c <= end (rad), exactly: the cubic's value at
-    the ends and at the interior zeros of phi'."""
-    roots = np.stack([first_root_in(A[:, 1:] * np.array([1.0, 2.0, 3.0]), end),
-                      last_root_in(A[:, 1:] * np.array([1.0, 2.0, 3.0]), end)], axis=1)
-    t = np.concatenate([np.zeros((len(A), 1)), np.full((len(A), 1), end), roots], axis=1)
-    values = A[:, :1] + t * (A[:, 1:2] + t * (A[:, 2:3] + t * A[:, 3:4]))
-    return np.nanmax(values, axis=1)
-
-
-def _roots_in(coef: NDArray, end: float) -> NDArray:
-    """Both roots of c0 + c1 t + c2 t^2 per row of ``coef`` (n, 3), inf where not real or
-    outside [0, end]."""
-    c0, c1, c2 = coef.T
+    c0, c1, c2 = A[:, 1], 2 * A[:, 2], 3 * A[:, 3]
+    roots = np.empty((len(A), 2))
     with np.errstate(divide="ignore", invalid="ignore"):
         disc = np.sqrt(c1 * c1 - 4 * c2 * c0)
-        quad = np.stack([(-c1 - disc) / (2 * c2), (-c1 + disc) / (2 * c2)], axis=1)
-        linear = -c0 / c1
-    flat = np.abs(c2) <= 1e-12 * (np.abs(c1) + np.abs(c0))
-    roots = np.where(flat[:, None], np.stack([linear, linear], axis=1), quad)
-    return np.where((roots >= 0) & (roots <= end), roots, np.inf)
+        inv = 0.5 / c2
+        np.multiply(-c1 - disc, inv, out=roots[:, 0])
+        np.multiply(-c1 + disc, inv, out=roots[:, 1])
+        flat = np.abs(c2) <= 1e-12 * (np.abs(c1) + np.abs(c0))  # phi' linear
+        if flat.any():
+            roots[flat] = (-c0[flat] / c1[flat])[:, None]
+    roots[~((roots >= 0) & (roots <= end))] = np.nan
+    roots.sort(axis=1)  # NaN last
+    return roots
 
 
-def first_root_in(coef: NDArray, end: float) -> NDArray:
-    """First root in [0, end] of c0 + c1 t + c2 t^2 per row of ``coef`` (n, 3), NaN if none."""
-    first = _roots_in(coef, end).min(axis=1)
-    return np.where(np.isfinite(first), first, np.nan)
+def follower_dwell(A: NDArray, end: float, zeros: NDArray | None = None) -> NDArray:
+    """First cam angle in [0, end] where phi' vanishes (rad), NaN where it does not."""
+    return (rate_zeros(A, end) if zeros is None else zeros)[:, 0]
 
 
-def last_root_in(coef: NDArray, end: float) -> NDArray:
-    """Last root in [0, end] of c0 + c1 t + c2 t^2 per row, NaN if none."""
-    roots = _roots_in(coef, end)
-    last = np.where(np.isfinite(roots), roots, -np.inf).max(axis=1)
-    return np.where(np.isfinite(last), last, np.nan)
+def phi_max(A: NDArray, end: float, zeros: NDArray | None = None) -> NDArray:
+    """Largest follower swing over 0 <= theta_c <= end (rad), exactly: the cubic's value at
+    the ends and at the zeros of phi' (from :func:`rate_zeros`, computed if not given)."""
+    zeros = rate_zeros(A, end) if zeros is None else zeros
+    t = np.empty((len(A), 4))
+    t[:, 0], t[:, 1], t[:, 2:] = 0.0, end, zeros
+    values = A[:, :1] + t * (A[:, 1:2] + t * (A[:, 2:3] + t * A[:, 3:4]))
+    return np.nanmax(values, axis=1)
 
 
 def unassembled(cos4: NDArray, rate: NDArray) -> NDArray:

@@ -8,7 +8,16 @@ from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import CamDesign, VcbConfig
 from camopt.cases.vcb.dynamics import ClosingMotion, Inertia, closing_motion
-from camopt.cases.vcb.model import DEG, MM, VcbModel, follower_dwell, phi_max, row_max, unassembled
+from camopt.cases.vcb.model import (
+    DEG,
+    MM,
+    VcbModel,
+    follower_dwell,
+    phi_max,
+    rate_zeros,
+    row_max,
+    unassembled,
+)
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, fourbar, hertz
 from camopt.problem import Evaluation, Problem, Variable
@@ -104,10 +113,11 @@ class VcbProblem(Problem):
         torque = m.closing_torque(kc)
         bal = m.balance(kin, kc, torque, self.load)
         end = m.theta_c[-1]
-        phi_top = phi_max(A, end) / DEG  # exact, not the sampled maximum
+        zeros = rate_zeros(A, end)  # where phi' = 0: dwell, and phi_max's candidates
+        phi_top = phi_max(A, end, zeros) / DEG  # exact, not the sampled maximum
         travel = kin.s1[:, -1]
         lo, hi = c.phi_max_deg
-        sigma_max = m.peak_stress(A, kin.follower, torque)
+        sigma_max = m.peak_stress(A, kin.follower, torque, zeros)
         tau_max = hertz.max_shear_stress(sigma_max)  # Eq 31
         motion = self.motion(X) if (detail or self.search_dynamics) else None
         if motion is not None:  # over the part of the stroke the cam reaches
@@ -165,7 +175,7 @@ class VcbProblem(Problem):
         if detail:
             con = m.contact(kin.follower, torque)
             ends = m.output_angle(kin.ends()) / DEG
-            dwell = follower_dwell(A, end) / DEG
+            dwell = follower_dwell(A, end, zeros) / DEG
             eq39 = m.abs_sum(bal)
             extras.update({
                 "a0": A[:, 0], "a1": A[:, 1], "a2": A[:, 2], "a3": A[:, 3],
