@@ -15,7 +15,8 @@ from tests.conftest import SphereConfig, SphereProblem
 GENERIC = [name for name, cls in solvers().items() if not cls.requires and name != "evaluate"]
 # a small budget for each (its own option names); unknown solvers run their defaults
 BUDGET = {"de_gr": {"population": 30, "generations": 150}, "simplex": {"starts": 3},
-          "pso": {"particles": 30, "iterations": 200}}
+          "pso": {"particles": 30, "iterations": 200},
+          "nsga2": {"population": 40, "generations": 150}}
 
 
 def _config(name: str, run: dict | None = None, **case):
