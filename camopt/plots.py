@@ -10,8 +10,9 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
+from camopt import pareto
 from camopt.cases import get_case
-from camopt.plotting import close, new_figure, readable
+from camopt.plotting import PAPER_STYLE, close, new_figure, readable
 from camopt.runview import RunView
 
 
@@ -51,8 +52,31 @@ def convergence(curves: dict[str, list[np.ndarray]], objective: str) -> Figure:
 def run_figures(run: RunView) -> dict[str, Figure]:
     """Convergence and the case's figures for one run archive."""
     figs = {"convergence": convergence({"repeats": run.histories()}, run.objective_name)}
+    if len(pareto.objectives(run)[0]) >= 2:
+        figs["pareto"] = pareto_front(run)
     figs.update(get_case(run.kind).draw(run))
     return figs
+
+
+def pareto_front(run: RunView) -> Figure:
+    """The Pareto set in its first two objectives, infeasible members hollow, and the
+    paper's design (the case's ``paper`` values of those metrics) marked when known."""
+    names, _ = pareto.objectives(run)
+    a, b = names[:2]
+    fig, ax = new_figure(f"Pareto front ({len(run.table)} designs)", readable(a), readable(b))
+    rows = pareto.rows(run) or []
+    for feasible, style in ((True, {"color": "tab:blue"}),
+                            (False, {"facecolors": "none", "edgecolors": "grey"})):
+        pts = np.array([[r[a], r[b]] for r in rows if r["feasible"] is feasible], dtype=float)
+        if len(pts):
+            ax.scatter(pts[:, 0], pts[:, 1], s=18, label="feasible" if feasible
+                       else "infeasible", **style)
+    paper = get_case(run.kind).paper
+    if a in paper and b in paper:
+        ax.scatter([paper[a]], [paper[b]], marker="*", s=160, color=PAPER_STYLE["color"],
+                   label="paper's design", zorder=3)
+    ax.legend()
+    return fig
 
 
 def sweep_figures(spec: Any, results: dict) -> dict[str, Figure]:

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from camopt import stats
+from camopt import pareto, stats
 from camopt.runview import RunView
 
 SHOW_KEYS = ("case", "solver", "best", "repeats", "table")
@@ -32,11 +32,15 @@ REPEAT_KEYS = ("seed", "objective", "feasible", "nfev", "wall_s", "converged_nit
 
 
 def show(run: RunView) -> dict[str, Any]:
-    """The ``show --format json`` document: exactly case, solver, best, repeats, table."""
+    """The ``show --format json`` document: case, solver, best, repeats, table, and for a
+    multi-objective run (a solver with ``objectives``) ``pareto``."""
     repeats = [{k: getattr(r, k) for k in REPEAT_KEYS} for r in run.repeats]
     best = {k: v for k, v in asdict(run.best).items() if k != "repeat"}
     doc = {"case": run.case, "solver": run.solver, "best": best, "repeats": repeats,
            "table": run.table}
+    rows = pareto.rows(run)
+    if rows is not None:
+        doc["pareto"] = rows
     return jsonable(doc)
 
 
@@ -97,6 +101,7 @@ def compare(runs: list[RunView]) -> dict[str, Any]:
         "metrics": side_by_side("metrics"),
         "statistics": [repeat_statistics(run).as_dict() for run in runs],
         "tests": _pairwise(runs),
+        **({"hypervolume": hv} if (hv := pareto.compare_fronts(runs)) else {}),
     })
 
 

@@ -52,11 +52,21 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
     for stat in ("runs", "best", "median", "worst", "feasible_fraction", "success_rate"):
         table.add_row(f"repeats: {stat}", *(fmt(s[stat]) for s in doc["statistics"]))
     out.print(table)
+    if "hypervolume" in doc:
+        _print_hypervolume(doc["hypervolume"], names)
     for test in doc["tests"]:
         out.print(f"A = {names[0]}, B = {names[1]}: Mann-Whitney p = {test['p_value']:.3g}, "
                   f"P(A better) = {test['p_a_better']:.2f}; success A "
                   f"{_rate(test['success_a'])}, B {_rate(test['success_b'])}")
         out.print(f"[bold]{test['verdict']}[/]")
+
+
+def _print_hypervolume(hv: dict[str, Any], names: list[str]) -> None:
+    ref = ", ".join(f"{n} {fmt(v)}" for n, v in zip(hv["objectives"], hv["reference_point"] or []))
+    out.print(f"hypervolume of the feasible fronts (normalised by their union; reference "
+              f"point {ref or '-'}; larger is better):")
+    for name, value, size in zip(names, hv["values"], hv["sizes"]):
+        out.print(f"  {name}: {value:.4f} ({size} designs)")
 
 
 def _rate(s: dict[str, float]) -> str:
