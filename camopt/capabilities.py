@@ -15,6 +15,8 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.problem import Evaluation
+
 
 @runtime_checkable
 class HasFamily(Protocol):
@@ -50,7 +52,24 @@ class HasResiduals(Protocol):
         ...
 
 
-CAPABILITIES = {"family": HasFamily, "repair": Repairable, "residuals": HasResiduals}
+@runtime_checkable
+class VariesCase(Protocol):
+    """Case fields the Problem can take per design instead of one value from its config
+    (tolerance analysis of fixed parts: a link of the VCB's linkage). Cases without it
+    still take tolerances on their design variables."""
+
+    def case_fields(self) -> tuple[str, ...]:
+        """The ``[case]`` fields that may vary per design (names as in the case file)."""
+        ...
+
+    def describe_with(self, X: NDArray, fields: Mapping[str, NDArray]) -> Evaluation:
+        """As ``describe(X)``, with each named case field taking its own value per row:
+        ``fields[name]`` (n,) in the field's unit (``l1_mm`` in mm)."""
+        ...
+
+
+CAPABILITIES = {"family": HasFamily, "repair": Repairable, "residuals": HasResiduals,
+                "case_fields": VariesCase}
 """Capability names as a solver's error messages and ``camopt solvers`` spell them."""
 
 

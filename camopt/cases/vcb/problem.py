@@ -3,9 +3,12 @@ or step 2 (four-bar), Kang, Huang & Yang (2023), Eqs 37-43."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.capabilities import VariesCase
 from camopt.cases.vcb.config import CamDesign, VcbConfig
 from camopt.cases.vcb.dynamics import ClosingMotion, Inertia, closing_motion
 from camopt.cases.vcb.model import (
@@ -22,8 +25,11 @@ from camopt.errors import ConfigError
 from camopt.mechanics import cam, fourbar, hertz
 from camopt.problem import Evaluation, Problem, Variable
 
+LINK_FIELDS = ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
+"""The linkage fields of ``[case]`` in the order of a linkage row (``designs``)."""
 
-class VcbProblem(Problem):
+
+class VcbProblem(Problem, VariesCase):
     """Step 1 (cam + springs) or step 2 (four-bar) of the VCB design; minimise Eq 39."""
 
     def __init__(self, config: VcbConfig) -> None:
@@ -75,13 +81,16 @@ class VcbProblem(Problem):
         a0 = self.model.phi0() if d.a0 is None else d.a0
         return np.array([a0, d.a1, d.a2, d.a3]), np.array([d.kc1_n_per_mm, d.kc2_n_per_mm]) * 1e3
 
-    def designs(self, X: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-        """Cubic coefficients (n, 4), spring rates (n, 2) and linkage (n, 5) of each row."""
+    def designs(self, X: NDArray, link: NDArray | None = None
+                ) -> tuple[NDArray, NDArray, NDArray]:
+        """Cubic coefficients (n, 4), spring rates (n, 2) and linkage (n, 5) of each row;
+        step 1 takes the config's linkage unless ``link`` (n, 5) gives one per row."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         n = len(X)
         if self.config.step == "cam":
             A = np.column_stack([np.full(n, self.model.phi0()), X[:, :3]])
-            return A, X[:, 3:5], np.tile(self.model.vendor_link, (n, 1))
+            return A, X[:, 3:5], np.tile(self.model.vendor_link, (n, 1)) if link is None \
+                else link
         return np.tile(self.cam_a, (n, 1)), np.tile(self.cam_kc, (n, 1)), X[:, :5]
 
     def vendor_x(self) -> NDArray:
@@ -100,15 +109,36 @@ class VcbProblem(Problem):
         normal force, output range) for tables and reports."""
         return self._evaluate(X, detail=True)
 
-    def motion(self, X: NDArray) -> ClosingMotion:
+    def case_fields(self) -> tuple[str, ...]:
+        """Step 1: the linkage fields (the four-bar is fixed there, so its made lengths
+        may vary per design); step 2 varies the linkage as design variables."""
+        return LINK_FIELDS if self.config.step == "cam" else ()
+
+    def describe_with(self, X: NDArray, fields: Mapping[str, NDArray]) -> Evaluation:
+        """As :meth:`describe`, with the named linkage fields (mm, deg) per row: the
+        linkage array the kinematics already takes per design (the loads stay those of
+        the config's linkage: they describe the breaker, not the parts made)."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        unknown = sorted(set(fields) - set(self.case_fields()))
+        if unknown:
+            raise ConfigError("case", unknown[0], "cannot vary per design; fields that can: "
+                              f"{', '.join(self.case_fields()) or 'none'}")
+        link = np.tile(self.model.vendor_link, (len(X), 1))
+        for i, name in enumerate(LINK_FIELDS):
+            if name in fields:
+                link[:, i] = np.asarray(fields[name], dtype=float) * (
+                    DEG if name.endswith("_deg") else MM)
+        return self._evaluate(X, detail=True, link=link)
+
+    def motion(self, X: NDArray, link: NDArray | None = None) -> ClosingMotion:
         """Closing dynamics of each row of ``X`` (:mod:`camopt.cases.vcb.dynamics`)."""
-        A, kc, link = self.designs(X)
+        A, kc, link = self.designs(X, link)
         return closing_motion(self.model, A, kc, link, self.rod_offset, self.load,
                               self.inertia, self.config.dynamics_steps)
 
-    def _evaluate(self, X: NDArray, detail: bool) -> Evaluation:
+    def _evaluate(self, X: NDArray, detail: bool, link: NDArray | None = None) -> Evaluation:
         c, m = self.config, self.model
-        A, kc, link = self.designs(X)
+        A, kc, link = self.designs(X, link)
         kin = m.kinematics(A, link, self.rod_offset)
         torque = m.closing_torque(kc)
         bal = m.balance(kin, kc, torque, self.load)
@@ -119,7 +149,7 @@ class VcbProblem(Problem):
         lo, hi = c.phi_max_deg
         sigma_max = m.peak_stress(A, kin.follower, torque, zeros)
         tau_max = hertz.max_shear_stress(sigma_max)  # Eq 31
-        motion = self.motion(X) if (detail or self.search_dynamics) else None
+        motion = self.motion(X, link) if (detail or self.search_dynamics) else None
         if motion is not None:  # over the part of the stroke the cam reaches
             cam_torque_min = np.min(np.where(np.isfinite(motion.time), motion.cam_torque,
                                              np.inf), axis=1)
