@@ -87,7 +87,8 @@ def load_run(path: str | Path) -> RunView:
     """A run archive as a :class:`RunView`; a sweep or a foreign file is an ArchiveError."""
     with open_archive(path) as f:
         if f.attrs.get("archive_kind", "run") != "run":
-            raise ArchiveError(f"{path}: file: a sweep archive, not a run archive")
+            raise ArchiveError(f"{path}: file: a {f.attrs['archive_kind']} archive, not a "
+                               "run archive")
         names = tuple(json.loads(f.attrs["variables"]))
         constraints = tuple(json.loads(f.attrs["constraints"]))
         scale = np.asarray(f.attrs["variable_scale"])

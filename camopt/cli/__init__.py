@@ -2,7 +2,15 @@
 
 from __future__ import annotations
 
-from camopt.cli import catalog, compare, outputs, run, show, sweep  # noqa: F401  (commands)
+from camopt.cli import (  # noqa: F401  (commands)
+    catalog,
+    compare,
+    outputs,
+    run,
+    show,
+    sweep,
+    tolerance,
+)
 from camopt.cli.app import app
 
 

@@ -1,0 +1,238 @@
+"""Tolerance analysis of a run's optimum: what survives parts made to tolerance.
+
+Each varied input (a design variable of the run, or a ``case.`` field the case can take
+per design, capability :class:`~camopt.capabilities.VariesCase`) is drawn around its
+nominal value, uniformly within +-X or normally with sigma = X / 3, X relative (``%``) or
+in the input's own unit. The nominal design, one row per input at each end of its
+tolerance (the tornado chart's one-at-a-time swings) and every sample are evaluated in
+one vectorised call (``Problem.describe``). Reported: the share of feasible samples
+(yield), the 5th/50th/95th percentiles of every metric, and the Spearman rank correlation
+of every metric with every input (scipy.stats), strongest first.
+"""
+
+from __future__ import annotations
+
+import enum
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import stats
+
+from camopt.capabilities import VariesCase
+from camopt.cases import build_problem
+from camopt.driver import validate
+from camopt.errors import CamoptError
+from camopt.problem import FEASIBILITY_TOL, Evaluation, Problem
+from camopt.runview import RunView
+
+CASE_PREFIX = "case."
+_SPEC = re.compile(r"^(?P<name>[A-Za-z_][\w.]*)=(?:±|\+-|\+/-)(?P<value>[0-9.eE+-]+)"
+                   r"(?P<pct>%?)$")
+
+
+class Distribution(str, enum.Enum):
+    """How a varied input is drawn within its tolerance."""
+
+    uniform = "uniform"
+    normal = "normal"
+
+
+@dataclass(frozen=True)
+class Vary:
+    """One ``--vary NAME=±X[%]``: the input, its tolerance and whether it is relative."""
+
+    name: str
+    tolerance: float
+    relative: bool
+
+    @property
+    def is_case_field(self) -> bool:
+        return self.name.startswith(CASE_PREFIX)
+
+    @property
+    def field(self) -> str:
+        """The case field's own name (``l1_mm``), or the design variable's."""
+        return self.name.removeprefix(CASE_PREFIX)
+
+    def half_width(self, nominal: float) -> float:
+        """X in the input's unit: a share of |nominal| when relative."""
+        return abs(nominal) * self.tolerance / 100 if self.relative else self.tolerance
+
+
+def parse_vary(source: str, text: str) -> Vary:
+    """``NAME=±X%`` (relative) or ``NAME=±X`` (in the input's unit); ``+-`` for ``±``."""
+    m = _SPEC.match(text.replace(" ", ""))
+    value = float("nan")
+    if m:
+        try:
+            value = float(m["value"])
+        except ValueError:
+            pass
+    if not m or not np.isfinite(value) or value < 0:
+        raise CamoptError(f"{source}: --vary: {text!r}: expected NAME=±X% or NAME=±X with "
+                          "X >= 0 (NAME a design variable or case.FIELD)")
+    return Vary(m["name"], value, bool(m["pct"]))
+
+
+@dataclass
+class Tolerance:
+    """The result of :func:`analyse`: the inputs' nominal values and samples (input units),
+    the evaluation of nominal, one-at-a-time ends and samples, and the summaries."""
+
+    run_path: str
+    varies: list[Vary]
+    distribution: Distribution
+    seed: int
+    nominal_inputs: NDArray  # (k,)
+    inputs: NDArray  # (n, k)
+    nominal: Evaluation  # one row
+    swings: Evaluation  # 2k rows: input j at -X (row 2j) and +X (row 2j + 1)
+    samples: Evaluation  # n rows
+    objective_name: str
+    constraint_names: tuple[str, ...]
+    summary: dict[str, Any] = field(default_factory=dict)
+
+    def metric_columns(self, ev: Evaluation) -> dict[str, NDArray]:
+        """The objective and every metric of an evaluation, (rows,) each."""
+        return {self.objective_name: ev.f, **{k: np.asarray(v, dtype=float)
+                                              for k, v in ev.extras.items()}}
+
+
+def _problem_of(run: RunView) -> Problem:
+    config = validate({"case": run.case, "solver": run.solver, "run": run.run}, run.path)
+    return build_problem(config.case)
+
+
+def _inputs(run: RunView, problem: Problem, varies: Sequence[Vary]) -> NDArray:
+    """Nominal value of each varied input in its own unit (display units for variables)."""
+    values = []
+    offered = problem.case_fields() if isinstance(problem, VariesCase) else ()
+    for v in varies:
+        if v.is_case_field:
+            if v.field not in offered:
+                can = ", ".join(CASE_PREFIX + f for f in offered) or "none"
+                raise CamoptError(f"{run.path}: --vary: {v.name}: case '{run.kind}' cannot "
+                                  f"vary it per design (case fields it can: {can})")
+            values.append(float(run.case[v.field]))
+        elif v.name in run.best.x:
+            if problem.variables[problem.names.index(v.name)].integer:
+                raise CamoptError(f"{run.path}: --vary: {v.name}: an integer variable "
+                                  "(a count has no tolerance)")
+            values.append(float(run.best.x[v.name]))
+        else:
+            raise CamoptError(f"{run.path}: --vary: {v.name}: not a design variable of the run "
+                              f"({', '.join(run.variables)}) nor case.FIELD")
+    names = [v.name for v in varies]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise CamoptError(f"{run.path}: --vary: {twice[0]}: given twice")
+    return np.array(values, dtype=float)
+
+
+def _evaluate(problem: Problem, run: RunView, varies: Sequence[Vary], values: NDArray
+              ) -> Evaluation:
+    """Every row of ``values`` (rows, k) in input units evaluated in one call."""
+    x0 = problem.from_display(run.best.x)
+    X = np.tile(x0, (len(values), 1))
+    fields = {}
+    for j, v in enumerate(varies):
+        if v.is_case_field:
+            fields[v.field] = values[:, j]
+        else:
+            i = problem.names.index(v.name)
+            X[:, i] = values[:, j] / problem.variables[i].scale
+    if fields:
+        assert isinstance(problem, VariesCase)
+        return problem.describe_with(X, fields)
+    return problem.describe(X)
+
+
+def draw(rng: np.random.Generator, n: int, nominal: NDArray, half: NDArray,
+         distribution: Distribution) -> NDArray:
+    """``n`` samples of the inputs, (n, k): uniform on nominal +- half, or normal with
+    sigma = half / 3."""
+    if distribution is Distribution.uniform:
+        unit = rng.uniform(-1.0, 1.0, (n, len(nominal)))
+    else:
+        unit = rng.standard_normal((n, len(nominal))) / 3
+    return nominal + unit * half
+
+
+def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
+            distribution: Distribution = Distribution.uniform) -> Tolerance:
+    """Draw ``samples`` sets of the varied inputs from ``SeedSequence(seed)`` and evaluate
+    them, the nominal design and the one-at-a-time ends in one vectorised call."""
+    if not varies:
+        raise CamoptError(f"{run.path}: --vary: give at least one input to vary")
+    if samples < 2:
+        raise CamoptError(f"{run.path}: --samples: {samples}: at least 2")
+    problem = _problem_of(run)
+    nominal = _inputs(run, problem, varies)
+    half = np.array([v.half_width(x) for v, x in zip(varies, nominal)])
+    rng = np.random.default_rng(np.random.SeedSequence(seed))
+    drawn = draw(rng, samples, nominal, half, distribution)
+    k = len(varies)
+    ends = np.tile(nominal, (2 * k, 1))
+    ends[np.arange(0, 2 * k, 2), np.arange(k)] -= half
+    ends[np.arange(1, 2 * k, 2), np.arange(k)] += half
+    ev = _evaluate(problem, run, varies, np.vstack([nominal, ends, drawn]))
+    result = Tolerance(run.path, list(varies), distribution, seed, nominal, drawn,
+                       ev.take(0), ev.take(np.arange(1, 1 + 2 * k)),
+                       ev.take(np.arange(1 + 2 * k, len(ev.f))), problem.objective_name,
+                       problem.constraint_names)
+    result.summary = summarise(result)
+    return result
+
+
+def _finite_or_none(x: float) -> float | None:
+    return float(x) if np.isfinite(x) else None
+
+
+def summarise(t: Tolerance) -> dict[str, Any]:
+    """The ``tolerance --format json`` document."""
+    nominal = {k: float(v[0]) for k, v in t.metric_columns(t.nominal).items()}
+    columns = t.metric_columns(t.samples)
+    swings = t.metric_columns(t.swings)
+    metrics, sensitivity, tornado = {}, {}, {}
+    for name, values in columns.items():
+        with np.errstate(invalid="ignore"):
+            finite = values[~np.isnan(values)]
+            p = np.percentile(finite, [5, 50, 95]) if finite.size else [np.nan] * 3
+        metrics[name] = {"p05": float(p[0]), "p50": float(p[1]), "p95": float(p[2])}
+        rows = []
+        for j, v in enumerate(t.varies):
+            rows.append({"input": v.name, "spearman": _spearman(t.inputs[:, j], values),
+                         "low": float(swings[name][2 * j]),
+                         "high": float(swings[name][2 * j + 1])})
+        rows.sort(key=lambda r: -abs(r["spearman"]) if r["spearman"] is not None else 1.0)
+        sensitivity[name] = [{"input": r["input"], "spearman": r["spearman"]} for r in rows]
+        tornado[name] = [{"input": r["input"], "low": r["low"], "high": r["high"]}
+                         for r in rows]
+    return {
+        "run": t.run_path, "samples": int(len(t.inputs)), "seed": t.seed,
+        "distribution": t.distribution.value,
+        "vary": [{"input": v.name, "nominal": float(x), "tolerance": v.tolerance,
+                  "unit": "%" if v.relative else "own", "half_width": v.half_width(x)}
+                 for v, x in zip(t.varies, t.nominal_inputs)],
+        "yield": float(np.mean(t.samples.feasible)),
+        "nominal_feasible": bool(t.nominal.feasible[0]),
+        "nominal": nominal, "metrics": metrics, "sensitivity": sensitivity,
+        "one_at_a_time": tornado,
+        "violated_share": {c: float(np.mean(~(t.samples.g[:, i] <= FEASIBILITY_TOL)))
+                           for i, c in enumerate(t.constraint_names)},
+    }
+
+
+def _spearman(a: NDArray, b: NDArray) -> float | None:
+    """Spearman's rank correlation of two columns (NaN rows dropped); None where either
+    is constant (an input at +-0, a metric the inputs do not move)."""
+    ok = ~(np.isnan(a) | np.isnan(b))
+    a, b = a[ok], b[ok]
+    if a.size < 3 or np.all(a == a[0]) or np.all(b == b[0]):
+        return None
+    rho = stats.spearmanr(a, b).statistic
+    return _finite_or_none(rho)
