@@ -231,8 +231,9 @@ class FastSwitchProblem(Problem, HasFamily):
     # ---- Problem interface ---------------------------------------------------------------
     def evaluate(self, X: NDArray) -> Evaluation:
         """Closure time in ms (Eq 39 on the right arcsine branch, or Eq 58 as printed), the
-        reduced problem's constraints, and x1..x13 plus the largest equality residual of the
-        full model as extras."""
+        reduced problem's constraints, and x1..x13, the largest equality residual of the
+        full model and the spring's stress margin (% below its strength at the worse of the
+        two loads, R14 and R15) as extras."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         x = self.complete(X)
         if self.config.reduced_form == "printed":
@@ -242,8 +243,9 @@ class FastSwitchProblem(Problem, HasFamily):
         f = np.where(np.isfinite(f), f, np.inf)
         extras = x.display()
         extras["closure_time_ms"] = f * 1e3
-        _, h = self.full_model(x)
+        full, h = self.full_model(x)
         extras["equality_residual_max"] = np.max(np.abs(np.stack(list(h.values()))), axis=0)
+        extras["spring_stress_margin_pct"] = -100.0 * np.maximum(full["R14"], full["R15"])
         return Evaluation(f=f * 1e3, g=g, extras=extras)
 
     def _corrected(self, x: SwitchDesign) -> tuple[NDArray, NDArray]:
