@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from scipy import stats
 
 from camopt.capabilities import VariesCase
-from camopt.cases import build_problem
+from camopt.cases import build_problem, get_case
 from camopt.driver import validate
 from camopt.errors import CamoptError
 from camopt.problem import FEASIBILITY_TOL, Evaluation, Problem
@@ -105,6 +105,20 @@ class Tolerance:
 def _problem_of(run: RunView) -> Problem:
     config = validate({"case": run.case, "solver": run.solver, "run": run.run}, run.path)
     return build_problem(config.case)
+
+
+def default_varies(run: RunView) -> list[Vary]:
+    """The case's documented tolerances (``CaseSpec.tolerances``) that apply to this run:
+    its design variables, and the case fields its Problem can vary per design."""
+    problem = _problem_of(run)
+    offered = problem.case_fields() if isinstance(problem, VariesCase) else ()
+    applies = [*run.variables, *(CASE_PREFIX + f for f in offered)]
+    chosen = [parse_vary(run.path, f"{name}={tol}")
+              for name, tol in get_case(run.kind).tolerances.items() if name in applies]
+    if not chosen:
+        raise CamoptError(f"{run.path}: --vary: case '{run.kind}' documents no tolerance for "
+                          "this run's inputs; give --vary")
+    return chosen
 
 
 def _inputs(run: RunView, problem: Problem, varies: Sequence[Vary]) -> NDArray:

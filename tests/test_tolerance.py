@@ -154,3 +154,19 @@ def test_figures_mark_limits_and_swings(vcb_run, tmp_path):
     r = invoke("tolerance", vcb_run, "--samples", 200, *VARY, "--plot", tmp_path / "p",
                "--tornado", "tau_max_mpa")
     assert r.exit_code == 0 and len(list((tmp_path / "p").glob("*.png"))) == 3
+
+
+def test_default_tolerances_are_the_cases_documented_ones(vcb_run):
+    """Without --vary the case's CaseSpec.tolerances apply (those for this run's inputs);
+    every built-in case's defaults parse."""
+    doc = json.loads(invoke("tolerance", vcb_run, "--samples", 100, "--format", "json").stdout)
+    assert [v["input"] for v in doc["vary"]] == [
+        "kc1_n_per_mm", "kc2_n_per_mm", "case.l1_mm", "case.l3_mm", "case.l4_mm",
+        "case.l5_mm", "case.theta1_deg"]
+    assert doc["vary"][0]["tolerance"] == 5.0 and doc["vary"][0]["unit"] == "%"
+    from camopt.cases import cases
+
+    for spec in cases().values():
+        for name, tol in spec.tolerances.items():
+            v = parse_vary("spec", f"{name}={tol}")
+            assert v.tolerance > 0 and v.name == name

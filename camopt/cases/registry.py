@@ -67,6 +67,11 @@ class CaseSpec:
     profiles: tuple[ProfileCurve, ...] = ()
     paper: Mapping[str, Any] = field(default_factory=dict)
     resolve: Callable[[CaseConfig, ArchiveLoader], CaseConfig] | None = None
+    tolerances: Mapping[str, str] = field(default_factory=dict)
+    """Realistic manufacturing tolerances, ``camopt tolerance``'s default ``--vary``:
+    ``{design variable or "case.FIELD": "±X%" or "±X"}`` (docs/assumptions.md); those
+    that do not apply to a run (not its variables, not a field its case varies) are
+    skipped."""
 
     def build(self, config: CaseConfig) -> Problem:
         """The case's Problem for a validated config of this kind."""

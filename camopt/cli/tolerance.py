@@ -14,15 +14,15 @@ from camopt import archive
 from camopt.cli.app import Format, app, errors, fmt, out
 from camopt.errors import CamoptError
 from camopt.report import jsonable
-from camopt.tolerance import Distribution, analyse, parse_vary
+from camopt.tolerance import Distribution, analyse, default_varies, parse_vary
 
 
 @app.command()
 def tolerance(
     run_path: Annotated[Path, typer.Argument(metavar="ARCHIVE", help="run archive")],
-    vary: Annotated[list[str], typer.Option(
+    vary: Annotated[list[str] | None, typer.Option(
         "--vary", help="NAME=±X% (relative) or NAME=±X (own unit); NAME a design variable "
-        "or case.FIELD; repeatable")],
+        "or case.FIELD; repeatable; default: the case's documented tolerances")] = None,
     samples: Annotated[int, typer.Option(help="samples, evaluated in one pass")] = 2000,
     seed: Annotated[int, typer.Option(min=0, help="root seed of the draws")] = 0,
     dist: Annotated[Distribution, typer.Option(
@@ -39,7 +39,8 @@ def tolerance(
     """Vary a run's optimum within tolerances: yield, percentiles, sensitivities."""
     with errors():
         run = archive.load_run(run_path)
-        varies = [parse_vary(str(run_path), v) for v in vary]
+        varies = ([parse_vary(str(run_path), v) for v in vary] if vary
+                  else default_varies(run))
         if out_path is not None:
             archive.check_writable(out_path, force)
         result = analyse(run, varies, samples, seed, dist)

@@ -7,6 +7,11 @@ from camopt.cases.emb_cam.paper import PAPER
 from camopt.cases.emb_cam.problem import EmbCamProblem
 from camopt.cases.registry import CaseSpec, ProfileCurve, register_case
 
+TOLERANCES = {  # docs/assumptions.md, "Default tolerances": a ground cam profile
+    **{f"r{j}_mm": "±0.01" for j in range(1, 40)},  # key radii (those of the run apply)
+    "e_mm": "±0.05",  # follower offset, a machined bore
+}
+
 SPEC = register_case(CaseSpec(
     kind="emb_cam", config=EmbCamConfig, problem=EmbCamProblem, default_solver="pso",
     summary="negative-radius roller cam of an electromechanical brake",
@@ -14,4 +19,5 @@ SPEC = register_case(CaseSpec(
     figures="camopt.cases.emb_cam.figures:figures", paper=PAPER,
     profiles=(ProfileCurve("cam-profile", ("profile_x_mm", "nonworking_x_mm"),
                            ("profile_y_mm", "nonworking_y_mm")),),
+    tolerances=TOLERANCES,
 ))

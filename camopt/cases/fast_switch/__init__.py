@@ -7,10 +7,16 @@ from camopt.cases.fast_switch.paper import PAPER
 from camopt.cases.fast_switch.problem import FastSwitchProblem
 from camopt.cases.registry import CaseSpec, register_case
 
+TOLERANCES = {  # docs/assumptions.md, "Default tolerances"
+    "sud_mm": "±1",  # undeformed (free) spring length
+    "sf_mm": "±0.1", "s0_mm": "±0.1",  # installed lengths, set by machined stops
+    "r2_mm": "±0.05", "r3_mm": "±0.05",  # link lengths
+}
+
 SPEC = register_case(CaseSpec(
     kind="fast_switch", config=FastSwitchConfig, problem=FastSwitchProblem,
     default_solver="enumeration",
     summary="minimum closure time of a spring-driven slider-crank switch",
     paper_source="Clauss & Papalambros (1982), UM-MEAM-81-3",
-    figures="camopt.cases.fast_switch.figures:figures", paper=PAPER,
+    figures="camopt.cases.fast_switch.figures:figures", paper=PAPER, tolerances=TOLERANCES,
 ))

@@ -18,6 +18,13 @@ from camopt.config.models import CaseConfig
 from camopt.errors import ConfigError
 
 SOURCE = "Kang, Huang & Yang (2023), Machines 11:150"
+TOLERANCES = {  # docs/assumptions.md, "Default tolerances"
+    "kc1_n_per_mm": "±5%", "kc2_n_per_mm": "±5%",  # spring rates (EN 13906-1 grade 2)
+    "l1_mm": "±0.05", "l3_mm": "±0.05", "l4_mm": "±0.05", "l5_mm": "±0.05",  # step 2
+    "theta1_deg": "±0.05",
+    "case.l1_mm": "±0.05", "case.l3_mm": "±0.05", "case.l4_mm": "±0.05",  # step 1
+    "case.l5_mm": "±0.05", "case.theta1_deg": "±0.05",
+}
 
 
 def resolve_cam_archive(config: CaseConfig, load: ArchiveLoader) -> CaseConfig:
@@ -41,7 +48,7 @@ VCB = register_case(CaseSpec(
     paper_source=SOURCE, figures="camopt.cases.vcb.figures:figures", paper=PAPER,
     profiles=(ProfileCurve("cam-profile", ("profile_x_mm",), ("profile_y_mm",)),
               ProfileCurve("cam-pitch-curve", ("pitch_x_mm",), ("pitch_y_mm",))),
-    resolve=resolve_cam_archive,
+    resolve=resolve_cam_archive, tolerances=TOLERANCES,
 ))
 VCB_IDENTIFY = register_case(CaseSpec(
     kind="vcb_identify", config=VcbIdentifyConfig, problem=VcbIdentification,
