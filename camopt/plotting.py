@@ -31,6 +31,8 @@ def new_figure(title: str, xlabel: str, ylabel: str) -> tuple[Figure, Any]:
 
 def readable(name: str) -> str:
     """'closure_time_ms' -> 'closure time (ms)'."""
+    if name.endswith("_m_s"):  # a two-word unit
+        return f"{name[:-4].replace('_', ' ')} (m/s)"
     stem, _, unit = name.rpartition("_")
     if stem and unit in UNITS:
         return f"{stem.replace('_', ' ')} ({UNITS[unit]})" if UNITS[unit] else stem

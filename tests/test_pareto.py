@@ -88,3 +88,20 @@ def test_plot_draws_the_front(fronts):
     ax = fig.axes[0]
     assert ax.get_xlabel() == "f" and ax.get_ylabel() == "norm"
     assert len(ax.collections[0].get_offsets()) == 20
+
+
+def test_plot_marks_a_finite_initial_design(fronts):
+    from dataclasses import replace
+
+    view = archive.load_run(fronts[1])
+    marked = replace(view, best=replace(view.best, metrics={
+        **view.best.metrics, "initial_f": 0.1, "initial_norm": 0.2}))
+    ax = plots.pareto_front(marked).axes[0]
+    labels = [c.get_label() for c in ax.collections]
+    assert "initial design" in labels
+    pts = ax.collections[labels.index("initial design")].get_offsets()
+    np.testing.assert_array_equal(pts, [[0.1, 0.2]])
+    unknown = replace(view, best=replace(view.best, metrics={
+        **view.best.metrics, "initial_f": float("nan"), "initial_norm": 0.2}))
+    ax = plots.pareto_front(unknown).axes[0]
+    assert "initial design" not in [c.get_label() for c in ax.collections]
