@@ -5,6 +5,11 @@ end point; the driver then evaluates that point like any other candidate. Starts
 ``x0`` or the case's initial design (``Problem.initial_x``) and uniform draws within the
 bounds from the run's generator. Distinct end points are clustered in coordinates
 normalised by the bounds.
+
+A start counts only when it *converged inside the bounds* (the local solver's own
+success test and every variable within its bounds). Any other end point is a last
+iterate, not a design: it is never the best, and when no start converged the repeat's
+best is reported infeasible (objective +inf) with a note saying so.
 """
 
 from __future__ import annotations
@@ -51,6 +56,7 @@ class MultiStart(Solver):
 
     def ask(self) -> NDArray:
         x, info = self.local_solve(self.starts[self.nit])
+        info.setdefault("in_bounds", bool(np.all((x >= self.lo) & (x <= self.hi))))
         self.results.append(info)
         self.nfev += info.pop("nfev", 0)
         return x[None, :]
@@ -61,20 +67,29 @@ class MultiStart(Solver):
         self.X.append(X[0])
         self.ev = ev if self.ev is None else Evaluation.concat([self.ev, ev])
 
+    def converged(self) -> NDArray:
+        """Which starts converged inside the bounds (the only end points that are designs)."""
+        return np.array([bool(r["success"]) and bool(r["in_bounds"]) for r in self.results],
+                        dtype=bool)
+
     def best(self) -> tuple[NDArray, Evaluation]:
+        """The best converged start by Deb's rules; with none, the first start's end point
+        with objective +inf (infeasible by construction: it is not a solution)."""
         assert self.ev is not None
-        ok = np.array([r["success"] for r in self.results])
-        ev = self.ev
-        f = np.where(ok, ev.f, np.inf) if ok.any() else ev.f
-        i = best_index(Evaluation(f, ev.g, ev.extras))
-        return self.X[i].copy(), ev.take(i)
+        ok = np.flatnonzero(self.converged())
+        if ok.size:
+            i = int(ok[best_index(self.ev.take(ok))])
+            return self.X[i].copy(), self.ev.take(i)
+        ev = self.ev.take(0)
+        return self.X[0].copy(), Evaluation(np.full(1, np.inf), ev.g, ev.extras)
 
     def stop_reason(self) -> StopReason | None:
         return StopReason.EXHAUSTED if self.nit >= len(self.starts) else None
 
     def reached(self) -> NDArray:
-        """Which starts count as having reached an optimum (subclasses refine)."""
-        return np.array([r["success"] for r in self.results], dtype=bool)
+        """Which starts count as having reached an optimum (subclasses refine; never one
+        that did not converge inside the bounds)."""
+        return self.converged()
 
     def clusters(self) -> NDArray:
         """Cluster id of each end point that reached an optimum (-1 for the others)."""
@@ -97,6 +112,7 @@ class MultiStart(Solver):
     def table(self) -> list[dict[str, Any]]:
         assert self.ev is not None
         ids = self.clusters()
+        conv = self.converged()
         rows = []
         for i, (x, r) in enumerate(zip(self.X, self.results)):
             row: dict[str, Any] = {"start": i, "cluster": int(ids[i])}
@@ -104,10 +120,25 @@ class MultiStart(Solver):
                         self.problem.to_display(self.starts[i]).items()})
             row.update(self.problem.to_display(x))
             row[self.problem.objective_name] = float(self.ev.f[i])
-            row["feasible"] = bool(self.ev.feasible[i])
             row.update(r)
+            row["converged"] = bool(conv[i])
+            row["feasible"] = bool(self.ev.feasible[i] and conv[i])
             rows.append(row)
         return rows
+
+    def convergence_notes(self) -> list[str]:
+        """Plain lines on starts that did not converge inside the bounds (none if all did)."""
+        failed = [r for r in self.results if not r["success"]]
+        outside = [r for r in self.results if r["success"] and not r["in_bounds"]]
+        if len(failed) + len(outside) == 0:
+            return []
+        tail = (f"{len(failed)} did not converge, {len(outside)} converged outside the "
+                f"bounds")
+        if not self.converged().any():
+            return [f"no start converged inside the bounds ({tail}): no solution; the design "
+                    f"shown is start 0's end point, infeasible by construction"]
+        return [f"{len(failed) + len(outside)} of {len(self.results)} starts discarded "
+                f"({tail})"]
 
     def distinct_summary(self, what: str, missed: str) -> str:
         """One line: how many distinct end points the starts reached, and their spread."""

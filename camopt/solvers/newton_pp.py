@@ -74,4 +74,5 @@ class NewtonPP(MultiStart):
                    "message": str(sol.message), "nfev": int(sol.nfev)}
 
     def notes(self) -> list[str]:
-        return [self.distinct_summary("roots", "starts found no root")]
+        return [self.distinct_summary("roots", "starts found no root inside the bounds"),
+                *self.convergence_notes()]

@@ -61,10 +61,14 @@ class Simplex(MultiStart):
 
     def reached(self) -> NDArray:
         """Starts whose end point is feasible and within optimum_tol of the best objective
-        (Nelder-Mead's own flag only says whether its tolerances were met in maxiter)."""
+        (Nelder-Mead's own flag only says whether its tolerances were met in maxiter: on a
+        flat valley a start can reach the optimum's level without meeting them). The
+        best design is still taken only from starts that met them (``converged``)."""
         assert self.ev is not None
         best = np.min(np.where(self.ev.feasible, self.ev.f, np.inf))
-        return self.ev.feasible & (self.ev.f <= best + self.options.optimum_tol)
+        in_bounds = np.array([r["in_bounds"] for r in self.results], dtype=bool)
+        return self.ev.feasible & (self.ev.f <= best + self.options.optimum_tol) & in_bounds
 
     def notes(self) -> list[str]:
-        return [self.distinct_summary("optima", "starts ended above the best objective")]
+        return [self.distinct_summary("optima", "starts ended above the best objective"),
+                *self.convergence_notes()]

@@ -105,3 +105,29 @@ def test_table1_designs_simulated():
         assert np.isfinite(row["rms_velocity_error_rad_s"])
     assert (rows["3 precision points"]["rms_velocity_error_rad_s"]
             < rows["original"]["rms_velocity_error_rad_s"])
+
+
+def test_four_points_have_no_root_and_show_says_so(tmp_path):
+    """configs/opening_spring_pp4.toml: k, l0, s from 4 precision points. No start
+    converges inside the bounds (Newton either stalls, residual > 1e-9, or leaves the
+    bounds, e.g. k 1992 N/mm, s -16.5 mm), so no feasible best is offered and ``show``
+    says no start converged."""
+    from typer.testing import CliRunner
+
+    from camopt.cli import app
+
+    out = tmp_path / "pp4.h5"
+    runner = CliRunner()
+    res = runner.invoke(app, ["run", str(CONFIGS / "opening_spring_pp4.toml"), "--out",
+                              str(out), "--quiet"])
+    assert res.exit_code == 0, res.output
+    shown = runner.invoke(app, ["show", str(out), "--format", "json"])
+    assert shown.exit_code == 0, shown.output
+    import json
+    doc = json.loads(shown.output)
+    assert doc["best"]["feasible"] is False
+    rows = doc["table"]
+    assert not any(r["success"] and r["in_bounds"] for r in rows)
+    assert any(r["success"] and not r["in_bounds"] for r in rows)  # roots exist, outside
+    text = runner.invoke(app, ["show", str(out)], terminal_width=200).output
+    assert "no start converged inside the bounds" in text

@@ -84,3 +84,30 @@ def test_simplex_fits_a_line_exactly():
     np.testing.assert_allclose(rec.x, [1.5, -0.7], atol=1e-6)
     assert rec.fun < 1e-12
     assert rec.notes[0].startswith("1 distinct optima")
+
+
+def test_newton_never_offers_a_root_outside_the_bounds():
+    """Circle with y >= 0.6: the root (1.932, 0.518) lies outside the bounds, (0.518, 1.932)
+    inside. Starts that converge outside are tabulated but infeasible; the best is the
+    root inside (to 1e-9)."""
+    problem = Circle(lo=0.0)
+    problem.variables = (Variable("x", 0.0, 3.0), Variable("y", 0.6, 3.0))
+    rec = run_repeat(problem, get_solver("newton_pp"), _Cfg("newton_pp", starts=30),
+                     np.random.SeedSequence(4), 0, 1)
+    outside = [r for r in rec.table if r["success"] and not r["in_bounds"]]
+    assert outside and not any(r["feasible"] for r in outside)  # the case is exercised
+    a = np.sqrt(2 + np.sqrt(3))
+    assert rec.feasible
+    assert rec.x == pytest.approx([1 / a, a], abs=1e-9)
+
+
+def test_newton_without_a_root_in_the_bounds_offers_no_design():
+    """Circle restricted to x, y in [1, 1.2]: x^2 + y^2 <= 2.88 < 4, so no root there. The
+    repeat's best is infeasible with objective +inf and a note that no start converged."""
+    problem = Circle()
+    problem.variables = (Variable("x", 1.0, 1.2), Variable("y", 1.0, 1.2))
+    rec = run_repeat(problem, get_solver("newton_pp"), _Cfg("newton_pp", starts=5),
+                     np.random.SeedSequence(0), 0, 1)
+    assert not rec.feasible and rec.fun == np.inf
+    assert any(n.startswith("no start converged inside the bounds") for n in rec.notes)
+    assert not any(r["feasible"] for r in rec.table)
