@@ -41,6 +41,9 @@ class PolishOptions(BaseModel):
         "end point with ten and a hundred times the margin")
     maxiter: int = Field(500, ge=1, description="SLSQP iterations")
     ftol: float = Field(1e-10, gt=0, description="SLSQP objective tolerance")
+    integer_reach: int = Field(
+        2, ge=1, description="integer variables: how many steps beyond the best integer "
+        "value to try in each direction (each with its continuous variables polished)")
 
 
 class PolishableOptions(SolverOptions):
@@ -53,15 +56,76 @@ class PolishableOptions(SolverOptions):
 
 def polish(problem: Problem, x0: NDArray, options: PolishOptions
            ) -> tuple[NDArray, int, str]:
-    """SLSQP in bounds-normalised coordinates from ``x0``: end point, evaluations and
-    scipy's message."""
+    """Polish ``x0``: SLSQP on the continuous variables; with integer variables, the
+    integer-aware search of :func:`polish_mixed`. End point, evaluations, message."""
+    if problem.integer.any():
+        return polish_mixed(problem, x0, options)
+    return polish_continuous(problem, x0, options)
+
+
+def polish_mixed(problem: Problem, x0: NDArray, options: PolishOptions
+                 ) -> tuple[NDArray, int, str]:
+    """Integer-aware polish: fix the integer variables, polish the continuous ones
+    (:func:`polish_continuous`), then step each integer variable to its neighbours,
+    polishing the continuous ones again at each, and move while Deb's rules prefer the
+    neighbour; ``options.integer_reach`` non-improving steps in a row end a direction
+    (the objective over an integer can be flat with small bumps)."""
+    ints = np.flatnonzero(problem.integer)
+    nfev = 0
+
+    seen: dict[bytes, tuple[NDArray, Evaluation]] = {}
+
+    def local(x: NDArray) -> tuple[NDArray, Evaluation]:
+        nonlocal nfev
+        key = x[ints].tobytes()  # each integer combination is polished once
+        if key not in seen:
+            end, n, _ = polish_continuous(problem, x, options)
+            seen[key] = (end, problem.evaluate(end[None, :]))
+            nfev += n + 1
+        return seen[key]
+
+    x, ev = local(np.asarray(x0, dtype=float))
+    start_int = x[ints].copy()
+    moved = True
+    while moved:
+        moved = False
+        for j in ints:
+            for step in (-1.0, 1.0):
+                base = x.copy()
+                for k in range(1, options.integer_reach + 1):
+                    cand = base.copy()
+                    cand[j] = base[j] + step * k
+                    if not problem.lower[j] <= cand[j] <= problem.upper[j]:
+                        break
+                    end, eev = local(cand)
+                    if better(eev.f, eev.violation, ev.f, ev.violation)[0]:
+                        x, ev, moved = end, eev, True
+                        break
+    names = [problem.variables[j].name for j in ints]
+    moves = ", ".join(f"{n} {a:g} -> {b:g}" for n, a, b in zip(names, start_int, x[ints]))
+    return x, nfev, (f"integer-aware: {len(seen)} integer designs polished; {moves}")
+
+
+def polish_continuous(problem: Problem, x0: NDArray, options: PolishOptions
+                      ) -> tuple[NDArray, int, str]:
+    """SLSQP in bounds-normalised coordinates from ``x0`` over the continuous variables
+    (integer ones held at ``x0``'s values): end point, evaluations and scipy's message."""
+    x0 = np.asarray(x0, dtype=float)
+    free = ~problem.integer
+    lo, span = problem.lower[free], problem.upper[free] - problem.lower[free]
+    n_free = int(free.sum())
     cache: dict[bytes, Evaluation] = {}
+
+    def design(u: NDArray) -> NDArray:
+        x = x0.copy()
+        x[free] = lo + u * span
+        return x
 
     def evaluate(u: NDArray) -> Evaluation:
         key = u.tobytes()
         if key not in cache:
             cache.clear()  # SLSQP asks for f and then g at the same point
-            cache[key] = problem.evaluate(problem.from_unit(u)[None, :])
+            cache[key] = problem.evaluate(design(u)[None, :])
         return cache[key]
 
     def metric(ev: Evaluation, name: str | None) -> float:
@@ -79,16 +143,16 @@ def polish(problem: Problem, x0: NDArray, options: PolishOptions
         c = np.r_[-ev.g[0], caps] - margin
         return np.where(np.isfinite(c), c, -_BAD)
 
-    x, nfev, message = np.clip(problem.to_unit(x0), 0, 1), 0, ""
+    x, nfev, message = np.clip((x0[free] - lo) / span, 0, 1), 0, ""
     for factor in (1.0, 10.0, 100.0):  # rerun, further inside, while it ends outside
         margin = options.margin * factor
-        res = minimize(objective, x, method="SLSQP", bounds=[(0.0, 1.0)] * problem.n_var,
+        res = minimize(objective, x, method="SLSQP", bounds=[(0.0, 1.0)] * n_free,
                        constraints=[{"type": "ineq",
                                      "fun": lambda u, m=margin: constraints(u, m)}],
                        options={"maxiter": options.maxiter, "ftol": options.ftol})
         x, nfev, message = np.clip(res.x, 0, 1), nfev + int(res.nfev), str(res.message)
         if np.all(constraints(x, 0.0) >= 0):
-            return problem.from_unit(x), nfev, message
+            return design(x), nfev, message
     # SLSQP's finite-difference gradients can stall a hair outside a bound on cases
     # whose measures are sampled (a sample entering a section makes small jumps).
     # Restore: minimise the squared shortfall from 100 margins inside every bound
@@ -102,15 +166,15 @@ def polish(problem: Problem, x0: NDArray, options: PolishOptions
     # derivative-free (the same kinks stall gradients), from a small simplex at the end
     step = np.where(x + 1e-5 <= 1.0, 1e-5, -1e-5)
     simplex = np.vstack([x, x + np.diag(step)])
-    back = minimize(excess, x, method="Nelder-Mead", bounds=[(0.0, 1.0)] * problem.n_var,
+    back = minimize(excess, x, method="Nelder-Mead", bounds=[(0.0, 1.0)] * n_free,
                     options={"initial_simplex": simplex, "xatol": 1e-10, "fatol": 1e-12,
-                             "maxiter": 200 * problem.n_var})
+                             "maxiter": 200 * n_free})
     nfev += int(back.nfev)
-    start = np.clip(problem.to_unit(x0), 0, 1)
+    start = np.clip((x0[free] - lo) / span, 0, 1)
     anchor = next((a for a in (np.clip(back.x, 0, 1), start)
                    if np.all(constraints(a, 0.0) >= 0)), None)  # else: a feasible start
     if anchor is None:
-        return problem.from_unit(x), nfev, message + "; could not restore feasibility"
+        return design(x), nfev, message + "; could not restore feasibility"
     inside, outside = 0.0, 1.0  # fractions of the way from the anchor to SLSQP's end
     for _ in range(30):
         t = (inside + outside) / 2
@@ -120,7 +184,7 @@ def polish(problem: Problem, x0: NDArray, options: PolishOptions
             outside = t
     nfev += 30
     x = anchor + inside * (x - anchor)
-    return problem.from_unit(x), nfev, message + "; feasibility restored"
+    return design(x), nfev, message + "; feasibility restored"
 
 
 class Polishing:
@@ -157,10 +221,6 @@ class Polishing:
             if name is not None and name not in known:
                 raise SolverError(f"polish.{key}: no metric '{name}'; the case reports "
                                   f"{', '.join(known)}")
-        if self.problem.integer.any():
-            names = [v.name for v in self.problem.variables if v.integer]
-            raise SolverError(f"polish: SLSQP handles continuous variables only; integer: "
-                              f"{', '.join(names)}")
 
     def polish_pending(self) -> bool:
         """Whether the budget is spent and the polish has not run yet."""

@@ -8,7 +8,7 @@ import pytest
 from camopt.config import RunSection
 from camopt.driver import run_repeat
 from camopt.errors import SolverError
-from camopt.problem import Evaluation
+from camopt.problem import Evaluation, Variable
 from camopt.solvers import get_solver
 from camopt.solvers.polish import PolishOptions, polish
 from tests.conftest import SphereConfig, SphereProblem
@@ -58,11 +58,36 @@ def test_polish_rejects_unknown_metrics_before_the_search():
                           np.random.default_rng(0))
 
 
-def test_polish_refuses_integer_variables():
-    problem = SphereProblem(SphereConfig(integer_first=True))
-    with pytest.raises(SolverError, match="continuous variables only; integer: x0"):
-        get_solver("de_gr")(problem, get_solver("de_gr").Options(polish={}),
-                            np.random.default_rng(0))
+def test_integer_aware_polish_fixes_integers_and_tries_neighbours():
+    """Sphere with x0 integer (best at 0) and x1, x2 continuous (best at 0.3), from
+    x0 = 1: the continuous ones are polished with x0 held, then x0 = 0 (polished again)
+    wins and x0 = -1 does not: the end point is (0, 0.3, 0.3) to 1e-6, and x0 stayed an
+    integer throughout."""
+    problem = SphereProblem(SphereConfig(n_var=3, integer_first=True))
+    x, nfev, message = polish(problem, np.array([1.0, -0.5, 0.8]), PolishOptions())
+    np.testing.assert_allclose(x, [0.0, 0.3, 0.3], atol=1e-6)
+    assert x[0] == 0.0 and nfev > 0
+    assert "x0 1 -> 0" in message
+
+
+def test_integer_aware_polish_reaches_past_a_bump():
+    """An objective over an integer with a bump: f(n) = (n - 4)^2 + 6 [n == 2] on n in
+    0..6, start n = 0. One step (0 -> 1) improves, 1 -> 2 does not; with integer_reach = 2
+    the search looks past the bump to n = 3 and goes on to the optimum 4."""
+
+    class Bumpy(SphereProblem):
+        def evaluate(self, X):
+            X = np.atleast_2d(X)
+            n = X[:, 0]
+            f = (n - 4) ** 2 + 6.0 * (n == 2) + (X[:, 1] - 0.3) ** 2
+            return Evaluation(f, np.full((len(X), 1), -1.0), {"norm": f})
+
+    problem = Bumpy(SphereConfig(n_var=2, integer_first=True))
+    problem.variables = (Variable("x0", 0.0, 6.0, integer=True), problem.variables[1])
+    x, _, _ = polish(problem, np.array([0.0, 0.0]), PolishOptions(integer_reach=2))
+    np.testing.assert_allclose(x, [4.0, 0.3], atol=1e-6)
+    y, _, _ = polish(problem, np.array([0.0, 0.0]), PolishOptions(integer_reach=1))
+    assert y[0] == 1.0  # one step of reach stops at the bump
 
 
 class _Lowered(SphereProblem):
