@@ -9,7 +9,7 @@ is kept, ``margin`` inside its bound so the end point is strictly feasible.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -41,6 +41,20 @@ class PolishOptions(BaseModel):
         "end point with ten and a hundred times the margin")
     maxiter: int = Field(500, ge=1, description="SLSQP iterations")
     ftol: float = Field(1e-10, gt=0, description="SLSQP objective tolerance")
+    restore_within: float = Field(
+        0.01, gt=0, description="slsqp, from an infeasible start: rerun further inside and "
+        "restore feasibility only when SLSQP ends within this total normalised shortfall")
+    method: list[Literal["slsqp", "cmaes"]] = Field(
+        ["slsqp"], min_length=1, description="stages run in turn, each from the better "
+        "of its start and the previous end: 'slsqp' (gradient, keeps a margin) and/or "
+        "'cmaes' (CMA-ES ranked by Deb's rules; for sampled, kinked measures)")
+    sigma: float = Field(0.01, gt=0, le=0.5, description="cmaes: initial step, fraction "
+                         "of each variable's range")
+    evaluations: int = Field(20000, ge=10, description="cmaes: evaluation budget (split "
+                             "over the restarts)")
+    population: int | None = Field(None, ge=4, description="cmaes: candidates per "
+                                   "generation (default 4 + 3 ln n)")
+    restarts: int = Field(0, ge=0, description="cmaes: reruns from the best so far")
     integer_reach: int = Field(
         2, ge=1, description="integer variables: how many steps beyond the best integer "
         "value to try in each direction (each with its continuous variables polished)")
@@ -54,17 +68,17 @@ class PolishableOptions(SolverOptions):
         "SLSQP from the best design once the budget is spent")
 
 
-def polish(problem: Problem, x0: NDArray, options: PolishOptions
-           ) -> tuple[NDArray, int, str]:
+def polish(problem: Problem, x0: NDArray, options: PolishOptions,
+           rng: np.random.Generator | None = None) -> tuple[NDArray, int, str]:
     """Polish ``x0``: SLSQP on the continuous variables; with integer variables, the
     integer-aware search of :func:`polish_mixed`. End point, evaluations, message."""
     if problem.integer.any():
-        return polish_mixed(problem, x0, options)
-    return polish_continuous(problem, x0, options)
+        return polish_mixed(problem, x0, options, rng)
+    return polish_continuous(problem, x0, options, rng)
 
 
-def polish_mixed(problem: Problem, x0: NDArray, options: PolishOptions
-                 ) -> tuple[NDArray, int, str]:
+def polish_mixed(problem: Problem, x0: NDArray, options: PolishOptions,
+                 rng: np.random.Generator | None = None) -> tuple[NDArray, int, str]:
     """Integer-aware polish: fix the integer variables, polish the continuous ones
     (:func:`polish_continuous`), then step each integer variable to its neighbours,
     polishing the continuous ones again at each, and move while Deb's rules prefer the
@@ -79,7 +93,7 @@ def polish_mixed(problem: Problem, x0: NDArray, options: PolishOptions
         nonlocal nfev
         key = x[ints].tobytes()  # each integer combination is polished once
         if key not in seen:
-            end, n, _ = polish_continuous(problem, x, options)
+            end, n, _ = polish_continuous(problem, x, options, rng)
             seen[key] = (end, problem.evaluate(end[None, :]))
             nfev += n + 1
         return seen[key]
@@ -106,20 +120,106 @@ def polish_mixed(problem: Problem, x0: NDArray, options: PolishOptions
     return x, nfev, (f"integer-aware: {len(seen)} integer designs polished; {moves}")
 
 
-def polish_continuous(problem: Problem, x0: NDArray, options: PolishOptions
-                      ) -> tuple[NDArray, int, str]:
-    """SLSQP in bounds-normalised coordinates from ``x0`` over the continuous variables
-    (integer ones held at ``x0``'s values): end point, evaluations and scipy's message."""
+def polish_continuous(problem: Problem, x0: NDArray, options: PolishOptions,
+                      rng: np.random.Generator | None = None) -> tuple[NDArray, int, str]:
+    """Each stage of ``options.method`` in turn over the continuous variables (integer ones
+    held at ``x0``'s values), each from the better (Deb's rules) of the previous stage's
+    start and end: end point, evaluations and the stages' messages."""
+    x = np.asarray(x0, dtype=float)
+    ev = problem.evaluate(x[None, :])
+    nfev, messages = 1, []
+    for stage in options.method:
+        if stage == "slsqp":
+            end, n, message = _slsqp(problem, x, options)
+        else:
+            if rng is None:
+                raise SolverError("polish: the cmaes stage needs the solver's generator")
+            end, n, message = _cmaes(problem, x, options, rng)
+        end_ev = problem.evaluate(end[None, :])
+        nfev += n + 1
+        kept = better(*_score(problem, end_ev, options), *_score(problem, ev, options))[0]
+        if kept:
+            x, ev = end, end_ev
+        messages.append(f"{stage}: {message}" + ("" if kept else " (not kept)"))
+    return x, nfev, "; ".join(messages)
+
+
+def _unit_map(problem: Problem, x0: NDArray) -> tuple[NDArray, Any]:
+    """The continuous variables of ``x0`` in bounds-normalised coordinates, and the map
+    from such coordinates back to a full SI design (integer variables held at ``x0``'s)."""
     x0 = np.asarray(x0, dtype=float)
     free = ~problem.integer
     lo, span = problem.lower[free], problem.upper[free] - problem.lower[free]
-    n_free = int(free.sum())
-    cache: dict[bytes, Evaluation] = {}
 
-    def design(u: NDArray) -> NDArray:
-        x = x0.copy()
-        x[free] = lo + u * span
-        return x
+    def design(U: NDArray) -> NDArray:
+        U = np.asarray(U, dtype=float)
+        X = np.broadcast_to(x0, U.shape[:-1] + x0.shape).copy()
+        X[..., free] = lo + U * span
+        return X
+
+    return np.clip((x0[free] - lo) / span, 0, 1), design
+
+
+def _score(problem: Problem, ev: Evaluation, options: PolishOptions
+           ) -> tuple[NDArray, NDArray]:
+    """What the polish ranks by (Deb's rules): the ``minimise`` metric (+inf where not
+    finite) and the violation plus the excess over ``limits``, each (n,)."""
+    name = options.minimise
+    f = ev.f if name is None or name == problem.objective_name else ev.extras[name]
+    return (np.where(np.isfinite(f), f, np.inf),
+            ev.violation + _limit_excess(problem, ev, options))
+
+
+def _limit_excess(problem: Problem, ev: Evaluation, options: PolishOptions) -> NDArray:
+    """Normalised excess of each candidate over ``options.limits`` (0 where within), (n,)."""
+    out = np.zeros(len(ev.f))
+    for name, cap in options.limits.items():
+        v = ev.f if name == problem.objective_name else ev.extras[name]
+        out += np.clip((v - cap) / abs(cap) if cap else v, 0, None)
+    return np.where(np.isnan(out), np.inf, out)
+
+
+def _cmaes(problem: Problem, x0: NDArray, options: PolishOptions, rng: np.random.Generator
+           ) -> tuple[NDArray, int, str]:
+    """CMA-ES (:mod:`camopt.solvers.cmaes`) from ``x0`` over the continuous variables, in
+    bounds-normalised coordinates, ranking each generation by Deb's rules on
+    (violation + excess over ``limits``, ``minimise`` metric): the case's penalty scale
+    does not matter and an infeasible start walks toward feasibility. ``restarts`` rerun
+    it from the best so far. Every generation is one vectorised evaluation."""
+    from camopt.solvers.cmaes import CMACore, deb_order
+
+    u0, design = _unit_map(problem, x0)
+    best_u, (best_f, best_v) = u0, _score(problem, problem.evaluate(design(u0)[None, :]),
+                                          options)
+    nfev, stops = 1, []
+    per_run = options.evaluations // (options.restarts + 1)
+    for _ in range(options.restarts + 1):
+        core = CMACore(best_u, options.sigma, rng, options.population)
+        used, stop = 0, "budget"
+        while used + core.lam <= per_run:
+            U = core.ask()
+            f, v = _score(problem, problem.evaluate(design(U)), options)
+            order = deb_order(f, v)
+            core.tell(U, order)
+            used += len(U)
+            i = order[0]
+            if better(f[i:i + 1], v[i:i + 1], best_f, best_v)[0]:
+                best_u, best_f, best_v = U[i].copy(), f[i:i + 1], v[i:i + 1]
+            if core.step_size() < 1e-12:
+                stop = "step below 1e-12"
+                break
+        nfev += used
+        stops.append(stop)
+    return design(best_u), nfev, f"CMA-ES {nfev} evaluations (stops: {', '.join(stops)})"
+
+
+def _slsqp(problem: Problem, x0: NDArray, options: PolishOptions
+           ) -> tuple[NDArray, int, str]:
+    """SLSQP in bounds-normalised coordinates from ``x0`` over the continuous variables
+    (integer ones held at ``x0``'s values): end point, evaluations and scipy's message."""
+    start, design = _unit_map(problem, x0)
+    n_free = start.size
+    cache: dict[bytes, Evaluation] = {}
 
     def evaluate(u: NDArray) -> Evaluation:
         key = u.tobytes()
@@ -143,7 +243,8 @@ def polish_continuous(problem: Problem, x0: NDArray, options: PolishOptions
         c = np.r_[-ev.g[0], caps] - margin
         return np.where(np.isfinite(c), c, -_BAD)
 
-    x, nfev, message = np.clip((x0[free] - lo) / span, 0, 1), 0, ""
+    x, nfev, message = start, 0, ""
+    start_feasible = bool(np.all(constraints(start, 0.0) >= 0))
     for factor in (1.0, 10.0, 100.0):  # rerun, further inside, while it ends outside
         margin = options.margin * factor
         res = minimize(objective, x, method="SLSQP", bounds=[(0.0, 1.0)] * n_free,
@@ -151,8 +252,13 @@ def polish_continuous(problem: Problem, x0: NDArray, options: PolishOptions
                                      "fun": lambda u, m=margin: constraints(u, m)}],
                        options={"maxiter": options.maxiter, "ftol": options.ftol})
         x, nfev, message = np.clip(res.x, 0, 1), nfev + int(res.nfev), str(res.message)
-        if np.all(constraints(x, 0.0) >= 0):
+        shortfall = float(np.sum(np.clip(-constraints(x, 0.0), 0, None)))
+        if shortfall == 0:
             return design(x), nfev, message
+        if shortfall > options.restore_within and not start_feasible:
+            # from an infeasible start and still far outside: reruns and the restoration
+            # below (which needs a feasible anchor) cost up to 1e4 evaluations for little
+            return design(x), nfev, message + f"; ended infeasible (shortfall {shortfall:.3g})"
     # SLSQP's finite-difference gradients can stall a hair outside a bound on cases
     # whose measures are sampled (a sample entering a section makes small jumps).
     # Restore: minimise the squared shortfall from 100 margins inside every bound
@@ -170,7 +276,6 @@ def polish_continuous(problem: Problem, x0: NDArray, options: PolishOptions
                     options={"initial_simplex": simplex, "xatol": 1e-10, "fatol": 1e-12,
                              "maxiter": 200 * n_free})
     nfev += int(back.nfev)
-    start = np.clip((x0[free] - lo) / span, 0, 1)
     anchor = next((a for a in (np.clip(back.x, 0, 1), start)
                    if np.all(constraints(a, 0.0) >= 0)), None)  # else: a feasible start
     if anchor is None:
@@ -196,6 +301,7 @@ class Polishing:
     options: Any
     nfev: int
     nit: int
+    rng: np.random.Generator
     _polished: tuple[NDArray, Evaluation] | None = None
     _polishing = False
     polish_message = ""
@@ -230,7 +336,8 @@ class Polishing:
     def polish_ask(self) -> NDArray:
         """Run the polish from the population's best; its end point, (1, n_var)."""
         x, _ = self.population_best()
-        end, nfev, self.polish_message = polish(self.problem, x, self.options.polish)
+        end, nfev, self.polish_message = polish(self.problem, x, self.options.polish,
+                                                self.rng)
         self.nfev += nfev
         self._polishing = True
         return end[None, :]
@@ -265,5 +372,5 @@ class Polishing:
             return []
         x, ev = self.population_best()
         kept = self.with_polish(x, ev)[1] is not ev
-        return [f"polish (SLSQP): {self.polish_message}; "
+        return [f"polish: {self.polish_message}; "
                 f"{'replaced' if kept else 'did not improve on'} the population's best"]

@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from camopt.solvers.base import Solver
 
 ENTRY_POINT_GROUP = "camopt.solvers"
-BUILTINS = ("de_gr", "enumeration", "evaluate", "newton_pp", "nsga2", "pso", "simplex")
+BUILTINS = ("cmaes", "de_gr", "enumeration", "evaluate", "newton_pp", "nsga2", "pso", "simplex")
 _REGISTRY: dict[str, type[Solver]] = {}
 _loaded = False
 

@@ -15,6 +15,7 @@ from tests.conftest import SphereConfig, SphereProblem
 GENERIC = [name for name, cls in solvers().items() if not cls.requires and name != "evaluate"]
 # a small budget for each (its own option names); unknown solvers run their defaults
 BUDGET = {"de_gr": {"population": 30, "generations": 150}, "simplex": {"starts": 3},
+          "cmaes": {"generations": 150},
           "pso": {"particles": 30, "iterations": 200},
           "nsga2": {"population": 40, "generations": 150}}
 
@@ -105,5 +106,5 @@ def test_duplicate_registration_raises():
 
 
 def test_unknown_solver_lists_known():
-    with pytest.raises(SolverError, match="known: de_gr"):
+    with pytest.raises(SolverError, match="known: cmaes, de_gr"):
         get_solver("nelder")

@@ -1,0 +1,156 @@
+"""``cmaes``: CMA-ES ranked by Deb's rules, in bounds-normalised coordinates.
+
+The (mu/mu_w, lambda)-CMA-ES with rank-one and rank-mu covariance updates and
+cumulative step-size adaptation, as in Hansen's tutorial (arXiv:1604.00772, Table 1
+and Fig 6 / ``purecma``). CMA-ES uses only the ranking of each generation, so ranking
+by Deb's rules (less violation first, then lower objective) handles constraints with
+no penalty scale, and an infeasible start walks toward feasibility. Candidates are
+clipped into the unit box before evaluation and the update uses the clipped points.
+
+Written here rather than wrapping the ``cma`` package: importing it costs ~1.8 s,
+its Python bookkeeping ~6 ms per generation (more than evaluating 100 EMB profiles),
+and it draws from numpy's global generator unless told otherwise; this core draws from
+the run's Generator and costs ~0.1 ms per generation.
+
+The same core is the ``cmaes`` stage of ``[solver.polish]`` (:mod:`camopt.solvers.polish`).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import Field
+
+from camopt.config.models import SolverOptions
+from camopt.problem import Evaluation
+from camopt.solvers.base import Solver, StopReason, better, snap
+from camopt.solvers.registry import register_solver
+
+
+class CMACore:
+    """CMA-ES state in the unit box (Hansen 2016, Table 1): ``ask`` draws a generation,
+    ``tell`` takes its ranking (0 = best)."""
+
+    def __init__(self, u0: NDArray, sigma: float, rng: np.random.Generator,
+                 popsize: int | None = None) -> None:
+        n = self.n = len(u0)
+        self.rng = rng
+        self.lam = lam = popsize or 4 + int(3 * np.log(n))
+        self.mu = mu = lam // 2
+        w = np.log(mu + 0.5) - np.log(np.arange(1, mu + 1))
+        self.w = w / w.sum()
+        self.mueff = mueff = 1.0 / np.sum(self.w**2)
+        self.cc = (4 + mueff / n) / (n + 4 + 2 * mueff / n)
+        self.cs = (mueff + 2) / (n + mueff + 5)
+        self.c1 = 2 / ((n + 1.3) ** 2 + mueff)
+        self.cmu = min(1 - self.c1, 2 * (mueff - 2 + 1 / mueff) / ((n + 2) ** 2 + mueff))
+        self.damps = 1 + 2 * max(0.0, np.sqrt((mueff - 1) / (n + 1)) - 1) + self.cs
+        self.chi_n = np.sqrt(n) * (1 - 1 / (4 * n) + 1 / (21 * n * n))
+        self.mean = np.asarray(u0, dtype=float).copy()
+        self.sigma = float(sigma)
+        self.C = np.eye(n)
+        self.B = np.eye(n)
+        self.D = np.ones(n)
+        self.pc = np.zeros(n)
+        self.ps = np.zeros(n)
+        self.generation = 0
+
+    def ask(self) -> NDArray:
+        """One generation, (lam, n), clipped into [0, 1]."""
+        Z = self.rng.standard_normal((self.lam, self.n))
+        return np.clip(self.mean + self.sigma * (Z * self.D) @ self.B.T, 0.0, 1.0)
+
+    def tell(self, U: NDArray, order: NDArray) -> None:
+        """Update from the generation ``U`` and its indices best first (``order``)."""
+        n, cs, cc = self.n, self.cs, self.cc
+        self.generation += 1
+        old = self.mean
+        sel = U[order[: self.mu]]
+        self.mean = self.w @ sel
+        y = (self.mean - old) / self.sigma
+        inv_sqrt_c = (self.B / self.D) @ self.B.T
+        self.ps = (1 - cs) * self.ps + np.sqrt(cs * (2 - cs) * self.mueff) * inv_sqrt_c @ y
+        norm_ps = np.linalg.norm(self.ps)
+        hsig = (norm_ps / np.sqrt(1 - (1 - cs) ** (2 * self.generation)) / self.chi_n
+                < 1.4 + 2 / (n + 1))
+        self.pc = (1 - cc) * self.pc + hsig * np.sqrt(cc * (2 - cc) * self.mueff) * y
+        art = (sel - old) / self.sigma
+        self.C = ((1 - self.c1 - self.cmu) * self.C
+                  + self.c1 * (np.outer(self.pc, self.pc) + (1 - hsig) * cc * (2 - cc) * self.C)
+                  + self.cmu * (art.T * self.w) @ art)
+        self.sigma *= np.exp(min(1.0, (cs / self.damps) * (norm_ps / self.chi_n - 1)))
+        self.C = (self.C + self.C.T) / 2
+        d2, self.B = np.linalg.eigh(self.C)
+        self.D = np.sqrt(np.maximum(d2, 1e-30))
+
+    def step_size(self) -> float:
+        """The largest standard deviation of the search distribution (unit coordinates)."""
+        return float(self.sigma * self.D.max())
+
+
+def deb_order(f: NDArray, violation: NDArray) -> NDArray:
+    """Indices best first by Deb's rules (violation, then objective; NaN as +inf)."""
+    f = np.where(np.isnan(f), np.inf, f)
+    return np.lexsort((f, np.where(np.isnan(violation), np.inf, violation)))
+
+
+class CMAESOptions(SolverOptions):
+    """Options of ``cmaes``."""
+
+    name: Literal["cmaes"] = "cmaes"
+    population: int | None = Field(None, ge=4, description="lambda (default 4 + 3 ln n)")
+    generations: int = Field(500, ge=1, description="generations")
+    sigma: float = Field(0.3, gt=0, le=1, description="initial step, fraction of each range")
+    x0: dict[str, float] | None = Field(
+        None, description="start (display units); default the case's design, else the centre")
+    tolx: float = Field(1e-12, gt=0, description="stop when every step is below (normalised)")
+
+
+@register_solver
+class CMAES(Solver):
+    """CMA-ES over a case's continuous variables, ranked by Deb's rules."""
+
+    name = "cmaes"
+    Options = CMAESOptions
+    summary = "CMA-ES (Hansen 2016) ranked by Deb's rules, in the unit box (generic)"
+    integers = False
+
+    def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
+        super().__init__(problem, options, rng)
+        if options.x0 is not None:
+            x0 = problem.from_display(options.x0)
+        else:
+            x0 = problem.initial_x()
+            x0 = (problem.lower + problem.upper) / 2 if x0 is None else x0
+        self.core = CMACore(np.clip(problem.to_unit(x0), 0, 1), options.sigma, rng,
+                            options.population)
+        self._best: tuple[NDArray, Evaluation] | None = None
+
+    def max_iterations(self) -> int:
+        return self.options.generations
+
+    def ask(self) -> NDArray:
+        return snap(self.problem, self.problem.from_unit(self.core.ask()))
+
+    def tell(self, X: NDArray, ev: Evaluation) -> None:
+        self.nfev += len(X)
+        self.nit += 1
+        order = deb_order(ev.f, ev.violation)
+        self.core.tell(self.problem.to_unit(X), order)
+        i = int(order[0])
+        if self._best is None or better(ev.f[i:i + 1], ev.violation[i:i + 1],
+                                        self._best[1].f, self._best[1].violation)[0]:
+            self._best = (X[i].copy(), ev.take(i))
+
+    def best(self) -> tuple[NDArray, Evaluation]:
+        assert self._best is not None
+        return self._best[0].copy(), self._best[1]
+
+    def stop_reason(self) -> StopReason | None:
+        if self.nit >= self.options.generations:
+            return StopReason.BUDGET
+        if self.nit > 0 and self.core.step_size() < self.options.tolx:
+            return StopReason.CONVERGED
+        return None
