@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -26,17 +28,27 @@ def test_ideal_screw_of_the_paper(reported):
 
 @pytest.mark.slow
 def test_paper_headline_reached_or_beaten(emb, reported):
-    """Sec 4.4 with the same inputs: lift 2.00 +- 0.01 mm, rotation no more than the
+    """Sec 4.4 with the same inputs: lift 2.000 +- 0.002 mm, rotation no more than the
     2.40 mm-lead screw's, no distortion (rho <= r_g), stress within the allowable, peak
     torque <= 7.72 N m and clearance angle <= 1.72 rad."""
     m, e = emb.metrics, reported["emb_cam"]
     assert emb.best.feasible
-    assert m["lift_mm"] == pytest.approx(2.0, abs=0.01)
+    assert m["lift_mm"] == pytest.approx(2.0, abs=0.002 + 1e-12)
     assert m["max_rotation_rad"] <= 2 * np.pi * 2.0 / 2.40 + 1e-9
     assert m["curvature_max_mm"] <= 20.0
     assert m["contact_stress_max_mpa"] <= emb.problem.config.allowable_stress_mpa
     assert m["peak_torque_nm"] <= e["peak_torque_nm"]
     assert m["clearance_angle_rad"] <= e["clearance_angle_rad"]
+
+
+@pytest.mark.slow
+def test_paper_objective_reaches_4p7(emb):
+    """Issue #13: on the paper's own objective (Eq 29 with the assumed weights) the search
+    reaches fitness <= 4.7 with the lift held at 2.000 +- 0.002 mm (an independent scipy
+    DE over the same particle found 4.57; the swarm alone stopped at 5.8-6.9)."""
+    assert emb.best.feasible
+    assert emb.best.fun <= 4.7
+    assert abs(emb.metrics["lift_mm"] - 2.0) <= 0.002 + 1e-12
 
 
 @pytest.mark.slow
@@ -63,7 +75,8 @@ def test_corrections_help(reported):
     def runs(repair: bool):
         cfg = load(CONFIGS / "emb.toml", f"solver.repair={str(repair).lower()}",
                    "solver.iterations=150", "solver.particles=60", "run.repeats=3")
-        return execute(cfg).repeats
+        swarm = cfg.solver.model_copy(update={"polish": None})  # the swarms alone
+        return execute(replace(cfg, solver=swarm)).repeats
 
     improved, plain = runs(True), runs(False)
     feas = [sum(r.feasible for r in rs) for rs in (improved, plain)]
@@ -72,17 +85,19 @@ def test_corrections_help(reported):
 
 
 @pytest.mark.slow
-def test_straight_ramp_below_5_5_nm():
-    """Beyond the paper (issue): same inputs and constraints, torque a straight ramp over
-    the clamping section (RMS <= 3 % of the peak), clearance <= 1.72 rad, peak <= 5.5 N m.
-    Three of the config's six repeats (the third reaches it)."""
-    rec = execute(load(CONFIGS / "emb_linear.toml", "run.repeats=3"))
+def test_straight_ramp_at_or_below_5p2_nm():
+    """Beyond the paper (issue #13): configs/emb_linear.toml as run (6 repeats): same
+    inputs and constraints, torque a straight ramp over the clamping section (RMS <= 3 %
+    of the peak), clearance <= 1.72 rad, lift 2.000 +- 0.002 mm, and peak <= 5.2 N m (an
+    independent scipy DE found 5.12 N m; the earlier SLSQP polish stopped at 5.40 N m at
+    the loose 1.990 mm lift)."""
+    rec = execute(load(CONFIGS / "emb_linear.toml"))
     m = rec.metrics
     assert rec.best.feasible
-    assert m["peak_torque_nm"] <= 5.5
-    assert m["torque_ramp_rms_pct"] <= 3.0
+    assert m["peak_torque_nm"] <= 5.2
+    assert m["torque_ramp_rms_pct"] <= 3.0 + 1e-9
     assert m["clearance_angle_rad"] <= 1.72
-    assert m["lift_mm"] == pytest.approx(2.0, abs=0.01)
+    assert abs(m["lift_mm"] - 2.0) <= 0.002 + 1e-12
     assert m["max_rotation_rad"] <= 2 * np.pi * 2.0 / 2.40 + 1e-9
     assert m["curvature_max_mm"] <= 20.0 + 1e-9
 

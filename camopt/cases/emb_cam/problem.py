@@ -24,6 +24,7 @@ from camopt.mechanics.spline import ClampedNaturalSpline
 from camopt.problem import Evaluation, Problem, Variable
 
 MM = 1e-3
+BIG_VIOLATION = 1e6  # normalised violation standing for a non-finite measure
 CONSTRAINTS = ("valid", "contact_stress", "lift", "distortion", "monotonic")
 
 REPAIR_DEFAULTS = {  # trigger probability (first iteration, last iteration), Sec 3.3.4
@@ -278,7 +279,9 @@ class EmbCamProblem(Problem, Repairable):
         if c.torque_ramp_rms_max_pct is not None:
             g["torque_ramp"] = m.ramp_rms_pct / c.torque_ramp_rms_max_pct - 1
         G = np.column_stack([g[k] for k in self.constraint_names])
-        G = np.where(np.isfinite(G), G, np.inf)
+        # a non-finite measure (e.g. stress at a cusp, rho = 0) counts as a large finite
+        # violation, so the other constraints still rank such designs (Deb)
+        G = np.where(np.isfinite(G), G, BIG_VIOLATION)
         err = np.clip(G, 0, None)
         penalty = np.where(err.sum(axis=1) > 0, c.penalty_p1, 0.0) + c.penalty_p2 * np.where(
             np.isfinite(err), err, 1e6).sum(axis=1)  # Eq 30
