@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import h5py
 import numpy as np
 import pytest
@@ -32,8 +34,11 @@ def _contents(path):
 
 
 def _de(*overrides):
-    return load(CONFIGS / "fast_switch_de.toml", "solver.generations=20",
-                "solver.population=20", *overrides)
+    """fast_switch_de.toml, small and without its polish (archives are what is tested
+    here; the integer-aware polish from a 20-generation search costs seconds)."""
+    cfg = load(CONFIGS / "fast_switch_de.toml", "solver.generations=20",
+               "solver.population=20", *overrides)
+    return replace(cfg, solver=cfg.solver.model_copy(update={"polish": None}))
 
 
 def test_same_config_and_seed_identical_archives(tmp_path):
