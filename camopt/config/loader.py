@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import os
 import re
+import stat
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -11,7 +13,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from camopt.config.models import CaseConfig, RunSection, SolverOptions
+from camopt.config.models import PLAUSIBILITY_KEY, CaseConfig, RunSection, SolverOptions
 from camopt.errors import ConfigError
 
 if sys.version_info >= (3, 11):
@@ -23,6 +25,11 @@ SECTIONS = ("case", "solver", "run")
 EXTENDS = "extends"
 # a bare word taken as a string: names and paths (runs/run-1.h5, /tmp/a.h5, ~/x.h5)
 _BARE_WORD = re.compile(r"^[A-Za-z_./~][\w./~\-+:]*$")
+# a case file is a few kB; 1 MiB leaves room for long evaluate tables and stops
+# /dev/zero-like inputs before they fill memory
+MAX_FILE_BYTES = 2**20
+# extends chains in practice are one or two files deep
+MAX_EXTENDS_DEPTH = 16
 
 
 @dataclass(frozen=True)
@@ -67,6 +74,8 @@ def parse_value(raw: str) -> Any:
     raw = raw.strip()
     try:
         return tomllib.loads(f"v = {raw}")["v"]
+    except RecursionError:  # tomllib recurses into nested arrays
+        raise ValueError(raw) from None
     except tomllib.TOMLDecodeError:
         if not _BARE_WORD.fullmatch(raw):
             raise ValueError(raw) from None
@@ -86,17 +95,44 @@ def apply_override(data: dict[str, Any], key: str, value: Any) -> None:
 
 
 def _read(path: Path) -> tuple[str, dict[str, Any]]:
+    """A case file's text and parsed TOML: a regular file (a FIFO would block, a device
+    never end) of at most MAX_FILE_BYTES, checked on the opened descriptor."""
     source = str(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        # O_NONBLOCK: opening a FIFO must not wait for a writer; fstat then refuses it
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
     except FileNotFoundError:
         raise ConfigError(source, "file", "no such file") from None
     except IsADirectoryError:
         raise ConfigError(source, "file", "is a directory, not a case file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(source, "file", f"cannot read: {exc}") from None
+    except (OSError, ValueError) as exc:
+        what = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise ConfigError(source, "file", f"cannot open: {what}") from None
+    try:
+        info = os.fstat(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise ConfigError(source, "file", "is a directory, not a case file")
+        if not stat.S_ISREG(info.st_mode):
+            raise ConfigError(source, "file", "not a regular file (a device, FIFO or socket)")
+        if info.st_size > MAX_FILE_BYTES:
+            raise ConfigError(source, "file", f"{info.st_size} bytes; a case file is at most "
+                              f"{MAX_FILE_BYTES} bytes")
+        with os.fdopen(fd, "rb", closefd=False) as fh:
+            raw = fh.read(MAX_FILE_BYTES + 1)
+    except OSError as exc:
+        raise ConfigError(source, "file", f"cannot read: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+    if len(raw) > MAX_FILE_BYTES:
+        raise ConfigError(source, "file", f"a case file is at most {MAX_FILE_BYTES} bytes")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(source, "file", f"not UTF-8 text (byte {exc.start})") from None
     try:
         return text, tomllib.loads(text)
+    except RecursionError:
+        raise ConfigError(source, "syntax", "values nested too deeply") from None
     except tomllib.TOMLDecodeError as exc:
         message = str(exc)
         match = re.search(r"\(at line (\d+), column (\d+)\)", message)
@@ -106,10 +142,11 @@ def _read(path: Path) -> tuple[str, dict[str, Any]]:
 
 
 def _validate(
-    model: type[BaseModel], data: Any, section: str, source: str, overridden: set[str]
+    model: type[BaseModel], data: Any, section: str, source: str, overridden: set[str],
+    context: dict[str, Any] | None = None,
 ) -> Any:
     try:
-        return model.model_validate(data)
+        return model.model_validate(data, context=context)
     except ValidationError as exc:
         error = exc.errors()[0]
         loc = ".".join(str(p) for p in (section, *error["loc"]))
@@ -137,6 +174,9 @@ def _select(
     names = ", ".join(sorted(known))
     if value is None:
         raise ConfigError(source, f"{section}.{tag}", f"missing; known {noun}s: {names}")
+    if not isinstance(value, str):
+        raise ConfigError(source, f"{section}.{tag}", f"must be a string; known {noun}s: "
+                          f"{names}")
     if value not in known:
         raise ConfigError(source, f"{section}.{tag}", f"unknown {noun} {value!r}; known: {names}")
     return known[value]
@@ -154,19 +194,28 @@ def _merge(base: dict[str, Any], child: dict[str, Any]) -> dict[str, Any]:
 
 
 def _read_extended(path: Path, seen: tuple[Path, ...] = ()) -> tuple[str, dict[str, Any]]:
-    """Read a case file and, through ``extends = "other.toml"``, the files it builds on."""
+    """Read a case file and, through ``extends = "other.toml"``, the files it builds on
+    (a chain of at most MAX_EXTENDS_DEPTH files, without loops)."""
     text, data = _read(path)
     base_name = data.pop(EXTENDS, None)
     if base_name is None:
         return text, data
     if not isinstance(base_name, str):
         raise ConfigError(str(path), EXTENDS, "must be a path string")
-    base = (path.parent / base_name).resolve()
-    if base in seen:
+    if len(seen) >= MAX_EXTENDS_DEPTH:
+        raise ConfigError(str(path), EXTENDS, f"more than {MAX_EXTENDS_DEPTH} files extend "
+                          "each other")
+    try:
+        here = path.resolve(strict=True)
+        base = (path.parent / base_name).resolve(strict=True)
+    except FileNotFoundError:
+        raise ConfigError(str(path), EXTENDS, f"no such file {base_name}") from None
+    except (OSError, RuntimeError, ValueError) as exc:  # symlink loops, NUL bytes
+        raise ConfigError(str(path), EXTENDS, f"cannot follow {base_name!r}: "
+                          f"{getattr(exc, 'strerror', None) or exc}") from None
+    if base in seen or base == here:
         raise ConfigError(str(path), EXTENDS, f"circular: {base_name}")
-    if not base.is_file():
-        raise ConfigError(str(path), EXTENDS, f"no such file {base_name}")
-    _, base_data = _read_extended(base, (*seen, path.resolve()))
+    _, base_data = _read_extended(base, (*seen, here))
     return text, _merge(base_data, data)
 
 
@@ -184,7 +233,9 @@ def load_config(
     text, data = _read_extended(path)
     parsed = parse_overrides(overrides)
     new_solver = dict(parsed).get("solver.name")
-    if new_solver is not None and data.get("solver", {}).get("name") != new_solver:
+    old_solver = data.get("solver")
+    if new_solver is not None and (not isinstance(old_solver, dict)
+                                   or old_solver.get("name") != new_solver):
         data["solver"] = {}  # another solver: the file's options belong to the old one
     for key, value in parsed:
         if key.split(".")[0] not in SECTIONS:
@@ -214,11 +265,14 @@ def validate_data(
             raise ConfigError(source, key, f"missing [{key}] table")
     case_model = _select(data["case"], "case", "kind", cases, source, "case kind")
     solver_model = _select(data["solver"], "solver", "name", solvers, source, "solver")
+    run = data.get("run", {})
+    plausible = not (isinstance(run, dict) and run.get(PLAUSIBILITY_KEY) is False)
     return LoadedConfig(
         path=source,
         text=text,
         overrides=overrides,
-        case=_validate(case_model, data["case"], "case", source, overridden),
+        case=_validate(case_model, data["case"], "case", source, overridden,
+                       {PLAUSIBILITY_KEY: plausible}),
         solver=_validate(solver_model, data["solver"], "solver", source, overridden),
         run=_validate(RunSection, data.get("run", {}), "run", source, overridden),
         data=data,

@@ -8,18 +8,84 @@ build their Problem. Each case's own config model lives beside the case
 
 from __future__ import annotations
 
-from typing import Annotated
+import math
+import re
+from dataclasses import dataclass
+from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
+
+# Every float of a case file is finite (``allow_inf_nan=False`` on :class:`Strict`) and at
+# most MAX_MAGNITUDE in size: no length, mass, rate or modulus of a mechanism in the units
+# the field names carry (mm, kg, N, MPa, GPa ...) comes near 1e12, while values like 1e308
+# overflow the physics (squares, exponentials) into inf and NaN.
+MAX_MAGNITUDE = 1e12
 
 Positive = Annotated[float, Field(gt=0)]
 Pair = tuple[float, float]
 
+PLAUSIBILITY_KEY = "check_plausibility"
+
+
+@dataclass(frozen=True)
+class Plausible:
+    """Physical range of a field for its mechanism, checked after validation: a value
+    outside it is bad input (a length in metres typed into an mm field, say) unless the
+    case file sets ``run.check_plausibility = false``. Use as ``Annotated`` metadata:
+    ``Annotated[Positive, Plausible(1, 5000)]``."""
+
+    lower: float
+    upper: float
+
+
+def _too_large(value: Any) -> float | None:
+    """The first float in ``value`` (nested lists, tuples, dicts) above MAX_MAGNITUDE."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) and abs(value) > MAX_MAGNITUDE else None
+    if isinstance(value, (list, tuple)):
+        items: Any = value
+    elif isinstance(value, dict):
+        items = value.values()
+    else:
+        return None
+    for item in items:
+        found = _too_large(item)
+        if found is not None:
+            return found
+    return None
+
 
 class Strict(BaseModel):
-    """Base of every config model: unknown keys are errors."""
+    """Base of every config model: unknown keys are errors; every float is finite and at
+    most MAX_MAGNITUDE in size; fields with :class:`Plausible` metadata are in range."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    @field_validator("*", mode="after")
+    @classmethod
+    def _physical(cls, value: Any, info: ValidationInfo) -> Any:
+        big = _too_large(value)
+        if big is not None:
+            raise ValueError(f"{big:g} is beyond {MAX_MAGNITUDE:g} in size: no quantity of a "
+                             "mechanism in this field's unit is that large")
+        if not isinstance(value, (int, float)) or isinstance(value, bool):
+            return value
+        if (info.context or {}).get(PLAUSIBILITY_KEY) is False or info.field_name is None:
+            return value
+        for meta in cls.model_fields[info.field_name].metadata:
+            if isinstance(meta, Plausible) and not meta.lower <= value <= meta.upper:
+                unit = _unit(info.field_name)
+                raise ValueError(
+                    f"{value:g} is outside the physical range [{meta.lower:g}, "
+                    f"{meta.upper:g}]{unit} of this mechanism (a value in another unit?); "
+                    f"set run.{PLAUSIBILITY_KEY} = false to accept it")
+        return value
+
+
+def _unit(name: str) -> str:
+    """' mm' for ``l1_mm``, '' for a field without a unit suffix."""
+    match = re.search(r"_(mm|kg|deg|rad|gpa|mpa|n|ms|s|n_per_mm|kn_per_mm3|kg_m2)$", name)
+    return f" {match.group(1).replace('_per_', '/')}" if match else ""
 
 
 class Bounds(Strict):
@@ -47,12 +113,43 @@ class Bounds(Strict):
         return [self.lower, self.upper]
 
 
+MAX_REPEATS = 10_000
+# Size and budget caps of solver options (each option's description repeats its reason).
+# Memory: a population's evaluation holds several arrays of n_pop x samples floats (VCB:
+# 141 samples, EMB: ~400), so 10,000 designs stay within ~1 GB; the papers use 100.
+MAX_POPULATION = 10_000
+# Time: 100,000 iterations of a 100-design population is 10^7 evaluations per repeat,
+# hours on one core for the slower cases; the papers use 300-500.
+MAX_ITERATIONS = 100_000
+# Local starts and their scipy iterations (one start is one scipy solve).
+MAX_STARTS = 10_000
+MAX_LOCAL_ITERATIONS = 1_000_000
+MAX_NAME_BYTES = 100
+# a run name becomes a file name: word characters (any script), '.', '_', '-', '+'; not
+# starting with '.' (hidden files, '..'); no separators, NUL, spaces or markup brackets
+_SAFE_NAME = re.compile(r"[^\W_][\w.+-]*|_[\w.+-]*")
+
+
+def safe_name(name: str) -> str:
+    """``name`` when it is safe as a file name (see ``_SAFE_NAME``); ValueError otherwise."""
+    if not _SAFE_NAME.fullmatch(name):
+        raise ValueError("must be a file name: letters, digits, '.', '_', '-', '+', not "
+                         "starting with '.' (no '/', spaces or other characters)")
+    if len(name.encode()) > MAX_NAME_BYTES:
+        raise ValueError(f"longer than {MAX_NAME_BYTES} bytes (the archive's file name adds "
+                         "a timestamp and must stay within the 255-byte limit)")
+    return name
+
+
 class RunSection(Strict):
     """``[run]``: naming, seeding and repeats of a run."""
 
-    name: str = Field("run", description="name of the run; the archive is runs/<name>-<time>.h5")
-    seed: int = Field(0, ge=0, description="root seed; repeats get SeedSequence(seed).spawn(n)")
-    repeats: int = Field(1, ge=1, description="independent repeats of the solver")
+    name: str = Field("run", description="name of the run; the archive is runs/<name>-<time>.h5 "
+                      "(letters, digits, '.', '_', '-', '+'; at most 100 bytes)")
+    seed: int = Field(0, ge=0, lt=2**128, description="root seed; repeats get "
+                      "SeedSequence(seed).spawn(n) (below 2^128: SeedSequence's own entropy)")
+    repeats: int = Field(1, ge=1, le=MAX_REPEATS, description="independent repeats of the "
+                         f"solver (at most {MAX_REPEATS}: each is a group in the archive)")
     target: float | None = Field(
         None, description="objective at or below which a feasible repeat counts as a success"
     )
@@ -65,6 +162,15 @@ class RunSection(Strict):
     max_seconds: float | None = Field(
         None, gt=0, description="stop a repeat after this many seconds of wall time "
         "(besides the solver's own budget; not reproducible across machines)")
+    check_plausibility: bool = Field(
+        True, description="reject case values outside the physical ranges of the case's "
+        "config model (false: accept them)")
+
+    @field_validator("name")
+    @classmethod
+    def _safe_name(cls, name: str) -> str:
+        return safe_name(name)
+
 
 
 class SolverOptions(Strict):

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
+from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION
 from camopt.problem import Evaluation
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
 from camopt.solvers.polish import PolishableOptions, Polishing
@@ -25,8 +26,10 @@ class DEGROptions(PolishableOptions):
     """Options of ``de_gr``."""
 
     name: Literal["de_gr"] = "de_gr"
-    population: int = Field(100, ge=4, description="individuals per generation (Table 5: 100)")
-    generations: int = Field(300, ge=1, description="generations (Table 5: 300)")
+    population: int = Field(100, ge=4, le=MAX_POPULATION, description="individuals per "
+                            f"generation (Table 5: 100; at most {MAX_POPULATION}: memory)")
+    generations: int = Field(300, ge=1, le=MAX_ITERATIONS, description="generations "
+                             f"(Table 5: 300; at most {MAX_ITERATIONS}: time)")
     mutation_factor: float = Field(0.382, gt=0, le=2, description="F (Table 5: 0.382)")
     crossover_rate: float = Field(0.618, ge=0, le=1, description="CR (Table 5: 0.618)")
     tolerance: float = Field(

@@ -11,7 +11,7 @@ from pydantic import Field
 from scipy.optimize import root
 
 from camopt.capabilities import HasResiduals
-from camopt.config.models import SolverOptions
+from camopt.config.models import MAX_STARTS, SolverOptions
 from camopt.errors import SolverError
 from camopt.solvers.multistart import MultiStart
 from camopt.solvers.registry import register_solver
@@ -21,7 +21,9 @@ class NewtonOptions(SolverOptions):
     """Options of ``newton_pp``."""
 
     name: Literal["newton_pp"] = "newton_pp"
-    starts: int = Field(10, ge=1, description="starts: the case's design, then random")
+    starts: int = Field(10, ge=1, le=MAX_STARTS,
+                        description="starts: the case's design, then random "
+                        f"(at most {MAX_STARTS})")
     method: Literal["hybr", "lm"] = Field("hybr", description="scipy.optimize.root method")
     xtol: float = Field(1e-13, gt=0, description="relative step tolerance")
     residual_tol: float = Field(1e-9, gt=0, description="a root needs max |residual| below")

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 from scipy.optimize import minimize
 
-from camopt.config.models import SolverOptions
+from camopt.config.models import MAX_LOCAL_ITERATIONS, SolverOptions
 from camopt.errors import SolverError
 from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import better
@@ -27,7 +27,7 @@ _BAD = 1e6  # stands for a non-finite objective or constraint inside SLSQP
 class PolishOptions(BaseModel):
     """``[solver.polish]``: SLSQP from the best design once the budget is spent."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
     minimise: str | None = Field(
         None, description="metric to minimise (the objective's name or one the case "
@@ -39,7 +39,8 @@ class PolishOptions(BaseModel):
         1e-7, ge=0, description="normalised distance kept inside each bound; when SLSQP "
         "still ends outside one (it stops within its own accuracy), it is rerun from its "
         "end point with ten and a hundred times the margin")
-    maxiter: int = Field(500, ge=1, description="SLSQP iterations")
+    maxiter: int = Field(500, ge=1, le=MAX_LOCAL_ITERATIONS,
+                         description=f"SLSQP iterations (at most {MAX_LOCAL_ITERATIONS})")
     ftol: float = Field(1e-10, gt=0, description="SLSQP objective tolerance")
     restore_within: float = Field(
         0.01, gt=0, description="slsqp, from an infeasible start: rerun further inside and "

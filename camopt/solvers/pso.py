@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.capabilities import Repairable
-from camopt.config.models import SolverOptions
+from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
 from camopt.errors import SolverError
 from camopt.problem import Evaluation
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
@@ -29,8 +29,10 @@ class PSOOptions(PolishableOptions):
     """Options of ``pso``."""
 
     name: Literal["pso"] = "pso"
-    particles: int = Field(60, ge=2, description="swarm size")
-    iterations: int = Field(300, ge=1, description="iterations (i_max of Eq 40)")
+    particles: int = Field(60, ge=2, le=MAX_POPULATION,
+                           description=f"swarm size (at most {MAX_POPULATION}: memory)")
+    iterations: int = Field(300, ge=1, le=MAX_ITERATIONS, description="iterations (i_max of "
+                            f"Eq 40; at most {MAX_ITERATIONS}: time)")
     c1: float = Field(1.5, ge=0, description="cognitive learning factor (Eq 38)")
     c2: float = Field(1.5, ge=0, description="social learning factor (Eq 38)")
     w_max: float = Field(0.9, ge=0, description="initial inertia (Eq 40)")

@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 from pydantic import Field
 from scipy.optimize import minimize
 
-from camopt.config.models import SolverOptions
+from camopt.config.models import MAX_LOCAL_ITERATIONS, MAX_STARTS, SolverOptions
 from camopt.solvers.multistart import MultiStart
 from camopt.solvers.registry import register_solver
 
@@ -19,9 +19,11 @@ class SimplexOptions(SolverOptions):
     """Options of ``simplex``."""
 
     name: Literal["simplex"] = "simplex"
-    starts: int = Field(1, ge=1, description="starts: the case's design (or x0), then random")
+    starts: int = Field(1, ge=1, le=MAX_STARTS, description="starts: the case's design (or "
+                        f"x0), then random (at most {MAX_STARTS})")
     x0: dict[str, float] | None = Field(None, description="first start (display units)")
-    maxiter: int = Field(4000, ge=1, description="iterations per start")
+    maxiter: int = Field(4000, ge=1, le=MAX_LOCAL_ITERATIONS,
+                         description=f"iterations per start (at most {MAX_LOCAL_ITERATIONS})")
     xatol: float = Field(1e-9, gt=0, description="normalised step tolerance")
     fatol: float = Field(1e-14, gt=0, description="objective tolerance")
     adaptive: bool = Field(True, description="dimension-adapted Nelder-Mead parameters")

@@ -2,40 +2,52 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from camopt.config.models import Bounds, CaseConfig, Positive
+from camopt.config.models import Bounds, CaseConfig, Plausible, Positive
+
+# Physical ranges of a switch of this family (a bench-top to a substation switch): a value
+# outside is a unit slip (metres into mm) or a typo; run.check_plausibility = false accepts it.
+Length = Annotated[Positive, Plausible(1.0, 5000.0)]
+Mass = Annotated[Positive, Plausible(1e-3, 1000.0)]
+WireDiameter = Annotated[Positive, Plausible(0.1, 50.0)]
+Stress = Annotated[Positive, Plausible(10.0, 10_000.0)]
+Modulus = Annotated[Positive, Plausible(1.0, 1000.0)]
+Load = Annotated[Positive, Plausible(1.0, 1e7)]
+# the family is enumerated coil by coil; a helical spring beyond 1000 coils is not a spring
+MAX_COILS = 1000
 
 
 class FastSwitchConfig(CaseConfig):
     """Fast acting switch, Clauss & Papalambros (1982): Nomenclature parameters."""
 
     kind: Literal["fast_switch"] = "fast_switch"
-    link2_length_mm: Positive = Field(200.0, description="L, total length of link 2")
-    half_piston_mm: Positive = Field(50.0, description="p4, one-half piston length")
-    m2_kg: Positive = Field(0.5, description="M2, mass of part 2")
-    m3_kg: Positive = Field(0.75, description="M3, mass of part 3")
-    m4_kg: Positive = Field(0.5, description="M4, mass of part 4 (piston)")
-    spring_diameter_mm: Positive = Field(20.0, description="D, spring coil diameter")
-    wire_diameter_mm: Positive = Field(2.0, description="d, spring wire diameter")
-    wire_strength_a_mpa: Positive = Field(1880.0, description="A, wire strength coefficient")
+    link2_length_mm: Length = Field(200.0, description="L, total length of link 2")
+    half_piston_mm: Length = Field(50.0, description="p4, one-half piston length")
+    m2_kg: Mass = Field(0.5, description="M2, mass of part 2")
+    m3_kg: Mass = Field(0.75, description="M3, mass of part 3")
+    m4_kg: Mass = Field(0.5, description="M4, mass of part 4 (piston)")
+    spring_diameter_mm: Length = Field(20.0, description="D, spring coil diameter")
+    wire_diameter_mm: WireDiameter = Field(2.0, description="d, spring wire diameter")
+    wire_strength_a_mpa: Stress = Field(1880.0, description="A, wire strength coefficient")
     wire_strength_exponent: float = Field(0.186, ge=0, lt=1, description="m, strength exponent")
     wire_strength_d_unit: Literal["m", "mm"] = Field(
         "m",
         description="unit of d inside A*d**-m; 'm' reproduces Table 1, 'mm' is Shigley's "
         "(see docs/assumptions.md)",
     )
-    shear_modulus_gpa: Positive = Field(
+    shear_modulus_gpa: Modulus = Field(
         207.0, description="G as printed (207 GPa reproduces Table 1; steel is about 79 GPa)"
     )
     max_initial_angle_deg: float = Field(
         30.0, gt=0, le=90, description="W, largest initial angle of part 2 (arcing)"
     )
-    max_joint_load_n: Positive = Field(1500.0, description="F_rated, joint strength")
-    min_coils: int = Field(3, ge=1, description="practical least number of coils")
-    max_coils: int = Field(42, ge=1, description="largest coil count searched")
+    max_joint_load_n: Load = Field(1500.0, description="F_rated, joint strength")
+    min_coils: int = Field(3, ge=1, le=MAX_COILS, description="practical least number of coils")
+    max_coils: int = Field(42, ge=1, le=MAX_COILS,
+                           description=f"largest coil count searched (at most {MAX_COILS})")
     branch: Literal["I", "II", "both"] = Field(
         "both", description="sign of sf - sud allowed: I (sf >= sud), II (sf <= sud) or both"
     )
