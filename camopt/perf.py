@@ -34,3 +34,20 @@ def tune_allocator(trim_bytes: int = 256 * 2**20, mmap_bytes: int = 32 * 2**20) 
         return False
     _done = ok
     return ok
+
+
+_PR_SET_PDEATHSIG = 1
+
+
+def die_with_parent() -> bool:
+    """Ask Linux to SIGKILL this process when its parent dies (pool workers of a sweep
+    whose parent was killed would otherwise wait for work forever); True if applied."""
+    if not sys.platform.startswith("linux"):
+        return False
+    import signal
+
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+        return libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
+    except (OSError, AttributeError):
+        return False

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 from camopt.archive.files import (
+    Claim,
     archive_kind,
     atomic_write,
     check_writable,
+    claim,
     default_path,
+    describe_file,
     open_archive,
     versions,
 )
@@ -14,6 +17,7 @@ from camopt.archive.references import resolve_references
 from camopt.archive.runs import load_run, write_run
 from camopt.archive.tables import read_table, write_table
 
-__all__ = ["archive_kind", "atomic_write", "check_writable", "default_path", "load_run",
+__all__ = ["Claim", "archive_kind", "atomic_write", "check_writable", "claim", "default_path",
+           "describe_file", "load_run",
            "open_archive", "read_table", "resolve_references", "versions", "write_run",
            "write_table"]

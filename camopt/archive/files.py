@@ -1,11 +1,35 @@
-"""Archive files: where they go, atomic writes, opening for reading."""
+"""Archive files: where they go, one writer per archive, atomic writes, opening for reading.
+
+Writing an archive (``claim`` then ``atomic_write``):
+
+- One writer per archive: ``claim`` takes an exclusive ``flock`` on ``.<name>.lock``
+  beside the archive for as long as the writer works; a second writer fails at once with
+  an error naming the holder (pid, host, start time). The kernel drops the lock when its
+  holder dies, so a killed writer never blocks the next one.
+- Nothing half-written: the archive is built in memory (h5py on a ``BytesIO``), written to
+  a temporary file ``.<name>.<random>.tmp`` beside the target with plain ``os.write``
+  (a full disk is an ``OSError`` there, never inside HDF5), synced, and moved into
+  place. Without ``force`` the move is a hard link, which fails rather than replace a
+  file another program made meanwhile; with ``force`` only a regular file is replaced.
+- Temporary files are removed on errors and on SIGINT/SIGTERM (the CLI turns SIGTERM into
+  KeyboardInterrupt); those a SIGKILL leaves are removed by the next ``claim`` in that
+  folder (a temporary file whose archive nobody holds locked is stale).
+"""
 
 from __future__ import annotations
 
+import contextlib
+import errno
+import fcntl
+import io
 import os
 import platform
+import re
+import socket
+import stat
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -15,20 +39,46 @@ import numpy as np
 import camopt
 from camopt.errors import ArchiveError
 
+# the temporary file's name adds 14 bytes and a leading dot to the archive's name, and a
+# file name has at most 255 bytes
+MAX_NAME_BYTES = 200
+_TMP = re.compile(r"\.(?P<target>.+)\.[A-Za-z0-9_]{8}\.tmp")
+_held: dict[Path, int] = {}  # archives this process holds locked -> lock file descriptor
+
 
 def default_path(name: str, out_dir: str | Path = "runs") -> Path:
-    """``runs/<name>-<UTC timestamp>.h5``."""
+    """``runs/<name>-<UTC timestamp>.h5`` (``name`` is a safe run name: no separators)."""
     stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S%fZ")
     return Path(out_dir) / f"{name}-{stamp}.h5"
 
 
+def _folder(path: Path) -> Path:
+    return path.parent if str(path.parent) else Path(".")
+
+
 def check_writable(path: Path, force: bool) -> None:
-    """Fail before any work if ``path`` exists (without force) or its folder is not writable."""
-    if path.exists() and not force:
-        raise ArchiveError(f"{path}: --out: exists; pass --force to overwrite")
-    if path.is_dir():
-        raise ArchiveError(f"{path}: --out: is a directory")
-    folder = path.parent if str(path.parent) else Path(".")
+    """Fail before any work if ``path`` exists (without force), is not a regular file (even
+    with force), has an over-long name, or its folder is not writable."""
+    if "\0" in str(path):
+        raise ArchiveError(f"{path!r}: --out: contains a NUL byte")
+    if len(path.name.encode()) > MAX_NAME_BYTES:
+        raise ArchiveError(f"{path}: --out: file name longer than {MAX_NAME_BYTES} bytes (its "
+                           "temporary file beside it must fit the 255-byte limit)")
+    try:
+        info = os.lstat(path)
+    except FileNotFoundError:
+        info = None
+    except OSError as exc:
+        raise ArchiveError(f"{path}: --out: {exc.strerror}") from None
+    if info is not None:
+        if stat.S_ISDIR(info.st_mode):
+            raise ArchiveError(f"{path}: --out: is a directory")
+        if not stat.S_ISREG(info.st_mode):
+            raise ArchiveError(f"{path}: --out: exists and is not a regular file (a link, "
+                               "device or FIFO); --out replaces only a regular file")
+        if not force:
+            raise ArchiveError(f"{path}: --out: exists; pass --force to overwrite")
+    folder = _folder(path)
     if not folder.is_dir():
         raise ArchiveError(f"{path}: --out: folder {folder} does not exist")
     try:  # a real probe: os.access says yes to root even where writing fails
@@ -40,6 +90,115 @@ def check_writable(path: Path, force: bool) -> None:
     os.unlink(probe)
 
 
+def _lock_path(path: Path) -> Path:
+    return _folder(path) / f".{path.name}.lock"
+
+
+def _try_lock(path: Path) -> int | None:
+    """Lock ``path``'s lock file; its descriptor, or None when another process holds it."""
+    lock = _lock_path(path)
+    while True:
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            return None
+        try:  # the file may have been unlinked by its last holder after we opened it
+            same = os.stat(lock).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            return fd
+        os.close(fd)
+
+
+def _unlock(path: Path, fd: int) -> None:
+    with contextlib.suppress(OSError):
+        os.unlink(_lock_path(path))  # unlink before unlocking: see _try_lock's inode check
+    os.close(fd)
+
+
+def _holder(path: Path) -> str:
+    try:
+        return _lock_path(path).read_text().strip() or "unknown process"
+    except (OSError, UnicodeDecodeError):
+        return "unknown process"
+
+
+@dataclass
+class Claim:
+    """An archive path held for writing; ``stale`` lists temporary files it removed."""
+
+    path: Path
+    force: bool
+    stale: list[Path] = field(default_factory=list)
+
+
+@contextlib.contextmanager
+def claim(path: Path, force: bool = False) -> Iterator[Claim]:
+    """Hold ``path`` for writing: checks (``check_writable``), then an exclusive lock that
+    a second writer fails on, naming this one; stale temporary files in the folder are
+    removed. Re-entrant within one process."""
+    path = Path(path)
+    key = Path(os.path.abspath(path))
+    if key in _held:
+        yield Claim(path, force)
+        return
+    check_writable(path, force)
+    try:
+        fd = _try_lock(path)
+    except OSError as exc:
+        raise ArchiveError(f"{path}: --out: cannot create its lock file "
+                           f"({exc.strerror})") from None
+    if fd is None:
+        raise ArchiveError(f"{path}: --out: another camopt is writing this archive "
+                           f"({_holder(path)})")
+    try:
+        os.ftruncate(fd, 0)
+        started = datetime.now(timezone.utc).isoformat(timespec="seconds")
+        os.write(fd, f"pid {os.getpid()} on {socket.gethostname()} since {started}\n".encode())
+        _held[key] = fd
+        check_writable(path, force)  # again under the lock: a writer may have just finished
+        yield Claim(path, force, remove_stale(_folder(path)))
+    finally:
+        _held.pop(key, None)
+        _unlock(path, fd)
+
+
+def remove_stale(folder: Path) -> list[Path]:
+    """Remove temporary archive files in ``folder`` that no writer holds (left by a killed
+    camopt); the paths removed."""
+    removed = []
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return removed
+    for name in names:
+        match = _TMP.fullmatch(name)
+        if not match:
+            continue
+        target = folder / match.group("target")
+        key = Path(os.path.abspath(target))
+        fd = None
+        if key not in _held:
+            try:
+                fd = _try_lock(target)
+            except OSError:
+                continue
+            if fd is None:  # its writer is alive
+                continue
+        try:
+            os.unlink(folder / name)
+            removed.append(folder / name)
+        except OSError:
+            pass
+        finally:
+            if fd is not None:
+                _unlock(target, fd)
+    return removed
+
+
 def versions() -> dict[str, str]:
     """Library versions recorded in every archive's root attributes."""
     import scipy
@@ -49,37 +208,113 @@ def versions() -> dict[str, str]:
             "h5py_version": h5py.__version__}
 
 
-def atomic_write(path: Path, write: Callable[[h5py.File], None]) -> Path:
-    """Call ``write(h5py.File)`` on a temporary file beside ``path``, then rename it into
-    place: readers see the old complete file or the new one, never a partial one."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
+def atomic_write(path: Path, write: Callable[[h5py.File], None], replace: bool = True
+                 ) -> Path:
+    """Call ``write(h5py.File)`` on an in-memory file, write its bytes to a temporary file
+    beside ``path`` and move that into place: readers see the old complete file or the
+    new one, never a partial one. ``replace=False`` never replaces an existing file;
+    ``replace=True`` replaces only a regular file. Any failure (a full disk included) is an
+    ArchiveError with the temporary file removed."""
+    path = Path(path)
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as f:
+        write(f)
+    data = buffer.getbuffer()
+    tmp: str | None = None
     try:
-        with h5py.File(tmp, "w") as f:
-            write(f)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        fd, tmp = tempfile.mkstemp(dir=_folder(path), prefix=f".{path.name}.", suffix=".tmp")
+        try:
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view):]
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        _publish(Path(tmp), path, replace)
+        tmp = None
+    except OSError as exc:
+        if isinstance(exc, ArchiveError):
+            raise
+        raise ArchiveError(f"{path}: archive: cannot write ({exc.strerror or exc}); "
+                           "nothing written") from None
+    finally:
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
     return path
+
+
+def _publish(tmp: Path, path: Path, replace: bool) -> None:
+    if replace:
+        with contextlib.suppress(FileNotFoundError):
+            if not stat.S_ISREG(os.lstat(path).st_mode):
+                raise ArchiveError(f"{path}: --out: is not a regular file; not replaced")
+        os.replace(tmp, path)
+        return
+    try:
+        os.link(tmp, path)  # fails if path exists: never replaces what another writer made
+    except FileExistsError:
+        raise ArchiveError(f"{path}: --out: a file appeared there while camopt was "
+                           "working; not replaced (pass --force to replace it)") from None
+    except OSError as exc:
+        if exc.errno not in (errno.EPERM, errno.ENOTSUP, errno.EXDEV, errno.EMLINK):
+            raise
+        if os.path.lexists(path):  # a file system without hard links
+            raise ArchiveError(f"{path}: --out: exists; not replaced") from None
+        os.replace(tmp, path)
+        return
+    os.unlink(tmp)
+
+
+def describe_file(path: Path) -> str | None:
+    """'a camopt run archive, 12345 bytes' for an existing file (what --force replaces)."""
+    try:
+        size = os.stat(path).st_size
+    except OSError:
+        return None
+    try:
+        with h5py.File(path, "r") as f:
+            kind = f"a camopt {f.attrs.get('archive_kind', 'run')} archive" if (
+                "camopt_version" in f.attrs) else "an HDF5 file"
+    except Exception:  # anything h5py cannot open is simply 'a file'
+        kind = "a file"
+    return f"{kind}, {size} bytes"
 
 
 def open_archive(path: str | Path) -> h5py.File:
     """Open an archive read-only; anything else is an ArchiveError naming the file."""
     path = Path(path)
-    if not path.is_file():
-        raise ArchiveError(f"{path}: file: no such file")
+    try:
+        info = os.stat(path)
+    except (OSError, ValueError):
+        raise ArchiveError(f"{path}: file: no such file") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise ArchiveError(f"{path}: file: not a regular file")
     try:
         f = h5py.File(path, "r")
     except OSError:
         raise ArchiveError(f"{path}: file: not a camopt archive (not HDF5)") from None
-    if "schema_version" not in f.attrs or "camopt_version" not in f.attrs:
+    try:
+        ok = "schema_version" in f.attrs and "camopt_version" in f.attrs
+    except Exception:  # a damaged attribute table
+        ok = False
+    if not ok:
         f.close()
         raise ArchiveError(f"{path}: file: not a camopt archive (no camopt attributes)")
     return f
 
 
+KINDS = ("run", "sweep", "tolerance")
+
+
 def archive_kind(path: str | Path) -> str:
-    """'run' or 'sweep'."""
+    """'run', 'sweep' or 'tolerance'."""
     with open_archive(path) as f:
-        return str(f.attrs.get("archive_kind", "run"))
+        try:
+            kind = str(f.attrs.get("archive_kind", "run"))
+        except Exception:
+            kind = "?"
+    if kind not in KINDS:
+        raise ArchiveError(f"{path}: archive: unknown archive_kind {kind!r}")
+    return kind
+

@@ -7,7 +7,9 @@ Layout (schema 1): root attributes (versions, exact TOML, config as run, seed);
 
 from __future__ import annotations
 
+import contextlib
 import json
+from collections.abc import Iterator
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -15,7 +17,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from camopt.archive.files import atomic_write, check_writable, open_archive, versions
+from camopt.archive.files import atomic_write, claim, open_archive, versions
 from camopt.archive.tables import read_table, write_table
 from camopt.driver import RunRecord
 from camopt.errors import ArchiveError
@@ -69,10 +71,12 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
 
 
 def write_run(rec: RunRecord, path: str | Path, force: bool = False) -> Path:
-    """Write ``rec`` to a temporary file beside ``path`` and rename it when complete."""
+    """Write ``rec`` to a temporary file beside ``path`` and move it into place when
+    complete, holding the archive's lock (``files.claim``); without ``force`` an existing
+    file is never replaced."""
     path = Path(path)
-    check_writable(path, force)
-    return atomic_write(path, lambda f: _write(f, rec))
+    with claim(path, force):
+        return atomic_write(path, lambda f: _write(f, rec), replace=force)
 
 
 def _plain(value: Any) -> Any:
@@ -84,48 +88,121 @@ def _plain(value: Any) -> Any:
 
 
 def load_run(path: str | Path) -> RunView:
-    """A run archive as a :class:`RunView`; a sweep or a foreign file is an ArchiveError."""
+    """A run archive as a :class:`RunView`; a sweep, a foreign file or a damaged archive is
+    an ArchiveError (``<file>: archive: <what is wrong>``)."""
     with open_archive(path) as f:
         if f.attrs.get("archive_kind", "run") != "run":
             raise ArchiveError(f"{path}: file: a {f.attrs['archive_kind']} archive, not a "
                                "run archive")
-        names = tuple(json.loads(f.attrs["variables"]))
-        constraints = tuple(json.loads(f.attrs["constraints"]))
-        scale = np.asarray(f.attrs["variable_scale"])
-        repeats = []
-        for key in sorted(f["repeats"]):
-            grp = f["repeats"][key]
-            a = grp.attrs
-            repeats.append(RepeatView(
-                index=int(key[1:]), spawn_key=tuple(json.loads(a["spawn_key"])),
-                seed=int(a["seed"]), objective=float(a["objective"]),
-                feasible=bool(a["feasible"]), violation=float(a["violation"]),
-                nfev=int(a["nfev"]), nit=int(a["nit"]), wall_s=float(a["wall_s"]),
-                converged_nit=int(a["converged_nit"]), message=str(a["message"]),
-                notes=tuple(json.loads(a["notes"])),
-                x=dict(zip(names, (grp["x"][()] * scale).tolist())),
-                history={k: v[()] for k, v in grp["history"].items()}))
-        best = f["best"]
-        g = best["g"][()]
-        config = json.loads(f.attrs["config_effective"])
-        return RunView(
-            path=str(path), kind=str(f.attrs["case_kind"]),
-            case={"kind": str(f.attrs["case_kind"]), **config["case"]},
-            solver=config["solver"], run=config["run"],
-            objective_name=str(f.attrs["objective_name"]), variables=names,
-            constraints=constraints,
-            best=BestView(
-                objective=float(best.attrs["objective"]),
-                feasible=bool(best.attrs["feasible"]),
-                x=dict(zip(names, (best["x"][()] * scale).tolist())),
-                metrics={k: _plain(v) for k, v in best["metrics"].attrs.items()},
-                active=[c for c, gi in zip(constraints, g) if abs(gi) <= ACTIVE_TOL],
-                violated=[c for c, gi in zip(constraints, g) if not gi <= FEASIBILITY_TOL],
-                repeat=int(best.attrs["repeat"])),
-            repeats=repeats, table=read_table(f["table"]),
-            analysis={k: v[()] for k, v in f["analysis"].items()},
-            config_toml=str(f.attrs["config_toml"]), created=str(f.attrs["created"]),
-            camopt_version=str(f.attrs["camopt_version"]),
-            seed_entropy=str(f.attrs["seed_entropy"]),
-            interrupted=bool(f.attrs.get("interrupted", False)),
-        )
+        with damaged(path):
+            check_schema(f, SCHEMA_VERSION, RUN_SCHEMA)
+            view = _load(f, path)
+        return view
+
+
+# what load_run reads: (HDF5 path, attribute names)
+RUN_SCHEMA = (
+    ("/", ("config_toml", "config_effective", "case_kind", "variables", "variable_scale",
+           "constraints", "objective_name", "created", "seed_entropy")),
+    ("/repeats", ()),
+    ("/best", ("objective", "feasible", "repeat")),
+    ("/best/x", ()), ("/best/g", ()), ("/best/metrics", ()), ("/analysis", ()),
+    ("/table", ("columns",)),
+)
+REPEAT_ATTRS = ("spawn_key", "seed", "objective", "feasible", "violation", "nfev", "nit",
+                "wall_s", "message", "converged_nit", "notes")
+
+
+def check_schema(f: h5py.File, version: int,
+                 schema: tuple[tuple[str, tuple[str, ...]], ...]) -> None:
+    """Raise ArchiveError naming the first object or attribute ``schema`` lists that ``f``
+    lacks, or a schema version this camopt cannot read."""
+    found = f.attrs["schema_version"]
+    if not isinstance(found, (int, np.integer)) or int(found) != version:
+        raise ArchiveError(f"schema_version {found!r}; this camopt reads version {version}")
+    for where, attrs in schema:
+        if where not in f:
+            raise ArchiveError(f"missing {where}")
+        missing = [a for a in attrs if a not in f[where].attrs]
+        if missing:
+            raise ArchiveError(f"{where}: missing attribute {missing[0]!r}")
+
+
+@contextlib.contextmanager
+def damaged(path: str | Path) -> Iterator[None]:
+    """Turn whatever reading a damaged archive raises (a missing object, bad JSON, a
+    flipped byte h5py cannot decode, a wrong type) into ``<file>: archive: <what>``."""
+    try:
+        yield
+    except Exception as exc:
+        if isinstance(exc, ArchiveError) and str(exc).startswith(f"{path}: "):
+            raise
+        what = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ArchiveError(f"{path}: archive: damaged or incomplete: {what}") from None
+
+
+def _json_list(text: object, what: str) -> list[Any]:
+    value = json.loads(str(text))
+    if not isinstance(value, list):
+        raise ArchiveError(f"{what}: expected a JSON list")
+    return value
+
+
+def _load(f: h5py.File, path: str | Path) -> RunView:
+    names = tuple(str(n) for n in _json_list(f.attrs["variables"], "variables"))
+    constraints = tuple(str(c) for c in _json_list(f.attrs["constraints"], "constraints"))
+    scale = np.asarray(f.attrs["variable_scale"], dtype=float)
+    if scale.shape not in ((), (len(names),)):
+        raise ArchiveError("variable_scale: one value per variable expected")
+    repeats = []
+    if not f["repeats"]:
+        raise ArchiveError("/repeats: no repeat")
+    for key in sorted(f["repeats"]):
+        grp = f["repeats"][key]
+        a = grp.attrs
+        missing = [k for k in REPEAT_ATTRS if k not in a]
+        if missing or "x" not in grp or "history" not in grp:
+            raise ArchiveError(f"/repeats/{key}: missing "
+                               f"{missing[0] if missing else 'x or history'}")
+        if grp["x"].shape != (len(names),):
+            raise ArchiveError(f"/repeats/{key}/x: {grp['x'].shape}, expected "
+                               f"({len(names)},)")
+        repeats.append(RepeatView(
+            index=int(key[1:]), spawn_key=tuple(json.loads(a["spawn_key"])),
+            seed=int(a["seed"]), objective=float(a["objective"]),
+            feasible=bool(a["feasible"]), violation=float(a["violation"]),
+            nfev=int(a["nfev"]), nit=int(a["nit"]), wall_s=float(a["wall_s"]),
+            converged_nit=int(a["converged_nit"]), message=str(a["message"]),
+            notes=tuple(json.loads(a["notes"])),
+            x=dict(zip(names, (grp["x"][()] * scale).tolist())),
+            history={k: v[()] for k, v in grp["history"].items()}))
+    best = f["best"]
+    g = best["g"][()]
+    if best["x"].shape != (len(names),) or g.shape != (len(constraints),):
+        raise ArchiveError("/best: x or g does not match the variables and constraints")
+    config = json.loads(f.attrs["config_effective"])
+    if not isinstance(config, dict) or not all(
+            isinstance(config.get(k), dict) for k in ("case", "solver", "run")):
+        raise ArchiveError("config_effective: expected case, solver and run tables")
+    return RunView(
+        path=str(path), kind=str(f.attrs["case_kind"]),
+        case={"kind": str(f.attrs["case_kind"]), **config["case"]},
+        solver=config["solver"], run=config["run"],
+        objective_name=str(f.attrs["objective_name"]), variables=names,
+        constraints=constraints,
+        best=BestView(
+            objective=float(best.attrs["objective"]),
+            feasible=bool(best.attrs["feasible"]),
+            x=dict(zip(names, (best["x"][()] * scale).tolist())),
+            metrics={k: _plain(v) for k, v in best["metrics"].attrs.items()},
+            active=[c for c, gi in zip(constraints, g) if abs(gi) <= ACTIVE_TOL],
+            violated=[c for c, gi in zip(constraints, g) if not gi <= FEASIBILITY_TOL],
+            repeat=int(best.attrs["repeat"])),
+        repeats=repeats, table=read_table(f["table"]),
+        analysis={k: v[()] for k, v in f["analysis"].items()},
+        config_toml=str(f.attrs["config_toml"]), created=str(f.attrs["created"]),
+        camopt_version=str(f.attrs["camopt_version"]),
+        seed_entropy=str(f.attrs["seed_entropy"]),
+        interrupted=bool(f.attrs.get("interrupted", False)),
+    )
+

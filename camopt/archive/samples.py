@@ -17,7 +17,7 @@ import h5py
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.archive.files import atomic_write, check_writable, versions
+from camopt.archive.files import atomic_write, claim, versions
 
 SCHEMA_VERSION = 1
 
@@ -27,7 +27,6 @@ def write_samples(path: str | Path, summary: Mapping[str, Any], inputs: Mapping[
                   feasible: NDArray, force: bool = False) -> Path:
     """Write a sample archive beside ``path`` and rename it into place when complete."""
     path = Path(path)
-    check_writable(path, force)
 
     def write(f: h5py.File) -> None:
         f.attrs.update({**versions(), "schema_version": SCHEMA_VERSION,
@@ -42,4 +41,5 @@ def write_samples(path: str | Path, summary: Mapping[str, Any], inputs: Mapping[
         f["g"].attrs["names"] = json.dumps(list(constraints))
         f.create_dataset("feasible", data=np.asarray(feasible, dtype=bool))
 
-    return atomic_write(path, write)
+    with claim(path, force):  # one writer per archive; never over another's file
+        return atomic_write(path, write, replace=force)

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import os
+import signal
+import sys
+
 from camopt.cli import (  # noqa: F401  (commands)
     catalog,
     compare,
@@ -11,12 +15,30 @@ from camopt.cli import (  # noqa: F401  (commands)
     sweep,
     tolerance,
 )
-from camopt.cli.app import app
+from camopt.cli.app import app, internal_error
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt  # SIGTERM unwinds like Ctrl-C: temporary files are removed
 
 
 def main() -> None:
-    """Console-script entry point."""
-    app()
+    """Console-script entry point: SIGTERM handled like Ctrl-C; whatever escapes a
+    command (a closed pipe, a bug) is still one line, never a traceback."""
+    signal.signal(signal.SIGTERM, _terminate)
+    try:
+        app(standalone_mode=True)
+    except SystemExit:
+        raise
+    except KeyboardInterrupt:
+        print("error: interrupted", file=sys.stderr)
+        sys.exit(130)
+    except BrokenPipeError:  # `camopt show ... | head`: the reader left; not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        sys.exit(0)
+    except Exception as exc:
+        print(internal_error(exc), file=sys.stderr)
+        sys.exit(2)
 
 
 __all__ = ["app", "main"]

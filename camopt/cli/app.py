@@ -10,9 +10,11 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+import click
 import typer
 from pydantic import ValidationError
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from camopt import archive
@@ -35,13 +37,35 @@ class Format(str, enum.Enum):
 
 @contextlib.contextmanager
 def errors() -> Iterator[None]:
-    """Print camopt's and pydantic's errors as one line and exit with code 2."""
+    """Print camopt's and pydantic's errors as one line and exit with code 2; Ctrl-C (and
+    SIGTERM, see ``main``) as one line and code 130, once temporary files are removed."""
     try:
         yield
     except (CamoptError, ValidationError) as exc:
         message = str(exc).splitlines()[0] if isinstance(exc, ValidationError) else str(exc)
         print(f"error: {message}", file=sys.stderr)
         raise typer.Exit(2) from None
+    except KeyboardInterrupt:
+        print("error: interrupted; no archive written", file=sys.stderr)
+        raise typer.Exit(130) from None
+    except (typer.Exit, typer.Abort, click.exceptions.Exit, click.exceptions.ClickException,
+            click.exceptions.Abort):
+        raise
+    except MemoryError:
+        print("error: out of memory", file=sys.stderr)
+        raise typer.Exit(2) from None
+    except Exception as exc:  # a bug: still one line, never a traceback (tests keep it unused)
+        print(internal_error(exc), file=sys.stderr)
+        raise typer.Exit(2) from None
+
+
+INTERNAL = "error: internal error"
+
+
+def internal_error(exc: BaseException) -> str:
+    """The one line for an exception camopt did not expect (a bug to report)."""
+    first = (str(exc).splitlines() or [""])[0]
+    return f"{INTERNAL}: {type(exc).__name__}: {first} (please report this)"
 
 
 def load_case(case: Path, overrides: Sequence[str] | None = None) -> LoadedConfig:
@@ -56,7 +80,7 @@ def fmt(value: Any) -> str:
         return f"{value:.6g}"
     if isinstance(value, list):
         return ",".join(fmt(v) for v in value)
-    return "-" if value is None else str(value)
+    return "-" if value is None else escape(str(value))  # labels may hold [markup]
 
 
 def print_rows(title: str, rows: list[dict[str, Any]], columns: list[str],
@@ -67,9 +91,9 @@ def print_rows(title: str, rows: list[dict[str, Any]], columns: list[str],
     if limit is not None and len(rows) > limit:
         note = (f"first {limit} of {len(rows)} rows; camopt show for all, "
                 "--format json for all columns")
-    table = Table(title=f"{title} ({note})")
+    table = Table(title=escape(f"{title} ({note})"))
     for col in columns:
-        table.add_column(col, justify="right", overflow="fold")
+        table.add_column(escape(col), justify="right", overflow="fold")
     for row in rows[:limit]:
         table.add_row(*(fmt(row.get(c)) for c in columns))
     out.print(table)

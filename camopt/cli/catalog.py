@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 from typing import Annotated
 
 import numpy as np
 import typer
+from rich.markup import escape
 from rich.table import Table
 
+from camopt import archive
 from camopt.capabilities import capability_name
 from camopt.cases import cases, get_case
 from camopt.cli.app import app, errors, load_case, out
@@ -27,7 +30,7 @@ def validate(case: Annotated[Path, typer.Argument(help="case file (TOML)")],
         config = load_case(case, set_)
         problem, solver_cls = prepare(config)
         build_solver(problem, solver_cls, config, np.random.default_rng(0))  # its own checks
-    out.print(f"ok: {case}: case '{config.case.kind}' ({problem.n_var} variables, "
+    out.print(f"ok: {escape(str(case))}: case '{config.case.kind}' ({problem.n_var} variables, "
               f"{problem.n_constr} constraints), solver '{solver_cls.name}'")
 
 
@@ -42,10 +45,29 @@ def init(kind: Annotated[str, typer.Argument(help="case kind")],
         if out_path is None:
             sys.stdout.write(text)
             return
-        if out_path.exists() and not force:
-            raise CamoptError(f"{out_path}: --out: exists; pass --force to overwrite")
-        out_path.write_text(text)
-    out.print(f"wrote {out_path}")
+        write_text(out_path, text, force)
+    out.print(f"wrote {escape(str(out_path))}")
+
+
+def write_text(path: Path, text: str, force: bool) -> None:
+    """Write a new file (``O_EXCL``: never over another's), or with ``force`` replace a
+    regular file, through a temporary file beside it."""
+    archive.check_writable(path, force)
+    tmp = path.parent / f".{path.name}.{os.getpid()}.tmp"
+    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        if force:
+            os.replace(tmp, path)
+        else:
+            os.link(tmp, path)
+    except FileExistsError:
+        raise CamoptError(f"{path}: --out: exists; pass --force to overwrite") from None
+    except OSError as exc:
+        raise CamoptError(f"{path}: --out: cannot write ({exc.strerror})") from None
+    finally:
+        tmp.unlink(missing_ok=True)
 
 
 @app.command(name="solvers")

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from camopt import archive, report
@@ -41,9 +42,9 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
     table = Table(title="compare")
     table.add_column("")
     for n in names:
-        table.add_column(n, justify="right", overflow="fold")
+        table.add_column(escape(n), justify="right", overflow="fold")
     for key, values in doc["config_differences"].items():
-        table.add_row(f"[dim]{key}[/]", *(fmt(v) for v in values))
+        table.add_row(f"[dim]{escape(key)}[/]", *(fmt(v) for v in values))
     table.add_row("[bold]objective[/]", *(fmt(v) for v in doc["objective"]))
     table.add_row("feasible", *(fmt(v) for v in doc["feasible"]))
     for section in ("x", "metrics"):
@@ -55,10 +56,11 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
     if "hypervolume" in doc:
         _print_hypervolume(doc["hypervolume"], names)
     for test in doc["tests"]:
-        out.print(f"A = {names[0]}, B = {names[1]}: Mann-Whitney p = {test['p_value']:.3g}, "
+        a, b = escape(names[0]), escape(names[1])
+        out.print(f"A = {a}, B = {b}: Mann-Whitney p = {test['p_value']:.3g}, "
                   f"P(A better) = {test['p_a_better']:.2f}; success A "
                   f"{_rate(test['success_a'])}, B {_rate(test['success_b'])}")
-        out.print(f"[bold]{test['verdict']}[/]")
+        out.print(f"[bold]{escape(test['verdict'])}[/]")
 
 
 def _print_hypervolume(hv: dict[str, Any], names: list[str]) -> None:
@@ -75,17 +77,17 @@ def _rate(s: dict[str, float]) -> str:
 
 def print_ranking(doc: dict[str, Any]) -> None:
     """A sweep's grid points ranked (``report.rank_sweep``) as a rich table."""
-    table = Table(title=f"sweep {doc['sweep']}: grid points ranked")
+    table = Table(title=escape(f"sweep {doc['sweep']}: grid points ranked"))
     for col in ("rank", "point", "runs", "success", "best", "median", "worst",
                 "nfev to target", "vs best"):
         table.add_column(col, justify="right" if col != "point" else "left")
     for r in doc["ranking"]:
         vs = r.get("vs_best")
-        table.add_row(str(r["rank"]), r["label"], str(r["runs"]),
+        table.add_row(str(r["rank"]), escape(r["label"]), str(r["runs"]),
                       fmt(r["success_rate"]), fmt(r["best"]), fmt(r["median"]),
                       fmt(r["worst"]), fmt(r["median_nfev_to_target"]),
                       f"p = {vs['p_value']:.3g}" if vs else "-")
     out.print(table)
     for r in doc["ranking"]:
         if r.get("vs_best"):
-            out.print(r["vs_best"]["verdict"])
+            out.print(escape(r["vs_best"]["verdict"]))

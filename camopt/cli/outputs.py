@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import enum
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Annotated
 
@@ -10,7 +12,21 @@ import typer
 
 from camopt import archive
 from camopt.archive.sweeps import load_sweep
-from camopt.cli.app import app, errors, out
+from camopt.cli.app import app, errors
+from camopt.errors import ArchiveError
+
+
+@contextlib.contextmanager
+def writing(folder: Path) -> Iterator[None]:
+    """An unwritable or full output folder is one error line naming it."""
+    try:
+        yield
+    except ArchiveError:
+        raise
+    except OSError as exc:
+        where = exc.filename or folder
+        raise ArchiveError(f"{folder}: --out: cannot write {where} "
+                           f"({exc.strerror or exc})") from None
 
 
 class ExportFormat(str, enum.Enum):
@@ -33,9 +49,10 @@ def plot(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="arch
             figures = plots.sweep_figures(*load_sweep(path))
         else:
             figures = plots.run_figures(archive.load_run(path))
-        written = plots.save(figures, folder, path.stem)
+        with writing(folder):
+            written = plots.save(figures, folder, path.stem)
     for p in written:
-        out.print(str(p))
+        print(p)
 
 
 @app.command()
@@ -49,6 +66,8 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
 
     with errors():
         view = archive.load_run(run_path)
-        written = export_run(view, out_dir or run_path.parent, run_path.stem, format.value)
+        folder = out_dir or run_path.parent
+        with writing(folder):
+            written = export_run(view, folder, run_path.stem, format.value)
     for p in written:
-        out.print(str(p))
+        print(p)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Annotated, Any
@@ -14,6 +15,7 @@ from camopt import archive
 from camopt.cli.app import app, err, errors, load_case
 from camopt.cli.show import print_show
 from camopt.driver import execute, prepare
+from camopt.errors import ArchiveError
 from camopt.perf import tune_allocator
 
 
@@ -39,18 +41,41 @@ def run(
     with errors():
         config = load_case(case, overrides)
         prepare(config)
-        path = out_path or archive.default_path(config.run.name)
-        if out_path is None:
-            path.parent.mkdir(parents=True, exist_ok=True)
-        archive.check_writable(path, force)
-        tune_allocator()
-        with progress(quiet) as callback:
-            record = execute(config, callback=callback)
-        archive.write_run(record, path, force=force)
+        path = out_path or default_out(config.run.name)
+        with claim_out(path, force):
+            tune_allocator()
+            with progress(quiet) as callback:
+                record = execute(config, callback=callback)
+            archive.write_run(record, path, force=force)
     if quiet:
         print(str(path))  # plain print: a script reads exactly the path, never wrapped
         return
     print_show(archive.load_run(path), rows=10)
+
+
+def default_out(name: str) -> Path:
+    """``runs/<name>-<time>.h5``, creating ``runs/`` (an unwritable folder is bad input)."""
+    path = archive.default_path(name)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ArchiveError(f"{path.parent}: --out: cannot create the folder "
+                           f"({exc.strerror})") from None
+    return path
+
+
+@contextlib.contextmanager
+def claim_out(path: Path, force: bool) -> Iterator[None]:
+    """Hold ``path`` for writing (``archive.claim``: one writer per archive); report stale
+    temporary files removed and, with ``--force``, what the new archive replaced."""
+    replaced = archive.describe_file(path) if force else None
+    with archive.claim(path, force) as held:
+        for stale in held.stale:
+            print(f"note: removed {stale} (a temporary file left by a killed camopt)",
+                  file=sys.stderr)
+        yield
+    if replaced:
+        print(f"note: --force: replaced {path} ({replaced})", file=sys.stderr)
 
 
 @contextlib.contextmanager

@@ -13,10 +13,10 @@ import typer
 from pydantic import ValidationError
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from camopt import archive
 from camopt import sweep as sweep_mod
 from camopt.archive.sweeps import load_sweep
 from camopt.cli.app import app, err, errors, load_case, out, print_rows
+from camopt.cli.run import claim_out, default_out
 from camopt.errors import CamoptError
 from camopt.perf import tune_allocator
 from camopt.sweep import run as sweep_run
@@ -43,29 +43,45 @@ def sweep(
     with errors():
         if executor not in ("local", "dask"):
             raise CamoptError(f"--executor: {executor!r}: expected local or dask")
-        spec, results, path = _sweep_setup(case, seeds, grid or [], set_ or [], out_path,
-                                           resume, force)
-        tune_allocator()
-        try:
-            with _cell_progress(quiet) as progress:
-                sweep_run.run_sweep(spec, path, results, jobs=jobs or os.cpu_count() or 1,
-                                    executor=executor, scheduler=scheduler,
-                                    progress=progress)
-        except sweep_run.SweepInterrupted as exc:
-            print(f"interrupted: {exc}; finish with: camopt sweep --resume {path}",
-                  file=sys.stderr)
-            raise typer.Exit(130) from None
+        if executor == "dask" and not scheduler:
+            raise CamoptError("--scheduler: give the Dask scheduler's address with "
+                              "--executor dask")
+        if resume is not None:
+            path = resume
+        else:
+            if case is None:
+                raise CamoptError("sweep: CASE: give a case file (or --resume ARCHIVE)")
+            config = load_case(case, set_ or [])
+            if check and config.run.min_success_rate is None:
+                raise CamoptError(f"{case}: run.min_success_rate: not set; --check needs it")
+            path = out_path or default_out(f"{config.run.name}-sweep")
+        with claim_out(path, force or resume is not None):
+            spec, results = _sweep_setup(case, seeds, grid or [], set_ or [], resume)
+            if check and spec.data["run"].get("min_success_rate") is None:
+                raise CamoptError(f"{path}: run.min_success_rate: not set; --check needs it")
+            tune_allocator()
+            try:
+                with _cell_progress(quiet) as progress:
+                    sweep_run.run_sweep(spec, path, results, jobs=jobs or os.cpu_count() or 1,
+                                        executor=executor, scheduler=scheduler,
+                                        progress=progress, replace=force or resume is not None)
+            except sweep_run.SweepInterrupted as exc:
+                print(f"interrupted: {exc}; finish with: camopt sweep --resume {path}",
+                      file=sys.stderr)
+                raise typer.Exit(130) from None
     rows = sweep_mod.summary(spec, results.values())
     if not quiet:
         print_rows(f"sweep {path}", rows, list(rows[0]), None)
     else:
-        out.print(str(path))
+        print(path)  # plain print: a script reads exactly the path
     if check:
         _check_success(spec, rows)
 
 
 def _sweep_setup(case: Path | None, seeds: str, grid: list[str], overrides: list[str],
-                 out_path: Path | None, resume: Path | None, force: bool) -> Any:
+                 resume: Path | None) -> Any:
+    """The sweep's spec and the cells already done (none for a new sweep); called with the
+    archive claimed, so a resumed archive cannot change under it."""
     if resume is not None:
         spec, results = load_sweep(resume)
         if case is not None:
@@ -74,9 +90,8 @@ def _sweep_setup(case: Path | None, seeds: str, grid: list[str], overrides: list
             if fresh.to_json() != spec.to_json():
                 raise CamoptError(f"{resume}: --resume: the case, grid or seeds differ from "
                                   "the sweep in the archive")
-        return spec, results, resume
-    if case is None:
-        raise CamoptError("sweep: CASE: give a case file (or --resume ARCHIVE)")
+        return spec, results
+    assert case is not None
     config = load_case(case, overrides)
     spec = sweep_mod.SweepSpec(config.effective(), str(case), config.text,
                                sweep_mod.parse_grid(grid), sweep_mod.parse_seeds(seeds))
@@ -84,11 +99,7 @@ def _sweep_setup(case: Path | None, seeds: str, grid: list[str], overrides: list
         spec.validate()
     except ValidationError as exc:
         raise CamoptError(f"{case}: --grid: {str(exc).splitlines()[0]}") from None
-    path = out_path or archive.default_path(f"{config.run.name}-sweep")
-    if out_path is None:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    archive.check_writable(path, force)
-    return spec, {}, path
+    return spec, {}
 
 
 def _check_success(spec: Any, rows: list[dict[str, Any]]) -> None:

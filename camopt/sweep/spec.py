@@ -11,6 +11,7 @@ from __future__ import annotations
 import copy
 import itertools
 import json
+import math
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -24,8 +25,18 @@ from camopt.driver import prepare, validate
 from camopt.errors import ConfigError
 from camopt.stats import run_statistics
 
-
 # ---- specification ------------------------------------------------------------------
+# The sweep archive is rewritten whole after each cell, so its cost grows with the square
+# of the number of cells (docs/design.md): 100,000 cells is far beyond any gated sweep here
+# and still finishes; more wants per-cell files.
+MAX_CELLS = 100_000
+# keys a grid may not set: seeds come from --seeds (child k of SeedSequence(run.seed) for
+# every grid point), so a grid over run.seed would run the same seeds at every point
+_NOT_GRIDDED = {"run.seed": "give seeds with --seeds; every grid point uses child k of "
+                "SeedSequence(run.seed)", "run.repeats": "a sweep cell is one repeat; give "
+                "more seeds with --seeds", "run.name": "the sweep has one name"}
+
+
 def parse_seeds(text: str) -> tuple[int, int]:
     """'0:25' -> (0, 25); '7' -> (0, 7)."""
     m = re.fullmatch(r"\s*(\d+)\s*(?::\s*(\d+)\s*)?", text)
@@ -35,6 +46,9 @@ def parse_seeds(text: str) -> tuple[int, int]:
                                                                     int(m.group(2)))
     if stop <= start:
         raise ConfigError("--seeds", text, "STOP must be above START")
+    if stop - start > MAX_CELLS or stop >= 2**63:
+        raise ConfigError("--seeds", text, f"at most {MAX_CELLS} seeds in one sweep (the "
+                          "archive is rewritten after every cell)")
     return start, stop
 
 
@@ -59,12 +73,18 @@ def parse_grid(items: Iterable[str]) -> list[tuple[str, list[Any]]]:
         key = key.strip()
         if not sep or not re.fullmatch(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)+", key):
             raise ConfigError("--grid", item, "expected section.key=v1,v2,...")
+        if key in _NOT_GRIDDED:
+            raise ConfigError("--grid", key, _NOT_GRIDDED[key])
+        if key in (k for k, _ in grid):
+            raise ConfigError("--grid", key, "given twice; list every value in one --grid")
         values = []
         for part in _split_top(raw):
             try:
                 values.append(parse_value(part))
             except ValueError:
                 raise ConfigError("--grid", key, f"cannot parse value {part!r}") from None
+        if len({json.dumps(v, sort_keys=True) for v in values}) < len(values):
+            raise ConfigError("--grid", key, "a value is given twice")
         grid.append((key, values))
     return grid
 
@@ -99,6 +119,11 @@ class SweepSpec:
 
     def validate(self) -> list[LoadedConfig]:
         """Validate every grid point's config now, so a bad grid fails before any work."""
+        n_cells = math.prod(len(v) for _, v in self.grid) * (self.seeds[1] - self.seeds[0])
+        if n_cells > MAX_CELLS:
+            raise ConfigError("--grid", "cells", f"{n_cells} grid points x seeds; at most "
+                              f"{MAX_CELLS} cells in one sweep (the archive is rewritten "
+                              "after every cell)")
         out = []
         for point in self.points():
             cfg = validate(self.point_data(point), self.source)
