@@ -387,7 +387,9 @@ class EmbCamProblem(Problem, Repairable):
             ratio = np.gradient(p.s, p.rotation)  # ds/dphi
             ok = clamp & np.isfinite(ratio) & (p.force > 0)
             t_over_f = p.torque[ok] / p.force[ok]
-            consistency = 100 * np.max(np.abs(t_over_f - ratio[ok])) / np.max(ratio[ok])
+            # a design that never clamps (an infeasible best of a short run) has no check
+            consistency = (100 * np.max(np.abs(t_over_f - ratio[ok])) / np.max(ratio[ok])
+                           if ok.any() else float("nan"))
         lead = 2 * np.pi * self.s_max / m.max_rotation  # Eq 45
         f_max = self.K * self.x2**3
         screw_torque = f_max * lead / (2 * np.pi)  # Eq 46
