@@ -155,9 +155,13 @@ def claim(path: Path, force: bool = False) -> Iterator[Claim]:
         raise ArchiveError(f"{path}: --out: another camopt is writing this archive "
                            f"({_holder(path)})")
     try:
-        os.ftruncate(fd, 0)
         started = datetime.now(timezone.utc).isoformat(timespec="seconds")
-        os.write(fd, f"pid {os.getpid()} on {socket.gethostname()} since {started}\n".encode())
+        try:  # who holds it, for the error a second writer gets (best effort: disk full)
+            os.ftruncate(fd, 0)
+            os.write(fd, f"pid {os.getpid()} on {socket.gethostname()} since {started}\n"
+                     .encode())
+        except OSError:
+            pass
         _held[key] = fd
         check_writable(path, force)  # again under the lock: a writer may have just finished
         yield Claim(path, force, remove_stale(_folder(path)))

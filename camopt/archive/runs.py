@@ -155,7 +155,7 @@ def _load(f: h5py.File, path: str | Path) -> RunView:
     if scale.shape not in ((), (len(names),)):
         raise ArchiveError("variable_scale: one value per variable expected")
     repeats = []
-    if not f["repeats"]:
+    if len(f["repeats"]) == 0:
         raise ArchiveError("/repeats: no repeat")
     for key in sorted(f["repeats"]):
         grp = f["repeats"][key]

@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import os
+import sys
+
 import pytest
 
 from camopt.config.loader import parse_overrides, parse_value
 from camopt.errors import ConfigError
+from tests.conftest import CONFIGS
+from tests.helpers import load
 
 
 @pytest.mark.parametrize("raw, value", [
@@ -27,3 +32,88 @@ def test_other_text_is_refused(raw):
 def test_override_names_the_key_it_cannot_parse():
     with pytest.raises(ConfigError, match="case.x: cannot parse value"):
         parse_overrides(["case.x=two words"])
+
+
+# ---- hostile case files (issue #11): one ConfigError naming file and key, never a crash
+
+
+FAST = CONFIGS / "fast_switch.toml"
+DE = CONFIGS / "fast_switch_de.toml"
+
+
+@pytest.mark.parametrize("override, where, what", [
+    ("case.m3_kg=nan", "case.m3_kg", "finite"),
+    ("case.m3_kg=inf", "case.m3_kg", "finite"),
+    ("run.target=nan", "run.target", "finite"),
+    ("case.sf_bounds_mm=[1, inf]", "case.sf_bounds_mm.upper", "finite"),
+    ("case.link2_length_mm=1e308", "case.link2_length_mm", "beyond 1e+12"),
+    ("case.link2_length_mm=0.2", "case.link2_length_mm", "physical range [1, 5000] mm"),
+    ("case.max_coils=100000000", "case.max_coils", "less than or equal to 1000"),
+    ("solver.population=9223372036854775807", "solver.population", "10000"),
+    ("solver.generations=9223372036854775807", "solver.generations", "100000"),
+    ("run.repeats=1000000000", "run.repeats", "10000"),
+    ("case.kind=[\"fast_switch\"]", "case.kind", "must be a string"),
+    ("solver.name={a = 1}", "solver.name", "must be a string"),
+    ("run.name='../../../x'", "run.name", "must be a file name"),
+    ("run.name='/tmp/x'", "run.name", "must be a file name"),
+    ("run.name='[/]x'", "run.name", "must be a file name"),
+    ("run.name='" + "a" * 250 + "'", "run.name", "longer than 100 bytes"),
+])
+def test_hostile_values_are_refused_with_the_reason(override, where, what):
+    with pytest.raises(ConfigError) as info:
+        load(DE, override)
+    assert info.value.where == where and what in info.value.what
+
+
+def test_nul_in_a_run_name_is_refused():
+    with pytest.raises(ConfigError, match="run.name: must be a file name"):
+        load(FAST, 'run.name="a\\u0000b"')
+
+
+def test_plausibility_can_be_switched_off():
+    cfg = load(FAST, "case.link2_length_mm=0.2", "run.check_plausibility=false")
+    assert cfg.case.link2_length_mm == 0.2
+
+
+def test_a_string_solver_table_with_a_solver_override(tmp_path):
+    case = tmp_path / "c.toml"
+    case.write_text('solver = "x"\n[case]\nkind = "fast_switch"\n')
+    cfg = load(case, "solver.name=de_gr")
+    assert cfg.solver.name == "de_gr"
+
+
+def test_deep_nesting_is_a_syntax_error(tmp_path):
+    case = tmp_path / "deep.toml"
+    case.write_text("x = " + "[" * 5000 + "]" * 5000 + "\n")
+    with pytest.raises(ConfigError, match="nested too deeply"):
+        load(case)
+
+
+def test_only_regular_files_under_the_size_cap(tmp_path):
+    with pytest.raises(ConfigError, match="not a regular file"):
+        load("/dev/zero")
+    fifo = tmp_path / "fifo.toml"
+    os.mkfifo(fifo)
+    with pytest.raises(ConfigError, match="not a regular file"):
+        load(fifo)  # would block on open without O_NONBLOCK
+    big = tmp_path / "big.toml"
+    big.write_text("# " + "x" * 2**20 + "\n")
+    with pytest.raises(ConfigError, match="at most 1048576 bytes"):
+        load(big)
+    binary = tmp_path / "bin.toml"
+    binary.write_bytes(b"\xff\xfe")
+    with pytest.raises(ConfigError, match="not UTF-8"):
+        load(binary)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="symlinks")
+def test_extends_through_a_symlink_loop_or_itself(tmp_path):
+    (tmp_path / "a.toml").symlink_to(tmp_path / "b.toml")
+    (tmp_path / "b.toml").symlink_to(tmp_path / "a.toml")
+    case = tmp_path / "c.toml"
+    case.write_text('extends = "a.toml"\n[solver]\nname = "enumeration"\n')
+    with pytest.raises(ConfigError, match="extends: cannot follow"):
+        load(case)
+    case.write_text('extends = "c.toml"\n')
+    with pytest.raises(ConfigError, match="extends: circular"):
+        load(case)

@@ -1,0 +1,131 @@
+"""Damaged archives (issue #11): every reader checks the schema and answers
+``error: FILE: archive: what is wrong`` with exit code 2, never a traceback."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import h5py
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from camopt.cli import app
+from camopt.cli.app import INTERNAL
+from tests.conftest import CONFIGS
+
+runner = CliRunner()
+FAST = str(CONFIGS / "fast_switch.toml")
+DE = str(CONFIGS / "fast_switch_de.toml")
+
+
+def invoke(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+@pytest.fixture(scope="module")
+def good(tmp_path_factory):
+    d = tmp_path_factory.mktemp("good")
+    run, sweep = d / "run.h5", d / "sweep.h5"
+    assert invoke("run", FAST, "--out", run, "--quiet").exit_code == 0
+    r = invoke("sweep", DE, "--out", sweep, "--seeds", "0:2", "--quiet", "--jobs", "1",
+               "--set", "solver.generations=5", "--set", "solver.population=8")
+    assert r.exit_code == 0, r.output
+    return run, sweep
+
+
+def one_error_line(r, path):
+    assert r.exit_code == 2, r.output
+    assert r.stderr.count("\n") == 1 and r.stderr.startswith(f"error: {path}: ")
+    assert INTERNAL not in r.stderr
+
+
+def _del_attr(name, where="/"):
+    def damage(f):
+        del f[where].attrs[name]
+    return damage
+
+
+def _set_attr(name, value, where="/"):
+    def damage(f):
+        f[where].attrs[name] = value
+    return damage
+
+
+def _del(where):
+    def damage(f):
+        del f[where]
+    return damage
+
+
+RUN_DAMAGE = {
+    "missing variables": _del_attr("variables"),
+    "missing best": _del("best"),
+    "missing repeat attribute": _del_attr("nfev", "/repeats/r000"),
+    "bad JSON": _set_attr("config_effective", "{not json"),
+    "JSON of the wrong shape": _set_attr("variables", json.dumps({"a": 1})),
+    "x of the wrong length": lambda f: (f["best"].__delitem__("x"),
+                                        f["best"].create_dataset("x", data=[1.0])),
+    "newer schema": _set_attr("schema_version", 99),
+    "no repeats": lambda f: [f["repeats"].__delitem__(k) for k in list(f["repeats"])],
+}
+
+
+@pytest.mark.parametrize("damage", RUN_DAMAGE)
+def test_damaged_run_archives(good, tmp_path, damage):
+    path = tmp_path / "bad.h5"
+    shutil.copy(good[0], path)
+    with h5py.File(path, "a") as f:
+        RUN_DAMAGE[damage](f)
+    for args in (["show", path], ["compare", good[0], path], ["export", path, "--out", tmp_path]):
+        r = invoke(*args)
+        one_error_line(r, path)
+        assert ": archive: " in r.stderr
+
+
+SWEEP_DAMAGE = {
+    "extra cell attribute": lambda f: f["cells"][next(iter(f["cells"]))].attrs.create("z", 1),
+    "missing cell attribute": lambda f: f["cells"][next(iter(f["cells"]))].attrs.__delitem__(
+        "objective"),
+    "bad spec": _set_attr("spec", json.dumps({"data": {}, "grid": 3, "seeds": [0]})),
+    "cell outside the sweep": lambda f: f["cells"][next(iter(f["cells"]))].attrs.modify(
+        "seed", 99),
+    "missing cells": _del("cells"),
+}
+
+
+@pytest.mark.parametrize("damage", SWEEP_DAMAGE)
+def test_damaged_sweep_archives(good, tmp_path, damage):
+    path = tmp_path / "bad.h5"
+    shutil.copy(good[1], path)
+    with h5py.File(path, "a") as f:
+        SWEEP_DAMAGE[damage](f)
+    for args in (["compare", path], ["sweep", "--resume", path, "--quiet", "--jobs", "1"]):
+        r = invoke(*args)
+        one_error_line(r, path)
+        assert ": archive: " in r.stderr
+
+
+def test_flipped_and_truncated_bytes(good, tmp_path):
+    """Bytes flipped at random places (a failing disk), and a truncated copy: every
+    reader answers with one line, or reads an archive the flip did not touch."""
+    rng = np.random.default_rng(11)
+    outcomes = {0: 0, 2: 0}
+    for i, source in enumerate([*[good[0]] * 12, *[good[1]] * 6]):
+        raw = bytearray(source.read_bytes())
+        for at in rng.integers(0, len(raw), 4):
+            raw[at] ^= 0xFF
+        path = tmp_path / f"flip{i}.h5"
+        path.write_bytes(bytes(raw))
+        command = ["show", path, "--format", "json"] if source == good[0] else ["compare", path]
+        r = invoke(*command)
+        if r.exit_code == 2:
+            one_error_line(r, path)
+        else:
+            assert r.exit_code == 0, r.output
+        outcomes[r.exit_code] += 1
+    cut = tmp_path / "cut.h5"
+    cut.write_bytes(good[0].read_bytes()[:5000])
+    one_error_line(invoke("show", cut), cut)
+    assert sum(outcomes.values()) == 18

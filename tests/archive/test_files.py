@@ -1,0 +1,192 @@
+"""Writers under faults (issue #11): one writer per archive, nothing partial or lost on a
+full disk, a kill or a signal, --out never replaces anything but a regular file."""
+
+from __future__ import annotations
+
+import errno
+import os
+import resource
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from typer.testing import CliRunner
+
+from camopt import archive
+from camopt.archive import files
+from camopt.cli import app
+from tests.conftest import CONFIGS
+
+runner = CliRunner()
+FAST = str(CONFIGS / "fast_switch.toml")
+DE = str(CONFIGS / "fast_switch_de.toml")
+CAMOPT = [sys.executable, "-m", "camopt"]
+
+
+def invoke(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+def leftovers(folder):
+    """Temporary and lock files a writer left in ``folder``."""
+    return sorted(p.name for p in folder.iterdir() if p.name.startswith("."))
+
+
+def test_a_second_writer_fails_naming_the_holder(tmp_path):
+    out = tmp_path / "a.h5"
+    with archive.claim(out):
+        proc = subprocess.run([*CAMOPT, "run", FAST, "--out", str(out), "--quiet"],
+                              capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1
+    assert f"another camopt is writing this archive (pid {os.getpid()}" in proc.stderr
+    assert leftovers(tmp_path) == []
+
+
+def test_two_concurrent_runs_into_one_file_never_both_succeed(tmp_path):
+    out = tmp_path / "same.h5"
+    cmd = [*CAMOPT, "run", DE, "--out", str(out), "--quiet", "--set", "solver.generations=150"]
+    procs = [subprocess.Popen([*cmd, "--seed", str(i)], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True) for i in range(2)]
+    results = [(p.wait(timeout=120), p.stderr.read()) for p in procs]
+    codes = sorted(code for code, _ in results)
+    assert codes == [0, 2], results
+    loser = next(err for code, err in results if code == 2)
+    assert loser.startswith("error: ") and loser.count("\n") == 1
+    assert "another camopt is writing" in loser or "exists" in loser
+    winner = next(i for i, (code, _) in enumerate(results) if code == 0)
+    assert archive.load_run(out).run["seed"] == winner
+    assert leftovers(tmp_path) == []
+
+
+def test_two_sweeps_into_one_file(tmp_path):
+    out = tmp_path / "s.h5"
+    with archive.claim(out):
+        proc = subprocess.run([*CAMOPT, "sweep", DE, "--out", str(out), "--seeds", "0:2",
+                               "--quiet", "--jobs", "1", "--set", "solver.generations=5"],
+                              capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2 and "another camopt is writing" in proc.stderr
+    assert not out.exists()
+
+
+def test_full_disk_leaves_the_old_archive_and_no_temporary_file(tmp_path, monkeypatch):
+    out = tmp_path / "a.h5"
+    assert invoke("run", FAST, "--out", out, "--quiet").exit_code == 0
+    before = out.read_bytes()
+    calls = []
+
+    write = os.write
+
+    def full(fd, data):  # the disk fills up while the archive is written
+        if len(data) < 1000:
+            return write(fd, data)
+        calls.append(fd)
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(files.os, "write", full)
+    r = invoke("run", FAST, "--out", out, "--quiet", "--force")
+    assert calls and r.exit_code == 2
+    assert r.stderr == f"error: {out}: archive: cannot write (No space left on device); " \
+                       "nothing written\n"
+    assert out.read_bytes() == before and leftovers(tmp_path) == []
+
+
+def _fsize_limit():  # the kernel's own 'file too large' (EFBIG) on a real write
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))
+
+
+def test_a_real_write_failure_is_one_line_and_no_partial_file(tmp_path):
+    out = tmp_path / "a.h5"
+    proc = subprocess.run([*CAMOPT, "run", FAST, "--out", str(out), "--quiet"],
+                          capture_output=True, text=True, timeout=60, preexec_fn=_fsize_limit)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.startswith(f"error: {out}: archive: cannot write (File too large)")
+    assert proc.stderr.count("\n") == 1
+    assert not out.exists() and leftovers(tmp_path) == []
+
+
+def test_sigterm_removes_everything_half_done(tmp_path):
+    out = tmp_path / "a.h5"
+    proc = subprocess.Popen([*CAMOPT, "run", DE, "--out", str(out), "--quiet",
+                             "--set", "solver.generations=100000", "--set", "run.repeats=50"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 30
+    while not (tmp_path / ".a.h5.lock").exists() and time.time() < deadline:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130 and err == "error: interrupted; no archive written\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_stale_temporary_files_of_a_killed_writer_are_removed(tmp_path):
+    stale = tmp_path / ".old.h5.abcd_123.tmp"  # as SIGKILL during a write leaves it
+    live = tmp_path / ".busy.h5.zzzz_999.tmp"
+    out = tmp_path / "a.h5"
+    with archive.claim(tmp_path / "busy.h5"):  # its writer is alive: kept
+        stale.write_bytes(b"partial")
+        live.write_bytes(b"in progress")
+        proc = subprocess.run([*CAMOPT, "run", FAST, "--out", str(out), "--quiet"],
+                              capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0
+    assert proc.stderr == f"note: removed {stale} (a temporary file left by a killed camopt)\n"
+    assert not stale.exists() and live.exists()
+
+
+@pytest.mark.parametrize("target", ["/dev/null", "link"])
+def test_force_replaces_only_a_regular_file(tmp_path, target):
+    if target == "link":
+        (tmp_path / "real.h5").write_bytes(b"x")
+        (tmp_path / "link").symlink_to(tmp_path / "real.h5")
+        target = tmp_path / "link"
+    r = invoke("run", FAST, "--out", target, "--force", "--quiet")
+    assert r.exit_code == 2 and "not a regular file" in r.stderr
+    assert os.path.exists("/dev/null")
+
+
+def test_force_says_what_it_replaced(tmp_path):
+    out = tmp_path / "a.h5"
+    out.write_text("notes")
+    r = invoke("run", FAST, "--out", out, "--force", "--quiet")
+    assert r.exit_code == 0
+    assert r.stderr == f"note: --force: replaced {out} (a file, 5 bytes)\n"
+
+
+@pytest.mark.parametrize("out", ["x" * 250 + ".h5", "missing/a.h5"])
+def test_bad_out_paths_fail_before_any_work(tmp_path, out):
+    r = invoke("run", DE, "--out", tmp_path / out, "--quiet")
+    assert r.exit_code == 2 and r.stderr.startswith("error: ") and r.stderr.count("\n") == 1
+    assert leftovers(tmp_path) == []
+
+
+def test_workers_die_with_a_killed_parent(tmp_path):
+    out = tmp_path / "s.h5"
+    proc = subprocess.Popen([*CAMOPT, "sweep", DE, "--out", str(out), "--seeds", "0:40",
+                             "--jobs", "2", "--quiet", "--set", "solver.generations=2000"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    children: list[int] = []
+    deadline = time.time() + 30
+    while len(children) < 2 and time.time() < deadline:
+        try:
+            text = open(f"/proc/{proc.pid}/task/{proc.pid}/children").read()
+        except OSError:
+            break
+        children = [int(c) for c in text.split()]
+        time.sleep(0.1)
+    assert len(children) >= 2
+    proc.kill()
+    proc.wait(timeout=10)
+    deadline = time.time() + 10
+    while any(os.path.exists(f"/proc/{c}") and _alive(c) for c in children):
+        assert time.time() < deadline, "pool workers outlived their parent"
+        time.sleep(0.1)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return open(f"/proc/{pid}/stat").read().split()[2] != "Z"
+    except OSError:
+        return False
