@@ -2,11 +2,25 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from camopt.config.models import Bounds, CaseConfig, Positive
+from camopt.config.models import Bounds, CaseConfig, Plausible, Positive
+
+# Physical ranges of a breaker's opening mechanism (distribution to transmission class): a
+# value outside is a unit slip (metres into mm, s into ms) or a typo; run.check_plausibility
+# = false accepts it.
+Length = Annotated[float, Plausible(-5000.0, 5000.0)]
+Time = Annotated[float, Plausible(0.0, 1000.0)]
+Gap = Annotated[Positive, Plausible(0.1, 1000.0)]
+Stiffness = Annotated[Positive, Plausible(1e-3, 1e5)]
+FreeLength = Annotated[Positive, Plausible(1.0, 5000.0)]
+Inertia = Annotated[Positive, Plausible(1e-6, 1000.0)]
+Force = Annotated[float, Plausible(-1e6, 1e6)]
+Mass = Annotated[float, Plausible(0.0, 1000.0)]
+Arm = Annotated[float, Plausible(0.0, 5000.0)]
+Gravity = Annotated[float, Plausible(0.0, 100.0)]
 
 
 class OpeningSpringConfig(CaseConfig):
@@ -22,32 +36,32 @@ class OpeningSpringConfig(CaseConfig):
     desired_coefficients: list[float] = Field(
         [-0.105, 3.42, 2.34e2, -2.53e3], description="Eq 7: theta(t) = c0 + c1 t + c2 t^2 + "
         "c3 t^3, t in s")
-    t0_ms: float = Field(15.85, description="Eq 6: contact separation")
-    ts_ms: float = Field(25.80, description="Eq 6: contacts 10 mm apart")
-    gap_mm: Positive = Field(10.0, description="Eq 6: contact gap D")
+    t0_ms: Time = Field(15.85, description="Eq 6: contact separation")
+    ts_ms: Time = Field(25.80, description="Eq 6: contacts 10 mm apart")
+    gap_mm: Gap = Field(10.0, description="Eq 6: contact gap D")
     lever_arm_mm: Positive | None = Field(
         None, description="contact lever d; None derives it from Eq 6 (gap reached at ts)")
     precision_points_ms: list[float] = Field(
         [15.85, 24.85, 25.80], description="times on Eq 7 of the precision points; the first "
         "is the initial point")
     # spring design (Table 1 'original' by default)
-    k_n_per_mm: Positive = Field(14.59, description="stiffness of each of the two springs")
-    l0_mm: Positive = Field(128.0, description="free length")
-    u_mm: float = Field(83.0, description="ground point A, x")
-    v_mm: float = Field(207.0, description="ground point A, y")
-    s_mm: float = Field(135.0, description="link point B along OD")
-    t_mm: float = Field(0.0, description="link point B across OD (Sec 4.3: zero)")
-    spring_count: int = Field(2, ge=1, description="symmetric opening springs")
+    k_n_per_mm: Stiffness = Field(14.59, description="stiffness of each of the two springs")
+    l0_mm: FreeLength = Field(128.0, description="free length")
+    u_mm: Length = Field(83.0, description="ground point A, x")
+    v_mm: Length = Field(207.0, description="ground point A, y")
+    s_mm: Length = Field(135.0, description="link point B along OD")
+    t_mm: Length = Field(0.0, description="link point B across OD (Sec 4.3: zero)")
+    spring_count: int = Field(2, ge=1, le=100, description="symmetric opening springs")
     # lumped dynamics (not in the paper; identified or assumed, docs/assumptions.md)
-    inertia_kg_m2: Positive = Field(0.5436, description="I_o of the follower about O")
-    self_closing_force_n: float = Field(
+    inertia_kg_m2: Inertia = Field(0.5436, description="I_o of the follower about O")
+    self_closing_force_n: Force = Field(
         210.4, description="F_r per contact; positive resists opening")
-    contact_mass_kg: float = Field(1.5, ge=0, description="m_c, one moving contact assembly")
-    contact_count: int = Field(3, ge=1, description="three phases")
-    follower_mass_kg: float = Field(0.0, ge=0, description="m_f (lumped into I_o if 0)")
-    follower_centroid_mm: float = Field(0.0, ge=0, description="C_f")
+    contact_mass_kg: Mass = Field(1.5, ge=0, description="m_c, one moving contact assembly")
+    contact_count: int = Field(3, ge=1, le=100, description="three phases")
+    follower_mass_kg: Mass = Field(0.0, ge=0, description="m_f (lumped into I_o if 0)")
+    follower_centroid_mm: Arm = Field(0.0, ge=0, description="C_f")
     follower_centroid_deg: float = Field(0.0, description="psi = angle C_f O B")
-    gravity: float = Field(9.81, ge=0, description="m/s^2")
+    gravity: Gravity = Field(9.81, ge=0, description="m/s^2")
     regularization: float = Field(
         0.0, ge=0, description="weight of a pull toward the original design (pins the "
         "least-squares optimum)")
