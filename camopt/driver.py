@@ -86,7 +86,9 @@ def validate(data: dict[str, Any], source: str = "<data>") -> LoadedConfig:
 def prepare(config: LoadedConfig) -> tuple[Problem, type[Solver]]:
     """Build the case's problem and check the solver can run on it with these options
     (a capability the case lacks is bad input against ``solver``)."""
-    problem = build_problem(config.case)
+    with np.errstate(all="ignore"):  # a non-assembling mechanism is reported below
+        problem = build_problem(config.case)
+    _check_bounds(problem, config)
     solver_cls = get_solver(config.solver.name)
     try:
         solver_cls.check(type(problem), config.solver)
@@ -97,6 +99,17 @@ def prepare(config: LoadedConfig) -> tuple[Problem, type[Solver]]:
         raise ConfigError(config.path, key, f"cannot run case '{config.case.kind}': "
                           f"{exc}") from None
     return problem, solver_cls
+
+
+def _check_bounds(problem: Problem, config: LoadedConfig) -> None:
+    """Every design variable has finite bounds, lower below upper: bounds a case derives
+    from its parameters (an angle from an arccos, a radius range from two radii) say
+    whether the mechanism can be assembled at all."""
+    for v in problem.variables:
+        if not (np.isfinite(v.lower) and np.isfinite(v.upper) and v.lower < v.upper):
+            raise ConfigError(config.path, "case", f"the mechanism cannot be assembled with "
+                              f"these values: variable {v.name} gets bounds "
+                              f"[{v.lower * v.scale:g}, {v.upper * v.scale:g}]")
 
 
 def build_solver(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
