@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from camopt import archive
@@ -23,7 +24,9 @@ def tolerance(
     vary: Annotated[list[str] | None, typer.Option(
         "--vary", help="NAME=±X% (relative) or NAME=±X (own unit); NAME a design variable "
         "or case.FIELD; repeatable; default: the case's documented tolerances")] = None,
-    samples: Annotated[int, typer.Option(help="samples, evaluated in one pass")] = 2000,
+    samples: Annotated[int, typer.Option(
+        min=1, max=1_000_000, help="samples, evaluated in one pass (at most 10^6: memory)")]
+    = 2000,
     seed: Annotated[int, typer.Option(min=0, help="root seed of the draws")] = 0,
     dist: Annotated[Distribution, typer.Option(
         "--dist", help="uniform on ±X, or normal with sigma = X/3")] = Distribution.uniform,
@@ -56,7 +59,7 @@ def tolerance(
     else:
         print_tolerance(doc)
     for p in written:
-        out.print(str(p))
+        print(p)
 
 
 def _write(result, path: Path, force: bool) -> None:  # type: ignore[no-untyped-def]
@@ -78,7 +81,8 @@ def print_tolerance(doc: dict) -> None:
     """The analysis as rich tables: yield, then each metric's spread and its driver."""
     varied = ", ".join(f"{v['input']} ±{fmt(v['tolerance'])}{'%' if v['unit'] == '%' else ''}"
                        for v in doc["vary"])
-    out.print(f"[bold]{doc['run']}[/]: {doc['samples']} samples ({doc['distribution']}, "
+    run = escape(str(doc["run"]))
+    out.print(f"[bold]{run}[/]: {doc['samples']} samples ({doc['distribution']}, "
               f"seed {doc['seed']}) of {varied}")
     out.print(f"yield (feasible share): [bold]{doc['yield']:.1%}[/]"
               f"{'' if doc['nominal_feasible'] else ' (the nominal design is infeasible)'}")

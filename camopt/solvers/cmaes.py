@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
-from camopt.config.models import SolverOptions
+from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
 from camopt.problem import Evaluation
 from camopt.solvers.base import Solver, StopReason, better, snap
 from camopt.solvers.registry import register_solver
@@ -100,8 +100,10 @@ class CMAESOptions(SolverOptions):
     """Options of ``cmaes``."""
 
     name: Literal["cmaes"] = "cmaes"
-    population: int | None = Field(None, ge=4, description="lambda (default 4 + 3 ln n)")
-    generations: int = Field(500, ge=1, description="generations")
+    population: int | None = Field(None, ge=4, le=MAX_POPULATION, description="lambda "
+                                   f"(default 4 + 3 ln n; at most {MAX_POPULATION}: memory)")
+    generations: int = Field(500, ge=1, le=MAX_ITERATIONS,
+                             description=f"generations (at most {MAX_ITERATIONS}: time)")
     sigma: float = Field(0.3, gt=0, le=1, description="initial step, fraction of each range")
     x0: dict[str, float] | None = Field(
         None, description="start (display units); default the case's design, else the centre")

@@ -32,7 +32,7 @@ from pymoo.operators.mutation.pm import PM
 from pymoo.problems.static import StaticProblem
 
 from camopt.capabilities import Repairable
-from camopt.config.models import SolverOptions
+from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
 from camopt.errors import SolverError
 from camopt.problem import Evaluation
 from camopt.solvers.base import Solver, StopReason, better, design_rows, snap
@@ -53,8 +53,10 @@ class NSGA2Options(SolverOptions):
     maximise: list[str] = Field(
         default_factory=list, description="those of the objectives to maximise (the rest "
         "are minimised)")
-    population: int = Field(100, ge=4, description="population size (pymoo's pop_size)")
-    generations: int = Field(250, ge=1, description="generations")
+    population: int = Field(100, ge=4, le=MAX_POPULATION, description="population size "
+                            f"(pymoo's pop_size; at most {MAX_POPULATION}: memory)")
+    generations: int = Field(250, ge=1, le=MAX_ITERATIONS,
+                             description=f"generations (at most {MAX_ITERATIONS}: time)")
     crossover_eta: float = Field(15.0, gt=0, description="SBX distribution index (pymoo's)")
     mutation_eta: float = Field(20.0, gt=0, description="polynomial mutation index (pymoo's)")
     repair: bool = Field(
