@@ -2,11 +2,21 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from camopt.config.models import Bounds, CaseConfig, Pair, Positive, Strict
+from camopt.config.models import Bounds, CaseConfig, Pair, Plausible, Positive, Strict
+
+# Physical ranges of a medium-voltage breaker mechanism of this family: a value outside is a
+# unit slip (metres into mm) or a typo; run.check_plausibility = false accepts it.
+Length = Annotated[Positive, Plausible(1.0, 2000.0)]  # mm
+Stroke = Annotated[Positive, Plausible(0.1, 500.0)]  # mm: strokes, compressions, clearances
+Rate = Annotated[Positive, Plausible(0.01, 10_000.0)]  # N/mm
+Modulus = Annotated[Positive, Plausible(1.0, 1000.0)]  # GPa
+StressMpa = Annotated[Positive, Plausible(10.0, 10_000.0)]  # MPa
+Mass = Annotated[Positive, Plausible(1e-3, 1000.0)]  # kg
+Inertia = Annotated[Positive, Plausible(1e-7, 10.0)]  # kg m^2
 
 
 class CamDesign(Strict):
@@ -28,56 +38,56 @@ class VcbConfig(CaseConfig):
         "cam", description="cam: a1, a2, a3, kc1, kc2 (Eq 37); fourbar: l1, l3, l4, l5, "
         "theta1 (Eq 41)")
     # four-bar and pivots (Sec 2.3)
-    l1_mm: Positive = Field(139.79, description="fixed link BE")
-    l2_mm: Positive = Field(70.0, description="follower (input) link BD")
-    l3_mm: Positive = Field(124.7, description="coupler DL")
-    l4_mm: Positive = Field(140.0, description="output arm EL")
-    l5_mm: Positive = Field(90.0, description="output arm EM to the insulated rod")
+    l1_mm: Length = Field(139.79, description="fixed link BE")
+    l2_mm: Length = Field(70.0, description="follower (input) link BD")
+    l3_mm: Length = Field(124.7, description="coupler DL")
+    l4_mm: Length = Field(140.0, description="output arm EL")
+    l5_mm: Length = Field(90.0, description="output arm EM to the insulated rod")
     theta1_deg: float = Field(-121.98, description="fixed-link angle (Table 7 initial)")
     pivot_b_mm: Pair = Field((-72.0, -55.0), description="follower pivot B (cam pivot O at 0,0)")
     pivot_g_mm: Pair = Field((50.0, 200.0), description="closing springs' fixed end G")
-    crank_l8_mm: Positive = Field(25.0, description="closing springs' crank OQ on the cam shaft")
+    crank_l8_mm: Length = Field(25.0, description="closing springs' crank OQ on the cam shaft")
     preset_qox_deg: float = Field(95.0, description="angle QOX in the opened state")
     rod_arm_offset_deg: float = Field(
         0.0, description="angle of EM from the extension of LE beyond E (identified)")
     # cam (Sec 2.2-2.3)
-    rb_mm: Positive = Field(23.0, description="base circle radius")
-    rf_mm: Positive = Field(15.0, description="roller radius")
+    rb_mm: Length = Field(23.0, description="base circle radius")
+    rf_mm: Length = Field(15.0, description="roller radius")
     alpha: Positive = Field(0.95, description="loss coefficient of contact (Eq 1)")
     beta_mm: float = Field(2.0, ge=0, description="cam-roller clearance (Eq 1)")
     gamma_mm: float = Field(1.0, ge=0, description="hook-roller clearance (Eq 1)")
     node_clearance_mm: float = Field(
         1.0, ge=0, description="clearance in Eqs 2 and 8 that reproduces a0..a3 (not beta)")
     theta0_deg: float = Field(4.0, ge=0, description="pre-rotation before contact")
-    s1_bar_mm: Positive = Field(16.0, description="overall displacement of M (Eq 1)")
+    s1_bar_mm: Stroke = Field(16.0, description="overall displacement of M (Eq 1)")
     node_cam_deg: list[float] = Field([0.0, 70.0, 100.0, 140.0], description="theta_ci (Fig 4)")
     node_fractions: list[float] = Field([0.0, 0.7, 0.9, 1.0], description="s2i / s2bar (Fig 4)")
     # springs and loads (Table 2, Sec 3.2)
-    kc1_n_per_mm: Positive = Field(7.72, description="vendor closing spring 1")
-    kc2_n_per_mm: Positive = Field(9.33, description="vendor closing spring 2")
-    kc1_precompression_mm: Positive = Field(140.0, description="spring 1, opened state")
-    kc2_precompression_mm: Positive = Field(100.0, description="spring 2, opened state")
-    opening_k_n_per_mm: Positive = Field(16.6, description="opening spring")
-    opening_stretch_closed_mm: Positive = Field(33.6, description="opening spring, closed state")
+    kc1_n_per_mm: Rate = Field(7.72, description="vendor closing spring 1")
+    kc2_n_per_mm: Rate = Field(9.33, description="vendor closing spring 2")
+    kc1_precompression_mm: Stroke = Field(140.0, description="spring 1, opened state")
+    kc2_precompression_mm: Stroke = Field(100.0, description="spring 2, opened state")
+    opening_k_n_per_mm: Rate = Field(16.6, description="opening spring")
+    opening_stretch_closed_mm: Stroke = Field(33.6, description="opening spring, closed state")
     opening_arm_ratio: Positive = Field(
         1.0, description="opening-spring elongation per mm of rod travel, r7/r6 (identified)")
-    wipe_k_n_per_mm: Positive = Field(82.4, description="one contact (wipe) spring")
+    wipe_k_n_per_mm: Rate = Field(82.4, description="one contact (wipe) spring")
     wipe_count: int = Field(3, ge=1, description="contact springs, one per phase")
-    wipe_compression_closed_mm: Positive = Field(17.0, description="closed state, vendor")
-    contact_gap_mm: Positive = Field(11.0, description="rod travel where contacts touch")
+    wipe_compression_closed_mm: Stroke = Field(17.0, description="closed state, vendor")
+    contact_gap_mm: Stroke = Field(11.0, description="rod travel where contacts touch")
     free_contact_force_n: float = Field(
         0.0, description="self-closing force of the interrupters before touch (identified)")
     efficiency: float = Field(0.85, gt=0, le=1, description="mechanical efficiency (Eq 26)")
-    rod_travel_mm: Positive = Field(
+    rod_travel_mm: Stroke = Field(
         18.0, description="rod travel the breaker needs, opened to closed (Sec 3.2)")
-    rod_travel_tolerance_mm: Positive = Field(
+    rod_travel_tolerance_mm: Stroke = Field(
         0.2, description="allowed deviation of the rod travel (constraint, steps 1 and 2)")
     # closing dynamics (Sec 3.2; inertias identified: configs/vcb_identify_dynamics.toml)
-    cam_inertia_kg_m2: Positive = Field(
+    cam_inertia_kg_m2: Inertia = Field(
         1.15e-3, description="cam, shaft, crank and closing springs about O (identified)")
-    rod_mass_kg: Positive = Field(
+    rod_mass_kg: Mass = Field(
         3.02, description="follower, four-bar and rods as a mass at the rod (identified)")
-    contacts_mass_kg: Positive = Field(
+    contacts_mass_kg: Mass = Field(
         2.15, description="the three moving contacts together (identified)")
     dynamics_steps: int = Field(
         400, ge=50, le=100_000, description="graded cam-angle intervals of the work-energy "
@@ -97,10 +107,10 @@ class VcbConfig(CaseConfig):
     latch_energy_min_j: float = Field(
         0.0, ge=0, description="kinetic energy the hook needs at the end of the stroke")
     # contact stress (Table 1, Eqs 27-31)
-    cam_modulus_gpa: Positive = Field(210.0, description="E of cam and roller (S45C)")
+    cam_modulus_gpa: Modulus = Field(210.0, description="E of cam and roller (S45C)")
     poisson: float = Field(0.3, ge=0, lt=0.5, description="Poisson's ratio")
-    contact_length_mm: Positive = Field(15.0, description="cam-roller contact length")
-    shear_yield_mpa: Positive = Field(1194.0, description="tau_y = 0.577 sigma_y")
+    contact_length_mm: Length = Field(15.0, description="cam-roller contact length")
+    shear_yield_mpa: StressMpa = Field(1194.0, description="tau_y = 0.577 sigma_y")
     stress_constraint: bool = Field(True, description="require tau_max <= shear_yield")
     # objective (Eqs 39-40)
     objective_form: Literal["net", "abs_sum"] = Field(
@@ -129,6 +139,13 @@ class VcbConfig(CaseConfig):
     def _nodes(self) -> VcbConfig:
         if len(self.node_cam_deg) != 4 or len(self.node_fractions) != 4:
             raise ValueError("node_cam_deg and node_fractions need four values (Eq 7)")
+        nodes, fractions = self.node_cam_deg, self.node_fractions
+        if nodes[0] != 0 or any(b <= a for a, b in zip(nodes, nodes[1:])) or nodes[-1] > 300:
+            raise ValueError("node_cam_deg: cam angles start at 0 and increase, at most "
+                             "300 deg (Eq 7; the cam must leave the roller within a turn)")
+        if any(b <= a for a, b in zip(fractions, fractions[1:])) or not (
+                0 <= fractions[0] and fractions[-1] <= 1):
+            raise ValueError("node_fractions: increasing fractions of the stroke in [0, 1]")
         if self.phi_max_deg[0] >= self.phi_max_deg[1]:
             raise ValueError("phi_max_deg: lower bound must be below upper bound")
         v = self.closing_velocity_m_s
