@@ -107,14 +107,17 @@ def test_interrupt_kill_and_resume_equal_uninterrupted(tmp_path):
 
 @pytest.mark.slow
 def test_dask_local_cluster_matches_local_pool(tmp_path):
+    """Issue #12: a sweep on a LocalCluster of 4 workers stores the same cells (but wall
+    times) and summary as --jobs 1."""
     distributed = pytest.importorskip("distributed")
-    grid = ["--seeds", "0:3", "--grid", "solver.population=10,20"]
+    grid = ["--seeds", "0:6", "--grid", "solver.population=10,20"]
     local = sweep(tmp_path, "local.h5", *grid, "--jobs", "1")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+    with distributed.LocalCluster(n_workers=4, threads_per_worker=1, processes=True,
                                   host="127.0.0.1", dashboard_address=None) as cluster:
         dask = sweep(tmp_path, "dask.h5", *grid, "--executor", "dask",
                      "--scheduler", cluster.scheduler_address)
     assert stable_summary(local) == stable_summary(dask)
+    assert cells(local) == cells(dask)
 
 
 @pytest.mark.slow
@@ -173,3 +176,33 @@ def test_seeds_are_children_of_one_sequence():
     child = np.random.SeedSequence(cell.entropy, spawn_key=(cell.seed,))
     assert child.generate_state(4).tolist() == \
         np.random.SeedSequence(7).spawn(5)[3].generate_state(4).tolist()
+
+
+def test_cells_go_to_a_journal_and_snapshots_double(tmp_path, monkeypatch):
+    """Issue #12: a finished cell costs one journal line; the HDF5 snapshot is rewritten
+    only when the stored cells have doubled (and at the end), so a sweep of n cells
+    rewrites it O(log n) times, and no journal is left once the sweep is complete."""
+    from camopt.archive import sweeps as store
+
+    calls = []
+    real = store.write_sweep
+    monkeypatch.setattr(store, "write_sweep", lambda *a, **k: (calls.append(len(a[2])),
+                                                               real(*a, **k)))
+    out = sweep(tmp_path, "s.h5", "--seeds", "0:32", "--set", "solver.generations=2",
+                "--set", "solver.population=6", "--jobs", "1")
+    assert calls == [0, 2, 4, 8, 16, 32, 32]
+    assert not store.journal_path(out).exists()
+    _, results = load_sweep(out)
+    assert sorted(results) == [(0, s) for s in range(32)]
+
+
+def test_batches_do_not_change_results(tmp_path):
+    """Cells sent to pool workers in batches (sized from the first cells' time) give the
+    same cells as one job running them one by one."""
+    from camopt.sweep import run as sweep_run
+
+    assert sweep_run.batch_size(1e-4) == sweep_run.MAX_BATCH
+    assert sweep_run.batch_size(10.0) == 1
+    args = ["--seeds", "0:24", "--set", "solver.generations=2", "--set", "solver.population=6"]
+    assert cells(sweep(tmp_path, "a.h5", *args, "--jobs", "1")) == \
+        cells(sweep(tmp_path, "b.h5", *args, "--jobs", "2"))

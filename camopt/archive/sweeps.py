@@ -1,10 +1,37 @@
-"""Sweep archives: the spec, every finished cell and a summary per grid point."""
+"""Sweep archives: the spec, every finished cell and a summary per grid point.
+
+Layout (schema 2), one HDF5 file:
+
+- root attributes: library versions, ``schema_version`` 2, ``archive_kind`` "sweep",
+  ``config_toml`` (the case file's text), ``config_path``, ``spec`` (JSON: the validated
+  config data, the grid, the seed range), ``seed_entropy``, ``cells_total``,
+  ``cells_done``, ``complete``, ``created``;
+- ``/cells``: one row per finished cell, columns ``point``, ``seed``, ``objective``,
+  ``feasible``, ``success``, ``nfev``, ``nit``, ``wall_s``, ``converged_nit``,
+  ``nfev_to_target`` (1-D datasets), the best designs ``x`` as ragged rows
+  (``x/values`` concatenated, SI, and ``x/offsets``, n_cells + 1), and each convergence
+  history ``history/<name>/values`` with ``history/<name>/offsets`` likewise;
+- ``/summary``: one row per grid point (success rate, statistics, evaluations to target).
+
+Cost per cell is O(1): a finished cell is appended to a journal beside the archive,
+``.<archive name>.cells`` (one JSON line per cell, written with one ``os.write``), and
+the HDF5 snapshot is rewritten (atomically, :func:`camopt.archive.files.atomic_write`)
+only when the number of cells has doubled since the last snapshot, after
+``SNAPSHOT_SECONDS``, and at the end, when the journal is removed. Readers take the
+snapshot and every complete journal line (a line cut short by a kill is ignored), so
+they never see a partial cell, and ``--resume`` after SIGKILL loses only running cells.
+"""
 
 from __future__ import annotations
 
-from dataclasses import asdict
+import contextlib
+import json
+import os
+import time
+from dataclasses import fields
 from datetime import datetime, timezone
 from pathlib import Path
+from typing import Any
 
 import h5py
 import numpy as np
@@ -15,13 +42,45 @@ from camopt.archive.tables import write_table
 from camopt.errors import ArchiveError
 from camopt.sweep.spec import CellResult, SweepSpec, summary
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+SNAPSHOT_SECONDS = 30.0
+_FIELDS = tuple(f.name for f in fields(CellResult))
+_SCALARS = tuple(name for name in _FIELDS if name not in ("x", "history"))
+_INTS = ("point", "seed", "nfev", "nit", "converged_nit", "nfev_to_target")
+_BOOLS = ("feasible", "success")
+
+
+def journal_path(path: Path) -> Path:
+    """The journal of cells finished since the last snapshot, beside the archive."""
+    path = Path(path)
+    return path.with_name(f".{path.name}.cells")
+
+
+def _ragged(group: h5py.Group, name: str, rows: list[list[Any]]) -> None:
+    """Rows of different lengths as concatenated ``values`` and ``offsets`` (n + 1)."""
+    g = group.create_group(name)
+    lengths = [len(r) for r in rows]
+    flat = [v for r in rows for v in r]
+    whole = all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in flat)
+    g.create_dataset("values", data=np.array(flat, dtype=np.int64 if whole and flat
+                                             else float))
+    g.create_dataset("offsets", data=np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64))
+
+
+def _unragged(g: h5py.Group, n: int) -> list[list[Any]]:
+    offsets = g["offsets"][()]
+    values = g["values"][()].tolist()
+    if offsets.shape != (n + 1,) or offsets[0] != 0 or np.any(np.diff(offsets) < 0) \
+            or offsets[-1] != len(values):
+        raise ArchiveError(f"{g.name}: offsets do not index its values")
+    return [values[offsets[i]:offsets[i + 1]] for i in range(n)]
 
 
 def write_sweep(path: Path, spec: SweepSpec, results: dict[tuple[int, int], CellResult],
                 total: int, replace: bool = True) -> None:
-    """Rewrite the sweep archive atomically with every finished cell (``replace=False``:
+    """Write the sweep snapshot atomically with every finished cell (``replace=False``:
     never replace an existing file, for a new sweep's first write)."""
+    cells = [results[k] for k in sorted(results)]
 
     def write(f: h5py.File) -> None:
         f.attrs.update({
@@ -31,23 +90,106 @@ def write_sweep(path: Path, spec: SweepSpec, results: dict[tuple[int, int], Cell
             "cells_done": len(results), "complete": len(results) == total,
             "created": datetime.now(timezone.utc).isoformat(),
         })
-        cells = f.create_group("cells")
-        for key in sorted(results):
-            r = results[key]
-            g = cells.create_group(f"p{r.point:03d}_s{r.seed:05d}")
-            meta = {k: v for k, v in asdict(r).items() if k not in ("x", "history")}
-            g.attrs.update(meta)
-            g.create_dataset("x", data=np.asarray(r.x))
-            hist = g.create_group("history")
-            for k, v in r.history.items():
-                hist.create_dataset(k, data=np.asarray(v), maxshape=(None,), chunks=True)
+        g = f.create_group("cells")
+        for name in _SCALARS:
+            dtype = np.int64 if name in _INTS else bool if name in _BOOLS else float
+            g.create_dataset(name, data=np.array([getattr(c, name) for c in cells],
+                                                 dtype=dtype))
+        _ragged(g, "x", [list(c.x) for c in cells])
+        hist = g.create_group("history")
+        for key in sorted({k for c in cells for k in c.history}):
+            _ragged(hist, key, [list(c.history.get(key, [])) for c in cells])
         write_table(f.create_group("summary"), summary(spec, results.values()))
 
     atomic_write(path, write, replace=replace)
 
 
+class SweepWriter:
+    """Stores a running sweep's finished cells: the journal line first (O(1) per cell), a
+    snapshot now and then (amortised O(1) per cell), a final snapshot on :meth:`close`."""
+
+    def __init__(self, path: Path, spec: SweepSpec,
+                 results: dict[tuple[int, int], CellResult], total: int,
+                 replace: bool = True) -> None:
+        self.path, self.spec, self.results, self.total = Path(path), spec, results, total
+        write_sweep(self.path, spec, results, total, replace=replace)
+        journal = journal_path(self.path)
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(journal)  # every cell it held is in the snapshot just written
+        self._fd: int | None = os.open(journal, os.O_WRONLY | os.O_CREAT | os.O_APPEND
+                                       | os.O_CLOEXEC, 0o644)
+        self._snapshot_size = max(len(results), 1)
+        self._snapshot_time = time.monotonic()
+
+    def add(self, result: CellResult) -> None:
+        """Store one finished cell; it counts as done only once its line is written."""
+        assert self._fd is not None
+        row = {name: getattr(result, name) for name in _FIELDS}  # shallow: no deep copy
+        line = (json.dumps(row, separators=(",", ":")) + "\n").encode()
+        try:
+            view = memoryview(line)
+            while view:
+                view = view[os.write(self._fd, view):]
+        except OSError as exc:
+            raise ArchiveError(f"{self.path}: archive: cannot append a cell "
+                               f"({exc.strerror}); finish with --resume") from None
+        self.results[result.key] = result
+        if (len(self.results) >= 2 * self._snapshot_size
+                or time.monotonic() - self._snapshot_time > SNAPSHOT_SECONDS):
+            self.snapshot()
+
+    def snapshot(self) -> None:
+        """Rewrite the archive with every stored cell and empty the journal."""
+        write_sweep(self.path, self.spec, self.results, self.total)
+        assert self._fd is not None
+        os.ftruncate(self._fd, 0)
+        self._snapshot_size = max(len(self.results), 1)
+        self._snapshot_time = time.monotonic()
+
+    def close(self) -> None:
+        """Final snapshot; the journal is removed."""
+        if self._fd is None:
+            return
+        self.snapshot()
+        os.close(self._fd)
+        self._fd = None
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(journal_path(self.path))
+
+
+def read_journal(path: Path, spec: SweepSpec) -> list[CellResult]:
+    """The complete lines of an archive's journal as cells (none without a journal)."""
+    try:
+        text = journal_path(path).read_bytes()
+    except FileNotFoundError:
+        return []
+    except OSError as exc:
+        raise ArchiveError(f"{path}: archive: cannot read its journal ({exc.strerror})") \
+            from None
+    cells = []
+    for line in text.split(b"\n")[:-1]:  # the part after the last newline is cut short
+        try:
+            cells.append(_cell(json.loads(line), spec, "journal"))
+        except (ValueError, TypeError) as exc:
+            raise ArchiveError(f"journal: a damaged line ({exc})") from None
+    return cells
+
+
+def _cell(a: dict[str, Any], spec: SweepSpec, where: str) -> CellResult:
+    expected = sorted(_FIELDS)
+    if sorted(a) != expected:
+        raise ArchiveError(f"{where}: cell fields {sorted(a)}, expected {expected}")
+    r = CellResult(**a)
+    n_points, (start, stop) = len(spec.points()), spec.seeds
+    if not (isinstance(r.point, int) and isinstance(r.seed, int)
+            and 0 <= r.point < n_points and start <= r.seed < stop):
+        raise ArchiveError(f"{where}: grid point or seed outside the sweep")
+    return r
+
+
 def load_sweep(path: str | Path) -> tuple[SweepSpec, dict[tuple[int, int], CellResult]]:
-    """A sweep archive's spec and finished cells."""
+    """A sweep archive's spec and finished cells (snapshot and journal)."""
+    path = Path(path)
     with open_archive(path) as f:
         if f.attrs.get("archive_kind") != "sweep":
             raise ArchiveError(f"{path}: file: a run archive, not a sweep archive")
@@ -55,25 +197,29 @@ def load_sweep(path: str | Path) -> tuple[SweepSpec, dict[tuple[int, int], CellR
             check_schema(f, SCHEMA_VERSION, SWEEP_SCHEMA)
             spec = SweepSpec.from_json(str(f.attrs["spec"]), str(f.attrs["config_toml"]))
             _check_spec(spec)
-            n_points, (start, stop) = len(spec.points()), spec.seeds
+            g = f["cells"]
+            columns = sorted(k for k in g if k not in ("x", "history"))
+            if columns != sorted(_SCALARS):
+                raise ArchiveError(f"/cells: columns {columns}, expected {sorted(_SCALARS)}")
+            data = {k: g[k][()].tolist() for k in _SCALARS}
+            n = len(data["point"])
+            if any(len(v) != n for v in data.values()):
+                raise ArchiveError("/cells: columns of different lengths")
+            xs = _unragged(g["x"], n)
+            hist = {k: _unragged(v, n) for k, v in g["history"].items()}
             results = {}
-            fields = [k for k in CellResult.__dataclass_fields__ if k not in ("x", "history")]
-            for name, g in f["cells"].items():
-                a = {k: (v.item() if isinstance(v, np.generic) else v)
-                     for k, v in g.attrs.items()}
-                if sorted(a) != sorted(fields) or "x" not in g or "history" not in g:
-                    raise ArchiveError(f"/cells/{name}: attributes {sorted(a)}, expected "
-                                       f"{sorted(fields)} with x and history")
-                r = CellResult(**a, x=g["x"][()].tolist(),
-                               history={k: v[()].tolist() for k, v in g["history"].items()})
-                if not (isinstance(r.point, int) and isinstance(r.seed, int)
-                        and 0 <= r.point < n_points and start <= r.seed < stop):
-                    raise ArchiveError(f"/cells/{name}: grid point or seed outside the sweep")
+            for i in range(n):
+                row = {k: data[k][i] for k in _SCALARS}
+                row.update(x=xs[i], history={k: v[i] for k, v in hist.items() if v[i]})
+                r = _cell(row, spec, f"/cells row {i}")
+                results[r.key] = r
+            for r in read_journal(path, spec):
                 results[r.key] = r
     return spec, results
 
 
-SWEEP_SCHEMA = (("/", ("spec", "config_toml", "cells_total", "cells_done")), ("/cells", ()))
+SWEEP_SCHEMA = (("/", ("spec", "config_toml", "cells_total", "cells_done")), ("/cells", ()),
+                ("/cells/x", ()), ("/cells/history", ()))
 
 
 def _check_spec(spec: SweepSpec) -> None:

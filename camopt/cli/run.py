@@ -65,10 +65,11 @@ def default_out(name: str) -> Path:
 
 
 @contextlib.contextmanager
-def claim_out(path: Path, force: bool) -> Iterator[None]:
+def claim_out(path: Path, force: bool, resuming: bool = False) -> Iterator[None]:
     """Hold ``path`` for writing (``archive.claim``: one writer per archive); report stale
-    temporary files removed and, with ``--force``, what the new archive replaced."""
-    replaced = archive.describe_file(path) if force else None
+    temporary files removed and, with ``--force``, what the new archive replaced (not when
+    ``resuming`` the archive's own sweep)."""
+    replaced = archive.describe_file(path) if force and not resuming else None
     with archive.claim(path, force) as held:
         for stale in held.stale:
             print(f"note: removed {stale} (a temporary file left by a killed camopt)",

@@ -132,8 +132,12 @@ class SweepSpec:
         return out
 
     def cells(self) -> list[CellSpec]:
-        return [CellSpec(self.point_data(p), self.source, self.entropy, s, i)
-                for i, p in enumerate(self.points()) for s in range(*self.seeds)]
+        """Every cell; the cells of one grid point share its (read-only) config data."""
+        out = []
+        for i, p in enumerate(self.points()):
+            data = self.point_data(p)
+            out += [CellSpec(data, self.source, self.entropy, s, i) for s in range(*self.seeds)]
+        return out
 
     def to_json(self) -> str:
         """The spec as JSON text (stored in the sweep archive)."""

@@ -84,13 +84,18 @@ def test_damaged_run_archives(good, tmp_path, damage):
         assert ": archive: " in r.stderr
 
 
+def _set_cell(column, index, value):
+    def damage(f):
+        f["cells"][column][index] = value
+    return damage
+
+
 SWEEP_DAMAGE = {
-    "extra cell attribute": lambda f: f["cells"][next(iter(f["cells"]))].attrs.create("z", 1),
-    "missing cell attribute": lambda f: f["cells"][next(iter(f["cells"]))].attrs.__delitem__(
-        "objective"),
+    "extra cell column": lambda f: f["cells"].create_dataset("z", data=[1, 2]),
+    "missing cell column": lambda f: f["cells"].__delitem__("objective"),
     "bad spec": _set_attr("spec", json.dumps({"data": {}, "grid": 3, "seeds": [0]})),
-    "cell outside the sweep": lambda f: f["cells"][next(iter(f["cells"]))].attrs.modify(
-        "seed", 99),
+    "cell outside the sweep": _set_cell("seed", 0, 99),
+    "offsets past the values": lambda f: f["cells"]["x"]["offsets"].__setitem__(-1, 10**6),
     "missing cells": _del("cells"),
 }
 
@@ -129,3 +134,18 @@ def test_flipped_and_truncated_bytes(good, tmp_path):
     cut.write_bytes(good[0].read_bytes()[:5000])
     one_error_line(invoke("show", cut), cut)
     assert sum(outcomes.values()) == 18
+
+
+def test_damaged_sweep_journal(good, tmp_path):
+    """A journal line that is complete but not a cell (a failing disk) is bad input with
+    one line; a line cut short by a kill (no newline) is ignored."""
+    path = tmp_path / "bad.h5"
+    shutil.copy(good[1], path)
+    journal = tmp_path / f".{path.name}.cells"
+    journal.write_text('{"point": 0, "seed"')
+    assert invoke("compare", path).exit_code == 0
+    journal.write_text('{"point": 0, "seed": 1}\n')
+    for args in (["compare", path], ["sweep", "--resume", path, "--quiet", "--jobs", "1"]):
+        r = invoke(*args)
+        one_error_line(r, path)
+        assert ": archive: " in r.stderr
