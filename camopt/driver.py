@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -18,6 +19,7 @@ from numpy.typing import NDArray
 from camopt.cases import build_problem, case_configs
 from camopt.config import LoadedConfig, load_config, validate_data
 from camopt.errors import ConfigError, SolverError
+from camopt.perf import fork_pool, kill_pool
 from camopt.problem import Problem, deb_best
 from camopt.solvers import Solver, StopReason, get_solver, solvers
 
@@ -124,11 +126,14 @@ def build_solver(problem: Problem, solver_cls: type[Solver], config: LoadedConfi
 
 def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
                child: np.random.SeedSequence, index: int, repeats: int,
-               callback: Callable[[Progress], None] | None = None) -> RepeatRecord:
+               callback: Callable[[Progress], None] | None = None, jobs: int = 1
+               ) -> RepeatRecord:
     """Run one repeat of the solver to its stop reason, or to the run's own limits
-    (``run.max_evaluations``, ``run.max_seconds``), whichever comes first."""
+    (``run.max_evaluations``, ``run.max_seconds``), whichever comes first; ``jobs``
+    worker processes are lent to the solver (multi-start solvers spread their starts)."""
     start = time.perf_counter()
     solver = build_solver(problem, solver_cls, config, np.random.default_rng(child))
+    solver.jobs = jobs
     max_nfev, max_s = config.run.max_evaluations, config.run.max_seconds
     nfev, best_f, mean_f, best_v = [], [], [], []
     while (reason := _stop(solver, start, max_nfev, max_s)) is None:
@@ -192,17 +197,57 @@ def best_repeat(records: list[RepeatRecord]) -> RepeatRecord:
     return records[deb_best([r.fun for r in records], [r.violation for r in records])]
 
 
+_REPEATS: tuple | None = None  # what forked workers of execute(jobs > 1) run
+
+
+def _repeat_in_worker(i: int) -> RepeatRecord:
+    assert _REPEATS is not None
+    problem, solver_cls, config, children = _REPEATS
+    return run_repeat(problem, solver_cls, config, children[i], i, len(children))
+
+
+def _parallel_repeats(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
+                      children: list[np.random.SeedSequence], jobs: int,
+                      callback: Callable[[Progress], None] | None) -> list[RepeatRecord]:
+    """Repeats in ``jobs`` forked workers; each repeat is independent (its own child
+    seed), so the records equal a sequential run's but for wall times."""
+    global _REPEATS
+    _REPEATS = (problem, solver_cls, config, children)
+    pool = fork_pool(min(jobs, len(children)))
+    records: list[RepeatRecord | None] = [None] * len(children)
+    try:
+        futures = {pool.submit(_repeat_in_worker, i): i for i in range(len(children))}
+        for fut in as_completed(futures):
+            rec = fut.result()
+            records[futures[fut]] = rec
+            if callback:
+                done = sum(r is not None for r in records)
+                callback(Progress(done - 1, len(children), rec.nit, rec.nit, rec.fun))
+    except BaseException:
+        kill_pool(pool)
+        raise
+    finally:
+        _REPEATS = None
+    pool.shutdown(wait=True)
+    return [r for r in records if r is not None]
+
+
 def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None = None,
-            callback: Callable[[Progress], None] | None = None) -> RunRecord:
+            callback: Callable[[Progress], None] | None = None, jobs: int = 1) -> RunRecord:
     """Run a validated config: every repeat, then the best design's metrics and analysis.
     ``seed`` and ``repeats`` override the config's (prefer setting ``run.seed`` and
-    ``run.repeats`` in the config, so the archive records the config as run)."""
+    ``run.repeats`` in the config, so the archive records the config as run). ``jobs``
+    worker processes run the repeats side by side, or a single repeat's independent
+    starts (multi-start solvers); results do not depend on it."""
     problem, solver_cls = prepare(config)
     seed = config.run.seed if seed is None else seed
     repeats = config.run.repeats if repeats is None else repeats
     children = np.random.SeedSequence(seed).spawn(repeats)
-    records = [run_repeat(problem, solver_cls, config, child, i, repeats, callback)
-               for i, child in enumerate(children)]
+    if jobs > 1 and repeats > 1:
+        records = _parallel_repeats(problem, solver_cls, config, children, jobs, callback)
+    else:
+        records = [run_repeat(problem, solver_cls, config, child, i, repeats, callback, jobs)
+                   for i, child in enumerate(children)]
     best = best_repeat(records)
     return RunRecord(config, problem, seed, records, best, dict(problem.metrics(best.x)),
                      dict(problem.analysis(best.x)))

@@ -51,3 +51,32 @@ def die_with_parent() -> bool:
         return libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
     except (OSError, AttributeError):
         return False
+
+
+def worker_start() -> None:
+    """Set-up of every camopt pool worker: die with the parent (a killed camopt leaves no
+    worker blocked forever), leave Ctrl-C to the parent (which stops the pool), restore
+    SIGTERM's default, tune the allocator."""
+    import signal
+
+    die_with_parent()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    tune_allocator()
+
+
+def fork_pool(jobs: int):  # type: ignore[no-untyped-def]
+    """A process pool of ``jobs`` forked workers (they inherit the parent's problem and
+    solver objects, so tasks pass only indices and small results)."""
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing import get_context
+
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("fork"),
+                               initializer=worker_start)
+
+
+def kill_pool(pool) -> None:  # type: ignore[no-untyped-def]
+    """Stop a pool at once: its workers are killed, not waited for (interrupted work)."""
+    for proc in list(getattr(pool, "_processes", {}).values()):
+        proc.kill()
+    pool.shutdown(wait=True, cancel_futures=True)

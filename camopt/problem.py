@@ -48,8 +48,9 @@ class Evaluation:
     def violation(self) -> NDArray:
         """Sum of constraint excesses over FEASIBILITY_TOL, (n_pop,); NaN counts as
         infinitely violated."""
-        g = np.where(np.isnan(self.g), np.inf, self.g)
-        return np.clip(g - FEASIBILITY_TOL, 0.0, None).sum(axis=1)
+        excess = np.asarray(self.g, dtype=float) - FEASIBILITY_TOL  # a new array
+        excess[np.isnan(excess)] = np.inf
+        return np.maximum(excess, 0.0, out=excess).sum(axis=1)
 
     @property
     def feasible(self) -> NDArray:
@@ -135,13 +136,25 @@ class Problem:
         raise NotImplementedError
 
     # ---- the unit cube ----------------------------------------------------------------
+    def _box(self) -> tuple[NDArray, NDArray]:
+        """(lower, upper - lower), built once per tuple of variables (local solvers map
+        every single design through the unit cube: the arrays are not rebuilt per call)."""
+        cache = self.__dict__.get("_box_cache")
+        if cache is None or cache[0] is not self.variables:
+            lower, upper = self.lower, self.upper
+            cache = (self.variables, lower, upper - lower)
+            self.__dict__["_box_cache"] = cache
+        return cache[1], cache[2]
+
     def to_unit(self, X: NDArray) -> NDArray:
         """SI designs to bounds-normalised coordinates (0 at the lower, 1 at the upper bound)."""
-        return (np.asarray(X, dtype=float) - self.lower) / (self.upper - self.lower)
+        lower, span = self._box()
+        return (np.asarray(X, dtype=float) - lower) / span
 
     def from_unit(self, U: NDArray) -> NDArray:
         """Bounds-normalised coordinates back to SI designs: ``lower + U (upper - lower)``."""
-        return self.lower + np.asarray(U, dtype=float) * (self.upper - self.lower)
+        lower, span = self._box()
+        return lower + np.asarray(U, dtype=float) * span
 
     def sample(self, rng: np.random.Generator, n: int) -> NDArray:
         """``n`` designs drawn uniformly within the bounds, (n, n_var), SI (integers not

@@ -13,6 +13,8 @@ from camopt.driver import (
     validate,
 )
 from camopt.solvers import StopReason
+from tests.conftest import CONFIGS
+from tests.helpers import load
 
 
 def _config(**run):
@@ -61,3 +63,22 @@ def test_run_limits_are_validated():
 
     with pytest.raises(ConfigError, match="run.max_evaluations"):
         _config(max_evaluations=0)
+
+
+def _comparable(record):
+    return [(r.x.tolist(), r.fun, r.nfev, r.nit, {k: v.tolist() for k, v in r.history.items()},
+             [{k: v for k, v in row.items() if k != "wall_s"} for row in r.table], r.notes)
+            for r in record.repeats]
+
+
+@pytest.mark.parametrize("config, overrides", [
+    ("opening_spring_lse6.toml", ["solver.starts=4", "run.repeats=1"]),  # starts in workers
+    ("vcb.toml", ["solver.generations=20", "run.repeats=3"]),  # repeats in workers
+])
+def test_jobs_change_nothing_but_wall_time(config, overrides):
+    """Issue #12: `camopt run --jobs 2` runs repeats (or one repeat's starts) in forked
+    workers; every record but wall times equals the sequential run's."""
+    cfg = load(CONFIGS / config, *overrides)
+    one, two = execute(cfg), execute(cfg, jobs=2)
+    assert _comparable(one) == _comparable(two)
+    assert one.best.fun == two.best.fun

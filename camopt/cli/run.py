@@ -31,6 +31,8 @@ def run(
     force: Annotated[bool, typer.Option(help="overwrite an existing --out")] = False,
     quiet: Annotated[bool, typer.Option(help="no progress bar or summary; print the path")]
     = False,
+    jobs: Annotated[int, typer.Option(min=1, max=256, help="worker processes for the "
+                                      "repeats (or one repeat's starts); same results")] = 1,
 ) -> None:
     """Run a case file and write an HDF5 run archive."""
     overrides = list(set_ or [])
@@ -45,7 +47,7 @@ def run(
         with claim_out(path, force):
             tune_allocator()
             with progress(quiet) as callback:
-                record = execute(config, callback=callback)
+                record = execute(config, callback=callback, jobs=jobs)
             archive.write_run(record, path, force=force)
     if quiet:
         print(str(path))  # plain print: a script reads exactly the path, never wrapped

@@ -38,6 +38,9 @@ class Solver(ABC):
     requires: ClassVar[tuple[type, ...]] = ()
     summary: ClassVar[str] = ""
     integers: ClassVar[bool] = True  # whether the solver handles integer variables
+    jobs: int = 1
+    """Worker processes the driver lends the solver (``camopt run --jobs``): an execution
+    detail only, never a source of different results."""
 
     def __init__(self, problem: Problem, options: SolverOptions, rng: np.random.Generator):
         self.check(type(problem), options)

@@ -6,6 +6,10 @@ end point; the driver then evaluates that point like any other candidate. Starts
 bounds from the run's generator. Distinct end points are clustered in coordinates
 normalised by the bounds.
 
+With ``jobs`` > 1 (``camopt run --jobs``) the starts' local solves run at the first ask in
+forked worker processes, and the end points are handed out one per ask as before, so the
+run (histories included) is the same whatever the worker count.
+
 A start counts only when it *converged inside the bounds* (the local solver's own
 success test and every variable within its bounds). Any other end point is a last
 iterate, not a design: it is never the best, and when no start converged the repeat's
@@ -19,8 +23,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.perf import fork_pool, kill_pool
 from camopt.problem import Evaluation
 from camopt.solvers.base import Solver, StopReason, best_index
+
+_SOLVING: MultiStart | None = None  # the solver whose starts forked workers solve
+
+
+def _solve_start(i: int) -> tuple[NDArray, dict[str, Any]]:
+    assert _SOLVING is not None
+    return _SOLVING.local_solve(_SOLVING.starts[i])
 
 
 class MultiStart(Solver):
@@ -35,6 +47,7 @@ class MultiStart(Solver):
         self.results: list[dict[str, Any]] = []
         self.X: list[NDArray] = []
         self.ev: Evaluation | None = None
+        self._solved: list[tuple[NDArray, dict[str, Any]]] | None = None
 
     def _starts(self) -> NDArray:
         n = self.options.starts
@@ -54,8 +67,28 @@ class MultiStart(Solver):
         """One scipy local solve from ``x0``: its end point and a record (success, nfev, ...)."""
         raise NotImplementedError
 
+    def _solve_all(self) -> list[tuple[NDArray, dict[str, Any]]]:
+        """Every start's local solve in ``jobs`` forked workers, in start order."""
+        global _SOLVING
+        _SOLVING = self
+        pool = fork_pool(min(self.jobs, len(self.starts)))
+        try:
+            solved = list(pool.map(_solve_start, range(len(self.starts))))
+        except BaseException:
+            kill_pool(pool)
+            raise
+        finally:
+            _SOLVING = None
+        pool.shutdown(wait=True)
+        return solved
+
     def ask(self) -> NDArray:
-        x, info = self.local_solve(self.starts[self.nit])
+        if self.jobs > 1 and len(self.starts) > 1 and self._solved is None:
+            self._solved = self._solve_all()
+        if self._solved is not None:
+            x, info = self._solved[self.nit]
+        else:
+            x, info = self.local_solve(self.starts[self.nit])
         info.setdefault("in_bounds", bool(np.all((x >= self.lo) & (x <= self.hi))))
         self.results.append(info)
         self.nfev += info.pop("nfev", 0)

@@ -9,12 +9,10 @@ loses at most the batches running. A worker prepares each grid point's problem o
 from __future__ import annotations
 
 import json
-import signal
 import time
 from collections import OrderedDict, deque
 from collections.abc import Callable
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from multiprocessing import get_context
+from concurrent.futures import FIRST_COMPLETED, wait
 from pathlib import Path
 
 import numpy as np
@@ -23,7 +21,7 @@ from camopt.archive.sweeps import SweepWriter
 from camopt.config import LoadedConfig
 from camopt.driver import prepare, run_repeat, validate
 from camopt.errors import ConfigError, SolverError
-from camopt.perf import die_with_parent, tune_allocator
+from camopt.perf import fork_pool, kill_pool, tune_allocator
 from camopt.stats import succeeded
 from camopt.sweep.spec import CellResult, CellSpec, SweepSpec
 
@@ -79,15 +77,6 @@ class SweepInterrupted(Exception):
     """Raised when a sweep stops early; the archive holds every finished cell."""
 
 
-def _worker_start() -> None:
-    """Pool worker set-up: die with the parent (a killed sweep leaves no worker blocked
-    forever), leave Ctrl-C to the parent (which stops the pool), tune the allocator."""
-    die_with_parent()
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    tune_allocator()
-
-
 def batch_size(seconds_per_cell: float) -> int:
     """Cells per batch so that a batch takes about BATCH_SECONDS."""
     return int(min(MAX_BATCH, max(1, BATCH_SECONDS / max(seconds_per_cell, 1e-9))))
@@ -98,8 +87,7 @@ def _local(cells: list[CellSpec], jobs: int, done: Callable[[CellResult], None])
         for cell in cells:
             done(run_cell(cell))
         return
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("fork"),
-                               initializer=_worker_start)
+    pool = fork_pool(jobs)
     finished_cleanly = False
     queue, size = deque(cells), 1  # single cells until the first batch is timed
     pending: set = set()
@@ -116,10 +104,10 @@ def _local(cells: list[CellSpec], jobs: int, done: Callable[[CellResult], None])
                 size = batch_size(seconds / len(results))
         finished_cleanly = True
     finally:
-        if not finished_cleanly:  # interrupted or failed: running cells are not waited for
-            for proc in list(getattr(pool, "_processes", {}).values()):
-                proc.kill()
-        pool.shutdown(wait=True, cancel_futures=True)
+        if finished_cleanly:
+            pool.shutdown(wait=True)
+        else:  # interrupted or failed: running cells are not waited for
+            kill_pool(pool)
 
 
 def _dask(cells: list[CellSpec], scheduler: str, done: Callable[[CellResult], None]) -> None:

@@ -26,9 +26,9 @@ from camopt.errors import ConfigError
 from camopt.stats import run_statistics
 
 # ---- specification ------------------------------------------------------------------
-# The sweep archive is rewritten whole after each cell, so its cost grows with the square
-# of the number of cells (docs/design.md): 100,000 cells is far beyond any gated sweep here
-# and still finishes; more wants per-cell files.
+# Storage is O(1) per cell (a journal line; snapshots when the cells double), but the
+# summary and the snapshots hold every cell in memory: 100,000 cells is far beyond any
+# gated sweep here and still a few hundred MB at most.
 MAX_CELLS = 100_000
 # keys a grid may not set: seeds come from --seeds (child k of SeedSequence(run.seed) for
 # every grid point), so a grid over run.seed would run the same seeds at every point
@@ -47,8 +47,8 @@ def parse_seeds(text: str) -> tuple[int, int]:
     if stop <= start:
         raise ConfigError("--seeds", text, "STOP must be above START")
     if stop - start > MAX_CELLS or stop >= 2**63:
-        raise ConfigError("--seeds", text, f"at most {MAX_CELLS} seeds in one sweep (the "
-                          "archive is rewritten after every cell)")
+        raise ConfigError("--seeds", text, f"at most {MAX_CELLS} seeds in one sweep (every "
+                          "cell is held in memory)")
     return start, stop
 
 
@@ -122,8 +122,8 @@ class SweepSpec:
         n_cells = math.prod(len(v) for _, v in self.grid) * (self.seeds[1] - self.seeds[0])
         if n_cells > MAX_CELLS:
             raise ConfigError("--grid", "cells", f"{n_cells} grid points x seeds; at most "
-                              f"{MAX_CELLS} cells in one sweep (the archive is rewritten "
-                              "after every cell)")
+                              f"{MAX_CELLS} cells in one sweep (every cell is held in "
+                              "memory)")
         out = []
         for point in self.points():
             cfg = validate(self.point_data(point), self.source)

@@ -131,3 +131,34 @@ def test_four_points_have_no_root_and_show_says_so(tmp_path):
     assert any(r["success"] and not r["in_bounds"] for r in rows)  # roots exist, outside
     text = runner.invoke(app, ["show", str(out)], terminal_width=200).output
     assert "no start converged inside the bounds" in text
+
+
+@pytest.mark.parametrize("name", ["opening_spring_lse6.toml", "opening_spring_pp3.toml",
+                                  "opening_spring_identify.toml",
+                                  "opening_spring_lse6_pinned.toml"])
+def test_lean_evaluation_equals_the_energy_equations(name):
+    """The local solvers' lean path (precomputed angles and constants) gives Eq 4's error,
+    Eq 5's residuals and both constraints as the term-by-term energy functions do
+    (``energy_balance``, ``rate_from_energy``, ``spring_length``), to 1e-12."""
+    cfg = load(CONFIGS / name)
+    p = OpeningSpringProblem(cfg.case)
+    X = p.sample(np.random.default_rng(0), 40)
+    ev = p.evaluate(X)
+    params = p.params(X)
+    rate = p.rate_from_energy(params, p.points_theta[None, :])
+    reference = (params["l0_mm"], p.points_theta[None, :], p.points_rate[None, :])
+    res = p.energy_balance(params, reference[1][:, 1:], reference[2][:, 1:]) / p.energy_scale
+    np.testing.assert_allclose(p.residuals(X), res, rtol=1e-12, atol=1e-12)
+    if cfg.case.mode == "design":
+        f = np.sum((p.points_rate - rate) ** 2, axis=1)
+        if cfg.case.regularization > 0:
+            ref = p.x_of(cfg.case.original)
+            f = f + cfg.case.regularization * np.sum(((X - ref) / ref) ** 2, axis=1)
+    else:
+        f = np.sum(res**2, axis=1)
+    np.testing.assert_allclose(ev.f, f, rtol=1e-12)
+    stroke = np.linspace(p.theta0, p.points_theta.max(), 25)[None, :]
+    length, _ = p.spring_length(params, stroke)
+    l0 = params["l0_mm"][:, 0]
+    np.testing.assert_allclose(ev.g[:, 0], (l0 - length.min(axis=1)) / l0, atol=1e-12)
+    np.testing.assert_allclose(ev.g[:, 1], -rate.min(axis=1) / p.rate0, atol=1e-12)
