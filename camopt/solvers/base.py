@@ -111,6 +111,27 @@ def better(f_a: NDArray, v_a: NDArray, f_b: NDArray, v_b: NDArray) -> NDArray:
     return (v_a < v_b) | ((v_a == v_b) & (f_a < f_b))
 
 
+class BestSoFar:
+    """The best design a solver has seen by Deb's rules (for solvers whose population
+    does not keep it: CMA-ES, NSGA-II)."""
+
+    def __init__(self) -> None:
+        self.design: tuple[NDArray, Evaluation] | None = None
+
+    def offer(self, X: NDArray, ev: Evaluation) -> None:
+        """Keep the best row of a told batch if it beats the best so far."""
+        i = best_index(ev)
+        held = self.design
+        if held is None or better(ev.f[i:i + 1], ev.violation[i:i + 1], held[1].f,
+                                  held[1].violation)[0]:
+            self.design = (X[i].copy(), ev.take(i))
+
+    def get(self) -> tuple[NDArray, Evaluation]:
+        """A copy of the best design and its evaluation."""
+        assert self.design is not None, "nothing told yet"
+        return self.design[0].copy(), self.design[1]
+
+
 def snap(problem: Problem, X: NDArray) -> NDArray:
     """Clip to bounds and round integer variables."""
     X = np.clip(X, problem.lower, problem.upper)

@@ -25,7 +25,7 @@ from pydantic import Field
 
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
 from camopt.problem import Evaluation
-from camopt.solvers.base import Solver, StopReason, better, snap
+from camopt.solvers.base import BestSoFar, Solver, StopReason, snap
 from camopt.solvers.registry import register_solver
 
 
@@ -128,7 +128,7 @@ class CMAES(Solver):
             x0 = (problem.lower + problem.upper) / 2 if x0 is None else x0
         self.core = CMACore(np.clip(problem.to_unit(x0), 0, 1), options.sigma, rng,
                             options.population)
-        self._best: tuple[NDArray, Evaluation] | None = None
+        self._best = BestSoFar()
 
     def max_iterations(self) -> int:
         return self.options.generations
@@ -141,14 +141,10 @@ class CMAES(Solver):
         self.nit += 1
         order = deb_order(ev.f, ev.violation)
         self.core.tell(self.problem.to_unit(X), order)
-        i = int(order[0])
-        if self._best is None or better(ev.f[i:i + 1], ev.violation[i:i + 1],
-                                        self._best[1].f, self._best[1].violation)[0]:
-            self._best = (X[i].copy(), ev.take(i))
+        self._best.offer(X, ev)
 
     def best(self) -> tuple[NDArray, Evaluation]:
-        assert self._best is not None
-        return self._best[0].copy(), self._best[1]
+        return self._best.get()
 
     def stop_reason(self) -> StopReason | None:
         if self.nit >= self.options.generations:

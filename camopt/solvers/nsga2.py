@@ -35,7 +35,7 @@ from camopt.capabilities import Repairable
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
 from camopt.errors import SolverError
 from camopt.problem import Evaluation
-from camopt.solvers.base import Solver, StopReason, better, design_rows, snap
+from camopt.solvers.base import BestSoFar, Solver, StopReason, design_rows, snap
 from camopt.solvers.registry import register_solver
 
 _BAD = 1e12
@@ -102,7 +102,7 @@ class NSGA2(Solver):
         self.algorithm.setup(self.pproblem, termination=NoTermination(), verbose=False)
         self.algorithm.random_state = rng  # the repeat's generator, not a fresh one
         self._pending: Any = None
-        self._best: tuple[NDArray, Evaluation] | None = None
+        self._best = BestSoFar()
 
     def _check_names(self) -> None:
         """Fail at construction on objective names the case does not report."""
@@ -145,14 +145,10 @@ class NSGA2(Solver):
         self.algorithm.tell(infills=pop)
         self.nfev += len(X)
         self.nit += 1
-        i = int(np.lexsort((ev.f, ev.violation))[0])
-        if self._best is None or better(ev.f[i:i + 1], ev.violation[i:i + 1],
-                                        self._best[1].f, self._best[1].violation)[0]:
-            self._best = (X[i].copy(), ev.take(i))
+        self._best.offer(X, ev)
 
     def best(self) -> tuple[NDArray, Evaluation]:
-        assert self._best is not None
-        return self._best[0].copy(), self._best[1]
+        return self._best.get()
 
     def pareto_set(self) -> NDArray:
         """The designs of the final non-dominated set, (n_front, n_var), SI, ordered by the
