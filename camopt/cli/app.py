@@ -8,7 +8,7 @@ import enum
 import sys
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import click
 import typer
@@ -26,6 +26,21 @@ app = typer.Typer(rich_markup_mode="rich", no_args_is_help=True, add_completion=
                   help="Batch optimiser for spring-actuated mechanisms.")
 out = Console()
 err = Console(stderr=True)
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        from camopt import __version__
+
+        print(f"camopt {__version__}")
+        raise typer.Exit(0)
+
+
+@app.callback()
+def _options(version: Annotated[bool, typer.Option(
+        "--version", is_eager=True, callback=_print_version,
+        help="print camopt's version and exit")] = False) -> None:
+    """Batch optimiser for spring-actuated mechanisms."""
 
 
 class Format(str, enum.Enum):
