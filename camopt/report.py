@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from camopt import pareto, stats
+from camopt.errors import ConfigError
 from camopt.runview import RunView
 
 SHOW_KEYS = ("case", "solver", "best", "repeats", "table")
@@ -76,7 +77,16 @@ def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarra
 
 def compare(runs: list[RunView]) -> dict[str, Any]:
     """Config differences, best objectives, variables, metrics and repeat statistics;
-    for two runs with repeats, a significance test of their final objectives."""
+    for two runs with repeats, a significance test of their final objectives. Runs of
+    different case kinds or objectives are not comparable (ConfigError against the second
+    run's ``case_kind`` or ``objective_name``)."""
+    for run in runs[1:]:
+        for key, mine, first in (("case_kind", run.kind, runs[0].kind),
+                                 ("objective_name", run.objective_name,
+                                  runs[0].objective_name)):
+            if mine != first:
+                raise ConfigError(run.path, key, f"{mine!r}, but {runs[0].path} has "
+                                  f"{first!r}: runs of different kinds are not comparable")
     flat = []
     for run in runs:
         cfg: dict[str, Any] = {}
