@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Annotated
 
 import numpy as np
+import tomli_w
 import typer
 from rich.markup import escape
 from rich.table import Table
@@ -75,11 +76,22 @@ def list_solvers() -> None:
     """List solvers with their options and the case kinds each runs on."""
     table = Table(title="camopt solvers")
     for col in ("name", "what", "needs", "options", "cases"):
-        table.add_column(col)
+        # names and TOML lines stay whole (copied into case files); the rest wraps, uncut
+        table.add_column(col, no_wrap=col in ("name", "options"), overflow="fold")
     for name, cls in solvers().items():
-        options = "\n".join(f"{k} = {v.get_default(call_default_factory=True)!r}"
+        options = "\n".join(toml_line(k, v.get_default(call_default_factory=True))
                             for k, v in cls.Options.model_fields.items() if k != "name")
         runs_on = ", ".join(k for k, spec in cases().items() if cls.supports(spec.problem))
         needs = ", ".join(capability_name(c) for c in cls.requires)
-        table.add_row(name, cls.summary, needs or "-", options or "-", runs_on or "-")
+        table.add_row(name, cls.summary, needs or "-", escape(options) or "-", runs_on or "-")
     out.print(table)
+
+
+def toml_line(key: str, value: object) -> str:
+    """``key = value`` as TOML (``true``, quoted strings, arrays); an unset (None) default as
+    a TOML comment, since TOML has no null: copied into a case file it stays valid."""
+    if value is None:
+        return f"# {key} unset"
+    if hasattr(value, "model_dump"):
+        value = value.model_dump(mode="json", exclude_none=True)
+    return tomli_w.dumps({key: value}).strip()
