@@ -69,6 +69,9 @@ class RunView:
     camopt_version: str = ""
     seed_entropy: str = ""
     interrupted: bool = False
+    """Ctrl-C stopped the run: ``repeats`` holds the finished ones (``repeats_done`` of
+    ``run["repeats"]``)."""
+    repeats_done: int = 0
 
     @property
     def solver_name(self) -> str:

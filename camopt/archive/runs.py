@@ -1,8 +1,11 @@
 """Run archives: one HDF5 file per run, written atomically, read back as a RunView.
 
-Layout (schema 1): root attributes (versions, exact TOML, config as run, seed);
-``/repeats/rNNN`` per repeat with growable ``history/*`` datasets; ``/best`` with
-``metrics``; ``/analysis/<curve>``; ``/table/<column>``; ``/summary/<column>``.
+Layout (schema 2, documented dataset by dataset in ``docs/archive.md``): root attributes
+(versions, exact TOML, config as run, seed); ``/repeats/rNNN`` per repeat with growable
+``history/*`` datasets; ``/best`` with ``metrics``; ``/analysis/<curve>``;
+``/table/<column>``; ``/summary/<column>``. Design vectors (``x``) are stored in the units
+their variable names say (``kc1_n_per_mm`` in N/mm); schema 1 stored them in SI with the
+factor in ``variable_scale`` and is still read.
 """
 
 from __future__ import annotations
@@ -24,7 +27,8 @@ from camopt.errors import ArchiveError
 from camopt.problem import ACTIVE_TOL, FEASIBILITY_TOL
 from camopt.runview import BestView, RepeatView, RunView
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+READABLE_SCHEMAS = (1, 2)
 
 
 def _write(f: h5py.File, rec: RunRecord) -> None:
@@ -32,13 +36,16 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
     attrs = {
         **versions(), "schema_version": SCHEMA_VERSION, "config_toml": cfg.text,
         "config_path": cfg.path, "overrides": json.dumps(list(cfg.overrides)),
-        "config_effective": json.dumps(cfg.effective()), "case_kind": cfg.case.kind,
+        "config_effective": json.dumps(cfg.effective()), "config_as_run": as_run_toml(cfg),
+        "case_kind": cfg.case.kind,
         "solver": cfg.solver.name, "run_name": cfg.run.name, "seed_entropy": str(rec.seed),
         "created": datetime.now(timezone.utc).isoformat(),
         "variables": json.dumps(list(problem.names)),
         "variable_scale": problem.scale, "constraints": json.dumps(list(problem.constraint_names)),
-        "objective_name": problem.objective_name,
+        "objective_name": problem.objective_name, "x_units": "display",
+        "interrupted": rec.interrupted, "repeats_done": len(rec.repeats),
     }
+    scale = problem.scale  # x in the units the variable names say
     f.attrs.update(attrs)
     reps = f.create_group("repeats")
     for r in rec.repeats:
@@ -47,7 +54,7 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
                           "objective": r.fun, "feasible": r.feasible, "violation": r.violation,
                           "nfev": r.nfev, "nit": r.nit, "wall_s": r.wall_s, "message": r.message,
                           "converged_nit": r.converged_nit, "notes": json.dumps(r.notes)})
-        grp.create_dataset("x", data=r.x)
+        grp.create_dataset("x", data=np.asarray(r.x, dtype=float) * scale)
         grp.create_dataset("g", data=r.g)
         hist = grp.create_group("history")
         for key, values in r.history.items():
@@ -55,7 +62,7 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
     best = f.create_group("best")
     best.attrs.update({"objective": rec.best.fun, "feasible": rec.best.feasible,
                        "repeat": rec.best.index})
-    best.create_dataset("x", data=rec.best.x)
+    best.create_dataset("x", data=np.asarray(rec.best.x, dtype=float) * scale)
     best.create_dataset("g", data=rec.best.g)
     metrics = best.create_group("metrics", track_order=True)
     for key, value in rec.metrics.items():
@@ -68,6 +75,21 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
                 "nfev": r.nfev, "converged_nit": r.converged_nit, "wall_s": r.wall_s}
                for r in rec.repeats]
     write_table(f.create_group("summary"), summary)
+
+
+def as_run_toml(cfg: Any) -> str:
+    """The config as run (overrides, ``--seed`` and ``--repeats`` applied) as TOML text that
+    ``camopt run`` accepts; unset (None) values are left out, as TOML has no null."""
+    import tomli_w
+
+    def drop_none(value: Any) -> Any:
+        if isinstance(value, dict):
+            return {k: drop_none(v) for k, v in value.items() if v is not None}
+        if isinstance(value, list):
+            return [drop_none(v) for v in value]
+        return value
+
+    return tomli_w.dumps(drop_none(cfg.effective()))
 
 
 def write_run(rec: RunRecord, path: str | Path, force: bool = False) -> Path:
@@ -95,7 +117,7 @@ def load_run(path: str | Path) -> RunView:
             raise ArchiveError(f"{path}: file: a {f.attrs['archive_kind']} archive, not a "
                                "run archive")
         with damaged(path):
-            check_schema(f, SCHEMA_VERSION, RUN_SCHEMA)
+            check_schema(f, READABLE_SCHEMAS, RUN_SCHEMA)
             view = _load(f, path)
         return view
 
@@ -113,13 +135,15 @@ REPEAT_ATTRS = ("spawn_key", "seed", "objective", "feasible", "violation", "nfev
                 "wall_s", "message", "converged_nit", "notes")
 
 
-def check_schema(f: h5py.File, version: int,
+def check_schema(f: h5py.File, version: int | tuple[int, ...],
                  schema: tuple[tuple[str, tuple[str, ...]], ...]) -> None:
     """Raise ArchiveError naming the first object or attribute ``schema`` lists that ``f``
-    lacks, or a schema version this camopt cannot read."""
+    lacks, or a schema version this camopt cannot read (``version``: one or several)."""
     found = f.attrs["schema_version"]
-    if not isinstance(found, (int, np.integer)) or int(found) != version:
-        raise ArchiveError(f"schema_version {found!r}; this camopt reads version {version}")
+    versions_ok = (version,) if isinstance(version, int) else version
+    if not isinstance(found, (int, np.integer)) or int(found) not in versions_ok:
+        said = " or ".join(str(v) for v in versions_ok)
+        raise ArchiveError(f"schema_version {found!r}; this camopt reads version {said}")
     for where, attrs in schema:
         if where not in f:
             raise ArchiveError(f"missing {where}")
@@ -154,6 +178,8 @@ def _load(f: h5py.File, path: str | Path) -> RunView:
     scale = np.asarray(f.attrs["variable_scale"], dtype=float)
     if scale.shape not in ((), (len(names),)):
         raise ArchiveError("variable_scale: one value per variable expected")
+    if int(f.attrs["schema_version"]) >= 2:  # x already in the units of its names
+        scale = np.ones_like(scale)
     repeats = []
     if len(f["repeats"]) == 0:
         raise ArchiveError("/repeats: no repeat")
@@ -204,5 +230,6 @@ def _load(f: h5py.File, path: str | Path) -> RunView:
         camopt_version=str(f.attrs["camopt_version"]),
         seed_entropy=str(f.attrs["seed_entropy"]),
         interrupted=bool(f.attrs.get("interrupted", False)),
+        repeats_done=len(repeats),
     )
 
