@@ -68,6 +68,8 @@ class RunRecord:
     best: RepeatRecord
     metrics: dict[str, float]
     analysis: dict[str, NDArray]
+    interrupted: bool = False
+    """True when Ctrl-C (or SIGTERM) stopped the run: ``repeats`` holds the finished ones."""
 
 
 def solver_options() -> dict[str, Any]:
@@ -208,28 +210,27 @@ def _repeat_in_worker(i: int) -> RepeatRecord:
 
 def _parallel_repeats(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
                       children: list[np.random.SeedSequence], jobs: int,
-                      callback: Callable[[Progress], None] | None) -> list[RepeatRecord]:
-    """Repeats in ``jobs`` forked workers; each repeat is independent (its own child
-    seed), so the records equal a sequential run's but for wall times."""
+                      callback: Callable[[Progress], None] | None,
+                      finished: list[RepeatRecord]) -> None:
+    """Repeats in ``jobs`` forked workers, appended to ``finished`` as they end (so an
+    interruption keeps those); each repeat is independent (its own child seed), so the
+    records equal a sequential run's but for wall times and order."""
     global _REPEATS
     _REPEATS = (problem, solver_cls, config, children)
     pool = fork_pool(min(jobs, len(children)))
-    records: list[RepeatRecord | None] = [None] * len(children)
     try:
-        futures = {pool.submit(_repeat_in_worker, i): i for i in range(len(children))}
+        futures = [pool.submit(_repeat_in_worker, i) for i in range(len(children))]
         for fut in as_completed(futures):
             rec = fut.result()
-            records[futures[fut]] = rec
+            finished.append(rec)
             if callback:
-                done = sum(r is not None for r in records)
-                callback(Progress(done - 1, len(children), rec.nit, rec.nit, rec.fun))
+                callback(Progress(len(finished) - 1, len(children), rec.nit, rec.nit, rec.fun))
     except BaseException:
         kill_pool(pool)
         raise
     finally:
         _REPEATS = None
     pool.shutdown(wait=True)
-    return [r for r in records if r is not None]
 
 
 def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None = None,
@@ -238,16 +239,30 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
     ``seed`` and ``repeats`` override the config's (prefer setting ``run.seed`` and
     ``run.repeats`` in the config, so the archive records the config as run). ``jobs``
     worker processes run the repeats side by side, or a single repeat's independent
-    starts (multi-start solvers); results do not depend on it."""
+    starts (multi-start solvers); results do not depend on it.
+
+    A KeyboardInterrupt (Ctrl-C, or SIGTERM turned into one by the CLI) after at least one
+    finished repeat ends the run early: the record holds the finished repeats and
+    ``interrupted`` is set, so the caller can keep them. Before any repeat finished it
+    propagates."""
     problem, solver_cls = prepare(config)
     seed = config.run.seed if seed is None else seed
     repeats = config.run.repeats if repeats is None else repeats
     children = np.random.SeedSequence(seed).spawn(repeats)
-    if jobs > 1 and repeats > 1:
-        records = _parallel_repeats(problem, solver_cls, config, children, jobs, callback)
-    else:
-        records = [run_repeat(problem, solver_cls, config, child, i, repeats, callback, jobs)
-                   for i, child in enumerate(children)]
+    records: list[RepeatRecord] = []
+    interrupted = False
+    try:
+        if jobs > 1 and repeats > 1:
+            _parallel_repeats(problem, solver_cls, config, children, jobs, callback, records)
+        else:
+            for i, child in enumerate(children):
+                records.append(run_repeat(problem, solver_cls, config, child, i, repeats,
+                                          callback, jobs))
+    except KeyboardInterrupt:
+        if not records:
+            raise
+        interrupted = True
+    records.sort(key=lambda r: r.index)
     best = best_repeat(records)
     return RunRecord(config, problem, seed, records, best, dict(problem.metrics(best.x)),
-                     dict(problem.analysis(best.x)))
+                     dict(problem.analysis(best.x)), interrupted)

@@ -51,8 +51,12 @@ def run(
             archive.write_run(record, path, force=force)
     if quiet:
         print(str(path))  # plain print: a script reads exactly the path, never wrapped
-        return
-    print_show(archive.load_run(path), rows=10)
+    else:
+        print_show(archive.load_run(path), rows=10)
+    if record.interrupted:
+        print(f"error: interrupted; kept the {len(record.repeats)} finished of "
+              f"{config.run.repeats} repeats in {path} (marked interrupted)", file=sys.stderr)
+        raise typer.Exit(130)
 
 
 def default_out(name: str) -> Path:
