@@ -11,7 +11,6 @@ import numpy as np
 import tomli_w
 import typer
 from rich.markup import escape
-from rich.table import Table
 
 from camopt import archive
 from camopt.capabilities import capability_name
@@ -73,18 +72,17 @@ def write_text(path: Path, text: str, force: bool) -> None:
 
 @app.command(name="solvers")
 def list_solvers() -> None:
-    """List solvers with their options and the case kinds each runs on."""
-    table = Table(title="camopt solvers")
-    for col in ("name", "what", "needs", "options", "cases"):
-        # names and TOML lines stay whole (copied into case files); the rest wraps, uncut
-        table.add_column(col, no_wrap=col in ("name", "options"), overflow="fold")
+    """List solvers with their options (TOML lines for a ``[solver]`` table) and the case
+    kinds each runs on."""
     for name, cls in solvers().items():
-        options = "\n".join(toml_line(k, v.get_default(call_default_factory=True))
-                            for k, v in cls.Options.model_fields.items() if k != "name")
+        options = [toml_line(k, v.get_default(call_default_factory=True))
+                   for k, v in cls.Options.model_fields.items() if k != "name"]
         runs_on = ", ".join(k for k, spec in cases().items() if cls.supports(spec.problem))
         needs = ", ".join(capability_name(c) for c in cls.requires)
-        table.add_row(name, cls.summary, needs or "-", escape(options) or "-", runs_on or "-")
-    out.print(table)
+        # plain print, never wrapped: each block is a valid [solver] table to copy
+        print(f"# {name}: {cls.summary}")
+        print(f"# cases: {runs_on or '-'}" + (f"; needs: {needs}" if needs else ""))
+        print("[solver]", f'name = "{name}"', *options, sep="\n", end="\n\n")
 
 
 def toml_line(key: str, value: object) -> str:
