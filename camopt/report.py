@@ -34,7 +34,8 @@ REPEAT_KEYS = ("seed", "objective", "feasible", "nfev", "wall_s", "converged_nit
 
 def show(run: RunView) -> dict[str, Any]:
     """The ``show --format json`` document: case, solver, best, repeats, table, and for a
-    multi-objective run (a solver with ``objectives``) ``pareto``."""
+    multi-objective run (a solver with ``objectives``) ``pareto``. These keys are a
+    contract scripts rely on; the two-column view is :func:`summary`."""
     repeats = [{k: getattr(r, k) for k in REPEAT_KEYS} for r in run.repeats]
     best = {k: v for k, v in asdict(run.best).items() if k != "repeat"}
     doc = {"case": run.case, "solver": run.solver, "best": best, "repeats": repeats,
@@ -43,6 +44,71 @@ def show(run: RunView) -> dict[str, Any]:
     if rows is not None:
         doc["pareto"] = rows
     return jsonable(doc)
+
+
+REFERENCE_PREFIXES = {"initial_": "initial design", "original_": "original design"}
+"""Metric prefixes under which cases report their reference (vendor's, original) design."""
+
+
+def reference(run: RunView) -> tuple[str, dict[str, Any]]:
+    """The reference design the optimum is shown beside: the metrics a case reports with a
+    prefix of :data:`REFERENCE_PREFIXES` (its initial or original design), else the paper's
+    reported values under the optimum's own names. Returns its label ('' when there is
+    none) and ``{name: value}`` keyed by the optimum's names (``objective`` included)."""
+    from camopt.cases import get_case
+
+    metrics = run.best.metrics
+    for prefix, label in REFERENCE_PREFIXES.items():
+        values = {k[len(prefix):]: v for k, v in metrics.items() if k.startswith(prefix)}
+        if values:
+            return label, values
+    paper = get_case(run.kind).paper
+    names = {run.objective_name, *run.best.x, *metrics}
+    values = {k: v for k, v in paper.items() if k in names and not isinstance(v, list)}
+    if run.objective_name in values:
+        values["objective"] = values[run.objective_name]
+    return ("paper", values) if values else ("", {})
+
+
+def summary(run: RunView) -> dict[str, Any]:
+    """The run summary: the best design beside the reference design, row by row.
+
+    ``rows`` are ``{"section", "name", "optimum", "reference"}`` with sections
+    ``objective``, ``variables`` and ``metrics``; the objective's name carries its unit
+    (``objective_j``); reference-design metrics (``initial_*``) are folded into the
+    ``reference`` column instead of being rows of their own. Values are raw (inf, NaN
+    kept): :func:`jsonable` turns them into null for JSON."""
+    label, ref = reference(run)
+    best = run.best
+    prefixes = tuple(REFERENCE_PREFIXES)
+    rows = [{"section": "objective", "name": run.objective_name, "optimum": best.objective,
+             "reference": ref.get("objective", ref.get(run.objective_name))},
+            {"section": "objective", "name": "feasible", "optimum": best.feasible,
+             "reference": _bool_or_none(ref.get("feasible"))}]
+    rows += [{"section": "variables", "name": k, "optimum": v, "reference": ref.get(k)}
+             for k, v in best.x.items()]
+    shown = {run.objective_name, "feasible", "objective", *best.x}
+    rows += [{"section": "metrics", "name": k, "optimum": v, "reference": ref.get(k)}
+             for k, v in best.metrics.items() if k not in shown and not k.startswith(prefixes)]
+    return {"reference_label": label, "rows": rows}
+
+
+def _bool_or_none(value: Any) -> bool | None:
+    return None if value is None else bool(value)
+
+
+def status(run: RunView) -> str:
+    """One line on the best design: feasible with its active constraints, or infeasible
+    naming what it violates (or, when no constraint is, why: the repeat's first note)."""
+    best = run.best
+    if best.feasible:
+        active = ", ".join(best.active) or "none"
+        return f"feasible; active constraints: {active}"
+    if best.violated:
+        return f"INFEASIBLE: violates {', '.join(best.violated)}"
+    notes = next((r.notes for r in run.repeats if r.index == best.repeat), ())
+    why = notes[0] if notes else "the solver returned no feasible design"
+    return f"INFEASIBLE: {why}"
 
 
 def _flatten(prefix: str, value: Any, out: dict[str, Any]) -> None:

@@ -76,17 +76,24 @@ def _rate(s: dict[str, float]) -> str:
 
 
 def print_ranking(doc: dict[str, Any]) -> None:
-    """A sweep's grid points ranked (``report.rank_sweep``) as a rich table."""
-    table = Table(title=escape(f"sweep {doc['sweep']}: grid points ranked"))
-    for col in ("rank", "point", "runs", "success", "best", "median", "worst",
-                "nfev to target", "vs best"):
-        table.add_column(col, justify="right" if col != "point" else "left")
+    """A sweep's grid points ranked (``report.rank_sweep``) as a rich table: numbers are
+    never wrapped or cut (the grid point's label folds instead)."""
+    from camopt.cli.show import cell
+
+    table = Table(title=escape(f"sweep {doc['sweep']}: grid points ranked"),
+                  title_justify="left",
+                  caption="success: successful/runs; nfev: median evaluations to the target; "
+                          "p: Mann-Whitney against rank 1", caption_justify="left")
+    for col in ("rank", "grid point", "success", "best", "median", "worst", "nfev", "p"):
+        if col == "grid point":
+            table.add_column(col, overflow="fold", min_width=10)
+        else:
+            table.add_column(col, justify="right", no_wrap=True)
     for r in doc["ranking"]:
         vs = r.get("vs_best")
-        table.add_row(str(r["rank"]), escape(r["label"]), str(r["runs"]),
-                      fmt(r["success_rate"]), fmt(r["best"]), fmt(r["median"]),
-                      fmt(r["worst"]), fmt(r["median_nfev_to_target"]),
-                      f"p = {vs['p_value']:.3g}" if vs else "-")
+        table.add_row(str(r["rank"]), escape(r["label"]), f"{r['successes']}/{r['runs']}",
+                      cell(r["best"]), cell(r["median"]), cell(r["worst"]),
+                      cell(r["median_nfev_to_target"]), f"{vs['p_value']:.3g}" if vs else "-")
     out.print(table)
     for r in doc["ranking"]:
         if r.get("vs_best"):

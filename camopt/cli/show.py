@@ -1,27 +1,41 @@
-"""``camopt show``: a run archive's best design, repeats and table."""
+"""``camopt show``: a run archive's summary (the best design beside the reference design,
+repeats, the solver's table), or a sweep archive's ranking."""
 
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
 from rich.table import Table
 
 from camopt import archive, report
-from camopt.cli.app import Format, app, errors, fmt, out, print_rows
+from camopt.archive.sweeps import load_sweep
+from camopt.cli.app import Format, app, errors, out
 from camopt.runview import RunView
 
 
 @app.command()
-def show(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run archive")],
+def show(run_path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP",
+                                                  help="run or sweep archive")],
          format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
          ) -> None:
-    """Show a run archive: best design, metrics, repeats, table."""
+    """Show an archive: a run's best design beside the reference design, its repeats and
+    table; a sweep's grid points ranked (as ``compare SWEEP``)."""
+    from camopt.cli.compare import print_ranking
+
     with errors():
+        if archive.archive_kind(run_path) == "sweep":
+            doc = report.rank_sweep(*load_sweep(run_path))
+            if format is Format.json:
+                sys.stdout.write(json.dumps(doc, indent=2) + "\n")
+            else:
+                print_ranking(doc)
+            return
         view = archive.load_run(run_path)
     if format is Format.json:
         sys.stdout.write(json.dumps(report.show(view), indent=2) + "\n")
@@ -29,32 +43,117 @@ def show(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run archi
         print_show(view)
 
 
+def cell(value: Any) -> str:
+    """A number as a table shows it: 6 significant digits; infinities as 'inf' (a
+    stress with no bound, a design that never closes), NaN as 'n/a' (a quantity that does
+    not exist for this design), booleans as yes/no, None as '-'."""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "n/a"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return f"{value:.6g}"
+    if isinstance(value, list):
+        return ", ".join(cell(v) for v in value)
+    return "-" if value is None else escape(str(value))
+
+
 def print_show(view: RunView, rows: int | None = None) -> None:
-    """The run summary as rich tables."""
+    """The run summary: what ran, the best design beside the reference design (two
+    columns, units in the names), the repeats (the first ``rows``) and the solver's table.
+    Fits 80 columns: numbers are never wrapped, names fold when they must."""
     doc = report.show(view)
-    best = doc["best"]
-    out.print(f"[bold]{escape(view.path)}[/]  case [cyan]{escape(view.kind)}[/], "
-              f"solver [cyan]{escape(view.solver_name)}[/]")
-    head = Table(title="best design", show_header=False)
-    head.add_row("objective", fmt(best["objective"]))
-    head.add_row("feasible", fmt(best["feasible"]))
-    head.add_row("active constraints", ", ".join(best.get("active", [])) or "none")
-    if best.get("violated"):
-        head.add_row("violated constraints", ", ".join(best["violated"]))
-    for k, v in {**best["x"], **best["metrics"]}.items():
-        head.add_row(k, fmt(v))
-    out.print(head)
-    # the 19-digit seeds are in --format json; the table names repeats by spawn key
-    reps = Table(title="repeats (repeat k: child k of SeedSequence(run.seed))")
+    out.print(escape(view.path), soft_wrap=True, highlight=False)
+    reps = view.repeats
+    n_run = view.run.get("repeats", len(reps))
+    done = f"{len(reps)} of {n_run}" if view.interrupted else f"{len(reps)}"
+    out.print(f"case [cyan]{escape(view.kind)}[/], solver [cyan]{escape(view.solver_name)}[/], "
+              f"{done} repeats, seed {view.run.get('seed', '-')}", highlight=False)
+    if view.interrupted:
+        out.print("[bold red]interrupted[/]: the archive holds the finished repeats only")
+    style = "green" if view.best.feasible else "bold red"
+    out.print(f"[{style}]{escape(report.status(view))}[/]", highlight=False)
+    out.print(best_table(report.summary(view)))  # raw values: inf and NaN are shown
+    _print_repeats(doc, rows)
+    for r in doc["repeats"]:
+        for note in r["notes"]:
+            out.print(f"[bold]note[/] (repeat {r['spawn_key'][-1]}): {escape(note)}",
+                      highlight=False)
+    if doc["table"]:
+        best = doc["best"]
+        columns = ["label", *best["x"], view.objective_name, "feasible", "active", "violated"]
+        print_fitted("solver's table", doc["table"], columns, rows)
+
+
+def best_table(summary: dict[str, Any]) -> Table:
+    """The best design beside the reference design (``report.summary``)."""
+    label = summary["reference_label"]
+    table = Table(title="best design" + (f" beside the {label}" if label else ""),
+                  title_justify="left")
+    table.add_column("", overflow="fold")
+    table.add_column("optimum", justify="right", no_wrap=True)
+    if label:
+        table.add_column(label, justify="right", no_wrap=True)
+    section = None
+    for row in summary["rows"]:
+        if section is not None and row["section"] != section:
+            table.add_section()
+        section = row["section"]
+        values = [row["optimum"], row["reference"]] if label else [row["optimum"]]
+        name = f"objective: {row['name']}" if row is summary["rows"][0] else row["name"]
+        table.add_row(escape(name), *(cell(v) for v in values))
+    return table
+
+
+def _print_repeats(doc: dict[str, Any], rows: int | None) -> None:
+    reps = doc["repeats"]
+    stats = [r["objective"] for r in reps if r["feasible"] and r["objective"] is not None]
+    line = f"repeats: {sum(r['feasible'] for r in reps)} of {len(reps)} feasible"
+    if stats:
+        line += (f"; objective best {cell(min(stats))}, median "
+                 f"{cell(float(sorted(stats)[len(stats) // 2]))}, worst {cell(max(stats))}")
+    out.print(line, highlight=False)
+    if len(reps) <= 1:
+        return
+    shown = reps if rows is None else reps[:rows]
+    title = "repeats (repeat k: child k of SeedSequence(run.seed))"
+    if len(shown) < len(reps):
+        title += f"; first {len(shown)} of {len(reps)}, camopt show for all"
+    table = Table(title=title, title_justify="left")
     columns = ("objective", "feasible", "nfev", "converged_nit")
     for col in ("repeat", *columns, "wall_s"):
-        reps.add_column(col, justify="right")
-    for r in doc["repeats"]:
-        reps.add_row(fmt(r["spawn_key"]), *(fmt(r[c]) for c in columns), f"{r['wall_s']:.2f}")
-    out.print(reps)
-    for i, r in enumerate(doc["repeats"]):
-        for note in r["notes"]:
-            out.print(f"[bold]note[/] (repeat {i}): {escape(note)}")
-    if doc["table"]:
-        columns = ["label", *best["x"], view.objective_name, "feasible", "active", "violated"]
-        print_rows("table", doc["table"], columns, rows)
+        table.add_column(col, justify="right", no_wrap=True)
+    for r in shown:
+        table.add_row(cell(r["spawn_key"][-1]), *(cell(r[c]) for c in columns),
+                      f"{r['wall_s']:.2f}")
+    out.print(table)
+
+
+def print_fitted(title: str, rows: list[dict[str, Any]], columns: list[str],
+                 limit: int | None) -> None:
+    """A table of as many of ``columns`` as fit the console without wrapping a number
+    (the rest are in ``--format json``); the first ``limit`` rows."""
+    columns = [c for c in columns if c in rows[0]]
+    shown_rows = rows if limit is None else rows[:limit]
+    texts = {c: [cell(r.get(c)) for r in shown_rows] for c in columns}
+    width, kept = 1, []
+    for c in columns:
+        w = max(len(c), *(len(t) for t in texts[c])) + 3  # padding and a rule
+        if kept and width + w > out.width:
+            break
+        kept.append(c)
+        width += w
+    notes = []
+    if len(kept) < len(columns):
+        notes.append(f"{len(kept)} of {len(columns)} columns")
+    if len(shown_rows) < len(rows):
+        notes.append(f"first {len(shown_rows)} of {len(rows)} rows")
+    note = ("; ".join(notes) + "; all: camopt show --format json") if notes else ""
+    table = Table(title=escape(f"{title} ({note})" if note else title), title_justify="left")
+    for c in kept:
+        table.add_column(escape(c), justify="right", no_wrap=True)
+    for i in range(len(shown_rows)):
+        table.add_row(*(texts[c][i] for c in kept))
+    out.print(table)
