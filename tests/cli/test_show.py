@@ -1,0 +1,102 @@
+"""``camopt show``: the run summary (best design beside the reference design, at 80
+columns) and sweeps."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import re
+
+import pytest
+from typer.testing import CliRunner
+
+from camopt import archive, report
+from camopt.cli import app
+from tests.conftest import CONFIGS
+
+runner = CliRunner()
+SMALL_VCB = ["--set", "solver.generations=30", "--set", "solver.population=30",
+             "--repeats", "2"]
+
+
+def invoke(*args, columns=80):
+    return runner.invoke(app, [str(a) for a in args], env={"COLUMNS": str(columns)})
+
+
+@pytest.fixture(scope="module")
+def vcb_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("show") / "vcb.h5"
+    r = invoke("run", CONFIGS / "vcb.toml", "--out", out, "--quiet", *SMALL_VCB)
+    assert r.exit_code == 0, r.output
+    return out
+
+
+def best_rows(stdout: str) -> dict[str, list[str]]:
+    """The cells of the best-design table's rows, by row name."""
+    rows = {}
+    for line in stdout.splitlines():
+        cells = [c.strip() for c in line.strip("│").split("│")]
+        if line.startswith("│") and len(cells) == 3:
+            rows[cells[0]] = cells[1:]
+    return rows
+
+
+def test_summary_shows_optimum_beside_the_initial_design_in_80_columns(vcb_run):
+    r = invoke("show", vcb_run)
+    assert r.exit_code == 0, r.output
+    assert max(len(line) for line in r.stdout.splitlines()[1:]) <= 80  # line 0: the path
+    assert "best design beside the initial design" in r.stdout
+    rows = best_rows(r.stdout)
+    view = archive.load_run(vcb_run)
+    m = view.best.metrics
+    # every number whole on one line, under the optimum and the reference columns
+    for name in ("tau_max_mpa", "driving_work_j", "rod_travel_mm", "closing_velocity_avg_m_s"):
+        assert rows[name][0] == f"{m[name]:.6g}"
+    assert rows["driving_work_j"][1] == f"{m['initial_driving_work_j']:.6g}"
+    assert rows["objective: objective_j"][0] == f"{view.best.objective:.6g}"
+    assert rows["tau_max_mpa"][1] == "inf"  # the vendor's follower dwells: unbounded stress
+    assert not any(k.startswith("initial_") for k in rows)  # folded into the column
+    assert list(rows).count("feasible") == 1
+    for x in view.best.x:
+        assert rows[x][0] == f"{view.best.x[x]:.6g}"
+
+
+def test_json_keys_unchanged(vcb_run):
+    doc = json.loads(invoke("show", vcb_run, "--format", "json").stdout)
+    assert list(doc) == ["case", "solver", "best", "repeats", "table"]
+    assert doc["best"]["metrics"]["initial_tau_max_mpa"] is None  # inf as null: valid JSON
+
+
+def test_infeasible_best_names_what_it_violates(vcb_run):
+    view = archive.load_run(vcb_run)
+    broken = dataclasses.replace(view, best=dataclasses.replace(
+        view.best, feasible=False, violated=["shear_yield", "rod_travel"], active=[]))
+    assert report.status(broken) == "INFEASIBLE: violates shear_yield, rod_travel"
+    assert report.status(view).startswith("feasible; active constraints: ")
+
+
+def test_infeasible_best_without_violation_says_why(tmp_path):
+    out = tmp_path / "pp4.h5"
+    r = invoke("run", CONFIGS / "opening_spring_pp4.toml", "--out", out)
+    assert r.exit_code == 0, r.output
+    assert "INFEASIBLE: 0 distinct roots" in r.stdout
+    assert "active constraints: none" not in r.stdout
+
+
+def test_show_reads_a_sweep(tmp_path):
+    out = tmp_path / "sweep.h5"
+    r = invoke("sweep", CONFIGS / "fast_switch_de.toml", "--seeds", "0:2", "--grid",
+               "solver.population=10,20", "--set", "solver.generations=10", "--out", out,
+               "--quiet", "--jobs", "1")
+    assert r.exit_code == 0, r.output
+    shown = invoke("show", out)
+    assert shown.exit_code == 0, shown.output
+    assert "grid points ranked" in shown.stdout
+    assert max(len(line) for line in shown.stdout.splitlines()) <= 80
+    doc = json.loads(invoke("show", out, "--format", "json").stdout)
+    compared = json.loads(invoke("compare", out, "--format", "json").stdout)
+    assert [r["label"] for r in doc["ranking"]] == [r["label"] for r in compared["ranking"]]
+    assert {r["label"] for r in doc["ranking"]} == {"solver.population=10",
+                                                   "solver.population=20"}
+    for row in doc["ranking"]:
+        assert re.search(rf"{row['successes']}/{row['runs']}", shown.stdout)
