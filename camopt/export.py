@@ -1,5 +1,6 @@
-"""Export a run's summary and analysis curves as CSV or JSON, and cam profiles as point
-files (x, y, z in mm, one point per line) that CAD tools import as curves."""
+"""Export a run's summary and analysis curves as CSV or JSON, cam profiles as point files
+(x, y, z in mm, one point per line) that CAD tools import as curves, and the profiles with
+their base circle and roller as a DXF drawing (ezdxf)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,10 @@ import numpy as np
 
 from camopt import report
 from camopt.cases import get_case
+from camopt.errors import ConfigError
 from camopt.runview import RunView
+
+FORMATS = ("csv", "json", "dxf")
 
 
 def _series(analysis: dict[str, np.ndarray], keys: tuple[str, ...]) -> np.ndarray:
@@ -19,12 +23,23 @@ def _series(analysis: dict[str, np.ndarray], keys: tuple[str, ...]) -> np.ndarra
 
 
 def export_run(run: RunView, out_dir: Path, stem: str, fmt: str) -> list[Path]:
-    """Write the export files; returns their paths."""
+    """Write the export files (``fmt`` one of :data:`FORMATS`; every format also writes the
+    profiles' point files); returns their paths. A DXF of a case without profiles is bad
+    input (ConfigError against ``--format``)."""
+    spec = get_case(run.kind)
+    curves = profiles(run)
+    if fmt == "dxf" and not curves:
+        raise ConfigError(run.path, "--format", f"dxf: case '{run.kind}' has no cam profile "
+                          "to draw; use csv or json")
     out_dir.mkdir(parents=True, exist_ok=True)
     analysis = run.analysis
     doc = report.show(run)
     written = []
-    if fmt == "json":
+    if fmt == "dxf":
+        path = out_dir / f"{stem}.dxf"
+        write_dxf(path, curves, circles(run, spec.circles))
+        written.append(path)
+    elif fmt == "json":
         path = out_dir / f"{stem}.json"
         doc["analysis"] = {k: report.jsonable(np.asarray(v).tolist()) for k, v in analysis.items()}
         path.write_text(json.dumps(doc, indent=2))
@@ -50,13 +65,61 @@ def export_run(run: RunView, out_dir: Path, stem: str, fmt: str) -> list[Path]:
                 w.writerow(keys)
                 w.writerows(np.column_stack([np.asarray(analysis[k]) for k in keys]).tolist())
             written.append(path)
+    for name, points in curves.items():
+        path = out_dir / f"{stem}-{name}.txt"
+        np.savetxt(path, np.column_stack([points, np.zeros(len(points))]), fmt="%.6f",
+                   delimiter=",")
+        written.append(path)
+    return written
+
+
+def profiles(run: RunView) -> dict[str, np.ndarray]:
+    """The case's profile curves of this run as ``{name: (n, 2) points in mm}`` (finite
+    points only; curves whose analysis the archive lacks are left out)."""
+    analysis = run.analysis
+    curves = {}
     for curve in get_case(run.kind).profiles:
         if not all(k in analysis for k in (*curve.x, *curve.y)):
             continue
         x, y = _series(analysis, curve.x), _series(analysis, curve.y)
         ok = np.isfinite(x) & np.isfinite(y)
-        path = out_dir / f"{stem}-{curve.name}.txt"
-        np.savetxt(path, np.column_stack([x[ok], y[ok], np.zeros(ok.sum())]), fmt="%.6f",
-                   delimiter=",")
-        written.append(path)
-    return written
+        curves[curve.name] = np.column_stack([x[ok], y[ok]])
+    return curves
+
+
+def circles(run: RunView, specs: tuple) -> dict[str, tuple[tuple[float, float], float]]:
+    """The case's circles of this run: ``{name: ((x, y) centre in mm, radius in mm)}``;
+    those whose radius or centre the archive lacks are left out."""
+    found = {}
+    for c in specs:
+        radius = run.case.get(c.radius)
+        if not isinstance(radius, (int, float)):
+            continue
+        centre = (0.0, 0.0)
+        if c.centre is not None:
+            if not all(k in run.analysis and np.size(run.analysis[k]) for k in c.centre):
+                continue
+            centre = tuple(float(np.asarray(run.analysis[k]).ravel()[0]) for k in c.centre)
+        found[c.name] = (centre, float(radius))
+    return found
+
+
+def write_dxf(path: Path, curves: dict[str, np.ndarray],
+              rings: dict[str, tuple[tuple[float, float], float]]) -> None:
+    """A DXF (R2010) in millimetres: each curve a 2-D polyline (LWPOLYLINE) on a layer of
+    its name, each circle a CIRCLE on its own layer."""
+    import ezdxf
+    from ezdxf import units
+
+    doc = ezdxf.new("R2010", setup=False)
+    doc.units = units.MM
+    doc.header["$MEASUREMENT"] = 1  # metric
+    msp = doc.modelspace()
+    colours = iter(range(1, 256))
+    for name, points in curves.items():
+        doc.layers.add(name, color=next(colours))
+        msp.add_lwpolyline(points.tolist(), format="xy", dxfattribs={"layer": name})
+    for name, (centre, radius) in rings.items():
+        doc.layers.add(name, color=next(colours))
+        msp.add_circle(centre, radius, dxfattribs={"layer": name})
+    doc.saveas(path)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from camopt.cases.registry import (
     CaseSpec,
+    ProfileCircle,
     ProfileCurve,
     case_configs,
     cases,
@@ -19,5 +20,5 @@ def build_problem(config: CaseConfig) -> Problem:
     return get_case(config.kind).build(config)
 
 
-__all__ = ["CaseSpec", "ProfileCurve", "build_problem", "case_configs", "cases", "get_case",
-           "register_case"]
+__all__ = ["CaseSpec", "ProfileCircle", "ProfileCurve", "build_problem", "case_configs",
+           "cases", "get_case", "register_case"]

@@ -47,6 +47,17 @@ class ProfileCurve:
 
 
 @dataclass(frozen=True)
+class ProfileCircle:
+    """A circle drawn with a case's profiles in CAD export (base circle, roller): a layer
+    ``name``, the ``[case]`` field holding its radius in mm, and the analysis curves whose
+    first point is its centre in mm (``None``: the cam's centre, the origin)."""
+
+    name: str
+    radius: str
+    centre: tuple[str, str] | None = None
+
+
+@dataclass(frozen=True)
 class CaseSpec:
     """Everything camopt needs to know about one mechanism.
 
@@ -65,6 +76,7 @@ class CaseSpec:
     paper_source: str = ""
     figures: str | None = None
     profiles: tuple[ProfileCurve, ...] = ()
+    circles: tuple[ProfileCircle, ...] = ()
     paper: Mapping[str, Any] = field(default_factory=dict)
     resolve: Callable[[CaseConfig, ArchiveLoader], CaseConfig] | None = None
     tolerances: Mapping[str, str] = field(default_factory=dict)

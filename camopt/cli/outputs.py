@@ -34,6 +34,7 @@ class ExportFormat(str, enum.Enum):
 
     csv = "csv"
     json = "json"
+    dxf = "dxf"
 
 
 @app.command()
@@ -61,7 +62,9 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
            = ExportFormat.csv,
            out_dir: Annotated[Path | None, typer.Option("--out", help="output folder")] = None
            ) -> None:
-    """Export the summary and analysis curves (csv or json) and cam profile point files."""
+    """Export the summary and analysis curves (csv or json) or the cam profiles, base
+    circle and roller as a DXF drawing in mm (dxf); every format also writes the profiles'
+    point files (x,y,z in mm)."""
     from camopt.export import export_run
 
     with errors():

@@ -5,7 +5,7 @@ from __future__ import annotations
 from camopt.cases.emb_cam.config import EmbCamConfig
 from camopt.cases.emb_cam.paper import PAPER
 from camopt.cases.emb_cam.problem import EmbCamProblem
-from camopt.cases.registry import CaseSpec, ProfileCurve, register_case
+from camopt.cases.registry import CaseSpec, ProfileCircle, ProfileCurve, register_case
 
 TOLERANCES = {  # docs/assumptions.md, "Default tolerances": a ground cam profile
     **{f"r{j}_mm": "±0.01" for j in range(1, 40)},  # key radii (those of the run apply)
@@ -19,5 +19,6 @@ SPEC = register_case(CaseSpec(
     figures="camopt.cases.emb_cam.figures:figures", paper=PAPER,
     profiles=(ProfileCurve("cam-profile", ("profile_x_mm", "nonworking_x_mm"),
                            ("profile_y_mm", "nonworking_y_mm")),),
+    circles=(ProfileCircle("base-circle", "r_st_mm"),),
     tolerances=TOLERANCES,
 ))

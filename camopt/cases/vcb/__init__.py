@@ -4,7 +4,13 @@ leaves out (kind ``vcb_identify``)."""
 
 from __future__ import annotations
 
-from camopt.cases.registry import ArchiveLoader, CaseSpec, ProfileCurve, register_case
+from camopt.cases.registry import (
+    ArchiveLoader,
+    CaseSpec,
+    ProfileCircle,
+    ProfileCurve,
+    register_case,
+)
 from camopt.cases.vcb.config import (
     CamDesign,
     VcbConfig,
@@ -48,6 +54,8 @@ VCB = register_case(CaseSpec(
     paper_source=SOURCE, figures="camopt.cases.vcb.figures:figures", paper=PAPER,
     profiles=(ProfileCurve("cam-profile", ("profile_x_mm",), ("profile_y_mm",)),
               ProfileCurve("cam-pitch-curve", ("pitch_x_mm",), ("pitch_y_mm",))),
+    circles=(ProfileCircle("base-circle", "rb_mm"),
+             ProfileCircle("roller", "rf_mm", ("pitch_x_mm", "pitch_y_mm"))),
     resolve=resolve_cam_archive, tolerances=TOLERANCES,
 ))
 VCB_IDENTIFY = register_case(CaseSpec(
