@@ -72,6 +72,10 @@ class RunView:
     """Ctrl-C stopped the run: ``repeats`` holds the finished ones (``repeats_done`` of
     ``run["repeats"]``)."""
     repeats_done: int = 0
+    config_as_run: str = ""
+    """The config as run as TOML (overrides applied; empty for schema-1 archives)."""
+    versions: dict[str, str] = field(default_factory=dict)
+    """Library versions the run was made with (``numpy_version``, ...)."""
 
     @property
     def solver_name(self) -> str:

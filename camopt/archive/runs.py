@@ -230,6 +230,8 @@ def _load(f: h5py.File, path: str | Path) -> RunView:
         camopt_version=str(f.attrs["camopt_version"]),
         seed_entropy=str(f.attrs["seed_entropy"]),
         interrupted=bool(f.attrs.get("interrupted", False)),
-        repeats_done=len(repeats),
+        repeats_done=len(repeats), config_as_run=str(f.attrs.get("config_as_run", "")),
+        versions={k: str(v) for k, v in f.attrs.items()
+                  if k.endswith("_version") and k != "schema_version"},
     )
 

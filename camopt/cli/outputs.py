@@ -74,3 +74,22 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
             written = export_run(view, folder, run_path.stem, format.value)
     for p in written:
         print(p)
+
+
+@app.command()
+def report(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="archive")],
+           out: Annotated[Path | None, typer.Option(
+               "--out", help="HTML file to write (default: the archive's name with .html)")]
+           = None,
+           force: Annotated[bool, typer.Option(help="overwrite --out")] = False) -> None:
+    """Write one self-contained HTML report (figures inline, no network needed to view it):
+    the case and solver, the best design beside the reference design, constraints, metrics,
+    figures, repeat statistics, notes, versions and seeds; for a sweep, its ranking."""
+    from camopt.cli.catalog import write_text
+    from camopt.html_report import render
+
+    with errors():
+        target = out or path.with_suffix(".html")
+        archive.check_writable(target, force)
+        write_text(target, render(path), force)
+    print(target)

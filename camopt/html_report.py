@@ -1,0 +1,123 @@
+"""``camopt report``: one self-contained HTML page per archive (Jinja2 template
+``templates/report.html.j2``). Every figure is an inline SVG data URI and the style sheet is
+in the page, so it opens without network access and can be handed over as one file."""
+
+from __future__ import annotations
+
+import base64
+import io
+import math
+import platform
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from typing import Any
+
+from camopt import archive, report
+from camopt.archive.sweeps import load_sweep
+from camopt.runview import RunView
+
+LIBRARIES = ("camopt", "numpy", "scipy", "h5py", "matplotlib", "pymoo", "pydantic", "Jinja2",
+             "ezdxf")
+
+
+def number(value: Any) -> str:
+    """A value as the report prints it: 6 significant digits, 'inf' for infinities (an
+    unbounded stress, a design that never closes), 'n/a' for NaN, yes/no for booleans."""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "n/a"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return f"{value:.6g}"
+    if isinstance(value, (list, tuple)):
+        return ", ".join(number(v) for v in value)
+    return "-" if value is None else str(value)
+
+
+def svg_uri(fig: Any) -> str:
+    """A matplotlib figure as an ``data:image/svg+xml;base64,...`` URI (text as paths, so
+    no font is needed to view it); the figure is closed."""
+    from camopt.plotting import close
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="svg")
+    close(fig)
+    return "data:image/svg+xml;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _figures(figures: dict[str, Any]) -> list[dict[str, str]]:
+    out = []
+    for name, fig in figures.items():
+        title = fig.axes[0].get_title() if fig.axes else name
+        out.append({"name": name, "title": title or name, "uri": svg_uri(fig)})
+    return out
+
+
+def _environment() -> dict[str, str]:
+    found = {"python": platform.python_version()}
+    for lib in LIBRARIES:
+        try:
+            found[lib] = version(lib)
+        except PackageNotFoundError:
+            found[lib] = "not installed"
+    return found
+
+
+def run_context(view: RunView) -> dict[str, Any]:
+    """What the template shows of a run archive."""
+    from camopt import plots
+    from camopt.cases import get_case
+
+    spec = get_case(view.kind)
+    summary = report.summary(view)
+    stats = report.repeat_statistics(view).as_dict()
+    return {
+        "kind": "run", "title": f"{view.kind} / {view.solver_name}: {Path(view.path).name}",
+        "path": view.path, "case_kind": view.kind, "case_summary": spec.summary,
+        "paper_source": spec.paper_source, "solver": view.solver_name,
+        "created": view.created, "seed": view.run.get("seed"),
+        "seed_entropy": view.seed_entropy, "repeats_planned": view.run.get("repeats"),
+        "interrupted": view.interrupted, "status": report.status(view),
+        "feasible": view.best.feasible, "active": view.best.active,
+        "violated": view.best.violated, "objective_name": view.objective_name,
+        "reference_label": summary["reference_label"], "rows": summary["rows"],
+        "statistics": stats, "target": view.run.get("target"),
+        "repeats": view.repeats, "table": view.table[:50], "table_rows": len(view.table),
+        "table_columns": ["label", *view.best.x, view.objective_name, "feasible"],
+        "notes": [(r.index, n) for r in view.repeats for n in r.notes],
+        "figures": _figures(plots.run_figures(view)),
+        "config_toml": view.config_as_run or view.config_toml,
+        "versions": view.versions, "environment": _environment(),
+    }
+
+
+def sweep_context(path: Path) -> dict[str, Any]:
+    """What the template shows of a sweep archive (read through ``load_sweep`` only)."""
+    from camopt import plots
+
+    spec, results = load_sweep(path)
+    ranking = report.rank_sweep(spec, results)
+    return {
+        "kind": "sweep", "title": f"sweep: {path.name}", "path": str(path),
+        "source": spec.source, "grid": spec.grid, "seeds": list(spec.seeds),
+        "cells": len(results), "ranking": ranking["ranking"],
+        "figures": _figures(plots.sweep_figures(spec, results)),
+        "config_toml": spec.text, "environment": _environment(),
+    }
+
+
+def render(path: Path) -> str:
+    """The HTML page of a run or sweep archive."""
+    import jinja2
+
+    env = jinja2.Environment(loader=jinja2.PackageLoader("camopt", "templates"),
+                             autoescape=True, undefined=jinja2.StrictUndefined,
+                             trim_blocks=True, lstrip_blocks=True)
+    env.filters["num"] = number
+    if archive.archive_kind(path) == "sweep":
+        context = sweep_context(path)
+    else:
+        context = run_context(archive.load_run(path))
+    return env.get_template("report.html.j2").render(**context)
