@@ -1,0 +1,140 @@
+"""``camopt report``: one self-contained HTML page, checked as text and loaded in a real
+browser (Debian's headless Chromium): no console messages, every inline figure decoded,
+a screenshot that is not blank."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from camopt import archive
+from camopt.cli import app
+from tests.conftest import CONFIGS
+
+runner = CliRunner()
+BROWSERS = ("chromium", "chromium-browser", "google-chrome")
+BROWSER = next((shutil.which(b) for b in BROWSERS if shutil.which(b)), None)
+needs_browser = pytest.mark.skipif(
+    BROWSER is None, reason="no headless Chromium on PATH (Debian: apt-get install chromium; "
+    ".ci/run installs it)")
+EXTERNAL = re.compile(r"""(?:src|href|action)\s*=\s*["']?\s*(?:https?:)?//""", re.I)
+# after load: how many images failed to decode, written into the DOM for --dump-dom
+PROBE = """<script>window.addEventListener("load", () => {
+  const imgs = [...document.images];
+  document.body.dataset.images = imgs.length;
+  document.body.dataset.broken = imgs.filter(i => !i.complete || i.naturalWidth === 0).length;
+});</script>"""
+
+
+@pytest.fixture(scope="module")
+def emb_report(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("report")
+    run = folder / "emb.h5"
+    r = runner.invoke(app, ["run", str(CONFIGS / "emb.toml"), "--out", str(run), "--quiet",
+                            "--set", "solver.iterations=20", "--set", "solver.particles=20",
+                            "--repeats", "2"])
+    assert r.exit_code == 0, r.output
+    out = folder / "emb-report.html"
+    r = runner.invoke(app, ["report", str(run), "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    assert r.stdout == f"{out}\n"
+    return archive.load_run(run), out
+
+
+def load_in_browser(page: Path, tmp_path: Path) -> tuple[list[str], dict[str, str], Path]:
+    """Open ``page`` in headless Chromium with the network blocked: its console messages,
+    the body's data attributes after load (with :data:`PROBE` added) and a screenshot."""
+    probed = tmp_path / f"probed-{page.name}"
+    probed.write_text(page.read_text().replace("</body>", PROBE + "</body>"))
+    shot = tmp_path / f"{page.stem}.png"
+    base = [BROWSER, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+            f"--user-data-dir={tmp_path / 'profile'}", "--no-first-run",
+            "--proxy-server=127.0.0.1:9", "--host-resolver-rules=MAP * ~NOTFOUND",
+            "--enable-logging=stderr", "--v=0", "--window-size=1100,1600"]
+    # the browser's profile, cache and config stay in the test's folder
+    env = {**os.environ, "HOME": str(tmp_path), "XDG_CONFIG_HOME": str(tmp_path / "config"),
+           "XDG_CACHE_HOME": str(tmp_path / "cache")}
+    dom = subprocess.run([*base, "--dump-dom", probed.as_uri()], capture_output=True,
+                         text=True, timeout=120, env=env)
+    assert dom.returncode == 0, dom.stderr[-2000:]
+    console = [line for line in dom.stderr.splitlines() if ":CONSOLE" in line]
+    body = re.search(r"<body([^>]*)>", dom.stdout)
+    attrs = dict(re.findall(r'data-(\w+)="([^"]*)"', body.group(1))) if body else {}
+    subprocess.run([*base, f"--screenshot={shot}", page.as_uri()], capture_output=True,
+                   timeout=120, check=True, env=env)
+    return console, attrs, shot
+
+
+def not_blank(shot: Path) -> float:
+    """The fraction of the screenshot's pixels that are not background white."""
+    from matplotlib.image import imread
+
+    img = imread(shot)[..., :3]
+    return float(np.mean(np.any(img < 0.9, axis=-1)))
+
+
+def test_report_is_one_self_contained_page(emb_report):
+    view, out = emb_report
+    html = out.read_text()
+    assert not EXTERNAL.search(html) and "http://" not in html.replace(
+        "http://www.w3.org/2000/svg", "")  # the SVG namespace is a name, never fetched
+    figures = re.findall(r'<img src="data:image/svg\+xml;base64,[A-Za-z0-9+/=]+"', html)
+    assert len(figures) >= 3  # convergence and the case's figures
+    table = html[html.index('<table id="best-design">'):]
+    table = table[:table.index("</table>")]
+    for name, value in view.best.x.items():
+        assert f"<td>{name}</td><td class=\"num\">{value:.6g}</td>" in table
+    assert "peak_torque_nm" in table and ">paper<" in table  # beside the paper's 7.72 N m
+    assert "7.72" in table
+    assert f"SeedSequence({view.seed_entropy})" in html and "numpy" in html
+
+
+@needs_browser
+def test_report_loads_in_chromium_without_errors(emb_report, tmp_path):
+    _, out = emb_report
+    console, attrs, shot = load_in_browser(out, tmp_path)
+    assert console == []
+    assert int(attrs["images"]) >= 3 and attrs["broken"] == "0"
+    assert not_blank(shot) > 0.02  # text, tables and figure lines
+
+
+@needs_browser
+def test_browser_check_catches_errors_and_broken_images(tmp_path):
+    """The check above can fail: a console error and an image that cannot load are seen."""
+    page = tmp_path / "bad.html"
+    page.write_text('<html><body><p>x</p><img src="https://example.invalid/a.png">'
+                    '<script>console.error("boom")</script></body></html>')
+    console, attrs, shot = load_in_browser(page, tmp_path)
+    assert any('"boom"' in line for line in console)
+    assert attrs["broken"] == "1"
+    blank = tmp_path / "blank.html"
+    blank.write_text("<html><body></body></html>")
+    assert not_blank(load_in_browser(blank, tmp_path)[2]) < 0.001
+
+
+def test_report_of_a_sweep(tmp_path):
+    out = tmp_path / "sweep.h5"
+    r = runner.invoke(app, ["sweep", str(CONFIGS / "vcb.toml"), "--seeds", "0:2",
+                            "--grid", "solver.population=10,20", "--set",
+                            "solver.generations=10", "--set", "run.repeats=1", "--out",
+                            str(out), "--quiet", "--jobs", "1"])
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(app, ["report", str(out)])
+    assert r.exit_code == 0, r.output
+    html = out.with_suffix(".html").read_text()
+    assert 'id="ranking"' in html and "solver.population=20" in html
+    assert not EXTERNAL.search(html) and html.count('src="data:image/svg+xml') >= 1
+
+
+def test_report_refuses_an_existing_file(emb_report, tmp_path):
+    _, out = emb_report
+    r = runner.invoke(app, ["report", str(out.with_name("emb.h5")), "--out", str(out)])
+    assert r.exit_code == 2
+    assert r.stderr.startswith(f"error: {out}: --out: ") and r.stderr.count("\n") == 1
