@@ -33,25 +33,51 @@ def _scale(ax: Any, values: np.ndarray) -> None:
         ax.set_yscale("symlog", linthresh=max(floor, finite.max() * 1e-12))
 
 
-def convergence(curves: dict[str, list[np.ndarray]], objective: str) -> Figure:
-    """Median and inter-quartile band of the best objective over iterations."""
-    fig, ax = new_figure("Convergence (median and inter-quartile band over repeats)",
-                         "iteration (generation)", f"best {readable(objective)}")
+def convergence(curves: dict[str, list[np.ndarray]], objective: str,
+                target: float | None = None,
+                evaluations: dict[str, list[np.ndarray]] | None = None,
+                violations: dict[str, list[np.ndarray]] | None = None) -> Figure:
+    """Median and inter-quartile band of the best objective, against iterations or, given
+    ``evaluations`` (the ``nfev`` histories, one per curve), against function evaluations
+    (so grid points of different population sizes compare fairly). ``target`` is drawn
+    as a line. When no curve has a finite objective (no feasible design was found) the best
+    constraint violation is drawn instead (``violations``), never an empty axes."""
+    finite = any(np.isfinite(np.asarray(h, dtype=float)).any()
+                 for hist in curves.values() for h in hist)
+    if not finite and violations:
+        curves, what = violations, "best constraint violation (no feasible design found)"
+        ylabel, target = "best constraint violation", None
+    else:
+        what, ylabel = "best objective", f"best {readable(objective)}"
+    xlabel = "function evaluations" if evaluations else "iteration (generation)"
+    fig, ax = new_figure(f"Convergence: {what}\n(median and inter-quartile band over runs)",
+                         xlabel, ylabel)
     allv = []
     for label, hist in curves.items():
         med, lo, hi = _band(hist)
-        x = np.arange(1, med.size + 1)
+        x = np.arange(1, med.size + 1, dtype=float)
+        if evaluations and evaluations.get(label):
+            x = _band([np.asarray(e, dtype=float) for e in evaluations[label]])[0][:med.size]
         ax.plot(x, med, label=f"{label} (n = {len(hist)})")
         ax.fill_between(x, lo, hi, alpha=0.25)
         allv.append(med)
-    _scale(ax, np.concatenate(allv))
+    if target is not None and np.isfinite(target):
+        ax.axhline(target, color="black", linestyle=":", linewidth=1.2,
+                   label=f"target {target:.6g}")
+        allv.append(np.array([float(target)]))
+    values = np.concatenate(allv) if allv else np.array([])
+    if not np.isfinite(values).any():
+        ax.text(0.5, 0.5, "no finite value to draw", transform=ax.transAxes, ha="center")
+    _scale(ax, values)
     ax.legend()
     return fig
 
 
 def run_figures(run: RunView) -> dict[str, Figure]:
     """Convergence and the case's figures for one run archive."""
-    figs = {"convergence": convergence({"repeats": run.histories()}, run.objective_name)}
+    figs = {"convergence": convergence(
+        {"repeats": run.histories()}, run.objective_name, run.run.get("target"),
+        violations={"repeats": run.histories("best_violation")})}
     if len(pareto.objectives(run)[0]) >= 2:
         figs["pareto"] = pareto_front(run)
     figs.update(get_case(run.kind).draw(run))
@@ -86,12 +112,36 @@ def pareto_front(run: RunView) -> Figure:
 
 
 def sweep_figures(spec: Any, results: dict) -> dict[str, Figure]:
-    """Convergence with one line per grid point."""
+    """Convergence against function evaluations, one line per grid point (grid points of
+    different population sizes spend different evaluations per generation)."""
     curves: dict[str, list[np.ndarray]] = {}
+    nfev: dict[str, list[np.ndarray]] = {}
+    violations: dict[str, list[np.ndarray]] = {}
     for (point, _), r in sorted(results.items()):
         label = ", ".join(f"{k}={v}" for k, v in spec.points()[point].items()) or "base"
         curves.setdefault(label, []).append(np.asarray(r.history["best_objective"]))
-    return {"convergence": convergence(curves, "objective")}
+        if "nfev" in r.history:
+            nfev.setdefault(label, []).append(np.asarray(r.history["nfev"]))
+        if "best_violation" in r.history:
+            violations.setdefault(label, []).append(np.asarray(r.history["best_violation"]))
+    by_evaluations = nfev if set(nfev) == set(curves) else None
+    return {"convergence": convergence(curves, _objective_name(spec),
+                                       spec.data["run"].get("target"), by_evaluations,
+                                       violations or None)}
+
+
+def _objective_name(spec: Any) -> str:
+    """The objective's name (its unit in the name) of a sweep's case, from its config;
+    plain 'objective' when the case cannot be built here (e.g. it names another archive)."""
+    from pydantic import ValidationError
+
+    from camopt.driver import prepare, validate
+    from camopt.errors import CamoptError
+
+    try:
+        return str(prepare(validate(spec.data, spec.source))[0].objective_name)
+    except (CamoptError, ValidationError, OSError):
+        return "objective"
 
 
 def save(figures: dict[str, Figure], out_dir: Path, stem: str) -> list[Path]:

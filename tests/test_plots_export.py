@@ -104,5 +104,52 @@ def test_sweep_convergence_has_one_line_per_point(tmp_path):
     assert r.exit_code == 0, r.output
     from camopt.archive.sweeps import load_sweep
 
-    fig = plots.sweep_figures(*load_sweep(out))["convergence"]
-    assert len(fig.axes[0].lines) == 2
+    spec, results = load_sweep(out)
+    fig = plots.sweep_figures(spec, results)["convergence"]
+    ax = fig.axes[0]
+    lines = [ln for ln in ax.lines if not ln.get_label().startswith("target")]
+    assert len(lines) == 2
+    # by function evaluations: population 20 spends twice the evaluations per generation
+    assert ax.get_xlabel() == "function evaluations" and ax.get_ylabel() == "best objective (J)"
+    ends = {ln.get_label().split(" ")[0]: ln.get_xdata()[-1] for ln in lines}
+    for label, end in ends.items():
+        cells = [r for (p, _), r in results.items()
+                 if spec.points()[p] and label.endswith(str(spec.points()[p]["solver.population"]))]
+        assert end == pytest.approx(np.median([c.history["nfev"][-1] for c in cells]))
+    assert ends["solver.population=20"] > 1.5 * ends["solver.population=10"]
+
+
+def test_every_figure_is_labelled_with_ticks_and_legends(case_run):
+    """No empty figure; both axes labelled; ticks; a legend wherever two labelled series
+    share an axes."""
+    _, path = case_run
+    figs = plots.run_figures(archive.load_run(path))
+    for name, fig in figs.items():
+        assert fig.axes[0].get_xlabel(), name  # a twin axes shares the first one's x
+        for ax in fig.axes:
+            if not ax.get_visible():
+                continue
+            assert ax.get_ylabel(), name
+            assert len(ax.get_xticks()) and len(ax.get_yticks()), name
+            drawn = ax.lines + ax.collections
+            assert drawn, f"{name}: empty axes"
+            labelled = [a for a in drawn if not a.get_label().startswith("_")]
+            if len(labelled) >= 2 and ax is fig.axes[0]:
+                assert fig.axes[0].get_legend() is not None, name
+        close(fig)
+
+
+def test_convergence_draws_the_target_and_never_an_empty_axes(tmp_path):
+    run = tmp_path / "t.h5"
+    archive.write_run(execute(load(CONFIGS / "fast_switch_de.toml", "run.repeats=2",
+                                   "solver.generations=20", "run.target=18.5")), run)
+    ax = plots.run_figures(archive.load_run(run))["convergence"].axes[0]
+    (target,) = [ln for ln in ax.lines if ln.get_label().startswith("target")]
+    assert target.get_ydata()[0] == pytest.approx(18.5)
+    infeasible = tmp_path / "pp4.h5"  # no start converges: objective inf in every iteration
+    archive.write_run(execute(load(CONFIGS / "opening_spring_pp4.toml")), infeasible)
+    view = archive.load_run(infeasible)
+    assert not np.isfinite(view.histories()[0]).any()
+    ax = plots.run_figures(view)["convergence"].axes[0]
+    assert ax.get_ylabel() == "best constraint violation"
+    assert np.isfinite(ax.lines[0].get_ydata()).all()
