@@ -85,8 +85,9 @@ def test_infeasible_best_without_violation_says_why(tmp_path):
 
 def test_show_reads_a_sweep(tmp_path):
     out = tmp_path / "sweep.h5"
-    r = invoke("sweep", CONFIGS / "fast_switch_de.toml", "--seeds", "0:2", "--grid",
-               "solver.population=10,20", "--set", "solver.generations=10", "--out", out,
+    r = invoke("sweep", CONFIGS / "vcb.toml", "--seeds", "0:2", "--grid",
+               "solver.population=10,20", "--set", "solver.generations=10", "--set",
+               "run.repeats=1", "--out", out,
                "--quiet", "--jobs", "1")
     assert r.exit_code == 0, r.output
     shown = invoke("show", out)
