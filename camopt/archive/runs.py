@@ -183,7 +183,7 @@ def _load(f: h5py.File, path: str | Path) -> RunView:
     repeats = []
     if len(f["repeats"]) == 0:
         raise ArchiveError("/repeats: no repeat")
-    for key in sorted(f["repeats"]):
+    for key in sorted(f["repeats"], key=lambda k: int(k[1:])):  # r999 < r1000
         grp = f["repeats"][key]
         a = grp.attrs
         missing = [k for k in REPEAT_ATTRS if k not in a]
