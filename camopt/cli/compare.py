@@ -83,8 +83,9 @@ def print_ranking(doc: dict[str, Any]) -> None:
     table = Table(title=escape(f"sweep {doc['sweep']}: grid points ranked"),
                   title_justify="left",
                   caption="success: successful/runs; nfev: median evaluations to the target; "
-                          "p: Mann-Whitney against rank 1", caption_justify="left")
-    for col in ("rank", "grid point", "success", "best", "median", "worst", "nfev", "p"):
+                          "p: Mann-Whitney against rank 1; worst and more: --format json",
+                  caption_justify="left")
+    for col in ("rank", "grid point", "success", "best", "median", "nfev", "p"):
         if col == "grid point":
             table.add_column(col, overflow="fold", min_width=10)
         else:
@@ -92,8 +93,8 @@ def print_ranking(doc: dict[str, Any]) -> None:
     for r in doc["ranking"]:
         vs = r.get("vs_best")
         table.add_row(str(r["rank"]), escape(r["label"]), f"{r['successes']}/{r['runs']}",
-                      cell(r["best"]), cell(r["median"]), cell(r["worst"]),
-                      cell(r["median_nfev_to_target"]), f"{vs['p_value']:.3g}" if vs else "-")
+                      cell(r["best"]), cell(r["median"]), cell(r["median_nfev_to_target"]),
+                      f"{vs['p_value']:.3g}" if vs else "-")
     out.print(table)
     for r in doc["ranking"]:
         if r.get("vs_best"):
