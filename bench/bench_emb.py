@@ -42,7 +42,7 @@ def evaluation_cost(n_pop: int = 100) -> None:
     problem = EmbCamProblem(_load().case)
     rng = np.random.default_rng(0)
     X = problem.lower + rng.random((n_pop, problem.n_var)) * (problem.upper - problem.lower)
-    X = problem.repair(X, rng, {k: 1.0 for k in problem.repair_defaults})
+    X = problem.repair(X, rng, {k: 1.0 for k in problem.repair_schedule()})
     t0 = time.perf_counter()
     for _ in range(20):
         batched = problem.evaluate(X)
