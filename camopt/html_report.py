@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import base64
 import io
-import math
 import platform
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -21,19 +20,8 @@ LIBRARIES = ("camopt", "numpy", "scipy", "h5py", "matplotlib", "pymoo", "pydanti
 
 
 def number(value: Any) -> str:
-    """A value as the report prints it: 6 significant digits, 'inf' for infinities (an
-    unbounded stress, a design that never closes), 'n/a' for NaN, yes/no for booleans."""
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, float):
-        if math.isnan(value):
-            return "n/a"
-        if math.isinf(value):
-            return "inf" if value > 0 else "-inf"
-        return f"{value:.6g}"
-    if isinstance(value, (list, tuple)):
-        return ", ".join(number(v) for v in value)
-    return "-" if value is None else str(value)
+    """A value as the report prints it (:func:`camopt.report.format_value`)."""
+    return report.format_value(value)
 
 
 def svg_uri(fig: Any) -> str:

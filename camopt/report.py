@@ -15,6 +15,23 @@ from camopt.runview import RunView
 SHOW_KEYS = ("case", "solver", "best", "repeats", "table")
 
 
+def format_value(value: Any) -> str:
+    """A value as tables and the HTML report print it: 6 significant digits; infinities as
+    'inf' (a stress with no bound, a design that never closes), NaN as 'n/a' (a quantity
+    that does not exist for this design), booleans as yes/no, None as '-'."""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "n/a"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return f"{value:.6g}"
+    if isinstance(value, (list, tuple)):
+        return ", ".join(format_value(v) for v in value)
+    return "-" if value is None else str(value)
+
+
 def jsonable(value: Any) -> Any:
     """Replace non-finite floats by None and numpy scalars by Python ones, recursively."""
     if isinstance(value, dict):

@@ -4,7 +4,6 @@ repeats, the solver's table), or a sweep archive's ranking."""
 from __future__ import annotations
 
 import json
-import math
 import sys
 from pathlib import Path
 from typing import Annotated, Any
@@ -44,20 +43,8 @@ def show(run_path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP",
 
 
 def cell(value: Any) -> str:
-    """A number as a table shows it: 6 significant digits; infinities as 'inf' (a
-    stress with no bound, a design that never closes), NaN as 'n/a' (a quantity that does
-    not exist for this design), booleans as yes/no, None as '-'."""
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, float):
-        if math.isnan(value):
-            return "n/a"
-        if math.isinf(value):
-            return "inf" if value > 0 else "-inf"
-        return f"{value:.6g}"
-    if isinstance(value, list):
-        return ", ".join(cell(v) for v in value)
-    return "-" if value is None else escape(str(value))
+    """A table cell (:func:`camopt.report.format_value`), rich markup escaped."""
+    return escape(report.format_value(value))
 
 
 def print_show(view: RunView, rows: int | None = None) -> None:
