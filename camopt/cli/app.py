@@ -1,5 +1,10 @@
 """The typer application, its consoles and what every command shares: the one place that
-turns camopt's and pydantic's errors into ``error: ...`` and exit code 2."""
+turns camopt's and pydantic's errors into ``error: ...`` and exit code 2.
+
+The command modules import only the standard library, typer and rich at module level;
+camopt's models, numpy, scipy, h5py and pydantic are imported inside the commands that use
+them, so ``camopt --version`` and ``--help`` start in a fraction of a second
+(tests/cli/test_imports.py, bench/bench_startup.py)."""
 
 from __future__ import annotations
 
@@ -8,19 +13,18 @@ import enum
 import sys
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import click
 import typer
-from pydantic import ValidationError
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from camopt import archive
-from camopt.config import LoadedConfig
-from camopt.driver import load
 from camopt.errors import CamoptError
+
+if TYPE_CHECKING:
+    from camopt.config import LoadedConfig
 
 app = typer.Typer(rich_markup_mode="rich", no_args_is_help=True, add_completion=False,
                   help="Batch optimiser for spring-actuated mechanisms.")
@@ -56,9 +60,8 @@ def errors() -> Iterator[None]:
     SIGTERM, see ``main``) as one line and code 130, once temporary files are removed."""
     try:
         yield
-    except (CamoptError, ValidationError) as exc:
-        message = str(exc).splitlines()[0] if isinstance(exc, ValidationError) else str(exc)
-        print(f"error: {message}", file=sys.stderr)
+    except CamoptError as exc:
+        print(f"error: {exc}", file=sys.stderr)
         raise typer.Exit(2) from None
     except KeyboardInterrupt:
         print("error: interrupted; no archive written", file=sys.stderr)
@@ -69,9 +72,20 @@ def errors() -> Iterator[None]:
     except MemoryError:
         print("error: out of memory", file=sys.stderr)
         raise typer.Exit(2) from None
-    except Exception as exc:  # a bug: still one line, never a traceback (tests keep it unused)
+    except Exception as exc:
+        if is_validation_error(exc):
+            print(f"error: {str(exc).splitlines()[0]}", file=sys.stderr)
+            raise typer.Exit(2) from None
+        # a bug: still one line, never a traceback (tests keep it unused)
         print(internal_error(exc), file=sys.stderr)
         raise typer.Exit(2) from None
+
+
+def is_validation_error(exc: BaseException) -> bool:
+    """``exc`` is pydantic's ValidationError (pydantic is not imported to ask: a command
+    that raised one has imported it)."""
+    pydantic = sys.modules.get("pydantic")
+    return pydantic is not None and isinstance(exc, pydantic.ValidationError)
 
 
 INTERNAL = "error: internal error"
@@ -86,6 +100,9 @@ def internal_error(exc: BaseException) -> str:
 def load_case(case: Path, overrides: Sequence[str] | None = None) -> LoadedConfig:
     """A case file validated against every registered case and solver, with archive
     references (e.g. VCB step 2's ``cam_archive``) read."""
+    from camopt import archive
+    from camopt.driver import load
+
     return archive.resolve_references(load(case, list(overrides or [])))
 
 

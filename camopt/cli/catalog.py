@@ -7,25 +7,21 @@ import sys
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
-import tomli_w
 import typer
 from rich.markup import escape
 
-from camopt import archive
-from camopt.capabilities import capability_name
-from camopt.cases import cases, get_case
 from camopt.cli.app import app, errors, load_case, out
-from camopt.config import template
-from camopt.driver import build_solver, prepare
 from camopt.errors import CamoptError
-from camopt.solvers import solvers
 
 
 @app.command()
 def validate(case: Annotated[Path, typer.Argument(help="case file (TOML)")],
              set_: Annotated[list[str] | None, typer.Option("--set")] = None) -> None:
     """Check a case file without running it."""
+    import numpy as np
+
+    from camopt.driver import build_solver, prepare
+
     with errors():
         config = load_case(case, set_)
         problem, solver_cls = prepare(config)
@@ -39,6 +35,10 @@ def init(kind: Annotated[str, typer.Argument(help="case kind")],
          out_path: Annotated[Path | None, typer.Option("--out", help="write here")] = None,
          force: Annotated[bool, typer.Option(help="overwrite --out")] = False) -> None:
     """Write a commented case-file template for a case kind."""
+    from camopt.cases import get_case
+    from camopt.config import template
+    from camopt.solvers import solvers
+
     with errors():
         spec = get_case(kind)
         text = template(spec.config, solvers()[spec.default_solver].Options())
@@ -52,6 +52,8 @@ def init(kind: Annotated[str, typer.Argument(help="case kind")],
 def write_text(path: Path, text: str, force: bool) -> None:
     """Write a new file (``O_EXCL``: never over another's), or with ``force`` replace a
     regular file, through a temporary file beside it."""
+    from camopt import archive
+
     archive.check_writable(path, force)
     tmp = path.parent / f".{path.name}.{os.getpid()}.tmp"
     try:
@@ -74,6 +76,10 @@ def write_text(path: Path, text: str, force: bool) -> None:
 def list_solvers() -> None:
     """List solvers with their options (TOML lines for a ``[solver]`` table) and the case
     kinds each runs on."""
+    from camopt.capabilities import capability_name
+    from camopt.cases import cases
+    from camopt.solvers import solvers
+
     for name, cls in solvers().items():
         options = [toml_line(k, v.get_default(call_default_factory=True))
                    for k, v in cls.Options.model_fields.items() if k != "name"]
@@ -88,6 +94,8 @@ def list_solvers() -> None:
 def toml_line(key: str, value: object) -> str:
     """``key = value`` as TOML (``true``, quoted strings, arrays); an unset (None) default as
     a TOML comment, since TOML has no null: copied into a case file it stays valid."""
+    import tomli_w
+
     if value is None:
         return f"# {key} unset"
     if hasattr(value, "model_dump"):

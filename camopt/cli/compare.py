@@ -11,8 +11,6 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from camopt import archive, report
-from camopt.archive.sweeps import load_sweep
 from camopt.cli.app import Format, app, errors, fmt, out
 from camopt.errors import CamoptError
 
@@ -24,6 +22,9 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
             ) -> None:
     """Compare runs (config differences, designs, statistics, a significance test for two)
     or rank the grid points of a sweep."""
+    from camopt import archive, report
+    from camopt.archive.sweeps import load_sweep
+
     with errors():
         if len(runs) == 1 and archive.archive_kind(runs[0]) == "sweep":
             doc = report.rank_sweep(*load_sweep(runs[0]))

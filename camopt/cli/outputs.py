@@ -10,8 +10,6 @@ from typing import Annotated
 
 import typer
 
-from camopt import archive
-from camopt.archive.sweeps import load_sweep
 from camopt.cli.app import app, errors
 from camopt.errors import ArchiveError
 
@@ -42,7 +40,8 @@ def plot(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="arch
          out_dir: Annotated[Path | None, typer.Option("--out", help="folder for the PNGs")]
          = None) -> None:
     """Write PNG figures: convergence and the case's curves."""
-    from camopt import plots
+    from camopt import archive, plots
+    from camopt.archive.sweeps import load_sweep
 
     with errors():
         folder = out_dir or path.parent / f"{path.stem}-plots"
@@ -65,6 +64,7 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
     """Export the summary and analysis curves (csv or json) or the cam profiles, base
     circle and roller as a DXF drawing in mm (dxf); every format also writes the profiles'
     point files (x,y,z in mm)."""
+    from camopt import archive
     from camopt.export import export_run
 
     with errors():
@@ -85,6 +85,7 @@ def report(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="ar
     """Write one self-contained HTML report (figures inline, no network needed to view it):
     the case and solver, the best design beside the reference design, constraints, metrics,
     figures, repeat statistics, notes, versions and seeds; for a sweep, its ranking."""
+    from camopt import archive
     from camopt.cli.catalog import write_text
     from camopt.html_report import render
 

@@ -9,14 +9,9 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from camopt import archive
 from camopt.cli.app import app, err, errors, load_case
-from camopt.cli.show import print_show
-from camopt.driver import execute, prepare
 from camopt.errors import ArchiveError
-from camopt.perf import tune_allocator
 
 
 @app.command()
@@ -35,6 +30,11 @@ def run(
                                       "repeats (or one repeat's starts); same results")] = 1,
 ) -> None:
     """Run a case file and write an HDF5 run archive."""
+    from camopt import archive
+    from camopt.cli.show import print_show
+    from camopt.driver import execute, prepare
+    from camopt.perf import tune_allocator
+
     overrides = list(set_ or [])
     if seed is not None:  # recorded in the archive's config like any override
         overrides.append(f"run.seed={seed}")
@@ -61,6 +61,8 @@ def run(
 
 def default_out(name: str) -> Path:
     """``runs/<name>-<time>.h5``, creating ``runs/`` (an unwritable folder is bad input)."""
+    from camopt import archive
+
     path = archive.default_path(name)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -75,6 +77,8 @@ def claim_out(path: Path, force: bool, resuming: bool = False) -> Iterator[None]
     """Hold ``path`` for writing (``archive.claim``: one writer per archive); report stale
     temporary files removed and, with ``--force``, what the new archive replaced (not when
     ``resuming`` the archive's own sweep)."""
+    from camopt import archive
+
     replaced = archive.describe_file(path) if force and not resuming else None
     with archive.claim(path, force) as held:
         for stale in held.stale:
@@ -91,6 +95,14 @@ def progress(quiet: bool) -> Iterator[Any]:
     if quiet or not err.is_terminal:
         yield None
         return
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+    )
+
     columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                TextColumn("best {task.fields[best]}"), TimeElapsedColumn())
     with Progress(*columns, console=err, transient=True) as bar:

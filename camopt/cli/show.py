@@ -6,16 +6,16 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.markup import escape
 from rich.table import Table
 
-from camopt import archive, report
-from camopt.archive.sweeps import load_sweep
 from camopt.cli.app import Format, app, errors, out
-from camopt.runview import RunView
+
+if TYPE_CHECKING:
+    from camopt.runview import RunView
 
 
 @app.command()
@@ -25,6 +25,8 @@ def show(run_path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP",
          ) -> None:
     """Show an archive: a run's best design beside the reference design, its repeats and
     table; a sweep's grid points ranked (as ``compare SWEEP``)."""
+    from camopt import archive, report
+    from camopt.archive.sweeps import load_sweep
     from camopt.cli.compare import print_ranking
 
     with errors():
@@ -44,6 +46,8 @@ def show(run_path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP",
 
 def cell(value: Any) -> str:
     """A table cell (:func:`camopt.report.format_value`), rich markup escaped."""
+    from camopt import report
+
     return escape(report.format_value(value))
 
 
@@ -51,6 +55,8 @@ def print_show(view: RunView, rows: int | None = None) -> None:
     """The run summary: what ran, the best design beside the reference design (two
     columns, units in the names), the repeats (the first ``rows``) and the solver's table.
     Fits 80 columns: numbers are never wrapped, names fold when they must."""
+    from camopt import report
+
     doc = report.show(view)
     out.print(escape(view.path), soft_wrap=True, highlight=False)
     reps = view.repeats

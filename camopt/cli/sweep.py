@@ -10,16 +10,10 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from pydantic import ValidationError
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from camopt import sweep as sweep_mod
-from camopt.archive.sweeps import load_sweep
-from camopt.cli.app import app, err, errors, load_case, out, print_rows
+from camopt.cli.app import app, err, errors, is_validation_error, load_case, out, print_rows
 from camopt.cli.run import claim_out, default_out
 from camopt.errors import CamoptError
-from camopt.perf import tune_allocator
-from camopt.sweep import run as sweep_run
 
 
 @app.command()
@@ -40,6 +34,10 @@ def sweep(
     quiet: Annotated[bool, typer.Option(help="no progress bar")] = False,
 ) -> None:
     """Run every grid point x seed; one sweep archive with a summary per grid point."""
+    from camopt import sweep as sweep_mod
+    from camopt.perf import tune_allocator
+    from camopt.sweep import run as sweep_run
+
     with errors():
         if executor not in ("local", "dask"):
             raise CamoptError(f"--executor: {executor!r}: expected local or dask")
@@ -82,6 +80,9 @@ def _sweep_setup(case: Path | None, seeds: str, grid: list[str], overrides: list
                  resume: Path | None) -> Any:
     """The sweep's spec and the cells already done (none for a new sweep); called with the
     archive claimed, so a resumed archive cannot change under it."""
+    from camopt import sweep as sweep_mod
+    from camopt.archive.sweeps import load_sweep
+
     if resume is not None:
         spec, results = load_sweep(resume)
         if case is not None:
@@ -97,7 +98,9 @@ def _sweep_setup(case: Path | None, seeds: str, grid: list[str], overrides: list
                                sweep_mod.parse_grid(grid), sweep_mod.parse_seeds(seeds))
     try:
         spec.validate()
-    except ValidationError as exc:
+    except Exception as exc:
+        if not is_validation_error(exc):
+            raise
         raise CamoptError(f"{case}: --grid: {str(exc).splitlines()[0]}") from None
     return spec, {}
 
@@ -122,6 +125,8 @@ def _cell_progress(quiet: bool) -> Iterator[Any]:
     if quiet or not err.is_terminal:
         yield None
         return
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
     with Progress(TextColumn("cells"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   console=err, transient=True) as bar:
         task = bar.add_task("cells", total=None)

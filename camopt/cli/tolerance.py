@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 import json
 import sys
 from pathlib import Path
@@ -11,11 +12,16 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from camopt import archive
 from camopt.cli.app import Format, app, errors, fmt, out
 from camopt.errors import CamoptError
-from camopt.report import jsonable
-from camopt.tolerance import Distribution, analyse, default_varies, parse_vary
+
+
+class Dist(str, enum.Enum):
+    """``--dist`` (the names of :class:`camopt.tolerance.Distribution`, which imports scipy:
+    the command line lists them without it)."""
+
+    uniform = "uniform"
+    normal = "normal"
 
 
 @app.command()
@@ -28,8 +34,8 @@ def tolerance(
         min=1, max=1_000_000, help="samples, evaluated in one pass (at most 10^6: memory)")]
     = 2000,
     seed: Annotated[int, typer.Option(min=0, help="root seed of the draws")] = 0,
-    dist: Annotated[Distribution, typer.Option(
-        "--dist", help="uniform on ±X, or normal with sigma = X/3")] = Distribution.uniform,
+    dist: Annotated[Dist, typer.Option(
+        "--dist", help="uniform on ±X, or normal with sigma = X/3")] = Dist.uniform,
     format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
     out_path: Annotated[Path | None, typer.Option(
         "--out", help="write the samples to this HDF5 file")] = None,
@@ -40,13 +46,17 @@ def tolerance(
     force: Annotated[bool, typer.Option(help="overwrite an existing --out")] = False,
 ) -> None:
     """Vary a run's optimum within tolerances: yield, percentiles, sensitivities."""
+    from camopt import archive
+    from camopt.report import jsonable
+    from camopt.tolerance import Distribution, analyse, default_varies, parse_vary
+
     with errors():
         run = archive.load_run(run_path)
         varies = ([parse_vary(str(run_path), v) for v in vary] if vary
                   else default_varies(run))
         if out_path is not None:
             archive.check_writable(out_path, force)
-        result = analyse(run, varies, samples, seed, dist)
+        result = analyse(run, varies, samples, seed, Distribution(dist.value))
         doc = jsonable(result.summary)
         if tornado is not None and tornado not in doc["metrics"]:
             raise CamoptError(f"{run_path}: --tornado: no metric '{tornado}'; the case "
