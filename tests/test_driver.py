@@ -82,3 +82,24 @@ def test_jobs_change_nothing_but_wall_time(config, overrides):
     one, two = execute(cfg), execute(cfg, jobs=2)
     assert _comparable(one) == _comparable(two)
     assert one.best.fun == two.best.fun
+
+
+def _first_generation_best(problem, seq: np.random.SeedSequence, n: int) -> np.ndarray:
+    """The best of the n designs a generator from ``seq`` samples first (Deb's rules on the
+    sphere: its constraint x0 + x1 <= 1.5, then f = sum (x - 0.3)^2), computed here."""
+    X = problem.sample(np.random.default_rng(seq), n)
+    f = np.where(X[:, 0] + X[:, 1] <= 1.5, np.sum((X - 0.3) ** 2, axis=1), np.inf)
+    return X[np.argmin(f)]
+
+
+def test_repeat_i_draws_from_child_i_of_the_run_seed():
+    """Repeat i's generator is child i of SeedSequence(run.seed) (one generation of DE: the
+    best of its first sample), so any repeat can be re-run alone from the archive."""
+    cfg = validate({"case": {"kind": "sphere"},
+                    "solver": {"name": "de_gr", "population": 12, "generations": 1},
+                    "run": {"seed": 4, "repeats": 3}}, "sphere.toml")
+    rec = execute(cfg)
+    children = np.random.SeedSequence(4).spawn(3)
+    for i, r in enumerate(rec.repeats):
+        np.testing.assert_array_equal(r.x, _first_generation_best(rec.problem, children[i], 12))
+    assert len({tuple(r.x) for r in rec.repeats}) == 3

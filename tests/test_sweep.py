@@ -171,11 +171,22 @@ def test_bad_grid_and_seeds(tmp_path):
     assert r.exit_code == 2 and "--seeds" in r.stderr
 
 
-def test_seeds_are_children_of_one_sequence():
-    cell = sweep_mod.CellSpec({}, "x", 7, 3, 0)
-    child = np.random.SeedSequence(cell.entropy, spawn_key=(cell.seed,))
-    assert child.generate_state(4).tolist() == \
-        np.random.SeedSequence(7).spawn(5)[3].generate_state(4).tolist()
+def test_cell_seed_k_is_child_k_of_the_run_seed():
+    """run_cell with seed k of run.seed = 7 draws from child k of SeedSequence(7), the same
+    generator as repeat k of a run (one generation of DE: the best of its first sample)."""
+    from camopt.driver import prepare, validate
+    from camopt.sweep.run import run_cell
+    from tests.test_driver import _first_generation_best
+
+    data = {"case": {"kind": "sphere"},
+            "solver": {"name": "de_gr", "population": 12, "generations": 1},
+            "run": {"seed": 7}}
+    results = [run_cell(sweep_mod.CellSpec(data, "sphere.toml", 7, k, 0)) for k in (0, 3)]
+    problem, _ = prepare(validate(data, "sphere.toml"))
+    children = np.random.SeedSequence(7).spawn(4)
+    for k, r in zip((0, 3), results):
+        assert r.seed == k
+        np.testing.assert_array_equal(r.x, _first_generation_best(problem, children[k], 12))
 
 
 def test_cells_go_to_a_journal_and_snapshots_double(tmp_path, monkeypatch):

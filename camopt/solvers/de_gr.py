@@ -22,6 +22,26 @@ from camopt.solvers.polish import PolishableOptions, Polishing
 from camopt.solvers.registry import register_solver
 
 
+def best1(pop: NDArray, best: NDArray, factor: float, rng: np.random.Generator) -> NDArray:
+    """DE/best/1 mutants (n, d): best + F (x_r1 - x_r2) with r1 != r2, both != i, drawn
+    per row from the population ``pop`` (n, d)."""
+    n = len(pop)
+    idx = np.argsort(rng.random((n, n)), axis=1)
+    # the row's own index is swapped for the last of its permutation: r1, r2 != i
+    idx = np.where(idx == np.arange(n)[:, None], idx[:, -1:], idx)[:, :2]
+    return best + factor * (pop[idx[:, 0]] - pop[idx[:, 1]])
+
+
+def binomial_crossover(pop: NDArray, mutant: NDArray, rate: float, rng: np.random.Generator
+                       ) -> NDArray:
+    """Trials (n, d): each gene from the mutant with probability ``rate`` (CR), else from
+    the parent, and one random gene per row from the mutant whatever CR is."""
+    n, d = pop.shape
+    cross = rng.random((n, d)) < rate
+    cross[np.arange(n), rng.integers(0, d, n)] = True
+    return np.where(cross, mutant, pop)
+
+
 class DEGROptions(PolishableOptions):
     """Options of ``de_gr``."""
 
@@ -58,17 +78,12 @@ class DEGR(Polishing, Solver):
     def ask(self) -> NDArray:
         if self.polish_pending():
             return self.polish_ask()
-        n, d = self.options.population, self.problem.n_var
+        n = self.options.population
         if self.pop is None:
             return snap(self.problem, self.problem.sample(self.rng, n))
         best = self.pop[self._best_index()]
-        # three distinct partners different from i: r1, r2 (best/1 needs two)
-        idx = np.argsort(self.rng.random((n, n)), axis=1)
-        idx = np.where(idx == np.arange(n)[:, None], idx[:, -1:], idx)[:, :2]
-        mutant = best + self.options.mutation_factor * (self.pop[idx[:, 0]] - self.pop[idx[:, 1]])
-        cross = self.rng.random((n, d)) < self.options.crossover_rate
-        cross[np.arange(n), self.rng.integers(0, d, n)] = True
-        trial = np.where(cross, mutant, self.pop)
+        mutant = best1(self.pop, best, self.options.mutation_factor, self.rng)
+        trial = binomial_crossover(self.pop, mutant, self.options.crossover_rate, self.rng)
         # reflect into bounds, midway between the parent and the violated bound
         trial = np.where(trial < self.lo, (self.lo + self.pop) / 2, trial)
         trial = np.where(trial > self.hi, (self.hi + self.pop) / 2, trial)

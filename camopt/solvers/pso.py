@@ -25,6 +25,12 @@ from camopt.solvers.polish import PolishableOptions, Polishing
 from camopt.solvers.registry import register_solver
 
 
+def inertia(iteration: int, iterations: int, w_max: float, w_min: float) -> float:
+    """Inertia weight of Eq 40, falling linearly from w_max at iteration 0 to w_min at
+    i_max = ``iterations``."""
+    return w_max - iteration / iterations * (w_max - w_min)
+
+
 class PSOOptions(PolishableOptions):
     """Options of ``pso``."""
 
@@ -109,7 +115,7 @@ class PSO(Polishing, Solver):
             self.V = (self.rng.random((n, d)) * 2 - 1) * self.vmax
             return self._repair(snap(self.problem, X))
         assert self.P is not None and self.V is not None and self.pev is not None
-        w = o.w_max - self.nit / o.iterations * (o.w_max - o.w_min)  # Eq 40
+        w = inertia(self.nit, o.iterations, o.w_max, o.w_min)
         g = self.P[best_index(self.pev)]
         r1, r2 = self.rng.random((n, d)), self.rng.random((n, d))
         desired = o.c1 * r1 * (self.P - self.X) + o.c2 * r2 * (g - self.X)  # Eq 38

@@ -114,3 +114,121 @@ def test_swarm_evaluation_is_row_independent():
     for i in (0, 11, 29):
         one = p.evaluate(X[i : i + 1])
         assert one.f[0] == pytest.approx(whole.f[i], rel=1e-12)
+
+
+# ---- one fixed particle, every equation against an independent calculation -------------
+# Key radii rising from r_st = 15 mm to 16.6 mm, kappa 0.05 rad, offset 2 mm: every sample
+# finite, the clearance taken up part-way (lift 1.88 mm > x1), pressure angles to 29 deg.
+R_KEYS = (15 + 1.6 * np.linspace(1 / 9, 1, 9) ** 1.3) * 1e-3
+PARTICLE = np.r_[R_KEYS, 0.05, 2e-3]
+K_PAPER = 50e3 / 1e-9  # N/m^3: 50 kN at 1 mm of caliper deformation (Sec 3.1)
+Z_E = 189.8e3  # sqrt(Pa), steel on steel (Eq 15)
+
+
+def fixed_problem(**changes):
+    from camopt.cases.emb_cam import EmbCamConfig, EmbCamProblem
+
+    return EmbCamProblem(EmbCamConfig(**changes))
+
+
+def independent_profile(problem):
+    """The working profile by scipy's CubicSpline in the profile angle (clamped to the
+    non-working arc's slope r_st tan kappa at the start, Eq 20; natural at the end), with
+    theta0 and theta_a from Eqs 22-24 written out by the law of cosines, and the geometry
+    of Eqs 8-11 and 16 by vectors: B = r (cos, sin), the ring centre A = B - rg n (n the
+    outward normal), the follower height from |OA| and the offset."""
+    from scipy.interpolate import CubicSpline
+
+    rg, r_st, e, kappa = 20e-3, 15e-3, PARTICLE[-1], PARTICLE[-2]
+    r_keys = np.r_[r_st, R_KEYS]
+    oa0 = np.sqrt(rg**2 + r_st**2 - 2 * rg * r_st * np.cos(kappa))  # Eq 22
+
+    def ring_angle(r):  # angle AOB for B on the ring about A at the start
+        return np.arccos((oa0**2 + r**2 - rg**2) / (2 * oa0 * r))
+
+    theta_a = ring_angle(r_st) + ring_angle(r_keys[-1])  # Eq 23
+    theta0 = np.pi / 2 - ring_angle(r_st) + np.arccos(e / oa0)  # Eq 24
+    knots = theta0 + theta_a * np.arange(10) / 9  # Eq 25, uniform key points
+    spline = CubicSpline(knots, r_keys, bc_type=((1, r_st * np.tan(kappa)), (2, 0.0)))
+    theta = theta0 + theta_a * np.linspace(0, 1, problem.u.size)
+    r, dr, ddr = spline(theta), spline(theta, 1), spline(theta, 2)
+    c, s = np.cos(theta), np.sin(theta)
+    b = np.array([r * c, r * s])
+    t = np.array([dr * c - r * s, dr * s + r * c])  # dB/dtheta
+    tt = np.array([ddr * c - 2 * dr * s - r * c, ddr * s + 2 * dr * c - r * s])
+    speed = np.hypot(*t)
+    arm = np.abs(np.sum(b * t, axis=0)) / speed  # Eq 8: distance from O to the normal
+    normal_out = np.array([t[1], -t[0]]) / speed
+    oa = np.hypot(*(b - rg * normal_out))  # Eq 9
+    h = np.sqrt(oa**2 - e**2)  # Eq 10
+    rho = speed**3 / np.abs(t[0] * tt[1] - t[1] * tt[0])  # Eq 16
+    return {"theta": theta, "r": r, "dr": dr, "l": arm, "oa": oa, "s": h[0] - h, "rho": rho,
+            "knots": knots}
+
+
+@pytest.fixture(scope="module")
+def fixed():
+    problem = fixed_problem()
+    return problem, problem.profile(PARTICLE[None]).row(0), independent_profile(problem)
+
+
+def test_fixed_particle_geometry_eqs8_to_11_16_and_20_to_25(fixed):
+    _, p, ref = fixed
+    for key, tol in (("theta", 1e-12), ("r", 1e-12), ("dr", 1e-9), ("l", 1e-9),
+                     ("oa", 1e-12), ("s", 1e-8), ("rho", 1e-7)):
+        np.testing.assert_allclose(getattr(p, key), ref[key], rtol=tol,
+                                   atol=tol * 1e-3, err_msg=key)
+
+
+def test_fixed_particle_force_eq18_and_torque_eq14(fixed):
+    """Eq 18: F = K (s - x1)^3 once the 1 mm clearance is taken up (zero before); Eq 14 with
+    Eq 12: T = F l / cos(alpha)."""
+    _, p, ref = fixed
+    expected = K_PAPER * np.clip(ref["s"] - 1e-3, 0, None) ** 3
+    assert (expected > 0).sum() > 20 and (expected == 0).sum() > 20
+    np.testing.assert_allclose(p.force, expected, rtol=1e-7, atol=1e-6)
+    np.testing.assert_allclose(p.torque, expected * ref["l"] / np.cos(p.alpha), rtol=1e-7,
+                               atol=1e-9)
+
+
+def test_fixed_particle_pressure_angle_eq13_by_virtual_work(fixed):
+    """Eqs 13 and 17 against the work balance T dphi = F ds (Eq 44): l / cos(alpha) equals
+    ds/dphi over the clamping section (where the caliper force does work), by differences
+    of the independent lift over the rotation."""
+    _, p, ref = fixed
+    ratio = np.gradient(ref["s"], p.rotation)
+    clamping = ref["s"] > 1e-3
+    clamping[-3:] = False  # one-sided differences at the end
+    assert clamping.sum() > 20
+    np.testing.assert_allclose((ref["l"] / np.cos(p.alpha))[clamping], ratio[clamping],
+                               rtol=2e-3)
+
+
+def test_fixed_particle_hertz_stress_eq15(fixed):
+    """Eq 15: sigma_H = Z_E sqrt(F / (L rho_e)), 1/rho_e = 1/rho - 1/rg (the cam inside
+    the ring), F the normal force F / cos(alpha), L = 20 mm."""
+    _, p, ref = fixed
+    rho_e = 1 / (1 / ref["rho"] - 1 / 20e-3)
+    expected = Z_E * np.sqrt(p.force / np.cos(p.alpha) / (20e-3 * rho_e))
+    assert np.nanmax(expected) > 100e6
+    np.testing.assert_allclose(p.sigma, expected, rtol=1e-6, atol=1e-3)
+
+
+def test_fixed_particle_objective_eq27_terms():
+    """Eq 27 term by term (one weight at a time, no penalty): the curvature steps between
+    key points in mm (w4), the peak torque (w3) and the largest tan(alpha) while clamping
+    (w6), against the independent profile."""
+    flat = {"penalty_p1": 0.0, "penalty_p2": 0.0}
+    base = fixed_problem()
+    ref = independent_profile(base)
+    p = base.profile(PARTICLE[None]).row(0)
+    keys = base.knots
+    steps = np.abs(np.diff(ref["rho"][keys])).sum() / 1e-3
+    torque = K_PAPER * np.clip(ref["s"] - 1e-3, 0, None) ** 3 * ref["l"] / np.cos(p.alpha)
+    clamping = ref["s"] > 1e-3
+    for w, expected in ((3, steps), (2, torque.max()),
+                        (5, np.tan(np.abs(p.alpha[clamping])).max())):
+        weights = [0.0] * 6
+        weights[w] = 1.0
+        f = fixed_problem(weights=weights, **flat).evaluate(PARTICLE[None]).f[0]
+        assert f == pytest.approx(expected, rel=1e-6), w

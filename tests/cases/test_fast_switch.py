@@ -213,3 +213,56 @@ def test_de_with_integer_aware_polish_reaches_the_enumerated_optimum(sets):
     assert rec.best.feasible
     assert abs(rec.best.fun - reference) <= 5e-5 * reference, (rec.best.fun, reference,
                                                                rec.best.x[0], coils)
+
+
+# ---- away from sf = sud: every Table 1 row has sf = sud, so v = 0 there --------------------
+def _design_off_table():
+    """The 7-coil family member with sf moved 3 mm beyond sud (case I, v < 0)."""
+    p = FastSwitchProblem(FastSwitchConfig(branch="I"))
+    x = p.family()[4].copy()
+    x[1] = x[2] + 3e-3  # sf = sud + 3 mm
+    return p, x
+
+
+def test_closure_time_off_table_is_the_first_crossing_of_eq34():
+    """Eq 39 solved from Eq 34 without its decay factor (as the paper does): the first time
+    after release at which s(t) = sud + (s0 - sud)/sqrt(1 - xi^2) sin(wd t + atan(sqrt(1 -
+    xi^2)/xi)) reaches sf, found by root bracketing (not by an arcsine), with xi and
+    omega_n from Eqs 21, 32, 33, 35, 36 written out (Nomenclature values, G = 207 GPa)."""
+    from scipy.optimize import brentq
+
+    from camopt.cases.fast_switch.problem import closure_time
+
+    p, x = _design_off_table()
+    n, sf, sud, s0, r3, r2 = x
+    d, dia, g, m2, m3, m4, length = 2e-3, 20e-3, 207e9, 0.5, 0.75, 0.5, 0.2
+    k = g * d**4 / (8 * dia**3 * n)  # Eq 21
+    mass = m4 + 0.083 * m2 * length**2 / r2**2 + 0.021 * m3  # Eq 32
+    c = (0.0083 * m2 * length**2 / r2**3 + 0.0042 * m3 / r3
+         + 0.033 * m2 * length**2 / (r2**2 * r3) + 0.067 * m3 / r2)  # Eq 33
+    omega = np.sqrt(k / mass)  # Eq 36
+    xi = omega * c / (2 * k)  # Eq 35
+    root = np.sqrt(1 - xi**2)
+
+    def s(t):
+        return sud + (s0 - sud) / root * np.sin(root * omega * t + np.arctan(root / xi)) - sf
+
+    t = np.linspace(1e-9, 2 * np.pi / (root * omega), 20001)
+    first = np.flatnonzero(np.sign(s(t[1:])) != np.sign(s(t[:-1])))[0]
+    expected = brentq(s, t[first], t[first + 1], xtol=1e-15)
+    v = p.complete(x[None])
+    assert v.x1[0] == pytest.approx(xi, rel=1e-9) and v.x2[0] == pytest.approx(omega, rel=1e-9)
+    got = closure_time(v.x1, v.x2, v.x3, v.x4, v.x5)[0]
+    assert got == pytest.approx(expected, rel=1e-9)
+    assert p.evaluate(x[None]).f[0] == pytest.approx(got * 1e3, rel=1e-12)
+
+
+def test_r20_joint_load_off_table():
+    """R20 (Eq 41) at a design off Table 1: 1.2 (sud - s0) / sqrt(1 - xi^2) |M4 wn^2 - k|
+    / F_rated - 1 with F_rated = 1500 N, against the 13 variables of the full model."""
+    p, x = _design_off_table()
+    v = p.complete(x[None])
+    g, _ = p.full_model(v)
+    load = 1.2 * (v.x4 - v.x5) / np.sqrt(1 - v.x1**2) * np.abs(0.5 * v.x2**2 - v.x8)
+    assert abs(g["R20"][0]) > 0.05  # far enough from active that a factor 1.1 would show
+    assert g["R20"][0] == pytest.approx(load[0] / 1500.0 - 1.0, rel=1e-12)

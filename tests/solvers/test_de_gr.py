@@ -1,0 +1,43 @@
+"""DE-gr's operators (Kang 2023 Table 5: DE/best/1/bin) against their definitions."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from camopt.solvers.de_gr import best1, binomial_crossover
+
+
+def test_best1_is_best_plus_f_times_a_difference_of_two_other_members():
+    """Every mutant equals best + F (x_r1 - x_r2) for some r1 != r2, both != i (searched
+    over every pair), and the pairs differ between rows."""
+    rng = np.random.default_rng(3)
+    pop = rng.normal(size=(7, 3))
+    best, factor = pop[4], 0.382
+    mutant = best1(pop, best, factor, np.random.default_rng(11))
+    pairs = []
+    for i, row in enumerate(mutant):
+        hits = [(a, b) for a, b in itertools.permutations(range(len(pop)), 2)
+                if np.allclose(row, best + factor * (pop[a] - pop[b]), rtol=0, atol=1e-14)]
+        assert len(hits) == 1, i
+        a, b = hits[0]
+        assert i not in (a, b)
+        pairs.append(hits[0])
+    assert len(set(pairs)) > 3
+
+
+def test_crossover_takes_each_gene_with_probability_cr_and_one_gene_always():
+    """P(gene from the mutant) = CR + (1 - CR)/d (the forced gene); CR = 0 gives exactly one
+    mutant gene per row; CR = 1 gives the mutant."""
+    n, d = 4000, 5
+    parent, mutant = np.zeros((n, d)), np.ones((n, d))
+    rng = np.random.default_rng(2)
+    for cr in (0.2, 0.618):
+        trial = binomial_crossover(parent, mutant, cr, rng)
+        assert set(np.unique(trial)) <= {0.0, 1.0}
+        assert trial.sum(axis=1).min() >= 1
+        assert trial.mean() == pytest.approx(cr + (1 - cr) / d, abs=0.015)
+    assert np.all(binomial_crossover(parent, mutant, 0.0, rng).sum(axis=1) == 1)
+    assert np.all(binomial_crossover(parent, mutant, 1.0, rng) == 1)
