@@ -1,0 +1,140 @@
+"""Hand-made mutants of the equations and seeds, each applied alone in a scratch copy of
+the repository, against the fast tests (``-m "not slow"``) of the mechanics, case, sweep,
+driver, solver and statistics modules. A mutant is killed when those tests fail.
+
+    .venv/bin/python scripts/mutants.py [NAME ...]      # all, or the named ones
+
+Prints one line per mutant and a closing 'mutants: N killed, N survived'; exits 1 if any survived.
+The list and the last results are in docs/design.md (Mutation check).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+TESTS = ["tests/mechanics", "tests/cases", "tests/test_sweep.py", "tests/solvers",
+         "tests/test_stats.py", "tests/test_driver.py"]
+
+# name: (file, original text, mutated text); each original must occur exactly once
+MUTANTS: dict[str, tuple[str, str, str]] = {
+    # Kang 2023, disc cam (Eqs 6-15)
+    "cam_ddphi_6t": ("camopt/mechanics/cam.py", "2 * one, 6 * t", "2 * one, 3 * t"),
+    "cam_ddphi_2": ("camopt/mechanics/cam.py", "2 * one, 6 * t", "one, 6 * t"),
+    "cam_dphi_3t2": ("camopt/mechanics/cam.py", "2 * t, 3 * t * t", "2 * t, 2 * t * t"),
+    "cam_pitch_w": ("camopt/mechanics/cam.py", "w = l2 * (1 - f.dphi)", "w = l2 * (1 + f.dphi)"),
+    "cam_base_angle": ("camopt/mechanics/cam.py", "/ (2 * l2 * l6))", "/ (l2 * l6))"),
+    "cam_psi_eta_sign": ("camopt/mechanics/cam.py", "np.pi / 2 - eta - f.angle",
+                         "np.pi / 2 + eta - f.angle"),
+    "cam_psi_oi": ("camopt/mechanics/cam.py", "f.dphi / (1 - f.dphi)", "f.dphi / (1 + f.dphi)"),
+    "cam_rho_ddphi_sign": ("camopt/mechanics/cam.py", "- (l2 * l6) * f.ddphi * f.sin_a",
+                           "+ (l2 * l6) * f.ddphi * f.sin_a"),
+    "cam_rho_ddphi_dropped": ("camopt/mechanics/cam.py", "- (l2 * l6) * f.ddphi * f.sin_a",
+                              ""),
+    "cam_rho_rf": ("camopt/mechanics/cam.py", "/ den - rf", "/ den + rf"),
+    # Hertz line contact (Kang Eqs 27-31)
+    "hertz_2pi": ("camopt/mechanics/hertz.py", "(2 * np.pi * length)", "(np.pi * length)"),
+    "hertz_radius": ("camopt/mechanics/hertz.py", "1.0 / np.asarray(rho1) + 1.0",
+                     "1.0 / np.asarray(rho1) - 1.0"),
+    "hertz_0304": ("camopt/mechanics/hertz.py", "0.304 * np.asarray", "0.35 * np.asarray"),
+    # Yan 2023, EMB polar cam (Eqs 8-18, 27)
+    "emb_pressure_angle": ("camopt/mechanics/polar_cam.py", "np.where(near, a_e - a_l,",
+                           "np.where(near, a_e + a_l,"),
+    "emb_hertz_radius": ("camopt/mechanics/polar_cam.py", "rg * rho_cam / (rg - rho_cam)",
+                         "rg * rho_cam / (rg + rho_cam)"),
+    "emb_curvature_2dr2": ("camopt/mechanics/polar_cam.py", "r * r + 2 * dr * dr - r * ddr",
+                           "r * r + dr * dr - r * ddr"),
+    "emb_rotation_alpha": ("camopt/mechanics/polar_cam.py", "np.clip(np.asarray(l) / r, -1, 1)) + "
+                           "alpha", "np.clip(np.asarray(l) / r, -1, 1)) - alpha"),
+    "emb_center_distance": ("camopt/mechanics/polar_cam.py", "rg * rg - 2 * rg * np.sqrt",
+                            "rg * rg - rg * np.sqrt"),
+    "emb_force_cube": ("camopt/cases/emb_cam/problem.py", "self.x1, 0, None) ** 3  # Eq 18",
+                       "self.x1, 0, None) ** 2  # Eq 18"),
+    "emb_force_clearance": ("camopt/cases/emb_cam/problem.py",
+                            "np.clip(s - self.x1, 0, None) ** 3  # Eq 18",
+                            "np.clip(s, 0, None) ** 3  # Eq 18"),
+    "emb_torque_normal_force": ("camopt/cases/emb_cam/problem.py", "torque = f_b * l",
+                                "torque = force * l"),
+    "emb_objective_curvature_unit": ("camopt/cases/emb_cam/problem.py",
+                                     "w[3] * m.curvature_steps / MM", "w[3] * m.curvature_steps"),
+    "emb_objective_curvature_dropped": ("camopt/cases/emb_cam/problem.py",
+                                        "+ w[3] * m.curvature_steps / MM", ""),
+    "emb_start_slope": ("camopt/cases/emb_cam/problem.py", "self.r_st * np.tan(kappa)",
+                        "self.r_st * np.sin(kappa)"),
+    # Clauss 1982, fast switch
+    "switch_r20_factor": ("camopt/cases/fast_switch/problem.py", '"R20": 1.2 *', '"R20": 1.0 *'),
+    "switch_arcsine_sign": ("camopt/cases/fast_switch/problem.py", "(np.pi - np.arcsin(v) - phase)",
+                            "(np.pi + np.arcsin(v) - phase)"),
+    "switch_phase": ("camopt/cases/fast_switch/problem.py", "phase = np.arctan(root / xi)",
+                     "phase = np.arctan(xi / root)"),
+    "switch_mass_eq32": ("camopt/cases/fast_switch/problem.py", "+ 0.021 * self.M3  # Eq 32",
+                         "+ 0.21 * self.M3  # Eq 32"),
+    # seeds
+    "sweep_cell_spawn_key": ("camopt/sweep/run.py", "spawn_key=(cell.seed,)",
+                             "spawn_key=(cell.seed + 1,)"),
+    "sweep_cell_entropy": ("camopt/sweep/run.py", "SeedSequence(cell.entropy,",
+                           "SeedSequence(cell.entropy + 1,"),
+    "driver_seed": ("camopt/driver.py", "np.random.SeedSequence(seed).spawn(repeats)",
+                    "np.random.SeedSequence(seed + 1).spawn(repeats)"),
+    # DE-gr operators
+    "de_crossover_direction": ("camopt/solvers/de_gr.py", "rng.random((n, d)) < rate",
+                               "rng.random((n, d)) > rate"),
+    "de_forced_gene": ("camopt/solvers/de_gr.py", "    cross[np.arange(n), rng.integers(0, d, n)]"
+                       " = True\n", "    rng.integers(0, d, n)\n"),
+    "de_best1_base": ("camopt/solvers/de_gr.py", "return best + factor *",
+                      "return pop + factor *"),
+    "de_best1_self": ("camopt/solvers/de_gr.py", "idx = np.where(idx == np.arange(n)[:, None], "
+                      "idx[:, -1:], idx)[:, :2]", "idx = idx[:, :2]"),
+    # PSO inertia (Eq 40)
+    "pso_inertia_reversed": ("camopt/solvers/pso.py", "return w_max - iteration / iterations",
+                             "return w_min + iteration / iterations"),
+    "pso_inertia_constant": ("camopt/solvers/pso.py", "return w_max - iteration / iterations "
+                             "* (w_max - w_min)", "return w_max"),
+    # statistics
+    "stats_mw_direction": ("camopt/stats.py", "p_a_better = 1.0 - float(res.statistic)",
+                           "p_a_better = float(res.statistic)"),
+    "stats_mw_one_sided": ("camopt/stats.py", 'alternative="two-sided"', 'alternative="less"'),
+    "stats_verdict": ("camopt/stats.py", 'if test["p_a_better"] > 0.5', 'if test["p_a_better"] < 0.5'),
+}
+
+
+def run(name: str, scratch: Path) -> bool:
+    """Apply mutant ``name`` alone to a fresh copy; True when the fast tests kill it."""
+    path, old, new = MUTANTS[name]
+    if scratch.exists():
+        shutil.rmtree(scratch)
+    shutil.copytree(ROOT, scratch, ignore=shutil.ignore_patterns(".venv", ".git", "runs",
+                                                                  "*.egg-info", "__pycache__"))
+    target = scratch / path
+    text = target.read_text()
+    if text.count(old) != 1:
+        raise SystemExit(f"error: {path}: {name}: the original text occurs {text.count(old)} "
+                         "times (the source changed; update the mutant)")
+    target.write_text(text.replace(old, new))
+    proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:randomly",
+                           "-p", "no:cacheprovider", "-m", "not slow", *TESTS],
+                          cwd=scratch, env={**os.environ, "PYTHONPATH": str(scratch)},
+                          capture_output=True, text=True)
+    return proc.returncode != 0
+
+
+def main(names: list[str]) -> int:
+    names = names or list(MUTANTS)
+    scratch = Path(tempfile.mkdtemp(prefix="camopt-mutant-")) / "repo"
+    killed = 0
+    for name in names:
+        dead = run(name, scratch)
+        killed += dead
+        print(f"{name}: {'killed' if dead else 'SURVIVED'}", flush=True)
+    shutil.rmtree(scratch.parent)
+    print(f"mutants: {killed} killed, {len(names) - killed} survived")
+    return 0 if killed == len(names) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
