@@ -99,7 +99,8 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
     "stats_mw_direction": ("camopt/stats.py", "p_a_better = 1.0 - float(res.statistic)",
                            "p_a_better = float(res.statistic)"),
     "stats_mw_one_sided": ("camopt/stats.py", 'alternative="two-sided"', 'alternative="less"'),
-    "stats_verdict": ("camopt/stats.py", 'if test["p_a_better"] > 0.5', 'if test["p_a_better"] < 0.5'),
+    "stats_verdict": ("camopt/stats.py", 'if test["p_a_better"] > 0.5',
+                      'if test["p_a_better"] < 0.5'),
 }
 
 
