@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt import batch
 from camopt.cases import build_problem, case_configs
 from camopt.config import LoadedConfig, load_config, validate_data
 from camopt.errors import ConfigError, SolverError
@@ -140,7 +141,7 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
     nfev, best_f, mean_f, best_v = [], [], [], []
     while (reason := _stop(solver, start, max_nfev, max_s)) is None:
         X = solver.ask()
-        ev = problem.evaluate(X)
+        ev = batch.evaluate(problem, X)  # a population is one chunk; given designs, many
         solver.tell(X, ev)
         _, bev = solver.best()
         pop_f = solver.population_objectives()

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
+from camopt import batch
 from camopt.capabilities import VariesCase
 from camopt.cases import build_problem, get_case
 from camopt.driver import validate
@@ -149,7 +150,8 @@ def _inputs(run: RunView, problem: Problem, varies: Sequence[Vary]) -> NDArray:
 
 def _evaluate(problem: Problem, run: RunView, varies: Sequence[Vary], values: NDArray
               ) -> Evaluation:
-    """Every row of ``values`` (rows, k) in input units evaluated in one call."""
+    """Every row of ``values`` (rows, k) in input units, evaluated in cache-sized chunks
+    (:mod:`camopt.batch`: memory bounded whatever the sample count)."""
     x0 = problem.from_display(run.best.x)
     X = np.tile(x0, (len(values), 1))
     fields = {}
@@ -159,10 +161,8 @@ def _evaluate(problem: Problem, run: RunView, varies: Sequence[Vary], values: ND
         else:
             i = problem.names.index(v.name)
             X[:, i] = values[:, j] / problem.variables[i].scale
-    if fields:
-        assert isinstance(problem, VariesCase)
-        return problem.describe_with(X, fields)
-    return problem.describe(X)
+    assert not fields or isinstance(problem, VariesCase)
+    return batch.describe(problem, X, fields)
 
 
 def draw(rng: np.random.Generator, n: int, nominal: NDArray, half: NDArray,

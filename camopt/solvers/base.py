@@ -9,6 +9,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt import batch
 from camopt.capabilities import capability_name
 from camopt.config.models import SolverOptions
 from camopt.errors import SolverError
@@ -150,7 +151,7 @@ def design_rows(problem: Problem, X: NDArray) -> list[dict[str, Any]]:
     """One table row per candidate: variables in display units, the case's descriptive
     metrics (:meth:`Problem.describe`), objective, feasibility, active and violated
     constraints. Tables are not a hot path."""
-    ev = problem.describe(X)
+    ev = batch.describe(problem, X)
     rows = []
     for i, x in enumerate(X):
         row: dict[str, Any] = dict(problem.to_display(x))
