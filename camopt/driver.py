@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt import batch
-from camopt.cases import build_problem, case_configs
+from camopt import batch, robust
+from camopt.cases import build_problem, case_configs, get_case
 from camopt.config import LoadedConfig, load_config, validate_data
 from camopt.errors import ConfigError, SolverError
 from camopt.perf import fork_pool, kill_pool
@@ -56,6 +56,8 @@ class RepeatRecord:
     history: dict[str, NDArray]
     table: list[dict[str, Any]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    nominal_x: NDArray | None = None
+    """Robust runs: the best design seen whose nominal evaluation is feasible."""
 
 
 @dataclass
@@ -71,6 +73,9 @@ class RunRecord:
     analysis: dict[str, NDArray]
     interrupted: bool = False
     """True when Ctrl-C (or SIGTERM) stopped the run: ``repeats`` holds the finished ones."""
+    robust_check: dict[str, Any] | None = None
+    """Robust runs: the final check of the best design (``robust``) and of the best design
+    seen whose nominal evaluation is feasible (``nominal``), :func:`camopt.robust.check`."""
 
 
 def solver_options() -> dict[str, Any]:
@@ -90,10 +95,15 @@ def validate(data: dict[str, Any], source: str = "<data>") -> LoadedConfig:
 
 def prepare(config: LoadedConfig) -> tuple[Problem, type[Solver]]:
     """Build the case's problem and check the solver can run on it with these options
-    (a capability the case lacks is bad input against ``solver``)."""
+    (a capability the case lacks is bad input against ``solver``). With ``[robust]`` the
+    problem is the case's wrapped for yield (:mod:`camopt.robust`)."""
     with np.errstate(all="ignore"):  # a non-assembling mechanism is reported below
         problem = build_problem(config.case)
     _check_bounds(problem, config)
+    if config.robust is not None:
+        problem = robust.wrap(problem, robust.plan(
+            problem, config.case, config.robust, dict(get_case(config.case.kind).tolerances),
+            config.path))
     solver_cls = get_solver(config.solver.name)
     try:
         solver_cls.check(type(problem), config.solver)
@@ -135,11 +145,16 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
     (``run.max_evaluations``, ``run.max_seconds``), whichever comes first; ``jobs``
     worker processes are lent to the solver (multi-start solvers spread their starts)."""
     start = time.perf_counter()
+    robust_search = isinstance(problem, robust.RobustProblem)
+    if robust_search:
+        problem.reseed(robust.repeat_seed(child))
     solver = build_solver(problem, solver_cls, config, np.random.default_rng(child))
     solver.jobs = jobs
     max_nfev, max_s = config.run.max_evaluations, config.run.max_seconds
     nfev, best_f, mean_f, best_v = [], [], [], []
     while (reason := _stop(solver, start, max_nfev, max_s)) is None:
+        if robust_search:
+            problem.new_generation()  # common random numbers: one set per generation
         X = solver.ask()
         ev = batch.evaluate(problem, X)  # a population is one chunk; given designs, many
         solver.tell(X, ev)
@@ -164,6 +179,8 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
         history={"nfev": np.array(nfev, dtype=np.int64), "best_objective": np.array(best_f),
                  "mean_objective": np.array(mean_f), "best_violation": np.array(best_v)},
         table=solver.table(), notes=solver.notes(),
+        nominal_x=(problem.nominal_best[0] if robust_search and problem.nominal_best
+                   else None),
     )
 
 
@@ -266,4 +283,23 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
     records.sort(key=lambda r: r.index)
     best = best_repeat(records)
     return RunRecord(config, problem, seed, records, best, dict(problem.metrics(best.x)),
-                     dict(problem.analysis(best.x)), interrupted)
+                     dict(problem.analysis(best.x)), interrupted,
+                     _robust_check(problem, records, best, seed))
+
+
+def _robust_check(problem: Problem, records: list[RepeatRecord], best: RepeatRecord,
+                  seed: int) -> dict[str, Any] | None:
+    """Robust runs: the best design and the best nominally feasible design seen (lowest
+    nominal objective over the repeats) checked on the same fresh draws."""
+    if not isinstance(problem, robust.RobustProblem):
+        return None
+    seen = [r.nominal_x for r in records if r.nominal_x is not None]
+    designs = [best.x]
+    if seen:
+        f = problem.base.evaluate(np.array(seen)).f
+        designs.append(seen[int(np.argmin(f))])
+    checked = robust.check(problem, designs, seed)
+    result: dict[str, Any] = {"robust": checked[0]}
+    if len(checked) > 1:
+        result["nominal"] = {**checked[1], "x": problem.base.to_display(designs[1])}
+    return result

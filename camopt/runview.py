@@ -76,6 +76,11 @@ class RunView:
     """The config as run as TOML (overrides applied; empty for schema-1 archives)."""
     versions: dict[str, str] = field(default_factory=dict)
     """Library versions the run was made with (``numpy_version``, ...)."""
+    robust: dict[str, Any] = field(default_factory=dict)
+    """The ``[robust]`` table as run (empty: a nominal run)."""
+    robust_check: dict[str, Any] = field(default_factory=dict)
+    """Robust runs: the final check of the best design (``robust``) and of the best
+    nominally feasible design seen (``nominal``) on fresh draws (docs/tolerance.md)."""
 
     @property
     def solver_name(self) -> str:

@@ -12,8 +12,6 @@ of every metric with every input (scipy.stats), strongest first.
 
 from __future__ import annotations
 
-import enum
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -22,61 +20,23 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from camopt import batch
-from camopt.capabilities import VariesCase
 from camopt.cases import build_problem, get_case
 from camopt.driver import validate
 from camopt.errors import CamoptError
 from camopt.problem import FEASIBILITY_TOL, Evaluation, Problem
 from camopt.runview import RunView
-
-CASE_PREFIX = "case."
-_SPEC = re.compile(r"^(?P<name>[A-Za-z_][\w.]*)=(?:±|\+-|\+/-)(?P<value>[0-9.eE+-]+)"
-                   r"(?P<pct>%?)$")
-
-
-class Distribution(str, enum.Enum):
-    """How a varied input is drawn within its tolerance."""
-
-    uniform = "uniform"
-    normal = "normal"
-
-
-@dataclass(frozen=True)
-class Vary:
-    """One ``--vary NAME=±X[%]``: the input, its tolerance and whether it is relative."""
-
-    name: str
-    tolerance: float
-    relative: bool
-
-    @property
-    def is_case_field(self) -> bool:
-        return self.name.startswith(CASE_PREFIX)
-
-    @property
-    def field(self) -> str:
-        """The case field's own name (``l1_mm``), or the design variable's."""
-        return self.name.removeprefix(CASE_PREFIX)
-
-    def half_width(self, nominal: float) -> float:
-        """X in the input's unit: a share of |nominal| when relative."""
-        return abs(nominal) * self.tolerance / 100 if self.relative else self.tolerance
-
-
-def parse_vary(source: str, text: str) -> Vary:
-    """``NAME=±X%`` (relative) or ``NAME=±X`` (in the input's unit); ``+-`` for ``±``."""
-    m = _SPEC.match(text.replace(" ", ""))
-    value = float("nan")
-    if m:
-        try:
-            value = float(m["value"])
-        except ValueError:
-            pass
-    if not m or not np.isfinite(value) or value < 0:
-        raise CamoptError(f"{source}: --vary: {text!r}: expected NAME=±X% or NAME=±X with "
-                          "X >= 0 (NAME a design variable or case.FIELD)")
-    return Vary(m["name"], value, bool(m["pct"]))
+from camopt.variation import (  # noqa: F401 - Distribution, parse_vary: the CLI's names
+    Distribution,
+    Vary,
+    applicable_defaults,
+    apply,
+    check_varies,
+    draw,
+    mark,
+    outside,
+    parse_vary,
+    physical_range,
+)
 
 
 @dataclass
@@ -96,6 +56,8 @@ class Tolerance:
     objective_name: str
     constraint_names: tuple[str, ...]
     summary: dict[str, Any] = field(default_factory=dict)
+    outside: NDArray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    """(n,) samples with an input outside its physical range (counted as failed)."""
 
     def metric_columns(self, ev: Evaluation) -> dict[str, NDArray]:
         """The objective and every metric of an evaluation, (rows,) each."""
@@ -111,11 +73,7 @@ def _problem_of(run: RunView) -> Problem:
 def default_varies(run: RunView) -> list[Vary]:
     """The case's documented tolerances (``CaseSpec.tolerances``) that apply to this run:
     its design variables, and the case fields its Problem can vary per design."""
-    problem = _problem_of(run)
-    offered = problem.case_fields() if isinstance(problem, VariesCase) else ()
-    applies = [*run.variables, *(CASE_PREFIX + f for f in offered)]
-    chosen = [parse_vary(run.path, f"{name}={tol}")
-              for name, tol in get_case(run.kind).tolerances.items() if name in applies]
+    chosen = applicable_defaults(_problem_of(run), get_case(run.kind).tolerances, run.path)
     if not chosen:
         raise CamoptError(f"{run.path}: --vary: case '{run.kind}' documents no tolerance for "
                           "this run's inputs; give --vary")
@@ -124,56 +82,9 @@ def default_varies(run: RunView) -> list[Vary]:
 
 def _inputs(run: RunView, problem: Problem, varies: Sequence[Vary]) -> NDArray:
     """Nominal value of each varied input in its own unit (display units for variables)."""
-    values = []
-    offered = problem.case_fields() if isinstance(problem, VariesCase) else ()
-    for v in varies:
-        if v.is_case_field:
-            if v.field not in offered:
-                can = ", ".join(CASE_PREFIX + f for f in offered) or "none"
-                raise CamoptError(f"{run.path}: --vary: {v.name}: case '{run.kind}' cannot "
-                                  f"vary it per design (case fields it can: {can})")
-            values.append(float(run.case[v.field]))
-        elif v.name in run.best.x:
-            if problem.variables[problem.names.index(v.name)].integer:
-                raise CamoptError(f"{run.path}: --vary: {v.name}: an integer variable "
-                                  "(a count has no tolerance)")
-            values.append(float(run.best.x[v.name]))
-        else:
-            raise CamoptError(f"{run.path}: --vary: {v.name}: not a design variable of the run "
-                              f"({', '.join(run.variables)}) nor case.FIELD")
-    names = [v.name for v in varies]
-    twice = sorted({n for n in names if names.count(n) > 1})
-    if twice:
-        raise CamoptError(f"{run.path}: --vary: {twice[0]}: given twice")
-    return np.array(values, dtype=float)
-
-
-def _evaluate(problem: Problem, run: RunView, varies: Sequence[Vary], values: NDArray
-              ) -> Evaluation:
-    """Every row of ``values`` (rows, k) in input units, evaluated in cache-sized chunks
-    (:mod:`camopt.batch`: memory bounded whatever the sample count)."""
-    x0 = problem.from_display(run.best.x)
-    X = np.tile(x0, (len(values), 1))
-    fields = {}
-    for j, v in enumerate(varies):
-        if v.is_case_field:
-            fields[v.field] = values[:, j]
-        else:
-            i = problem.names.index(v.name)
-            X[:, i] = values[:, j] / problem.variables[i].scale
-    assert not fields or isinstance(problem, VariesCase)
-    return batch.describe(problem, X, fields)
-
-
-def draw(rng: np.random.Generator, n: int, nominal: NDArray, half: NDArray,
-         distribution: Distribution) -> NDArray:
-    """``n`` samples of the inputs, (n, k): uniform on nominal +- half, or normal with
-    sigma = half / 3."""
-    if distribution is Distribution.uniform:
-        unit = rng.uniform(-1.0, 1.0, (n, len(nominal)))
-    else:
-        unit = rng.standard_normal((n, len(nominal))) / 3
-    return nominal + unit * half
+    check_varies(problem, varies, run.path, run.kind)
+    return np.array([float(run.case[v.field]) if v.is_case_field else float(run.best.x[v.name])
+                     for v in varies], dtype=float)
 
 
 def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
@@ -193,11 +104,17 @@ def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
     ends = np.tile(nominal, (2 * k, 1))
     ends[np.arange(0, 2 * k, 2), np.arange(k)] -= half
     ends[np.arange(1, 2 * k, 2), np.arange(k)] += half
-    ev = _evaluate(problem, run, varies, np.vstack([nominal, ends, drawn]))
+    values = np.vstack([nominal, ends, drawn])
+    x0 = problem.from_display(run.best.x)
+    ev = apply(problem, np.tile(x0, (len(values), 1)), varies, values, describe=True)
+    # draws outside an input's physical range count as failed (docs/tolerance.md)
+    ranges = [physical_range(problem, get_case(run.kind).config, v) for v in varies]
+    bad = outside(values, ranges)
+    ev = mark(ev, bad)
     result = Tolerance(run.path, list(varies), distribution, seed, nominal, drawn,
                        ev.take(0), ev.take(np.arange(1, 1 + 2 * k)),
                        ev.take(np.arange(1 + 2 * k, len(ev.f))), problem.objective_name,
-                       problem.constraint_names)
+                       problem.constraint_names, outside=bad[1 + 2 * k:])
     result.summary = summarise(result)
     return result
 
@@ -236,6 +153,7 @@ def summarise(t: Tolerance) -> dict[str, Any]:
         "nominal_feasible": bool(t.nominal.feasible[0]),
         "nominal": nominal, "metrics": metrics, "sensitivity": sensitivity,
         "one_at_a_time": tornado,
+        "outside_share": float(np.mean(t.outside)) if t.outside.size else 0.0,
         "violated_share": {c: float(np.mean(~(t.samples.g[:, i] <= FEASIBILITY_TOL)))
                            for i, c in enumerate(t.constraint_names)},
     }

@@ -44,6 +44,7 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
         "variable_scale": problem.scale, "constraints": json.dumps(list(problem.constraint_names)),
         "objective_name": problem.objective_name, "x_units": "display",
         "interrupted": rec.interrupted, "repeats_done": len(rec.repeats),
+        **({"robust_check": json.dumps(rec.robust_check)} if rec.robust_check else {}),
     }
     scale = problem.scale  # x in the units the variable names say
     f.attrs.update(attrs)
@@ -231,6 +232,8 @@ def _load(f: h5py.File, path: str | Path) -> RunView:
         seed_entropy=str(f.attrs["seed_entropy"]),
         interrupted=bool(f.attrs.get("interrupted", False)),
         repeats_done=len(repeats), config_as_run=str(f.attrs.get("config_as_run", "")),
+        robust=config.get("robust") or {},
+        robust_check=json.loads(f.attrs["robust_check"]) if "robust_check" in f.attrs else {},
         versions={k: str(v) for k, v in f.attrs.items()
                   if k.endswith("_version") and k != "schema_version"},
     )

@@ -13,7 +13,13 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from camopt.config.models import PLAUSIBILITY_KEY, CaseConfig, RunSection, SolverOptions
+from camopt.config.models import (
+    PLAUSIBILITY_KEY,
+    CaseConfig,
+    RobustSection,
+    RunSection,
+    SolverOptions,
+)
 from camopt.errors import ConfigError
 
 if sys.version_info >= (3, 11):
@@ -21,7 +27,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-SECTIONS = ("case", "solver", "run")
+SECTIONS = ("case", "solver", "run", "robust")
 EXTENDS = "extends"
 # a bare word taken as a string: names and paths (runs/run-1.h5, /tmp/a.h5, ~/x.h5)
 _BARE_WORD = re.compile(r"^[A-Za-z_./~][\w./~\-+:]*$")
@@ -43,6 +49,8 @@ class LoadedConfig:
     solver: SolverOptions
     run: RunSection
     data: dict[str, Any] = field(repr=False)
+    robust: RobustSection | None = None
+    """``[robust]`` when the case file has one: the search optimises for yield."""
 
     def effective(self) -> dict[str, Any]:
         """The parsed values after overrides, as plain TOML-able data."""
@@ -50,6 +58,7 @@ class LoadedConfig:
             "case": self.case.model_dump(mode="json"),
             "solver": self.solver.model_dump(mode="json"),
             "run": self.run.model_dump(mode="json", exclude_none=True),
+            **({"robust": self.robust.model_dump(mode="json")} if self.robust else {}),
         }
 
 
@@ -183,10 +192,11 @@ def _select(
 
 
 def _merge(base: dict[str, Any], child: dict[str, Any]) -> dict[str, Any]:
-    """[case] and [run] merge key by key; a child's [solver] replaces the base's whole."""
+    """[case], [run] and [robust] merge key by key; a child's [solver] replaces the base's whole."""
     merged = dict(base)
     for key, value in child.items():
-        if key in ("case", "run") and isinstance(value, dict) and isinstance(base.get(key), dict):
+        if (key in ("case", "run", "robust") and isinstance(value, dict)
+                and isinstance(base.get(key), dict)):
             merged[key] = {**base[key], **value}
         else:
             merged[key] = value
@@ -276,4 +286,6 @@ def validate_data(
         solver=_validate(solver_model, data["solver"], "solver", source, overridden),
         run=_validate(RunSection, data.get("run", {}), "run", source, overridden),
         data=data,
+        robust=(None if data.get("robust") is None else
+                _validate(RobustSection, data["robust"], "robust", source, overridden)),
     )

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
@@ -171,6 +171,42 @@ class RunSection(Strict):
     def _safe_name(cls, name: str) -> str:
         return safe_name(name)
 
+
+
+MAX_ROBUST_SAMPLES = 1_000
+MAX_CHECK_SAMPLES = 1_000_000
+
+
+class RobustSection(Strict):
+    """``[robust]``: optimise for yield under manufacturing tolerances (docs/tolerance.md,
+    "Robust design"). Every candidate is evaluated at ``samples`` perturbed copies (common
+    random numbers: one set per generation, the same for every candidate) and counts as
+    feasible when its estimated yield reaches ``yield_target``."""
+
+    vary: dict[str, str] = Field(
+        default_factory=dict, description="tolerances { NAME = \"±X%\" or \"±X\" }, NAME a "
+        "design variable or case.FIELD as camopt tolerance's --vary (empty: the case's "
+        "default tolerances)")
+    samples: int = Field(16, ge=2, le=MAX_ROBUST_SAMPLES, description="perturbed copies per "
+                         f"candidate and generation (at most {MAX_ROBUST_SAMPLES}: memory)")
+    yield_target: float = Field(0.95, gt=0, le=1, description="share of samples that must "
+                                "meet every constraint for a candidate to count as feasible")
+    objective: Literal["nominal", "mean", "quantile"] = Field(
+        "nominal", description="what is minimised: the nominal design's objective, its mean "
+        "over the samples, or its quantile (below)")
+    quantile: float = Field(0.9, gt=0, lt=1, description="the objective's quantile when "
+                            "objective = \"quantile\"")
+    distribution: Literal["uniform", "normal"] = Field(
+        "uniform", description="uniform on nominal ± X, or normal with sigma = X/3")
+    screen: bool = Field(True, description="sample only candidates whose nominal design "
+                         "meets every constraint (the others keep their nominal violation)")
+    check_samples: int = Field(4000, ge=100, le=MAX_CHECK_SAMPLES, description="fresh "
+                               "samples of the final check of the best design")
+    confidence: float = Field(0.95, gt=0, lt=1, description="level of the final yield's "
+                              "Wilson interval")
+    chunk_rows: int | None = Field(None, ge=1, le=10_000_000, description="rows "
+                                   "(candidates x samples) per vectorised call (unset: "
+                                   "camopt.batch's default): memory and speed, never results")
 
 
 class SolverOptions(Strict):

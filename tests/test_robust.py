@@ -1,0 +1,118 @@
+"""Robust design (camopt/robust.py): the yield column against an independent count of the
+samples, chunking, reproducibility, draws outside the physical range, bad [robust] input.
+The fast switch (configs/fast_switch_de.toml) keeps it fast: a closed-form model."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from camopt import robust
+from camopt.driver import execute, prepare
+from camopt.errors import ConfigError
+from camopt.problem import FEASIBILITY_TOL
+from tests.conftest import CONFIGS
+from tests.helpers import load
+
+SMALL = ("solver.population=12", "solver.generations=6", "run.repeats=1")
+
+
+def _problem(*overrides):
+    cfg = load(CONFIGS / "fast_switch_de.toml", "robust.samples=8", *overrides)
+    problem, _ = prepare(cfg)
+    assert isinstance(problem, robust.RobustProblem)
+    return problem
+
+
+def _near_optimum(problem, n=6, seed=3):
+    """Designs around the paper's Table 1 design, some on their limits."""
+    x = problem.from_display({"coils": 13, "sf_mm": 81.5, "sud_mm": 81.5, "s0_mm": 26.0,
+                              "r3_mm": 160.0, "r2_mm": 64.0})
+    rng = np.random.default_rng(seed)
+    X = x * (1 + 0.01 * rng.standard_normal((n, len(x))))
+    X[:, 0] = 13
+    return X
+
+
+def test_yield_column_counts_the_samples():
+    """g[:, -1] <= 0 exactly when at least ceil(target S) samples pass, and the estimate is
+    the share of passing samples, both against a loop of one-design evaluations of the
+    same draws (an independent count)."""
+    problem = _problem("robust.screen=false", "robust.yield_target=0.75")
+    problem.new_generation()
+    X = _near_optimum(problem)
+    ev = problem.evaluate(X)
+    base, plan = problem.base, problem.plan
+    need = math.ceil(0.75 * 8)
+    for i, x in enumerate(X):
+        passed = 0
+        for u in problem.unit:
+            xs = x.copy()
+            for j, v in enumerate(plan.varies):
+                k = base.names.index(v.name)
+                xs[k] = x[k] + u[j] * v.tolerance / base.variables[k].scale
+            one = base.evaluate(xs[None, :])
+            passed += bool(one.feasible[0])
+        assert ev.extras["yield"][i] == pytest.approx(passed / 8, abs=1e-12)
+        assert (ev.g[i, -1] <= FEASIBILITY_TOL) == (passed >= need)
+    assert np.isfinite(ev.extras["yield"]).all()
+
+
+def test_chunks_change_nothing():
+    a, b = _problem("robust.chunk_rows=5"), _problem()
+    for p in (a, b):
+        p.reseed(np.random.SeedSequence(1))
+        p.new_generation()
+    X = _near_optimum(a)
+    ea, eb = a.evaluate(X), b.evaluate(X)
+    np.testing.assert_array_equal(ea.g, eb.g)
+    np.testing.assert_array_equal(ea.f, eb.f)
+
+
+def test_objective_statistics():
+    f = np.array([[1.0, 3.0, np.inf, 2.0], [np.nan, np.nan, np.nan, np.nan]])
+    np.testing.assert_allclose(robust.statistic(f, "mean", 0.5), [2.0, np.inf])
+    q = robust.statistic(f, "quantile", 0.5)
+    assert q[0] == 3.0 and q[1] == np.inf  # the higher middle of 1, 2, 3, inf
+    assert robust.order_index(0.95, 20) == 18 and robust.order_index(0.95, 16) == 15
+    assert robust.order_index(1.0, 8) == 7
+
+
+def test_run_is_reproducible_and_checked():
+    cfg = load(CONFIGS / "fast_switch_de.toml", *SMALL, "robust.samples=8",
+               "robust.check_samples=200")
+    a, b = execute(cfg), execute(cfg)
+    np.testing.assert_array_equal(a.best.x, b.best.x)
+    assert a.robust_check == b.robust_check
+    check = a.robust_check["robust"]
+    assert check["samples"] == 200 and 0 <= check["yield_low"] <= check["yield"] <= 1
+    assert a.problem.constraint_names[-1] == "yield" and len(a.best.g) == a.problem.n_constr
+
+
+def test_draws_outside_the_physical_range_fail():
+    """r2 ±200 mm from ~64 mm: about a third of the draws give a negative crank; each such
+    sample counts as failed, so the yield never exceeds the share of draws inside."""
+    problem = _problem("robust.screen=false", 'robust.vary={r2_mm="±200"}')
+    problem.new_generation()
+    X = _near_optimum(problem, n=3)
+    s = robust.sample(problem.base, problem.plan, X, problem.unit)
+    r2 = X[:, 5, None] * 1e3 + problem.unit[None, :, 0] * 200
+    inside = r2 > 0
+    assert (~inside).any()
+    assert not s.feasible[~inside].any()
+    assert np.isnan(s.f[~inside]).all()
+
+
+@pytest.mark.parametrize("override, what", [
+    ('robust.vary={speed="±1"}', "speed: not a design variable of the case"),
+    ('robust.vary={coils="±1"}', "coils: an integer variable"),
+    ('robust.vary={"case.m2_kg"="±1%"}', "cannot vary it per design"),
+    ('robust.vary={sf_mm="1mm"}', "expected NAME=±X%"),
+])
+def test_bad_vary_names_robust_vary(override, what):
+    cfg = load(CONFIGS / "fast_switch_de.toml", override)
+    with pytest.raises(ConfigError) as err:
+        prepare(cfg)
+    assert err.value.where == "robust.vary" and what in err.value.what
