@@ -116,6 +116,24 @@ def test_swarm_evaluation_is_row_independent():
         assert one.f[0] == pytest.approx(whole.f[i], rel=1e-12)
 
 
+@pytest.mark.parametrize("density", [None, (0.5, 2.0, 0.2)])
+def test_lift_from_the_end_samples_is_the_profiles_last_lift(density):
+    """The lift correction (Eq 37) reads the lift from the profile's two end samples:
+    bit for bit the last sample of the whole profile's Eq 11, for rising key radii (about
+    half of them give a finite profile), with uniform and with warped key points."""
+    from camopt.cases.emb_cam import EmbCamProblem
+
+    case = load(CONFIGS / "emb.toml").case
+    p = EmbCamProblem(case.model_copy(update={"knot_density": density}))
+    rng = np.random.default_rng(2)
+    n = 400
+    R = p.r_st + np.sort(rng.uniform(0, 1, (n, p.n - 1)), axis=1) * p.rg / 2
+    X = np.column_stack([R, rng.uniform(0, p.kappa_max / 2, n), rng.uniform(0.01, 0.5, n) * p.rg])
+    whole = p.profile(X).s[:, -1]
+    assert np.isfinite(whole).sum() > n / 4
+    np.testing.assert_array_equal(p.lift(X), whole)
+
+
 # ---- one fixed particle, every equation against an independent calculation -------------
 # Key radii rising from r_st = 15 mm to 16.6 mm, kappa 0.05 rad, offset 2 mm: every sample
 # finite, the clearance taken up part-way (lift 1.88 mm > x1), pressure angles to 29 deg.

@@ -140,6 +140,8 @@ class EmbCamProblem(Problem, Repairable):
         self.knots = np.arange(0, self.u.size, c.samples_per_segment)
         self.spline = ClampedNaturalSpline(n, self.u)
         self.w, self.dw, self.ddw = knot_warp(self.u / (n - 1), c.knot_density)
+        self.end_spline = ClampedNaturalSpline(n, self.u[[0, -1]])  # the lift's two samples
+        self.end_dw = self.dw[[0, -1]]
         self.knot_w = knot_warp(np.arange(n) / (n - 1), c.knot_density)[0]
         self.kappa_max = float(np.arccos(self.r_st / (2 * self.rg)))  # Eq 21
         kb = c.kappa_bounds or None
@@ -180,24 +182,44 @@ class EmbCamProblem(Problem, Repairable):
         """Profile-angle steps between adjacent key points, (P, N - 1) (Eq 25)."""
         return theta_a[:, None] * np.diff(self.knot_w)[None, :]
 
-    def profile(self, X: NDArray) -> CamProfile:
-        """Every quantity of Sec 2.3 along the working profile, (P, K) arrays (SI)."""
+    def _polar(self, X: NDArray, spline: ClampedNaturalSpline, dw: NDArray):  # type: ignore[no-untyped-def]
+        """Key radii, kappa, e, Eqs 22-24's boundary and the spline S, dS/du, d2S/du2 with
+        d theta / du at ``spline``'s samples (``dw`` the warp's slope there), (P, K)."""
         r_keys, kappa, e = self.unpack(X)
         oa0, theta0, theta_a = self.boundary(r_keys, kappa, e)
         span = theta_a[:, None] / (self.n - 1)
-        th_u = span * self.dw[None, :]  # d theta / du along the samples
-        th_uu = span / (self.n - 1) * self.ddw[None, :]
+        th_u = span * dw[None, :]  # d theta / du along the samples
         slope0 = self.r_st * np.tan(kappa) * th_u[:, 0]  # Eq 20 in per-u units
-        S, dS, ddS = self.spline(r_keys, slope0)
+        return r_keys, kappa, e, oa0, theta0, theta_a, span, th_u, spline(r_keys, slope0)
+
+    def _height(self, r: NDArray, dr: NDArray, e: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """Normal arm (Eq 8), |OA| (Eq 9) and follower height (Eq 10), (P, K)."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            l = pc.normal_arm(r, dr)  # Eq 8
+            oa = pc.center_distance(r, l, self.rg)  # Eq 9
+            return l, oa, pc.follower_height(oa, e[:, None])  # Eq 10
+
+    def lift(self, X: NDArray) -> NDArray:
+        """Final lift s at the last sample (Eq 11), (P,), m: the profile at its two end
+        samples only (the lift reads nothing between them), the same numbers as
+        ``profile(X).s[:, -1]`` at 2 of its samples' cost."""
+        _, _, e, _, _, _, _, th_u, (S, dS, _) = self._polar(X, self.end_spline, self.end_dw)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            h = self._height(S, dS / th_u, e)[2]
+        return h[:, 0] - h[:, -1]
+
+    def profile(self, X: NDArray) -> CamProfile:
+        """Every quantity of Sec 2.3 along the working profile, (P, K) arrays (SI)."""
+        r_keys, kappa, e, oa0, theta0, theta_a, span, th_u, (S, dS, ddS) = self._polar(
+            X, self.spline, self.dw)
+        th_uu = span / (self.n - 1) * self.ddw[None, :]
         r, dr = S, dS / th_u
         ddr = (ddS - dS * th_uu / th_u) / (th_u * th_u)
         theta = theta0[:, None] + theta_a[:, None] * self.w[None, :]
         dtheta = theta_a / (self.n - 1)
         e_col = e[:, None]
+        l, oa, h = self._height(r, dr, e)
         with np.errstate(invalid="ignore", divide="ignore"):
-            l = pc.normal_arm(r, dr)  # Eq 8
-            oa = pc.center_distance(r, l, self.rg)  # Eq 9
-            h = pc.follower_height(oa, e_col)  # Eq 10
             s = h[:, :1] - h  # Eq 11
             alpha = pc.pressure_angle(oa, e_col, l, r, self.rg)  # Eq 13
             phi = pc.rotation_angle(theta, l, r, alpha)  # Eq 17
@@ -327,7 +349,7 @@ class EmbCamProblem(Problem, Repairable):
         # (3) global stretch toward the design lift (Eq 37)
         rows = np.flatnonzero(hit["lift"])
         if rows.size:
-            lift = self.profile(X[rows]).s[:, -1]
+            lift = self.lift(X[rows])
             ok = np.isfinite(lift) & (lift > 0)
             rr = rows[ok]
             X[rr, : n - 1] = (X[rr, : n - 1] - self.r_st) * (self.s_max / lift[ok])[:, None] \
