@@ -83,6 +83,16 @@ class Evaluation:
         )
 
 
+@dataclass(frozen=True)
+class ObjectiveFloor:
+    """The least objective any feasible design can reach in principle (``value``, in the
+    objective's unit) and why, in words (``reason``): a bound from the model itself (an
+    absolute value, an energy balance), not from a search."""
+
+    value: float
+    reason: str
+
+
 def deb_best(f: NDArray, violation: NDArray) -> int:
     """Index of the best candidate by Deb's rules: least violation, then lowest objective
     (the one ranking camopt uses for populations, starts and repeats alike)."""
@@ -174,6 +184,11 @@ class Problem:
     def analysis(self, x: NDArray) -> dict[str, NDArray]:
         """Curves of one design for the archive's ``/analysis`` (none by default)."""
         return {}
+
+    def objective_floor(self) -> ObjectiveFloor | None:
+        """What no feasible design can go below (``camopt validate`` warns of a ``run.target``
+        under it), or None when the case cannot say."""
+        return None
 
     def initial_x(self) -> NDArray | None:
         """The case's own starting design (SI) for local solvers, or None."""

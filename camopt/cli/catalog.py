@@ -17,15 +17,19 @@ from camopt.errors import CamoptError
 @app.command()
 def validate(case: Annotated[Path, typer.Argument(help="case file (TOML)")],
              set_: Annotated[list[str] | None, typer.Option("--set")] = None) -> None:
-    """Check a case file without running it."""
+    """Check a case file without running it; warn (stderr, exit 0) of a ``run.target`` no
+    design can reach or inherited from a file with another ``[case]``."""
     import numpy as np
 
     from camopt.driver import build_solver, prepare
+    from camopt.targets import target_warnings
 
     with errors():
         config = load_case(case, set_)
         problem, solver_cls = prepare(config)
         build_solver(problem, solver_cls, config, np.random.default_rng(0))  # its own checks
+    for warning in target_warnings(config, problem):
+        print(f"warning: {warning}", file=sys.stderr)
     out.print(f"ok: {escape(str(case))}: case '{config.case.kind}' ({problem.n_var} variables, "
               f"{problem.n_constr} constraints), solver '{solver_cls.name}'")
 

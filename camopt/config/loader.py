@@ -7,7 +7,7 @@ import re
 import stat
 import sys
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -39,6 +39,16 @@ MAX_EXTENDS_DEPTH = 16
 
 
 @dataclass(frozen=True)
+class Base:
+    """A case file another extends: its path, the keys it sets itself (``own``, without
+    ``extends``) and its data with its own bases merged in (``merged``)."""
+
+    path: str
+    own: dict[str, Any] = field(repr=False)
+    merged: dict[str, Any] = field(repr=False)
+
+
+@dataclass(frozen=True)
 class LoadedConfig:
     """A validated case file: the exact text read, overrides, and the parsed sections."""
 
@@ -51,6 +61,8 @@ class LoadedConfig:
     data: dict[str, Any] = field(repr=False)
     robust: RobustSection | None = None
     """``[robust]`` when the case file has one: the search optimises for yield."""
+    bases: tuple[Base, ...] = field(default=(), repr=False)
+    """The files this one ``extends``, nearest first (empty without ``extends``)."""
 
     def effective(self) -> dict[str, Any]:
         """The parsed values after overrides, as plain TOML-able data."""
@@ -60,6 +72,20 @@ class LoadedConfig:
             "run": self.run.model_dump(mode="json", exclude_none=True),
             **({"robust": self.robust.model_dump(mode="json")} if self.robust else {}),
         }
+
+    def inherited(self, section: str, key: str) -> Base | None:
+        """The base file that sets ``section.key`` when this file (and ``--set``) does not;
+        None when the key is set here, by ``--set``, or nowhere."""
+        overridden = {k.partition("=")[0].strip() for k in self.overrides}
+        if f"{section}.{key}" in overridden or not self.bases:
+            return None
+        own = _own(self.text)
+        if key in (own.get(section) or {}):
+            return None
+        for base in self.bases:
+            if key in (base.own.get(section) or {}):
+                return base
+        return None
 
 
 def parse_overrides(items: Sequence[str]) -> list[tuple[str, Any]]:
@@ -203,13 +229,28 @@ def _merge(base: dict[str, Any], child: dict[str, Any]) -> dict[str, Any]:
     return merged
 
 
-def _read_extended(path: Path, seen: tuple[Path, ...] = ()) -> tuple[str, dict[str, Any]]:
+def _shown(path: Path) -> str:
+    """A resolved path as messages show it: relative to the working folder when inside it."""
+    relative = os.path.relpath(path)
+    return path.as_posix() if relative.startswith("..") else relative
+
+
+def _own(text: str) -> dict[str, Any]:
+    """The keys a case file's text sets itself (its ``extends`` left out)."""
+    data = tomllib.loads(text)
+    data.pop(EXTENDS, None)
+    return data
+
+
+def _read_extended(path: Path, seen: tuple[Path, ...] = ()
+                   ) -> tuple[str, dict[str, Any], tuple[Base, ...]]:
     """Read a case file and, through ``extends = "other.toml"``, the files it builds on
-    (a chain of at most MAX_EXTENDS_DEPTH files, without loops)."""
+    (a chain of at most MAX_EXTENDS_DEPTH files, without loops): its text, the merged data
+    and the bases, nearest first."""
     text, data = _read(path)
     base_name = data.pop(EXTENDS, None)
     if base_name is None:
-        return text, data
+        return text, data, ()
     if not isinstance(base_name, str):
         raise ConfigError(str(path), EXTENDS, "must be a path string")
     if len(seen) >= MAX_EXTENDS_DEPTH:
@@ -225,8 +266,9 @@ def _read_extended(path: Path, seen: tuple[Path, ...] = ()) -> tuple[str, dict[s
                           f"{getattr(exc, 'strerror', None) or exc}") from None
     if base in seen or base == here:
         raise ConfigError(str(path), EXTENDS, f"circular: {base_name}")
-    _, base_data = _read_extended(base, (*seen, here))
-    return text, _merge(base_data, data)
+    base_text, base_data, further = _read_extended(base, (*seen, here))
+    layer = Base(_shown(base), _own(base_text), base_data)
+    return text, _merge(base_data, data), (layer, *further)
 
 
 def load_config(
@@ -240,7 +282,7 @@ def load_config(
     config layer knows no case or solver)."""
     path = Path(path)
     source = str(path)
-    text, data = _read_extended(path)
+    text, data, bases = _read_extended(path)
     parsed = parse_overrides(overrides)
     new_solver = dict(parsed).get("solver.name")
     old_solver = data.get("solver")
@@ -252,8 +294,9 @@ def load_config(
             expected = ", ".join(SECTIONS)
             raise ConfigError("--set", key, f"unknown section; expected one of {expected}")
         apply_override(data, key, value)
-    return validate_data(data, solvers, cases, source, text, tuple(overrides),
-                         {key for key, _ in parsed})
+    loaded = validate_data(data, solvers, cases, source, text, tuple(overrides),
+                           {key for key, _ in parsed})
+    return replace(loaded, bases=bases)
 
 
 def validate_data(

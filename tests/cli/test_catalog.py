@@ -34,3 +34,10 @@ def test_solvers_prints_one_valid_solver_table_per_solver():
 def test_version():
     r = runner.invoke(app, ["--version"])
     assert r.exit_code == 0 and r.stdout == f"camopt {__version__}\n"
+
+
+def test_validate_warns_of_an_unreachable_target_and_still_passes(tmp_path):
+    r = runner.invoke(app, ["validate", "configs/vcb.toml", "--set", "run.target=-1"])
+    assert r.exit_code == 0, r.output
+    assert r.stderr.startswith("warning: configs/vcb.toml: run.target: -1 is below 0")
+    assert r.stdout.startswith("ok: configs/vcb.toml")

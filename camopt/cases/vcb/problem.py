@@ -23,7 +23,7 @@ from camopt.cases.vcb.model import (
 )
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, fourbar, hertz
-from camopt.problem import Evaluation, Problem, Variable
+from camopt.problem import Evaluation, ObjectiveFloor, Problem, Variable
 
 LINK_FIELDS = ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
 """The linkage fields of ``[case]`` in the order of a linkage row (``designs``)."""
@@ -92,6 +92,12 @@ class VcbProblem(Problem, VariesCase):
             return A, X[:, 3:5], np.tile(self.model.vendor_link, (n, 1)) if link is None \
                 else link
         return np.tile(self.cam_a, (n, 1)), np.tile(self.cam_kc, (n, 1)), X[:, :5]
+
+    def objective_floor(self) -> ObjectiveFloor:
+        """Both forms of Eq 39 are absolute values (``|surplus|`` in J, a sum of ``|Fo -
+        Fr/eps|`` in N): 0. A required latch does not raise it: the cam's free turn before
+        it meets the roller (theta0) adds kinetic energy the surplus of Eq 26 leaves out."""
+        return ObjectiveFloor(0.0, "the objective is an absolute value")
 
     def vendor_x(self) -> NDArray:
         """The vendor's design in this step's variables (initial design of Tables 6, 7)."""
