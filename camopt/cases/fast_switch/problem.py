@@ -187,12 +187,16 @@ class FastSwitchProblem(Problem, HasFamily):
     def full_model(self, x: SwitchDesign) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
         """Inequalities R1-R21 (normalised, <= 0 feasible) and equality residuals R8-R18,
         each (n,), keyed by the paper's constraint names."""
+        return self.inequalities(x), self.equalities(x)
+
+    def inequalities(self, x: SwitchDesign) -> dict[str, NDArray]:
+        """The full model's inequalities R1-R21, normalised (<= 0 feasible), each (n,)."""
         p = self.p
-        x1, x2, x3, x4, x5, x6, x7 = x.x1, x.x2, x.x3, x.x4, x.x5, x.x6, x.x7
-        x8, x9, x10, x11, x12, x13 = x.x8, x.x9, x.x10, x.x11, x.x12, x.x13
+        x1, x2, x3, x4, x5, x7 = x.x1, x.x2, x.x3, x.x4, x.x5, x.x7
+        x8, x9, x10, x12, x13 = x.x8, x.x9, x.x10, x.x12, x.x13
         with np.errstate(divide="ignore", invalid="ignore"):
             damped = np.sqrt(1.0 - x1**2)
-            g = {
+            return {
                 "R1": x7 / p.L - 1.0,  # Eq 4
                 "R2": 0.5 * x10 / p.L - 1.0,  # Eq 5
                 "R3": x5 / x4 - 1.0,  # Eq 7
@@ -209,7 +213,15 @@ class FastSwitchProblem(Problem, HasFamily):
                 "R20": 1.2 * (x4 - x5) / damped * np.abs(p.M4 * x2**2 - x8) / p.F_rated - 1.0,
                 "R21": self._branch(x3, x4),
             }
-            h = {
+
+    def equalities(self, x: SwitchDesign) -> dict[str, NDArray]:
+        """The full model's equality residuals R8-R18 (zero where the loop closes), each
+        (n,); ``complete`` solves them, so they are a check, not read by the search."""
+        p = self.p
+        x1, x2, x6, x7, x8, x9 = x.x1, x.x2, x.x6, x.x7, x.x8, x.x9
+        x3, x5, x10, x11, x12, x13 = x.x3, x.x5, x.x10, x.x11, x.x12, x.x13
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return {
                 "R8": (x7 * np.sin(x13) + x6 * np.sin(x12)) / p.L,  # Eq 14
                 "R9": (x7 * np.cos(x13) + x6 * np.cos(x12) + p.p4 + x5 - x10) / p.L,  # Eq 15
                 "R10": (x7 + x6 * np.sin(x11)) / p.L,  # Eq 16
@@ -218,7 +230,6 @@ class FastSwitchProblem(Problem, HasFamily):
                 "R17": x1 / (x2 * p.velocity_coefficient(x7, x6) / (2 * x8)) - 1.0,  # Eq 35
                 "R18": x2 / np.sqrt(x8 / p.effective_mass(x7)) - 1.0,  # Eq 36
             }
-        return g, h
 
     def _branch(self, x3: NDArray, x4: NDArray) -> NDArray:
         """R21: case I (x4/x3 <= 1), case II (x3/x4 <= 1), or both (active iff x3 == x4)."""
@@ -231,25 +242,37 @@ class FastSwitchProblem(Problem, HasFamily):
     # ---- Problem interface ---------------------------------------------------------------
     def evaluate(self, X: NDArray) -> Evaluation:
         """Closure time in ms (Eq 39 on the right arcsine branch, or Eq 58 as printed), the
-        reduced problem's constraints, and x1..x13, the largest equality residual of the
-        full model and the spring's stress margin (% below its strength at the worse of the
-        two loads, R14 and R15) as extras."""
+        reduced problem's constraints, and what a search may name as an objective: the
+        closure time and the spring's stress margin (% below its strength at the worse of
+        the two loads, R14 and R15). :meth:`describe` adds x1..x13 and the full model's
+        largest equality residual (not computed for a search: issue #24)."""
+        return self._evaluate(X)[0]
+
+    def describe(self, X: NDArray) -> Evaluation:
+        """As :meth:`evaluate`, plus x1..x13 in display units and the largest equality
+        residual R8-R18 of the full model."""
+        ev, x = self._evaluate(X)
+        h = self.equalities(x)
+        extras = {**x.display(), "closure_time_ms": ev.extras["closure_time_ms"],
+                  "equality_residual_max": np.max(np.abs(np.stack(list(h.values()))), axis=0),
+                  "spring_stress_margin_pct": ev.extras["spring_stress_margin_pct"]}
+        return Evaluation(ev.f, ev.g, extras)
+
+    def _evaluate(self, X: NDArray) -> tuple[Evaluation, SwitchDesign]:
         X = np.atleast_2d(np.asarray(X, dtype=float))
         x = self.complete(X)
+        full = self.inequalities(x)
         if self.config.reduced_form == "printed":
             f, g = self._printed(x)
         else:
-            f, g = self._corrected(x)
-        f = np.where(np.isfinite(f), f, np.inf)
-        extras = x.display()
-        extras["closure_time_ms"] = f * 1e3
-        full, h = self.full_model(x)
-        extras["equality_residual_max"] = np.max(np.abs(np.stack(list(h.values()))), axis=0)
-        extras["spring_stress_margin_pct"] = -100.0 * np.maximum(full["R14"], full["R15"])
-        return Evaluation(f=f * 1e3, g=g, extras=extras)
+            f, g = self._corrected(x, full)
+        f = np.where(np.isfinite(f), f, np.inf) * 1e3
+        extras = {"closure_time_ms": f,
+                  "spring_stress_margin_pct": -100.0 * np.maximum(full["R14"], full["R15"])}
+        return Evaluation(f=f, g=g, extras=extras), x
 
-    def _corrected(self, x: SwitchDesign) -> tuple[NDArray, NDArray]:
-        g_full, _ = self.full_model(x)
+    def _corrected(self, x: SwitchDesign, g_full: dict[str, NDArray]
+                   ) -> tuple[NDArray, NDArray]:
         with np.errstate(divide="ignore", invalid="ignore"):
             extra = {
                 "R10a": x.x7 / x.x6 - 1.0,  # Eq 43
@@ -314,7 +337,7 @@ class FastSwitchProblem(Problem, HasFamily):
 
     def metrics(self, x: NDArray) -> dict[str, float]:
         """Headline metrics of one design, with the exact-dynamics closure time."""
-        ev = self.evaluate(np.atleast_2d(x))
+        ev = self.describe(np.atleast_2d(x))
         out = {k: float(v[0]) for k, v in ev.extras.items()}
         exact = self.exact_closure(x)
         out["closure_time_exact_ms"] = exact.time * 1e3
