@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-$(shell cat pyproject.toml | cksum | cut -d' ' -f1)
 RUN_CASE ?= configs/vcb.toml
 
-.PHONY: install run test lint bench sweep-ci clean
+.PHONY: install run test lint typecheck bench sweep-ci clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -21,8 +21,12 @@ run: install
 test: install
 	$(BIN)/python -m pytest -q
 
-lint: install
-	$(BIN)/ruff check camopt tests bench
+lint: typecheck
+	$(BIN)/ruff check camopt tests bench scripts
+
+# types and units as a gate: mypy's settings are in pyproject.toml ([tool.mypy])
+typecheck: install
+	$(BIN)/mypy
 
 bench: install
 	$(BIN)/python -m bench
@@ -42,4 +46,4 @@ sweep-ci: install
 		--check --quiet --force --out runs/ci-opening_spring.h5
 
 clean:
-	rm -rf $(VENV) .pytest_cache
+	rm -rf $(VENV) .pytest_cache .mypy_cache

@@ -69,7 +69,7 @@ class RunRecord:
     seed: int
     repeats: list[RepeatRecord]
     best: RepeatRecord
-    metrics: dict[str, float]
+    metrics: dict[str, object]
     analysis: dict[str, NDArray]
     interrupted: bool = False
     """True when Ctrl-C (or SIGTERM) stopped the run: ``repeats`` holds the finished ones."""

@@ -99,7 +99,8 @@ def circles(run: RunView, specs: tuple) -> dict[str, tuple[tuple[float, float], 
         if c.centre is not None:
             if not all(k in run.analysis and np.size(run.analysis[k]) for k in c.centre):
                 continue
-            centre = tuple(float(np.asarray(run.analysis[k]).ravel()[0]) for k in c.centre)
+            kx, ky = c.centre
+            centre = (float(np.ravel(run.analysis[kx])[0]), float(np.ravel(run.analysis[ky])[0]))
         found[c.name] = (centre, float(radius))
     return found
 

@@ -10,6 +10,11 @@ no-op off glibc.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # imported where used: the CLI starts without it
+    from concurrent.futures import ProcessPoolExecutor
+
 import ctypes
 import ctypes.util
 import sys
@@ -65,7 +70,7 @@ def worker_start() -> None:
     tune_allocator()
 
 
-def fork_pool(jobs: int):  # type: ignore[no-untyped-def]
+def fork_pool(jobs: int) -> ProcessPoolExecutor:
     """A process pool of ``jobs`` forked workers (they inherit the parent's problem and
     solver objects, so tasks pass only indices and small results)."""
     from concurrent.futures import ProcessPoolExecutor
@@ -75,7 +80,7 @@ def fork_pool(jobs: int):  # type: ignore[no-untyped-def]
                                initializer=worker_start)
 
 
-def kill_pool(pool) -> None:  # type: ignore[no-untyped-def]
+def kill_pool(pool: ProcessPoolExecutor) -> None:
     """Stop a pool at once: its workers are killed, not waited for (interrupted work)."""
     for proc in list(getattr(pool, "_processes", {}).values()):
         proc.kill()

@@ -22,7 +22,8 @@ def _band(histories: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarr
     stack = np.array([np.r_[h, np.full(n - len(h), h[-1])] for h in histories], dtype=float)
     stack = np.where(np.isfinite(stack), stack, np.nan)
     with np.errstate(all="ignore"):
-        return tuple(np.nanpercentile(stack, q, axis=0) for q in (50, 25, 75))  # type: ignore
+        mid, low, high = (np.nanpercentile(stack, q, axis=0) for q in (50, 25, 75))
+    return mid, low, high
 
 
 def _scale(ax: Any, values: np.ndarray) -> None:

@@ -11,7 +11,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 ACTIVE_TOL = 1e-4
 """A normalised constraint g with ``|g| <= ACTIVE_TOL`` counts as active (at its bound):
@@ -93,7 +93,7 @@ class ObjectiveFloor:
     reason: str
 
 
-def deb_best(f: NDArray, violation: NDArray) -> int:
+def deb_best(f: ArrayLike, violation: ArrayLike) -> int:
     """Index of the best candidate by Deb's rules: least violation, then lowest objective
     (the one ranking camopt uses for populations, starts and repeats alike)."""
     return int(np.lexsort((np.asarray(f, dtype=float), np.asarray(violation, dtype=float)))[0])
@@ -176,7 +176,7 @@ class Problem:
         """As :meth:`evaluate`, plus descriptive metrics for tables (not the hot path)."""
         return self.evaluate(X)
 
-    def metrics(self, x: NDArray) -> dict[str, object]:
+    def metrics(self, x: NDArray) -> Mapping[str, object]:
         """Headline metrics of one design ``x`` (n_var,) for the archive's ``/best``."""
         ev = self.describe(np.asarray(x, dtype=float)[None, :])
         return {k: float(v[0]) for k, v in ev.extras.items()}

@@ -134,7 +134,7 @@ def summarise(t: Tolerance) -> dict[str, Any]:
             finite = values[~np.isnan(values)]
             p = np.percentile(finite, [5, 50, 95]) if finite.size else [np.nan] * 3
         metrics[name] = {"p05": float(p[0]), "p50": float(p[1]), "p95": float(p[2])}
-        rows = []
+        rows: list[dict[str, Any]] = []  # one JSON row per varied input
         for j, v in enumerate(t.varies):
             rows.append({"input": v.name, "spearman": _spearman(t.inputs[:, j], values),
                          "low": float(swings[name][2 * j]),

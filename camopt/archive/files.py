@@ -173,7 +173,7 @@ def claim(path: Path, force: bool = False) -> Iterator[Claim]:
 def remove_stale(folder: Path) -> list[Path]:
     """Remove temporary archive files in ``folder`` that no writer holds (left by a killed
     camopt); the paths removed."""
-    removed = []
+    removed: list[Path] = []
     try:
         names = os.listdir(folder)
     except OSError:

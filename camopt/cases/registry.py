@@ -33,7 +33,7 @@ class ArchiveLoader(Protocol):
     """Loads another run's archive named by a case-file key (``case.cam_archive``); a
     missing or damaged archive is a ConfigError against that key."""
 
-    def __call__(self, key: str, path: str) -> RunView: ...
+    def __call__(self, key: str, path: str, /) -> RunView: ...
 
 
 @dataclass(frozen=True)

@@ -45,7 +45,7 @@ def init(kind: Annotated[str, typer.Argument(help="case kind")],
 
     with errors():
         spec = get_case(kind)
-        text = template(spec.config, solvers()[spec.default_solver].Options())
+        text = template(spec.config, solvers()[spec.default_solver].Options.model_validate({}))
         if out_path is None:
             sys.stdout.write(text)
             return

@@ -131,7 +131,7 @@ def print_fitted(title: str, rows: list[dict[str, Any]], columns: list[str],
     columns = [c for c in columns if c in rows[0]]
     shown_rows = rows if limit is None else rows[:limit]
     texts = {c: [cell(r.get(c)) for r in shown_rows] for c in columns}
-    width, kept = 1, []
+    width, kept = 1, list[str]()
     for c in columns:
         w = max(len(c), *(len(t) for t in texts[c])) + 3  # padding and a rule
         if kept and width + w > out.width:

@@ -6,13 +6,16 @@ import enum
 import json
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.markup import escape
 from rich.table import Table
 
 from camopt.cli.app import Format, app, errors, fmt, out
+
+if TYPE_CHECKING:  # imported inside the command: the CLI starts without numpy
+    from camopt.tolerance import Tolerance
 from camopt.errors import CamoptError
 
 
@@ -72,7 +75,7 @@ def tolerance(
         print(p)
 
 
-def _write(result, path: Path, force: bool) -> None:  # type: ignore[no-untyped-def]
+def _write(result: Tolerance, path: Path, force: bool) -> None:
     from camopt.archive.samples import write_samples
 
     inputs = {v.name: result.inputs[:, j] for j, v in enumerate(result.varies)}
@@ -80,7 +83,7 @@ def _write(result, path: Path, force: bool) -> None:  # type: ignore[no-untyped-
                   result.samples.g, result.constraint_names, result.samples.feasible, force)
 
 
-def _figures(result, folder: Path, metric: str | None, stem: str) -> list[Path]:  # type: ignore[no-untyped-def]
+def _figures(result: Tolerance, folder: Path, metric: str | None, stem: str) -> list[Path]:
     from camopt import plots
     from camopt.tolerance_figures import figures
 

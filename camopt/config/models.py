@@ -254,7 +254,7 @@ def _section(title: str, model: BaseModel) -> list[str]:
 
 def template(case_model: type[CaseConfig], solver: SolverOptions) -> str:
     """A commented case file for a case config model with every default written out."""
-    case = case_model()
+    case = case_model.model_validate({})
     kind = case.kind
     lines = [f"# camopt case file for '{kind}'. Units are in the field names; others are SI.", ""]
     lines += _section("case", case) + [""]

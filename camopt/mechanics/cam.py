@@ -11,12 +11,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
+from camopt.mechanics import Floats, FloatsLike
 from camopt.mechanics.trig import sincos
 
 
-def base_angle(l2: ArrayLike, l6: ArrayLike, distance: ArrayLike) -> NDArray:
+def base_angle(l2: FloatsLike, l6: FloatsLike, distance: FloatsLike) -> Floats:
     """Angle at B between BO and BD when the roller centre is ``distance`` from O
     (Eq 10 with distance = rb + rf; Eqs 2 and 8 with other distances)."""
     return np.arccos((l2**2 + l6**2 - np.square(distance)) / (2 * l2 * l6))
@@ -36,7 +37,7 @@ class Follower:
     sin_a: NDArray
 
     @property
-    def phi(self) -> NDArray:
+    def phi(self) -> Floats:
         """Follower swing from the base-circle position (Eq 6), rad."""
         return self.angle - self.xi
 
@@ -57,7 +58,7 @@ class Follower:
         return cls(t[None, :], xi, angle, dphi, ddphi, cos_a, sin_a)
 
 
-def pitch_curve(l2: float, l6: float, f: Follower) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+def pitch_curve(l2: float, l6: float, f: Follower) -> tuple[Floats, Floats, Floats, Floats]:
     """Pitch curve (xp, yp) and its derivatives with respect to theta_c (Eqs 9, 12)."""
     ct, st = np.cos(f.theta_c), np.sin(f.theta_c)
     cu = ct * f.cos_a + st * f.sin_a  # u = theta_c - xi - phi
@@ -66,14 +67,14 @@ def pitch_curve(l2: float, l6: float, f: Follower) -> tuple[NDArray, NDArray, ND
     return l6 * ct - l2 * cu, l6 * st - l2 * su, -l6 * st + w * su, l6 * ct - w * cu
 
 
-def profile(xp: ArrayLike, yp: ArrayLike, dxp: ArrayLike, dyp: ArrayLike,
-            rf: ArrayLike) -> tuple[NDArray, NDArray]:
+def profile(xp: FloatsLike, yp: FloatsLike, dxp: FloatsLike, dyp: FloatsLike,
+            rf: FloatsLike) -> tuple[Floats, Floats]:
     """Cam profile, the pitch curve offset by the roller radius (Eq 11)."""
     norm = np.hypot(dxp, dyp)
     return xp - rf * dyp / norm, yp + rf * dxp / norm
 
 
-def pressure_angle(l2: float, l6: float, f: Follower) -> NDArray:
+def pressure_angle(l2: float, l6: float, f: Follower) -> Floats:
     """Pressure angle psi = pi/2 - eta - xi - phi (Eqs 13-14), rad."""
     oi = l6 * f.dphi / (1 - f.dphi)
     id_ = np.sqrt(l2**2 + (oi + l6) ** 2 - 2 * l2 * (oi + l6) * f.cos_a)
@@ -81,7 +82,7 @@ def pressure_angle(l2: float, l6: float, f: Follower) -> NDArray:
     return np.pi / 2 - eta - f.angle
 
 
-def curvature_radius(l2: float, l6: float, f: Follower, rf: float) -> NDArray:
+def curvature_radius(l2: float, l6: float, f: Follower, rf: float) -> Floats:
     """Radius of curvature of the cam profile (Eq 15): pitch radius minus rf."""
     w = 1 - f.dphi
     w2 = w * w

@@ -9,11 +9,12 @@ Angles in rad; arrays broadcast. An assembly that cannot close gives NaN.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+
+from camopt.mechanics import Floats, FloatsLike
 
 
-def output_angle(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
-                 theta1: ArrayLike, theta2: ArrayLike, branch: float = 1.0) -> NDArray:
+def output_angle(l1: FloatsLike, l2: FloatsLike, l3: FloatsLike, l4: FloatsLike,
+                 theta1: FloatsLike, theta2: FloatsLike, branch: float = 1.0) -> Floats:
     """theta4 from theta2 (Eq 3); ``branch`` is the sign before the square root."""
     A = 2 * l1 * l4 * np.cos(theta1) - 2 * l2 * l4 * np.cos(theta2)
     B = 2 * l1 * l4 * np.sin(theta1) - 2 * l2 * l4 * np.sin(theta2)
@@ -22,8 +23,8 @@ def output_angle(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
         return 2 * np.arctan((B + branch * np.sqrt(A**2 + B**2 - C**2)) / (A + C))
 
 
-def input_angle(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
-                theta1: ArrayLike, theta4: ArrayLike, branch: float = -1.0) -> NDArray:
+def input_angle(l1: FloatsLike, l2: FloatsLike, l3: FloatsLike, l4: FloatsLike,
+                theta1: FloatsLike, theta4: FloatsLike, branch: float = -1.0) -> Floats:
     """theta2 from theta4 (Eq 5); the printed branch is the minus sign."""
     A = -2 * l1 * l2 * np.cos(theta1) - 2 * l2 * l4 * np.cos(theta4)
     B = -2 * l1 * l2 * np.sin(theta1) - 2 * l2 * l4 * np.sin(theta4)
@@ -34,15 +35,15 @@ def input_angle(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
 
 
 
-def grashof_margin(*lengths: ArrayLike) -> NDArray:
+def grashof_margin(*lengths: FloatsLike) -> Floats:
     """(p + q) - (s + l) for four link lengths (Eq 43); > 0 means Grashof."""
     L = np.sort(np.stack(np.broadcast_arrays(*lengths)), axis=0)
     return (L[1] + L[2]) - (L[0] + L[3])
 
 
-def output_motion(l1: ArrayLike, l2: ArrayLike, l3: ArrayLike, l4: ArrayLike,
-                  c1: ArrayLike, s1: ArrayLike, c2: ArrayLike, s2: ArrayLike,
-                  branch: float = 1.0) -> tuple[NDArray, NDArray, NDArray]:
+def output_motion(l1: FloatsLike, l2: FloatsLike, l3: FloatsLike, l4: FloatsLike,
+                  c1: FloatsLike, s1: FloatsLike, c2: FloatsLike, s2: FloatsLike,
+                  branch: float = 1.0) -> tuple[Floats, Floats, Floats]:
     """cos theta4, sin theta4 and d theta4 / d theta2 from the cosines and sines of
     theta1 and theta2, without trigonometry: Eq 3 is A cos4 + B sin4 = C, solved as
     (A C - b B r, B C + b A r) / (A^2 + B^2) with r = sqrt(A^2 + B^2 - C^2) (the

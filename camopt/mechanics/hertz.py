@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+
+from camopt.mechanics import Floats, FloatsLike
 
 
 def equivalent_modulus(e1: float, nu1: float, e2: float, nu2: float) -> float:
@@ -11,14 +12,14 @@ def equivalent_modulus(e1: float, nu1: float, e2: float, nu2: float) -> float:
     return 2.0 / ((1 - nu1**2) / e1 + (1 - nu2**2) / e2)
 
 
-def max_shear_stress(sigma_max: ArrayLike) -> NDArray:
+def max_shear_stress(sigma_max: FloatsLike) -> Floats:
     """Largest shear stress beneath the surface of a line contact, tau_max = 0.304
     sigma_max (Eq 31; the stress field gives 0.300 at 0.786 b for nu = 0.3)."""
     return 0.304 * np.asarray(sigma_max)
 
 
-def line_contact(force: ArrayLike, rho1: ArrayLike, rho2: ArrayLike, length: float,
-                 e_eq: float) -> tuple[NDArray, NDArray, NDArray]:
+def line_contact(force: FloatsLike, rho1: FloatsLike, rho2: FloatsLike, length: float,
+                 e_eq: float) -> tuple[Floats, Floats, Floats]:
     """Half-width b (Eq 27), peak pressure sigma_max (Eq 30) and tau_max = 0.304 sigma_max
     (Eq 31, nu = 0.3) for a normal ``force`` over ``length``. A concave surface has a
     negative radius; a non-positive equivalent radius gives NaN (no Hertz contact)."""

@@ -8,10 +8,12 @@ horizontal line at distance ``span = r2 cos theta2 + r3 cos theta3``.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
+
+from camopt.mechanics import Floats, FloatsLike
 
 
-def crank_angle_for_span(r2: ArrayLike, r3: ArrayLike, span: ArrayLike) -> NDArray:
+def crank_angle_for_span(r2: FloatsLike, r3: FloatsLike, span: FloatsLike) -> Floats:
     """cos(theta2) that closes the loop over ``span`` (law of cosines on Eq 3's first two lines).
 
     Values outside [-1, 1] mean the loop cannot close; callers turn that into a constraint.
@@ -19,12 +21,12 @@ def crank_angle_for_span(r2: ArrayLike, r3: ArrayLike, span: ArrayLike) -> NDArr
     return (np.square(r2) + np.square(span) - np.square(r3)) / (2.0 * r2 * span)
 
 
-def coupler_angle(r2: ArrayLike, r3: ArrayLike, theta2: ArrayLike, span: ArrayLike) -> NDArray:
+def coupler_angle(r2: FloatsLike, r3: FloatsLike, theta2: FloatsLike, span: FloatsLike) -> Floats:
     """theta3 in [0, 2 pi) from r2 sin theta2 + r3 sin theta3 = 0 and the horizontal loop."""
     return np.mod(np.arctan2(-r2 * np.sin(theta2), span - r2 * np.cos(theta2)), 2.0 * np.pi)
 
 
-def coupler_derivatives(r2: ArrayLike, r3: ArrayLike, theta2: ArrayLike
+def coupler_derivatives(r2: FloatsLike, r3: FloatsLike, theta2: FloatsLike
                         ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
     """theta3, dtheta3/dtheta2, d2theta3/dtheta2^2, ds/dtheta2, d2s/dtheta2^2 along the motion.
 

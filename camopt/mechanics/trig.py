@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.mechanics import Floats
+
 _STEP = 2 * np.pi / 2048
 _HALF = 8192  # table angles k h for k in [-_HALF, _HALF), stored at k mod 2 _HALF
 _LIMIT = (_HALF - 1) * _STEP  # rad, ~25; beyond it (and for NaN / inf): numpy's own
@@ -25,7 +27,7 @@ _COS = np.cos(_K * _STEP)
 _SIN = np.sin(_K * _STEP)
 
 
-def sincos(angle: NDArray, bound: float | None = None) -> tuple[NDArray, NDArray]:
+def sincos(angle: NDArray, bound: float | None = None) -> tuple[Floats, Floats]:
     """cos and sin of ``angle`` (rad, any shape), within 1e-15 of np.cos / np.sin;
     NaN and infinities give NaN as numpy does. A caller that knows |angle| <= ``bound``
     saves the range check."""
@@ -43,7 +45,7 @@ def sincos(angle: NDArray, bound: float | None = None) -> tuple[NDArray, NDArray
     return cos, sin
 
 
-def _reduced(angle: NDArray) -> tuple[NDArray, NDArray]:
+def _reduced(angle: NDArray) -> tuple[Floats, Floats]:
     """sincos for |angle| < _LIMIT."""
     k = np.multiply(angle, 1 / _STEP)
     np.rint(k, out=k)

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
-from camopt.problem import Evaluation
+from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import BestSoFar, Solver, StopReason, snap
 from camopt.solvers.registry import register_solver
 
@@ -116,16 +116,20 @@ class CMAES(Solver):
 
     name = "cmaes"
     Options = CMAESOptions
+    options: CMAESOptions
     summary = "CMA-ES (Hansen 2016) ranked by Deb's rules, in the unit box (generic)"
     integers = False
 
-    def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
+    def __init__(self, problem: Problem, options: CMAESOptions, rng: np.random.Generator
+                 ) -> None:
         super().__init__(problem, options, rng)
+        initial = problem.initial_x()
         if options.x0 is not None:
             x0 = problem.from_display(options.x0)
+        elif initial is not None:
+            x0 = np.asarray(initial, dtype=float)
         else:
-            x0 = problem.initial_x()
-            x0 = (problem.lower + problem.upper) / 2 if x0 is None else x0
+            x0 = (problem.lower + problem.upper) / 2
         self.core = CMACore(np.clip(problem.to_unit(x0), 0, 1), options.sigma, rng,
                             options.population)
         self._best = BestSoFar()

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION
-from camopt.problem import Evaluation
+from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
 from camopt.solvers.polish import PolishableOptions, Polishing
 from camopt.solvers.registry import register_solver
@@ -63,9 +63,11 @@ class DEGR(Polishing, Solver):
 
     name = "de_gr"
     Options = DEGROptions
+    options: DEGROptions
     summary = "differential evolution DE/best/1/bin, F=0.382, CR=0.618 (generic)"
 
-    def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
+    def __init__(self, problem: Problem, options: DEGROptions, rng: np.random.Generator
+                 ) -> None:
         super().__init__(problem, options, rng)
         self.lo, self.hi = problem.lower, problem.upper
         self.pop: NDArray | None = None

@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from camopt.capabilities import HasFamily
 from camopt.config.models import SolverOptions
-from camopt.problem import Evaluation
+from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import Solver, StopReason, best_index, design_rows
 from camopt.solvers.registry import register_solver
 
@@ -31,10 +31,12 @@ class Enumeration(Solver):
 
     name = "enumeration"
     Options = EnumerationOptions
+    options: EnumerationOptions
     requires = (HasFamily,)
     summary = "evaluates every member of the case's 1-DOF family (monotonicity analysis)"
 
-    def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
+    def __init__(self, problem: Problem, options: EnumerationOptions, rng: np.random.Generator
+                 ) -> None:
         super().__init__(problem, options, rng)
         self.X: NDArray | None = None
         self.ev: Evaluation | None = None

@@ -10,7 +10,7 @@ from pydantic import Field
 
 from camopt.config.models import SolverOptions
 from camopt.errors import SolverError
-from camopt.problem import Evaluation
+from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import Solver, StopReason, best_index, design_rows
 from camopt.solvers.registry import register_solver
 
@@ -31,9 +31,11 @@ class Evaluate(Solver):
 
     name = "evaluate"
     Options = EvaluateOptions
+    options: EvaluateOptions
     summary = "evaluates the designs listed in the TOML (reference designs, papers' tables)"
 
-    def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
+    def __init__(self, problem: Problem, options: EvaluateOptions, rng: np.random.Generator
+                 ) -> None:
         super().__init__(problem, options, rng)
         if not options.designs:
             raise SolverError("solver.designs: give at least one design to evaluate")

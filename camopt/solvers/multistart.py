@@ -23,8 +23,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.config.models import SolverOptions
 from camopt.perf import fork_pool, kill_pool
-from camopt.problem import Evaluation
+from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import Solver, StopReason, best_index
 
 _SOLVING: MultiStart | None = None  # the solver whose starts forked workers solve
@@ -35,12 +36,22 @@ def _solve_start(i: int) -> tuple[NDArray, dict[str, Any]]:
     return _SOLVING.local_solve(_SOLVING.starts[i])
 
 
+class MultiStartOptions(SolverOptions):
+    """What every multi-start solver's options hold (each sets its own defaults)."""
+
+    starts: int
+    x0: dict[str, float] | None
+    distinct_tol: float
+
+
 class MultiStart(Solver):
     """Base of solvers that run one scipy local solve per start."""
 
     integers = False
+    options: MultiStartOptions
 
-    def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
+    def __init__(self, problem: Problem, options: MultiStartOptions,
+                 rng: np.random.Generator) -> None:
         super().__init__(problem, options, rng)
         self.lo, self.hi = problem.lower, problem.upper
         self.starts = self._starts()

@@ -11,13 +11,14 @@ from pydantic import Field
 from scipy.optimize import root
 
 from camopt.capabilities import HasResiduals
-from camopt.config.models import MAX_STARTS, SolverOptions
+from camopt.config.models import MAX_STARTS
 from camopt.errors import SolverError
-from camopt.solvers.multistart import MultiStart
+from camopt.problem import Problem
+from camopt.solvers.multistart import MultiStart, MultiStartOptions
 from camopt.solvers.registry import register_solver
 
 
-class NewtonOptions(SolverOptions):
+class NewtonOptions(MultiStartOptions):
     """Options of ``newton_pp``."""
 
     name: Literal["newton_pp"] = "newton_pp"
@@ -37,10 +38,12 @@ class NewtonPP(MultiStart):
 
     name = "newton_pp"
     Options = NewtonOptions
+    options: NewtonOptions
     requires = (HasResiduals,)
     summary = "precision-point equations by scipy.optimize.root from several starts"
 
-    def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
+    def __init__(self, problem: Problem, options: NewtonOptions, rng: np.random.Generator
+                 ) -> None:
         super().__init__(problem, options, rng)
         assert isinstance(problem, HasResiduals)
         self.equations: HasResiduals = problem

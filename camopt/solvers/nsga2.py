@@ -34,7 +34,7 @@ from pymoo.problems.static import StaticProblem
 from camopt.capabilities import Repairable
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
 from camopt.errors import SolverError
-from camopt.problem import Evaluation
+from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import BestSoFar, Solver, StopReason, design_rows, snap
 from camopt.solvers.registry import register_solver
 
@@ -80,15 +80,20 @@ class NSGA2(Solver):
 
     name = "nsga2"
     Options = NSGA2Options
+    options: NSGA2Options
     summary = "multi-objective NSGA-II (pymoo, ask/tell); Pareto set in the archive's table"
 
     @classmethod
     def needs(cls, options: SolverOptions) -> tuple[type, ...]:
+        assert isinstance(options, NSGA2Options)
         return (Repairable,) if options.repair else ()
 
-    def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
+    def __init__(self, problem: Problem, options: NSGA2Options, rng: np.random.Generator
+                 ) -> None:
         super().__init__(problem, options, rng)
-        self.schedule = dict(problem.repair_schedule()) if options.repair else {}
+        # options.repair on a case without corrections was refused by check() (needs)
+        self.repairer = problem if isinstance(problem, Repairable) and options.repair else None
+        self.schedule = dict(self.repairer.repair_schedule()) if self.repairer else {}
         self.objectives = tuple(options.objectives) or (problem.objective_name,)
         self.sign = np.array([-1.0 if o in options.maximise else 1.0 for o in self.objectives])
         self._check_names()
@@ -126,10 +131,10 @@ class NSGA2(Solver):
     def ask(self) -> NDArray:
         pop = self.algorithm.ask()
         X = snap(self.problem, np.asarray(pop.get("X"), dtype=float))
-        if self.schedule:  # Lamarckian: the corrected designs replace the offspring
+        if self.repairer and self.schedule:  # Lamarckian: corrected designs replace offspring
             frac = self.nit / max(self.options.generations - 1, 1)
             prob = {k: a + (b - a) * frac for k, (a, b) in self.schedule.items()}
-            X = snap(self.problem, self.problem.repair(X, self.rng, prob))
+            X = snap(self.problem, self.repairer.repair(X, self.rng, prob))
         pop.set("X", X)
         self._pending = pop
         return X.copy()

@@ -230,8 +230,9 @@ def _slsqp(problem: Problem, x0: NDArray, options: PolishOptions
         return cache[key]
 
     def metric(ev: Evaluation, name: str | None) -> float:
-        own = name is None or name == problem.objective_name
-        return float(ev.f[0] if own else ev.extras[name][0])
+        if name is None or name == problem.objective_name:
+            return float(ev.f[0])
+        return float(ev.extras[name][0])
 
     def objective(u: NDArray) -> float:
         v = metric(evaluate(u), options.minimise)

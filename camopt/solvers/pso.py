@@ -19,7 +19,7 @@ from pydantic import Field
 from camopt.capabilities import Repairable
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
 from camopt.errors import SolverError
-from camopt.problem import Evaluation
+from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
 from camopt.solvers.polish import PolishableOptions, Polishing
 from camopt.solvers.registry import register_solver
@@ -58,6 +58,7 @@ class PSO(Polishing, Solver):
 
     name = "pso"
     Options = PSOOptions
+    options: PSOOptions
     summary = "particle swarm, decreasing inertia, optional case corrections (generic)"
 
     @classmethod
@@ -66,7 +67,8 @@ class PSO(Polishing, Solver):
         asked = options.repair or (options.repair is None and options.repair_probability)
         return (Repairable,) if asked else ()
 
-    def __init__(self, problem, options, rng):  # type: ignore[no-untyped-def]
+    def __init__(self, problem: Problem, options: PSOOptions, rng: np.random.Generator
+                 ) -> None:
         super().__init__(problem, options, rng)
         self.lo, self.hi = problem.lower, problem.upper
         self.vmax = options.v_max * (self.hi - self.lo)
@@ -75,14 +77,14 @@ class PSO(Polishing, Solver):
             else None)
         self.schedule: dict[str, tuple[float, float]] = {}
         if self.repairer is not None:
-            self.schedule = {k: tuple(v) for k, v in self.repairer.repair_schedule().items()}
+            self.schedule = {k: (a, b) for k, (a, b) in self.repairer.repair_schedule().items()}
             given = options.repair_probability or {}
             unknown = sorted(set(given) - set(self.schedule))
             if unknown:
                 raise SolverError(f"repair_probability: unknown correction "
                                   f"{', '.join(map(repr, unknown))}; the case's corrections: "
                                   f"{', '.join(self.schedule)}")
-            self.schedule.update({k: tuple(v) for k, v in given.items()})
+            self.schedule.update({k: (a, b) for k, (a, b) in given.items()})
         self.X: NDArray | None = None
         self.V: NDArray | None = None
         self.P: NDArray | None = None
@@ -131,7 +133,7 @@ class PSO(Polishing, Solver):
             return
         self.nfev += len(X)
         self.nit += 1
-        if self.X is not None:
+        if self.X is not None and self.V is not None:
             self.V = np.where(np.isfinite(X - self.X), self.V, 0.0)
         self.X, self.cur_f = X.copy(), ev.f
         if self.P is None or self.pev is None:

@@ -10,12 +10,12 @@ from numpy.typing import NDArray
 from pydantic import Field
 from scipy.optimize import minimize
 
-from camopt.config.models import MAX_LOCAL_ITERATIONS, MAX_STARTS, SolverOptions
-from camopt.solvers.multistart import MultiStart
+from camopt.config.models import MAX_LOCAL_ITERATIONS, MAX_STARTS
+from camopt.solvers.multistart import MultiStart, MultiStartOptions
 from camopt.solvers.registry import register_solver
 
 
-class SimplexOptions(SolverOptions):
+class SimplexOptions(MultiStartOptions):
     """Options of ``simplex``."""
 
     name: Literal["simplex"] = "simplex"
@@ -41,6 +41,7 @@ class Simplex(MultiStart):
 
     name = "simplex"
     Options = SimplexOptions
+    options: SimplexOptions
     summary = "modified simplex: scipy Nelder-Mead with bounds, multi-start (generic)"
 
     def _objective(self, u: NDArray) -> float:

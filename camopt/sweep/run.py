@@ -22,15 +22,17 @@ from camopt.config import LoadedConfig
 from camopt.driver import prepare, run_repeat, validate
 from camopt.errors import ConfigError, SolverError
 from camopt.perf import fork_pool, kill_pool, tune_allocator
+from camopt.problem import Problem
+from camopt.solvers import Solver
 from camopt.stats import succeeded
 from camopt.sweep.spec import CellResult, CellSpec, SweepSpec
 
 BATCH_SECONDS = 0.2
 MAX_BATCH = 256
-_PREPARED: OrderedDict[str, tuple[LoadedConfig, object, type]] = OrderedDict()
+_PREPARED: OrderedDict[str, tuple[LoadedConfig, Problem, type[Solver]]] = OrderedDict()
 
 
-def _prepared(cell: CellSpec) -> tuple[LoadedConfig, object, type]:
+def _prepared(cell: CellSpec) -> tuple[LoadedConfig, Problem, type[Solver]]:
     """The validated config, problem and solver class of a cell's grid point, built once
     per process (cells of one point share them; problems hold no run state)."""
     key = json.dumps([cell.source, cell.data], sort_keys=True, default=str)

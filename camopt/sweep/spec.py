@@ -67,7 +67,7 @@ def _split_top(text: str) -> list[str]:
 
 def parse_grid(items: Iterable[str]) -> list[tuple[str, list[Any]]]:
     """'solver.population=50,100,200' -> [('solver.population', [50, 100, 200])]."""
-    grid = []
+    grid: list[tuple[str, list[Any]]] = []
     for item in items:
         key, sep, raw = item.partition("=")
         key = key.strip()

@@ -402,8 +402,8 @@ class EmbCamProblem(Problem, Repairable):
     def metrics(self, x: NDArray) -> dict[str, float]:
         """Headline numbers, the ideal-screw comparison (Eqs 45-46) and the physical floor."""
         x = np.asarray(x, dtype=float)
-        m = self.measures(self.profile(x[None, :]))
-        m = CamMeasures(*(float(getattr(m, f.name)[0]) for f in fields(m)))
+        measured = self.measures(self.profile(x[None, :]))
+        m = {f.name: float(getattr(measured, f.name)[0]) for f in fields(measured)}
         p, clamp = self._clamping_curves(x)
         with np.errstate(invalid="ignore", divide="ignore"):
             ratio = np.gradient(p.s, p.rotation)  # ds/dphi
@@ -412,23 +412,23 @@ class EmbCamProblem(Problem, Repairable):
             # a design that never clamps (an infeasible best of a short run) has no check
             consistency = (100 * np.max(np.abs(t_over_f - ratio[ok])) / np.max(ratio[ok])
                            if ok.any() else float("nan"))
-        lead = 2 * np.pi * self.s_max / m.max_rotation  # Eq 45
+        lead = 2 * np.pi * self.s_max / m["max_rotation"]  # Eq 45
         f_max = self.K * self.x2**3
         screw_torque = f_max * lead / (2 * np.pi)  # Eq 46
         screw_clearance = 2 * np.pi * self.x1 / lead
         work = self.K * self.x2**4 / 4  # caliper work over the clamping section
-        left = m.max_rotation - m.clearance_angle
+        left = m["max_rotation"] - m["clearance_angle"]
         out = {
-            "peak_torque_nm": m.peak_torque, "clearance_angle_rad": m.clearance_angle,
-            "max_rotation_rad": m.max_rotation, "lift_mm": m.lift / MM,
-            "contact_stress_max_mpa": m.sigma_max / 1e6,
-            "curvature_max_mm": m.rho_max / MM,
-            "torque_ramp_rms_pct": m.ramp_rms_pct,
+            "peak_torque_nm": m["peak_torque"], "clearance_angle_rad": m["clearance_angle"],
+            "max_rotation_rad": m["max_rotation"], "lift_mm": m["lift"] / MM,
+            "contact_stress_max_mpa": m["sigma_max"] / 1e6,
+            "curvature_max_mm": m["rho_max"] / MM,
+            "torque_ramp_rms_pct": m["ramp_rms_pct"],
             "consistency_error_pct": float(consistency),
             "screw_lead_mm": lead / MM, "screw_torque_nm": screw_torque,
             "screw_clearance_angle_rad": screw_clearance,
-            "torque_ratio_to_screw": m.peak_torque / screw_torque,
-            "clearance_ratio_to_screw": m.clearance_angle / screw_clearance,
+            "torque_ratio_to_screw": m["peak_torque"] / screw_torque,
+            "clearance_ratio_to_screw": m["clearance_angle"] / screw_clearance,
             "torque_floor_flat_nm": work / left, "torque_floor_ramp_nm": 2 * work / left,
             "kappa_rad": float(p.kappa), "e_mm": float(p.e) / MM,
         }

@@ -109,12 +109,12 @@ class SwitchParameters:
 
     def rate(self, coils: NDArray) -> NDArray:
         """Spring rate (N/m) of each coil count (R13, Eq 21)."""
-        return springs.helical_rate(self.d, self.D, self.G, coils)  # R13, Eq 21
+        return np.asarray(springs.helical_rate(self.d, self.D, self.G, coils))  # R13, Eq 21
 
     def strength(self, k: NDArray, deflection: NDArray) -> NDArray:
         """Shear-strength use at a deflection (m); <= 1 is safe (R14/R15, Eqs 22-23)."""
-        return springs.strength_ratio(k, deflection, self.d, self.D, self.A, self.m,
-                                      self.d_strength)  # R14/R15, Eqs 22-23
+        return np.asarray(springs.strength_ratio(k, deflection, self.d, self.D, self.A, self.m,
+                                                 self.d_strength))  # R14/R15, Eqs 22-23
 
     def effective_mass(self, r2: NDArray) -> NDArray:
         """Effective mass m' (kg) for crank length r2 (m) (Eq 32)."""
@@ -361,7 +361,7 @@ class FastSwitchProblem(Problem, HasFamily):
         def kinematics(q: float) -> tuple[float, float, float, float, float]:
             th3, d3, dd3, ds, dds = coupler_derivatives(r2, r3, q)
             s = g - p.p4 - r2 * np.cos(q) - r3 * np.cos(th3)
-            return s, d3, dd3, ds, dds
+            return float(s), float(d3), float(dd3), float(ds), float(dds)
 
         def mass(q: float) -> float:
             _, d3, _, ds, _ = kinematics(q)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from matplotlib.figure import Figure
 
-from camopt.cases.opening_spring.paper import PAPER
+from camopt.cases.opening_spring.paper import THETA_RAD, THETADOT_T0_RAD_S
 from camopt.plotting import PAPER_STYLE, new_figure
 from camopt.runview import RunView
 
@@ -30,9 +30,9 @@ def figures(run: RunView) -> dict[str, Figure]:
     for label, style in zip(labels, STYLES):
         ax.plot(a[f"{label}_theta_rad"], a[f"{label}_rate_rad_s"], linestyle=style,
                 label=_name(label))
-    ax.plot([PAPER["theta_rad"][0]], [PAPER["thetadot_t0_rad_s"]], "o",
+    ax.plot([THETA_RAD[0]], [THETADOT_T0_RAD_S], "o",
             color=PAPER_STYLE["color"], label="Eq 6: theta(t0), theta'(t0)")
-    for i, th in enumerate(PAPER["theta_rad"][1:]):
+    for i, th in enumerate(THETA_RAD[1:]):
         ax.axvline(th, label="Eq 6: theta(tk), theta(ts)" if i == 0 else None, **PAPER_STYLE)
     ax.legend()
     fig2, ax2 = new_figure("Follower angle against time", "time (ms)",

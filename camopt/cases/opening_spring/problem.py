@@ -271,7 +271,7 @@ class OpeningSpringProblem(Problem, HasResiduals):
             return event
 
         stop = travel(c.gap_mm)
-        stop.terminal = True  # type: ignore[attr-defined]
+        stop.terminal = True
         sol = solve_ivp(rhs, (self.t0, self.t0 + t_max), [self.theta0, self.rate0],
                         method="DOP853", events=[travel(0.9 * c.gap_mm), stop],
                         rtol=1e-10, atol=1e-12, max_step=2e-4)

@@ -161,6 +161,14 @@ class VcbProblem(Problem, VariesCase):
                                              np.inf), axis=1)
         if detail or c.pressure_angle_max_deg is not None:
             psi_max = np.max(np.abs(cam.pressure_angle(m.l2, m.l6, kin.follower)), axis=1) / DEG
+        def dyn() -> ClosingMotion:  # the dynamic constraints exist only with the motion
+            assert motion is not None
+            return motion
+
+        def band() -> tuple[float, float]:
+            assert c.closing_velocity_m_s is not None
+            return c.closing_velocity_m_s
+
         g = {
             "phi_max_low": lambda: 1 - phi_top / lo,  # Eq 40
             "phi_max_high": lambda: phi_top / hi - 1,  # Eq 40
@@ -173,14 +181,12 @@ class VcbProblem(Problem, VariesCase):
             "grashof": lambda: -fourbar.grashof_margin(link[:, 0], m.l2, link[:, 1],
                                                        link[:, 2]) / m.l2,  # Eq 43
             "shear_yield": lambda: tau_max / (c.shear_yield_mpa * 1e6) - 1,
-            "closing_velocity_low": lambda: 1 - motion.closing_velocity_avg
-            / c.closing_velocity_m_s[0],
-            "closing_velocity_high": lambda: motion.closing_velocity_avg
-            / c.closing_velocity_m_s[1] - 1,
+            "closing_velocity_low": lambda: 1 - dyn().closing_velocity_avg / band()[0],
+            "closing_velocity_high": lambda: dyn().closing_velocity_avg / band()[1] - 1,
             # continuous across the limit: the kinetic energy left (share of the driving
             # work) when the cam latches, the share of the stroke it misses when it stalls
-            "latch": lambda: np.where(motion.latched, c.latch_energy_min_j - motion.final_kinetic,
-                                      c.latch_energy_min_j + bal.driving * (1 - motion.reach))
+            "latch": lambda: np.where(dyn().latched, c.latch_energy_min_j - dyn().final_kinetic,
+                                      c.latch_energy_min_j + bal.driving * (1 - dyn().reach))
             / bal.driving,
         }
         g["lift_off"] = lambda: -cam_torque_min * end / bal.driving
@@ -230,7 +236,8 @@ class VcbProblem(Problem, VariesCase):
     def _metrics_of(self, x: NDArray) -> dict[str, object]:
         ev = self.describe(x[None, :])
         out: dict[str, object] = {k: float(v[0]) for k, v in ev.extras.items()}
-        ends = [out.pop("output_start_deg"), out.pop("output_end_deg")]
+        ends = [float(ev.extras[k][0]) for k in ("output_start_deg", "output_end_deg")]
+        del out["output_start_deg"], out["output_end_deg"]
         out["output_range_deg"] = [min(ends), max(ends)]
         out["feasible"] = float(ev.feasible[0])
         return out
