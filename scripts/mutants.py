@@ -67,7 +67,8 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
     "emb_start_slope": ("camopt/cases/emb_cam/problem.py", "self.r_st * np.tan(kappa)",
                         "self.r_st * np.sin(kappa)"),
     # Clauss 1982, fast switch
-    "switch_r20_factor": ("camopt/cases/fast_switch/problem.py", '"R20": 1.2 *', '"R20": 1.0 *'),
+    "switch_r20_factor": ("camopt/cases/fast_switch/problem.py", '"R20": 1.2 * (x4 - x5) / damped',
+                          '"R20": 1.0 * (x4 - x5) / damped'),
     "switch_arcsine_sign": ("camopt/cases/fast_switch/problem.py", "(np.pi - np.arcsin(v) - phase)",
                             "(np.pi + np.arcsin(v) - phase)"),
     "switch_phase": ("camopt/cases/fast_switch/problem.py", "phase = np.arctan(root / xi)",

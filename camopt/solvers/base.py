@@ -39,6 +39,9 @@ class Solver(ABC):
     requires: ClassVar[tuple[type, ...]] = ()
     summary: ClassVar[str] = ""
     integers: ClassVar[bool] = True  # whether the solver handles integer variables
+    test_options: ClassVar[dict[str, Any]] = {}
+    """The solver's own small budget: options under which it solves the contract tests'
+    4-variable sphere (tests/solvers/test_contract.py) in a few seconds."""
     jobs: int = 1
     """Worker processes the driver lends the solver (``camopt run --jobs``): an execution
     detail only, never a source of different results."""

@@ -118,6 +118,7 @@ class CMAES(Solver):
     Options = CMAESOptions
     options: CMAESOptions
     summary = "CMA-ES (Hansen 2016) ranked by Deb's rules, in the unit box (generic)"
+    test_options = {"generations": 150}
     integers = False
 
     def __init__(self, problem: Problem, options: CMAESOptions, rng: np.random.Generator

@@ -65,6 +65,7 @@ class DEGR(Polishing, Solver):
     Options = DEGROptions
     options: DEGROptions
     summary = "differential evolution DE/best/1/bin, F=0.382, CR=0.618 (generic)"
+    test_options = {"population": 30, "generations": 150}
 
     def __init__(self, problem: Problem, options: DEGROptions, rng: np.random.Generator
                  ) -> None:

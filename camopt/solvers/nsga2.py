@@ -82,6 +82,7 @@ class NSGA2(Solver):
     Options = NSGA2Options
     options: NSGA2Options
     summary = "multi-objective NSGA-II (pymoo, ask/tell); Pareto set in the archive's table"
+    test_options = {"population": 40, "generations": 150}
 
     @classmethod
     def needs(cls, options: SolverOptions) -> tuple[type, ...]:

@@ -60,6 +60,7 @@ class PSO(Polishing, Solver):
     Options = PSOOptions
     options: PSOOptions
     summary = "particle swarm, decreasing inertia, optional case corrections (generic)"
+    test_options = {"particles": 30, "iterations": 200}
 
     @classmethod
     def needs(cls, options: SolverOptions) -> tuple[type, ...]:

@@ -1,12 +1,16 @@
 """Solver registry: ``@register_solver`` plus the ``camopt.solvers`` entry-point group.
 
-Built-ins are declared as entry points in pyproject.toml like any plugin; they are
-also imported directly so a source checkout without installed metadata works.
+Built-in solvers are found as cases are: every module of ``camopt.solvers`` is imported
+and the classes decorated with ``@register_solver`` register themselves (no list to
+keep). They are also declared as entry points in pyproject.toml like any plugin (a test
+checks the two agree); listing the package makes a source checkout work without
+installed metadata.
 """
 
 from __future__ import annotations
 
 import importlib
+import pkgutil
 from importlib.metadata import entry_points
 from typing import TYPE_CHECKING
 
@@ -16,7 +20,6 @@ if TYPE_CHECKING:
     from camopt.solvers.base import Solver
 
 ENTRY_POINT_GROUP = "camopt.solvers"
-BUILTINS = ("cmaes", "de_gr", "enumeration", "evaluate", "newton_pp", "nsga2", "pso", "simplex")
 _REGISTRY: dict[str, type[Solver]] = {}
 _loaded = False
 
@@ -35,8 +38,9 @@ def _load() -> None:
     if _loaded:
         return
     _loaded = True
-    for name in BUILTINS:
-        importlib.import_module(f"camopt.solvers.{name}")
+    package = importlib.import_module("camopt.solvers")
+    for module in pkgutil.iter_modules(package.__path__, "camopt.solvers."):
+        importlib.import_module(module.name)  # solver modules register on import
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         if ep.name in _REGISTRY:
             continue

@@ -43,6 +43,7 @@ class Simplex(MultiStart):
     Options = SimplexOptions
     options: SimplexOptions
     summary = "modified simplex: scipy Nelder-Mead with bounds, multi-start (generic)"
+    test_options = {"starts": 3}
 
     def _objective(self, u: NDArray) -> float:
         ev = self.problem.evaluate(self.problem.from_unit(u)[None, :])

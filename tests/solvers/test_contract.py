@@ -13,15 +13,10 @@ from tests.conftest import SphereConfig, SphereProblem
 
 # every registered solver that needs no capability runs on the sphere case
 GENERIC = [name for name, cls in solvers().items() if not cls.requires and name != "evaluate"]
-# a small budget for each (its own option names); unknown solvers run their defaults
-BUDGET = {"de_gr": {"population": 30, "generations": 150}, "simplex": {"starts": 3},
-          "cmaes": {"generations": 150},
-          "pso": {"particles": 30, "iterations": 200},
-          "nsga2": {"population": 40, "generations": 150}}
 
 
 def _config(name: str, run: dict | None = None, **case):
-    data = {"case": {"kind": "sphere", **case}, "solver": {"name": name, **BUDGET.get(name, {})},
+    data = {"case": {"kind": "sphere", **case}, "solver": {"name": name, **get_solver(name).test_options},
             "run": run or {}}
     return validate(data, "sphere.toml")
 

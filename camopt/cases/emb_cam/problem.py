@@ -22,8 +22,8 @@ from camopt.cases.emb_cam.config import EmbCamConfig
 from camopt.mechanics import polar_cam as pc
 from camopt.mechanics.spline import ClampedNaturalSpline
 from camopt.problem import Evaluation, Problem, Variable
+from camopt.units import MM
 
-MM = 1e-3
 BIG_VIOLATION = 1e6  # normalised violation standing for a non-finite measure
 CONSTRAINTS = ("valid", "contact_stress", "lift", "distortion", "monotonic")
 

@@ -25,6 +25,7 @@ from camopt.cases.fast_switch.config import FastSwitchConfig
 from camopt.mechanics import dynamics, springs
 from camopt.mechanics.slider_crank import coupler_angle, coupler_derivatives, crank_angle_for_span
 from camopt.problem import Evaluation, Problem, Variable
+from camopt.units import DEG, GPA, MM, MPA
 
 TWO_PI = 2.0 * np.pi
 
@@ -98,12 +99,12 @@ class SwitchParameters:
     @classmethod
     def from_config(cls, c: FastSwitchConfig) -> SwitchParameters:
         """The Nomenclature parameters of a config, converted to SI."""
-        d = c.wire_diameter_mm * 1e-3
+        d = c.wire_diameter_mm * MM
         return cls(
-            L=c.link2_length_mm * 1e-3, p4=c.half_piston_mm * 1e-3, M2=c.m2_kg, M3=c.m3_kg,
-            M4=c.m4_kg, D=c.spring_diameter_mm * 1e-3, d=d, A=c.wire_strength_a_mpa * 1e6,
-            m=c.wire_strength_exponent, G=c.shear_modulus_gpa * 1e9,
-            W=np.radians(c.max_initial_angle_deg), F_rated=c.max_joint_load_n,
+            L=c.link2_length_mm * MM, p4=c.half_piston_mm * MM, M2=c.m2_kg, M3=c.m3_kg,
+            M4=c.m4_kg, D=c.spring_diameter_mm * MM, d=d, A=c.wire_strength_a_mpa * MPA,
+            m=c.wire_strength_exponent, G=c.shear_modulus_gpa * GPA,
+            W=c.max_initial_angle_deg * DEG, F_rated=c.max_joint_load_n,
             d_strength=d if c.wire_strength_d_unit == "m" else c.wire_diameter_mm,
         )
 
@@ -149,18 +150,17 @@ class FastSwitchProblem(Problem, HasFamily):
     def __init__(self, config: FastSwitchConfig) -> None:
         self.config = config
         self.p = SwitchParameters.from_config(config)
-        mm = 1e-3
         self.variables = (
             Variable("coils", config.min_coils, config.max_coils, 1.0, True, "x9"),
-            Variable("sf_mm", config.sf_bounds_mm.lower * mm, config.sf_bounds_mm.upper * mm,
+            Variable("sf_mm", config.sf_bounds_mm.lower * MM, config.sf_bounds_mm.upper * MM,
                      1e3, symbol="x3"),
-            Variable("sud_mm", config.sud_bounds_mm.lower * mm, config.sud_bounds_mm.upper * mm,
+            Variable("sud_mm", config.sud_bounds_mm.lower * MM, config.sud_bounds_mm.upper * MM,
                      1e3, symbol="x4"),
-            Variable("s0_mm", config.s0_bounds_mm.lower * mm, config.s0_bounds_mm.upper * mm,
+            Variable("s0_mm", config.s0_bounds_mm.lower * MM, config.s0_bounds_mm.upper * MM,
                      1e3, symbol="x5"),
-            Variable("r3_mm", config.r3_bounds_mm.lower * mm, config.r3_bounds_mm.upper * mm,
+            Variable("r3_mm", config.r3_bounds_mm.lower * MM, config.r3_bounds_mm.upper * MM,
                      1e3, symbol="x6"),
-            Variable("r2_mm", config.r2_bounds_mm.lower * mm, config.r2_bounds_mm.upper * mm,
+            Variable("r2_mm", config.r2_bounds_mm.lower * MM, config.r2_bounds_mm.upper * MM,
                      1e3, symbol="x7"),
         )
         printed = config.reduced_form == "printed"

@@ -25,8 +25,8 @@ from scipy.integrate import solve_ivp
 from camopt.capabilities import HasResiduals
 from camopt.cases.opening_spring.config import OpeningSpringConfig
 from camopt.problem import Evaluation, Problem, Variable
+from camopt.units import MM, MS
 
-MM = 1e-3
 # parameter -> (config bounds field, factor from the TOML unit to SI)
 PARAMETERS = {
     "k_n_per_mm": ("k_bounds_n_per_mm", 1e3),
@@ -56,13 +56,13 @@ class OpeningSpringProblem(Problem, HasResiduals):
     def __init__(self, config: OpeningSpringConfig) -> None:
         self.config = c = config
         self.c3 = np.asarray(c.desired_coefficients, dtype=float)
-        self.t0, self.ts = c.t0_ms * MM, c.ts_ms * MM
+        self.t0, self.ts = c.t0_ms * MS, c.ts_ms * MS
         self.theta0, self.rate0 = self.desired(self.t0)
         theta_s = self.desired(self.ts)[0]
         # Eq 6: the contacts travel the gap D between t0 and ts; travel = d (sin th - sin th0)
         self.d = (c.lever_arm_mm * MM if c.lever_arm_mm is not None
                   else c.gap_mm * MM / (np.sin(theta_s) - np.sin(self.theta0)))
-        self.points_t = np.asarray(c.precision_points_ms, dtype=float) * MM
+        self.points_t = np.asarray(c.precision_points_ms, dtype=float) * MS
         self.points_theta, self.points_rate = self.desired(self.points_t)
         self.variables = tuple(
             Variable(name, getattr(c, PARAMETERS[name][0]).lower * PARAMETERS[name][1],
@@ -289,8 +289,8 @@ class OpeningSpringProblem(Problem, HasResiduals):
         return {
             "rms_velocity_error_rad_s": float(np.sqrt(np.mean(err**2))),
             "max_velocity_error_rad_s": float(np.max(np.abs(err))),
-            "travel_time_9mm_ms": motion.time_9mm / MM,
-            "travel_time_10mm_ms": motion.time_10mm / MM,
+            "travel_time_9mm_ms": motion.time_9mm / MS,
+            "travel_time_10mm_ms": motion.time_10mm / MS,
             "avg_opening_velocity_m_s": 0.9 * self.config.gap_mm * MM / motion.time_9mm,
         }
 
@@ -336,10 +336,10 @@ class OpeningSpringProblem(Problem, HasResiduals):
         """Desired and simulated theta(t), theta'(t) for the design and the original."""
         t = np.linspace(self.t0, self.ts, 200)
         th_d, rate_d = self.desired(t)
-        out = {"desired_time_ms": t / MM, "desired_theta_rad": th_d, "desired_rate_rad_s": rate_d}
+        out = {"desired_time_ms": t / MS, "desired_theta_rad": th_d, "desired_rate_rad_s": rate_d}
         runs = {"design": (self, np.asarray(x, dtype=float)), **self.others()}
         for label, (problem, design) in runs.items():
             motion = problem.simulate(design)
-            out.update({f"{label}_time_ms": motion.t / MM, f"{label}_theta_rad": motion.theta,
+            out.update({f"{label}_time_ms": motion.t / MS, f"{label}_theta_rad": motion.theta,
                         f"{label}_rate_rad_s": motion.rate})
         return out

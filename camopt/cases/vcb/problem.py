@@ -12,8 +12,6 @@ from camopt.capabilities import VariesCase
 from camopt.cases.vcb.config import CamDesign, VcbConfig
 from camopt.cases.vcb.dynamics import ClosingMotion, Inertia, closing_motion
 from camopt.cases.vcb.model import (
-    DEG,
-    MM,
     VcbModel,
     follower_dwell,
     phi_max,
@@ -24,6 +22,7 @@ from camopt.cases.vcb.model import (
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, fourbar, hertz
 from camopt.problem import Evaluation, ObjectiveFloor, Problem, Variable
+from camopt.units import DEG, MM
 
 LINK_FIELDS = ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
 """The linkage fields of ``[case]`` in the order of a linkage row (``designs``)."""
