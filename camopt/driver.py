@@ -145,16 +145,16 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
     (``run.max_evaluations``, ``run.max_seconds``), whichever comes first; ``jobs``
     worker processes are lent to the solver (multi-start solvers spread their starts)."""
     start = time.perf_counter()
-    robust_search = isinstance(problem, robust.RobustProblem)
-    if robust_search:
-        problem.reseed(robust.repeat_seed(child))
+    robust_problem = problem if isinstance(problem, robust.RobustProblem) else None
+    if robust_problem is not None:
+        robust_problem.reseed(robust.repeat_seed(child))
     solver = build_solver(problem, solver_cls, config, np.random.default_rng(child))
     solver.jobs = jobs
     max_nfev, max_s = config.run.max_evaluations, config.run.max_seconds
     nfev, best_f, mean_f, best_v = [], [], [], []
     while (reason := _stop(solver, start, max_nfev, max_s)) is None:
-        if robust_search:
-            problem.new_generation()  # common random numbers: one set per generation
+        if robust_problem is not None:
+            robust_problem.new_generation()  # common random numbers: one set per generation
         X = solver.ask()
         ev = batch.evaluate(problem, X)  # a population is one chunk; given designs, many
         solver.tell(X, ev)
@@ -179,8 +179,8 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
         history={"nfev": np.array(nfev, dtype=np.int64), "best_objective": np.array(best_f),
                  "mean_objective": np.array(mean_f), "best_violation": np.array(best_v)},
         table=solver.table(), notes=solver.notes(),
-        nominal_x=(problem.nominal_best[0] if robust_search and problem.nominal_best
-                   else None),
+        nominal_x=(robust_problem.nominal_best[0]
+                   if robust_problem is not None and robust_problem.nominal_best else None),
     )
 
 

@@ -32,7 +32,7 @@ depend on the worker count.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -229,7 +229,7 @@ class RobustProblem(Problem):
                 self.nominal_best = (X[i].copy(), float(nominal.f[i]))
 
     # the case's single-design outputs describe the nominal design
-    def metrics(self, x: NDArray) -> dict[str, object]:
+    def metrics(self, x: NDArray) -> Mapping[str, object]:
         return self.base.metrics(x)
 
     def analysis(self, x: NDArray) -> dict[str, NDArray]:

@@ -147,7 +147,7 @@ def outside(values: NDArray, ranges: Sequence[tuple[float, bool, float]]) -> NDA
     strict = np.array([r[1] for r in ranges])
     high = np.array([r[2] for r in ranges])
     below = np.where(strict, values <= low, values < low)
-    return (below | (values > high)).any(axis=1)
+    return np.asarray((below | (values > high)).any(axis=1))
 
 
 def mark(ev: Evaluation, bad: NDArray) -> Evaluation:

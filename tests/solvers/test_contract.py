@@ -16,8 +16,8 @@ GENERIC = [name for name, cls in solvers().items() if not cls.requires and name 
 
 
 def _config(name: str, run: dict | None = None, **case):
-    data = {"case": {"kind": "sphere", **case}, "solver": {"name": name, **get_solver(name).test_options},
-            "run": run or {}}
+    data = {"case": {"kind": "sphere", **case},
+            "solver": {"name": name, **get_solver(name).test_options}, "run": run or {}}
     return validate(data, "sphere.toml")
 
 

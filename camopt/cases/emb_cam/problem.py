@@ -182,7 +182,9 @@ class EmbCamProblem(Problem, Repairable):
         """Profile-angle steps between adjacent key points, (P, N - 1) (Eq 25)."""
         return theta_a[:, None] * np.diff(self.knot_w)[None, :]
 
-    def _polar(self, X: NDArray, spline: ClampedNaturalSpline, dw: NDArray):  # type: ignore[no-untyped-def]
+    def _polar(self, X: NDArray, spline: ClampedNaturalSpline, dw: NDArray
+               ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray,
+                          tuple[NDArray, NDArray, NDArray]]:
         """Key radii, kappa, e, Eqs 22-24's boundary and the spline S, dS/du, d2S/du2 with
         d theta / du at ``spline``'s samples (``dw`` the warp's slope there), (P, K)."""
         r_keys, kappa, e = self.unpack(X)
