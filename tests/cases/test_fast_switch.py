@@ -83,6 +83,23 @@ def test_exact_dynamics_of_paper_optimum(enumeration_run):
     assert t[-1] == pytest.approx(m["closure_time_exact_ms"])
 
 
+def test_infeasible_design_skips_the_exact_dynamics_and_says_so(enumeration_run):
+    """A design the reduced problem rejects (this one oscillates short of 90 deg for the
+    ODE's whole second: minutes of integration) gets its metrics without the exact motion,
+    the times NaN and ``exact_dynamics`` naming why; the optimum's is computed."""
+    p = FastSwitchProblem(FastSwitchConfig(branch="both"))
+    X = p.sample(np.random.default_rng(5), 40)
+    X[:, 0] = np.rint(X[:, 0])
+    x = X[35]
+    assert not p.evaluate(x[None]).feasible[0]
+    m = p.metrics(x)
+    assert m["exact_dynamics"] == "skipped: infeasible design"
+    assert np.isnan(m["closure_time_exact_ms"]) and np.isnan(m["closure_speed_rad_s"])
+    assert m["closure_time_ms"] == p.evaluate(x[None]).f[0]
+    assert p.analysis(x) == {}
+    assert enumeration_run.best.metrics["exact_dynamics"] == "computed"
+
+
 def test_exact_dynamics_conserves_energy():
     """Kinetic energy at closure equals the spring energy released (no damping in Eqs 2-3)."""
     p = FastSwitchProblem(FastSwitchConfig(branch="I"))

@@ -32,3 +32,14 @@ def test_position_dependent_mass_conserves_energy():
 def test_unreached_target_is_reported_not_raised():
     travel = time_to_reach(lambda q: 1.0, lambda q: 0.0, lambda q: -q, 0.0, 1.0, t_max=0.1)
     assert not travel.reached and np.isnan(travel.time)
+
+
+def test_call_budget_caps_an_oscillation_that_never_arrives():
+    """A spring oscillating short of the target for t_max: with a budget of right-hand-side
+    calls the integration stops early, capped and not reached, with no path."""
+    free = time_to_reach(lambda q: 1.0, lambda q: 0.0, lambda q: -1e4 * q, 0.1, 1.0, t_max=1.0)
+    capped = time_to_reach(lambda q: 1.0, lambda q: 0.0, lambda q: -1e4 * q, 0.1, 1.0,
+                           t_max=1.0, max_calls=500)
+    assert not free.reached and not free.capped and len(free.t) > 500 / 12
+    assert capped.capped and not capped.reached and np.isnan(capped.time)
+    assert capped.t.size == 0

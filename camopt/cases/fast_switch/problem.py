@@ -28,6 +28,9 @@ from camopt.problem import Evaluation, Problem, Variable
 from camopt.units import DEG, GPA, MM, MPA
 
 TWO_PI = 2.0 * np.pi
+EXACT_MAX_CALLS = 6000
+"""Budget of the exact-dynamics ODE in right-hand-side calls (~500 DOP853 steps; a
+feasible switch closes in 13-35 steps, an oscillating one never would)."""
 
 FULL_INEQUALITIES = ("R1", "R2", "R3", "R4", "R5", "R6", "R7", "R12", "R14", "R15", "R16",
                      "R19", "R20", "R21")
@@ -335,13 +338,25 @@ class FastSwitchProblem(Problem, HasFamily):
         x6 = np.sqrt(b**2 + x7**2)  # R2 with Eq 56
         return np.column_stack([N, x3, x4, x5, x6, x7])
 
-    def metrics(self, x: NDArray) -> dict[str, float]:
-        """Headline metrics of one design, with the exact-dynamics closure time."""
+    def metrics(self, x: NDArray) -> dict[str, object]:
+        """Headline metrics of one design, with the exact-dynamics closure time.
+
+        The exact motion is integrated only for a design the reduced problem finds
+        feasible with a finite Eq 39 time, and within :data:`EXACT_MAX_CALLS`: for any
+        other the ODE could oscillate short of 90 deg for its whole second (minutes of
+        Python calls, issue #24). ``exact_dynamics`` says which: ``computed``,
+        ``skipped: infeasible design`` (times NaN) or ``capped: ...`` (times NaN)."""
         ev = self.describe(np.atleast_2d(x))
-        out = {k: float(v[0]) for k, v in ev.extras.items()}
-        exact = self.exact_closure(x)
-        out["closure_time_exact_ms"] = exact.time * 1e3
-        out["closure_speed_rad_s"] = exact.speed
+        out: dict[str, object] = {k: float(v[0]) for k, v in ev.extras.items()}
+        out["closure_time_exact_ms"] = out["closure_speed_rad_s"] = float("nan")
+        if not (ev.feasible[0] and np.isfinite(ev.f[0])):
+            out["exact_dynamics"] = "skipped: infeasible design"
+        else:
+            exact = self.exact_closure(x)
+            out["exact_dynamics"] = ("computed" if not exact.capped else
+                                     f"capped: not closed within {EXACT_MAX_CALLS} ODE calls")
+            out["closure_time_exact_ms"] = exact.time * 1e3
+            out["closure_speed_rad_s"] = exact.speed
         g_full, _ = self.full_model(self.complete(np.atleast_2d(x)))
         out["full_model_feasible"] = float(all(v[0] <= 1e-9 for v in g_full.values()))
         return out
@@ -375,11 +390,18 @@ class FastSwitchProblem(Problem, HasFamily):
             s, _, _, ds, _ = kinematics(q)
             return -k * (s - sud) * ds
 
-        return dynamics.time_to_reach(mass, mass_slope, force, theta20, np.pi / 2, t_max=1.0)
+        return dynamics.time_to_reach(mass, mass_slope, force, theta20, np.pi / 2, t_max=1.0,
+                                      max_calls=EXACT_MAX_CALLS)
 
     def analysis(self, x: NDArray) -> dict[str, NDArray]:
-        """Curves for the archive: exact motion theta2(t), spring length s(t)."""
+        """Curves for the archive: exact motion theta2(t), spring length s(t); none for a
+        design :meth:`metrics` does not integrate (infeasible, or the ODE capped)."""
+        ev = self.evaluate(np.atleast_2d(x))
+        if not (ev.feasible[0] and np.isfinite(ev.f[0])):
+            return {}
         travel = self.exact_closure(x)
+        if travel.capped:
+            return {}
         v = self.complete(np.atleast_2d(x)).take(0)
         r2, r3, g = v["x7"], v["x6"], v["x10"]
         th3 = coupler_derivatives(r2, r3, travel.q)[0]
