@@ -147,7 +147,7 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
     start = time.perf_counter()
     robust_problem = problem if isinstance(problem, robust.RobustProblem) else None
     if robust_problem is not None:
-        robust_problem.reseed(robust.repeat_seed(child))
+        robust_problem.reseed(robust.repeat_seed(child, 0))
     solver = build_solver(problem, solver_cls, config, np.random.default_rng(child))
     solver.jobs = jobs
     max_nfev, max_s = config.run.max_evaluations, config.run.max_seconds
@@ -169,6 +169,8 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
         if callback:
             callback(Progress(index, repeats, solver.nit, solver.max_iterations(), best_f[-1]))
     x, bev = solver.best()
+    if robust_problem is not None:  # the solver's best and the finalists on fresh draws
+        x, bev = robust_problem.select(x, robust.repeat_seed(child, 1))
     return RepeatRecord(
         converged_nit=converged_iteration(np.array(best_f), np.array(best_v)),
         index=index, spawn_key=tuple(child.spawn_key),

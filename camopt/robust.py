@@ -9,9 +9,10 @@ and at ``S`` perturbed copies, population x samples in one vectorised call (in c
 :mod:`camopt.batch`). Its evaluation is:
 
 - ``g``: for each case constraint the ``k``-th smallest of its ``S`` sampled values,
-  ``k = ceil(yield_target S)``, and a last column ``yield``, the ``k``-th smallest of
-  each sample's worst constraint. ``yield <= 0`` exactly when at least ``k`` samples meet
-  every constraint, i.e. when the estimated yield reaches the target; the order statistic
+  ``k = ceil(search_yield S)`` (``search_yield`` defaults to ``yield_target``), and a
+  last column ``yield``, the ``k``-th smallest of each sample's worst constraint.
+  ``yield <= 0`` exactly when at least ``k`` samples meet every constraint, i.e. when the
+  estimated yield reaches the target; the order statistic
   is continuous in ``x``, so an infeasible candidate still tells the search how far off it
   is (a yield count is flat at 0 far from the feasible set).
 - ``f``: the nominal objective, its mean over the samples with a finite objective, or its
@@ -19,12 +20,20 @@ and at ``S`` perturbed copies, population x samples in one vectorised call (in c
 - ``extras``: the nominal design's metrics and ``yield`` (the estimate, share of samples
   meeting every constraint with a finite objective).
 
+Per-generation draws let a design that passed one generation's draws by luck stay in a
+population (a DE parent, a swarm's personal best). So the ``finalists`` best designs that
+met the target on their own generation's draws, with the solver's best, are evaluated
+again on ``check_samples`` fresh draws when the repeat ends, and the best of them by
+Deb's rules on those draws is the repeat's result (:meth:`RobustProblem.select`): there a
+design is feasible when the Wilson lower bound of its yield reaches ``yield_target``.
+
 With ``screen`` a candidate whose nominal design breaks a constraint is not sampled: its
 columns are its nominal constraints and its nominal worst constraint (it cannot be
 feasible, and Deb's rules only need its violation). The best design is checked at the end
 with ``check_samples`` fresh draws (:func:`check`), and the Wilson interval of its yield
 is reported. Seeds: repeat ``i``'s draws come from ``SeedSequence(run.seed,
-spawn_key=(i, ROBUST_KEY))``, the final check's from ``(ROBUST_KEY, CHECK_KEY)``; never the
+spawn_key=(i, ROBUST_KEY, 0))``, its selection's from ``(i, ROBUST_KEY, 1)``, the final
+check's from ``SeedSequence(run.seed, spawn_key=(ROBUST_KEY, CHECK_KEY))``; never the
 solver's generator, so the search itself is unchanged by the draws and results do not
 depend on the worker count.
 """
@@ -38,12 +47,13 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy import special
 
 from camopt import stats
 from camopt.capabilities import CAPABILITIES, VariesCase
 from camopt.config.models import CaseConfig, RobustSection
 from camopt.errors import ConfigError
-from camopt.problem import FEASIBILITY_TOL, Evaluation, Problem
+from camopt.problem import FEASIBILITY_TOL, Evaluation, Problem, deb_best
 from camopt.variation import (
     Distribution,
     Vary,
@@ -155,6 +165,26 @@ def order_index(target: float, samples: int) -> int:
     return max(int(math.ceil(target * samples - 1e-9)) - 1, 0)
 
 
+def wilson_low(passed: NDArray, n: int, confidence: float) -> NDArray:
+    """Lower end of the Wilson score interval of ``passed`` successes in ``n`` trials
+    (Wilson 1927; the interval :func:`camopt.stats.success_rate` reports), vectorised."""
+    z = float(special.ndtri(0.5 + confidence / 2))
+    p = np.asarray(passed, dtype=float) / n
+    centre = p + z * z / (2 * n)
+    spread = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return (centre - spread) / (1 + z * z / n)
+
+
+def confident_index(target: float, samples: int, confidence: float) -> int:
+    """0-based order statistic that decides "yield >= target" with confidence: at least
+    ``c`` samples must pass, ``c`` the least count whose Wilson lower bound reaches the
+    target (all samples when none does)."""
+    low = wilson_low(np.arange(samples + 1), samples, confidence)
+    enough = np.flatnonzero(low >= target - 1e-12)
+    need = int(enough[0]) if enough.size else samples
+    return max(need, 1) - 1
+
+
 def statistic(f: NDArray, objective: str, quantile: float) -> NDArray:
     """The objective's mean over samples with a finite value, or its quantile (the next
     order statistic above, non-finite values counted as +inf), per row of ``f`` (n, S)."""
@@ -181,12 +211,16 @@ class RobustProblem(Problem):
         self.unit: NDArray | None = None
         self.nominal_best: tuple[NDArray, float] | None = None
         """The best design seen whose nominal evaluation is feasible, and its objective."""
+        self.finalists: tuple[NDArray, NDArray] = (np.empty((0, self.n_var)), np.empty(0))
+        """Designs (m, n_var) that met the target on their generation's draws, lowest
+        objective (m,) first: checked again at the end of the repeat (:meth:`select`)."""
 
     def reseed(self, seed: np.random.SeedSequence) -> None:
         """Start a repeat: its own draws, nothing carried over from another repeat."""
         self.rng = np.random.default_rng(seed)
         self.unit = None
         self.nominal_best = None
+        self.finalists = (np.empty((0, self.n_var)), np.empty(0))
 
     def new_generation(self) -> None:
         """Draw the generation's perturbations (S, k), shared by every candidate."""
@@ -202,6 +236,15 @@ class RobustProblem(Problem):
         assert self.unit is not None
         X = np.atleast_2d(np.asarray(X, dtype=float))
         spec = self.plan.spec
+        target = spec.yield_target if spec.search_yield is None else spec.search_yield
+        ev = self.evaluate_at(X, self.unit, order_index(target, len(self.unit)))
+        self._keep_finalists(X, ev)
+        return ev
+
+    def evaluate_at(self, X: NDArray, unit: NDArray, k: int) -> Evaluation:
+        """As :meth:`evaluate` with the draws ``unit`` (S, k) given (any S), ``k`` the
+        0-based order statistic that decides the yield column."""
+        spec = self.plan.spec
         nominal = self.base.evaluate(X)
         self._remember(X, nominal)
         nom_g = np.where(np.isnan(nominal.g), np.inf, nominal.g)
@@ -212,14 +255,41 @@ class RobustProblem(Problem):
         estimate = np.full(len(X), np.nan)
         todo = np.flatnonzero(nominal.feasible) if spec.screen else np.arange(len(X))
         if todo.size:
-            s = sample(self.base, self.plan, X[todo], self.unit)
-            k = order_index(spec.yield_target, spec.samples)
+            s = sample(self.base, self.plan, X[todo], unit)
             g[todo, :-1] = np.partition(s.g, k, axis=1)[:, k, :]
             g[todo, -1] = np.partition(s.worst, k, axis=1)[:, k]
             estimate[todo] = s.feasible.mean(axis=1)
             if spec.objective != "nominal":
                 f[todo] = statistic(s.f, spec.objective, spec.quantile)
         return Evaluation(f, g, {**nominal.extras, YIELD: estimate})
+
+    def _keep_finalists(self, X: NDArray, ev: Evaluation) -> None:
+        """Keep the ``finalists`` distinct designs with the lowest objective among those
+        that met the target on their generation's draws."""
+        ok = ev.feasible
+        if not ok.any():
+            return
+        Xs = np.vstack([self.finalists[0], X[ok]])
+        fs = np.concatenate([self.finalists[1], ev.f[ok]])
+        Xs, first = np.unique(Xs, axis=0, return_index=True)
+        fs = fs[first]
+        keep = np.argsort(fs, kind="stable")[:self.plan.spec.finalists]
+        self.finalists = (Xs[keep], fs[keep])
+
+    def select(self, x: NDArray, seed: np.random.SeedSequence) -> tuple[NDArray, Evaluation]:
+        """The repeat's result: the solver's best ``x`` and the finalists evaluated on
+        ``check_samples`` fresh draws (the same for all), the best of them by Deb's rules,
+        a design counting as feasible when the Wilson lower bound of its yield (at
+        ``confidence``) reaches ``yield_target``. A design kept for passing one
+        generation's draws by luck fails here."""
+        spec = self.plan.spec
+        unit = unit_draws(np.random.default_rng(seed), spec.check_samples,
+                          len(self.plan.varies), self.plan.distribution)
+        X = np.vstack([x[None, :], self.finalists[0]])
+        ev = self.evaluate_at(X, unit, confident_index(spec.yield_target, len(unit),
+                                                       spec.confidence))
+        i = deb_best(ev.f, ev.violation)
+        return X[i].copy(), ev.take(i)
 
     def _remember(self, X: NDArray, nominal: Evaluation) -> None:
         ok = np.flatnonzero(nominal.feasible)
@@ -260,10 +330,12 @@ def wrap(base: Problem, robust_plan: Plan) -> RobustProblem:
     return cls(base, robust_plan)
 
 
-def repeat_seed(child: np.random.SeedSequence) -> np.random.SeedSequence:
+def repeat_seed(child: np.random.SeedSequence, stage: int = 0) -> np.random.SeedSequence:
     """The draws of the repeat whose solver is seeded by ``child`` (the run's
-    ``SeedSequence(seed).spawn(repeats)[i]``): spawn key ``(i, ROBUST_KEY)``."""
-    return np.random.SeedSequence(child.entropy, spawn_key=(*child.spawn_key, ROBUST_KEY))
+    ``SeedSequence(seed).spawn(repeats)[i]``): spawn key ``(i, ROBUST_KEY, stage)``, stage
+    0 the generations', 1 the selection's (:meth:`RobustProblem.select`)."""
+    return np.random.SeedSequence(child.entropy,
+                                  spawn_key=(*child.spawn_key, ROBUST_KEY, stage))
 
 
 def check(problem: RobustProblem, designs: Sequence[NDArray], seed: int) -> list[dict[str, Any]]:

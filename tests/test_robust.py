@@ -116,3 +116,21 @@ def test_bad_vary_names_robust_vary(override, what):
     with pytest.raises(ConfigError) as err:
         prepare(cfg)
     assert err.value.where == "robust.vary" and what in err.value.what
+
+
+def test_wilson_bound_matches_scipy():
+    """The vectorised Wilson lower bound against scipy's binomtest (stats.success_rate)."""
+    from camopt.stats import success_rate
+
+    for passed, n in ((3900, 4000), (32, 32), (0, 50), (17, 20)):
+        assert robust.wilson_low(passed, n, 0.95) == pytest.approx(
+            success_rate(passed, n, 0.95)["ci_low"], rel=1e-9, abs=1e-12)
+    i = robust.confident_index(0.95, 4000, 0.95)  # the least passing count that is enough
+    assert robust.wilson_low(i + 1, 4000, 0.95) >= 0.95 > robust.wilson_low(i, 4000, 0.95)
+    assert robust.confident_index(0.95, 32, 0.95) == 31  # 32 of 32 is not enough: all
+
+
+@pytest.mark.parametrize("name", ["vcb_velocity_robust", "emb_robust", "fast_switch_robust"])
+def test_shipped_robust_configs_validate(name):
+    problem, _ = prepare(load(CONFIGS / f"{name}.toml"))
+    assert isinstance(problem, robust.RobustProblem) and problem.plan.varies

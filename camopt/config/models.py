@@ -189,8 +189,13 @@ class RobustSection(Strict):
         "default tolerances)")
     samples: int = Field(16, ge=2, le=MAX_ROBUST_SAMPLES, description="perturbed copies per "
                          f"candidate and generation (at most {MAX_ROBUST_SAMPLES}: memory)")
-    yield_target: float = Field(0.95, gt=0, le=1, description="share of samples that must "
-                                "meet every constraint for a candidate to count as feasible")
+    yield_target: float = Field(0.95, gt=0, le=1, description="required share of parts "
+                                "meeting every constraint: a repeat's result is feasible when "
+                                "the Wilson lower bound of its yield on check_samples fresh "
+                                "draws reaches it")
+    search_yield: float | None = Field(
+        None, gt=0, le=1, description="share of a generation's draws a candidate must pass "
+        "during the search (unset: yield_target); above it, a margin against lucky draws")
     objective: Literal["nominal", "mean", "quantile"] = Field(
         "nominal", description="what is minimised: the nominal design's objective, its mean "
         "over the samples, or its quantile (below)")
@@ -200,8 +205,11 @@ class RobustSection(Strict):
         "uniform", description="uniform on nominal ± X, or normal with sigma = X/3")
     screen: bool = Field(True, description="sample only candidates whose nominal design "
                          "meets every constraint (the others keep their nominal violation)")
+    finalists: int = Field(8, ge=0, le=MAX_ROBUST_SAMPLES, description="designs that met "
+                           "the target on their generation's draws checked again on fresh "
+                           "draws at the end of a repeat, with the solver's best")
     check_samples: int = Field(4000, ge=100, le=MAX_CHECK_SAMPLES, description="fresh "
-                               "samples of the final check of the best design")
+                               "draws of that selection and of the final check of the best")
     confidence: float = Field(0.95, gt=0, lt=1, description="level of the final yield's "
                               "Wilson interval")
     chunk_rows: int | None = Field(None, ge=1, le=10_000_000, description="rows "
