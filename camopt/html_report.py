@@ -71,6 +71,7 @@ def run_context(view: RunView) -> dict[str, Any]:
         "feasible": view.best.feasible, "active": view.best.active,
         "violated": view.best.violated, "objective_name": view.objective_name,
         "reference_label": summary["reference_label"], "rows": summary["rows"],
+        "robust": report.robust_summary(view),
         "statistics": stats, "target": view.run.get("target"),
         "repeats": view.repeats, "table": view.table[:50], "table_rows": len(view.table),
         "table_columns": ["label", *view.best.x, view.objective_name, "feasible"],

@@ -60,7 +60,37 @@ def show(run: RunView) -> dict[str, Any]:
     rows = pareto.rows(run)
     if rows is not None:
         doc["pareto"] = rows
+    if run.robust:
+        doc["robust"] = {"settings": run.robust, "check": run.robust_check}
     return jsonable(doc)
+
+
+NEAR_LIMIT = -0.05
+"""Robust summaries list a constraint's margin when either design comes within 5 % of its
+limit (normalised g above this) at its nominal design or at the yield target."""
+
+
+def robust_summary(run: RunView) -> dict[str, Any] | None:
+    """A robust run's final check, the robust optimum beside the best nominally feasible
+    design the search saw, on the same fresh draws: objective (nominal, mean, quantile),
+    yield with its Wilson interval, and the margins (normalised g, <= 0 met) of the
+    constraints near their limits at the nominal design and at the yield target's order
+    statistic. None for a nominal run."""
+    check = run.robust_check
+    if not check:
+        return None
+    designs = [d for d in (check.get("robust"), check.get("nominal")) if d]
+    scalars = [k for k in designs[0] if k.startswith("objective_") or k.startswith("yield")]
+    rows = [{"name": k.replace("objective_", f"{run.objective_name} "),
+             "values": [d.get(k) for d in designs]} for k in scalars]
+    for c in designs[0]["margins"]:
+        pairs = [d["margins"][c] for d in designs]
+        if any(max(p["nominal"], p["at_target"]) > NEAR_LIMIT for p in pairs):
+            rows.append({"name": f"{c} nominal", "values": [p["nominal"] for p in pairs]})
+            rows.append({"name": f"{c} at target", "values": [p["at_target"] for p in pairs]})
+    labels = ["robust optimum", "nominal best seen"][:len(designs)]
+    return {"labels": labels, "samples": designs[0]["samples"],
+            "yield_target": run.robust.get("yield_target"), "rows": rows}
 
 
 REFERENCE_PREFIXES = {"initial_": "initial design", "original_": "original design"}

@@ -134,3 +134,31 @@ def test_wilson_bound_matches_scipy():
 def test_shipped_robust_configs_validate(name):
     problem, _ = prepare(load(CONFIGS / f"{name}.toml"))
     assert isinstance(problem, robust.RobustProblem) and problem.plan.varies
+
+
+def test_show_and_report_give_the_robust_check(tmp_path):
+    """A robust archive: show prints the check beside the nominal best seen, its JSON adds
+    ``robust`` (settings and check), the HTML report has the table."""
+    from typer.testing import CliRunner
+
+    from camopt import archive, report
+    from camopt.cli import app
+
+    out = tmp_path / "r.h5"
+    r = CliRunner().invoke(app, ["run", str(CONFIGS / "fast_switch_robust.toml"), "--out",
+                                 str(out), "--quiet", "--set", "solver.generations=8",
+                                 "--set", "solver.population=12", "--set",
+                                 "robust.check_samples=200", "--set", "robust.samples=8"])
+    assert r.exit_code == 0, r.output
+    view = archive.load_run(out)
+    doc = report.show(view)
+    check = doc["robust"]["check"]["robust"]
+    assert doc["robust"]["settings"]["samples"] == 8 and check["samples"] == 200
+    assert 0 <= check["yield_low"] <= check["yield"] <= check["yield_high"] <= 1
+    shown = CliRunner().invoke(app, ["show", str(out)])
+    assert shown.exit_code == 0 and "robust check (200 fresh draws" in shown.output
+    summary = report.robust_summary(view)
+    assert summary is not None and summary["rows"][0]["name"] == "yield"
+    html = CliRunner().invoke(app, ["report", str(out), "--out", str(tmp_path / "r.html")])
+    assert html.exit_code == 0, html.output
+    assert 'id="robust-check"' in (tmp_path / "r.html").read_text()

@@ -69,6 +69,9 @@ def print_show(view: RunView, rows: int | None = None) -> None:
     style = "green" if view.best.feasible else "bold red"
     out.print(f"[{style}]{escape(report.status(view))}[/]", highlight=False)
     out.print(best_table(report.summary(view)))  # raw values: inf and NaN are shown
+    robust = report.robust_summary(view)
+    if robust is not None:
+        out.print(robust_table(robust))
     _print_repeats(doc, rows)
     for r in doc["repeats"]:
         for note in r["notes"]:
@@ -97,6 +100,18 @@ def best_table(summary: dict[str, Any]) -> Table:
         values = [row["optimum"], row["reference"]] if label else [row["optimum"]]
         name = f"objective: {row['name']}" if row is summary["rows"][0] else row["name"]
         table.add_row(escape(name), *(cell(v) for v in values))
+    return table
+
+
+def robust_table(summary: dict[str, Any]) -> Table:
+    """A robust run's final check beside the best nominal design (``report.robust_summary``)."""
+    table = Table(title=f"robust check ({summary['samples']} fresh draws for both; "
+                  f"target {cell(summary['yield_target'])})", title_justify="left")
+    table.add_column("", overflow="fold")
+    for label in summary["labels"]:
+        table.add_column(label, justify="right", no_wrap=True)
+    for row in summary["rows"]:
+        table.add_row(escape(row["name"]), *(cell(v) for v in row["values"]))
     return table
 
 
