@@ -1,7 +1,7 @@
-"""VCB closing dynamics (camopt/cases/vcb/dynamics.py): the work-energy method against an
-independent ODE integration of Lagrange's equation, energy balance, convergence, the
-identified inertias against the paper's ADAMS numbers (Kang 2023 Sec 3.2) and the
-velocity design of configs/vcb_velocity.toml."""
+"""VCB opening and closing dynamics (camopt/cases/vcb/dynamics.py): the work-energy method
+against independent ODE integrations of Lagrange's equation at non-degenerate points (a
+follower inertia, friction and a release off the opened-state crank), convergence, energy
+bookkeeping, and the identification on the vendor's ADAMS data (Kang 2023 Sec 3.2)."""
 
 from __future__ import annotations
 
@@ -10,67 +10,72 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from camopt.cases.vcb import VcbProblem
+from camopt.cases.vcb.identify import DATA, PARAMETERS, VcbDynamicsIdentification
 from camopt.driver import execute
 from tests.conftest import CONFIGS
 from tests.helpers import load
 
 TABLE6 = np.array([0.238432, 0.000226, -0.011492, 9315.336, 7788.183])  # Table 6 DE-gr
+# a non-degenerate point of the model: every term of J(theta) and every load in play
+RICH = ("case.follower_inertia_kg_m2=2.0e-3", "case.cam_friction_nm=6.0",
+        "case.release_offset_deg=8.0", "case.dynamics_band=[]")
 
 
 @pytest.fixture(scope="module")
 def problem():
-    return VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_steps=4000").case)
+    return VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_steps=4000", *RICH).case)
 
 
-def _lagrange(problem, x):
-    """Right-hand side of J(theta) theta'' + J'(theta) theta'^2 / 2 = eps T - Fr ds1/dtheta
-    for one design before the touch, and the conserved energy KE + eps E_cs + V_r, from
-    the model's kinematics at single angles (nothing shared with the energy method but
-    the model)."""
+def _closing_ode(problem, x):
+    """Right-hand side of J(theta) theta'' + J'(theta) theta'^2 / 2 = eps T - T_f - Fr ds1,
+    J = J_cam + J_f phi'^2 + (m_rod + m_c) ds1^2, for one design before the touch, and the
+    conserved energy KE + eps E_cs + V_r + T_f theta, from the model's kinematics at
+    single angles (nothing shared with the energy method but the model)."""
     m, c, loads = problem.model, problem.config, problem.load
     A, kc, link = problem.designs(x)
     mass = c.rod_mass_kg + c.contacts_mass_kg
 
-    def rod(theta):
+    def state(theta):
         kin = m.kinematics(A, link, problem.rod_offset, np.array([0.0, theta]))
-        return kin.s1[0, 1], kin.ds1[0, 1]
+        return kin.s1[0, 1], kin.ds1[0, 1], kin.dphi[0, 1]
 
     def inertia(theta):
-        return c.cam_inertia_kg_m2 + mass * rod(theta)[1] ** 2
+        _, ds1, dphi = state(theta)
+        return c.cam_inertia_kg_m2 + c.follower_inertia_kg_m2 * dphi**2 + mass * ds1**2
 
     def rhs(_t, y):
         theta, omega = y
-        s1, ds1 = rod(theta)
+        s1, ds1, _ = state(theta)
         ext, rate = m.closing_spring_geometry(np.array([theta]))
         torque = m.closing_torque(kc, (ext, rate))[0, 0]
         h = 1e-6
         dj = (inertia(theta + h) - inertia(theta - h)) / (2 * h)
         force = loads.resistant_force(np.array([s1]))[0]
-        return [omega, (c.efficiency * torque - force * ds1 - 0.5 * dj * omega**2)
-                / inertia(theta)]
+        return [omega, (c.efficiency * torque - c.cam_friction_nm - force * ds1
+                        - 0.5 * dj * omega**2) / inertia(theta)]
 
     def energy(theta, omega):
-        s1, _ = rod(theta)
+        s1, _, _ = state(theta)
         ext, _ = m.closing_spring_geometry(np.array([theta]))
         stored = m.closing_energy(kc, ext)[0, 0]
         return (0.5 * inertia(theta) * omega**2 + c.efficiency * stored
-                + loads.resistant_energy(np.array([s1]))[0])
+                + loads.resistant_energy(np.array([s1]))[0] + c.cam_friction_nm * theta)
 
     def touch(_t, y):
-        return rod(y[0])[0] - loads.gap
+        return state(y[0])[0] - loads.gap
 
     touch.terminal = True
     return rhs, energy, touch
 
 
 @pytest.mark.parametrize("which", ["vendor", "table6"])
-def test_energy_method_matches_an_ode_integration(problem, which):
+def test_closing_matches_an_ode_integration(problem, which):
     """From the cam meeting the roller to the contacts' touch, the energy method's touch
     time and cam speed equal solve_ivp's (DOP853, rtol 1e-11) to 1e-4, and the ODE keeps
-    KE + eps E_closing + V_resist constant to 1e-6 (relative to the driving work)."""
+    KE + eps E_closing + V_resist + T_f theta constant to 1e-6 of the driving work."""
     x = problem.vendor_x() if which == "vendor" else TABLE6
     mo = problem.motion(x)
-    rhs, energy, touch = _lagrange(problem, x[None, :])
+    rhs, energy, touch = _closing_ode(problem, x[None, :])
     sol = solve_ivp(rhs, (0.0, 0.1), [0.0, mo.omega[0, 0]], method="DOP853", rtol=1e-11,
                     atol=1e-12, events=touch, dense_output=True)
     assert sol.status == 1  # stopped at the touch
@@ -86,83 +91,201 @@ def test_energy_method_matches_an_ode_integration(problem, which):
     assert np.ptp(e) / driving < 1e-6
 
 
-def test_velocities_converge_with_the_integration_grid():
+def test_free_rotation_matches_an_ode_integration(problem):
+    """The freely turning cam, J_cam theta'' = eps T(theta) - T_f from rest at the release
+    crank angle, reaches the roller (theta_c = 0) at the energy method's time and speed
+    within 1e-4 (solve_ivp, DOP853)."""
+    m, c = problem.model, problem.config
+    x = problem.vendor_x()
+    _, kc, _ = problem.designs(x)
+    mo = problem.motion(x)
+    start = m.dead_centre + c.release_offset_deg * np.pi / 180 - m.contact_crank_angle
+
+    def rhs(_t, y):
+        torque = m.closing_torque(kc, m.closing_spring_geometry(np.array([y[0]])))[0, 0]
+        return [y[1], (c.efficiency * torque - c.cam_friction_nm) / c.cam_inertia_kg_m2]
+
+    def contact(_t, y):
+        return y[0]
+
+    contact.terminal = True
+    sol = solve_ivp(rhs, (0.0, 0.2), [start, 0.0], method="DOP853", rtol=1e-11, atol=1e-13,
+                    events=contact)
+    assert sol.status == 1
+    assert mo.cam_contact_time[0] == pytest.approx(sol.t_events[0][0], rel=1e-4)
+    omega_free = sol.y_events[0][0][1]
+    # after the plastic impact on the roller: J_cam omega- = J(0) omega+
+    j0 = (c.cam_inertia_kg_m2 + c.follower_inertia_kg_m2 * (problem.model.vendor_a[1]) ** 2
+          + (c.rod_mass_kg + c.contacts_mass_kg) * (mo.rod_velocity[0, 0] / mo.omega[0, 0]) ** 2)
+    assert mo.omega[0, 0] == pytest.approx(c.cam_inertia_kg_m2 * omega_free / j0, rel=1e-4)
+
+
+def test_opening_matches_an_ode_integration():
+    """The opening from the closed state at rest, J(phi) phi'' + J'(phi) phi'^2 / 2 =
+    -eps Fr(s1) ds1/dphi with J = J_f + m_rod (ds1/dphi)^2, gives the energy method's
+    contact separation time within 1e-3 (solve_ivp, DOP853; the rest start is graded
+    in the energy method)."""
+    from camopt.cases.vcb.dynamics import opening_motion
+
+    p = VcbProblem(load(CONFIGS / "vcb.toml", *RICH).case)
+    m, c, loads = p.model, p.config, p.load
+    A, _, link = p.designs(p.vendor_x())
+    end = m.theta_c[-1]
+    phi_closed = float(A[0] @ [1.0, end, end**2, end**3])
+    phi_open = float(A[0, 0])
+
+    def rod(phi):
+        lin = np.array([[phi_open, 1.0, 0.0, 0.0]])
+        kin = m.kinematics(lin, link, p.rod_offset, np.array([0.0, phi - phi_open]))
+        return kin.s1[0, 1], kin.ds1[0, 1]
+
+    def inertia(phi):
+        return c.follower_inertia_kg_m2 + c.rod_mass_kg * rod(phi)[1] ** 2
+
+    def rhs(_t, y):
+        phi, rate = y
+        s1, ds = rod(phi)
+        h = 1e-7
+        dj = (inertia(phi + h) - inertia(phi - h)) / (2 * h)
+        force = loads.resistant_force(np.array([s1]))[0]
+        return [rate, (-c.efficiency * force * ds - 0.5 * dj * rate**2) / inertia(phi)]
+
+    def separation(_t, y):
+        return rod(y[0])[0] - loads.gap
+
+    separation.terminal = True
+    sol = solve_ivp(rhs, (0.0, 0.05), [phi_closed, 0.0], method="DOP853", rtol=1e-10,
+                    atol=1e-12, events=separation)
+    assert sol.status == 1
+    op = opening_motion(m, A, link, p.rod_offset, loads, p.dynamics, steps=4000)
+    assert op.departure_time[0] == pytest.approx(sol.t_events[0][0], rel=1e-3)
+
+
+def test_motion_converges_with_the_integration_grid():
     """The metrics at the configs' 400 graded steps equal those at 4,000 within 1e-4."""
     x = np.vstack([TABLE6, [0.343973, -0.179031, 0.0431478, 4032.8, 4779.95]])
     out = []
     for steps in (400, 4000):
-        p = VcbProblem(load(CONFIGS / "vcb.toml", f"case.dynamics_steps={steps}").case)
+        p = VcbProblem(load(CONFIGS / "vcb.toml", f"case.dynamics_steps={steps}", *RICH).case)
         mo = p.motion(x)
-        out.append(np.r_[mo.closing_velocity_avg, mo.touch_time, mo.closing_time,
+        out.append(np.r_[mo.closing_velocity_avg, mo.touch_time, mo.cam_contact_time,
                          mo.touch_velocity])
     np.testing.assert_allclose(out[0], out[1], rtol=1e-4)
 
 
-def test_energy_left_at_the_latch_is_eps_surplus_less_impact_losses(problem):
+def test_energy_left_at_the_latch_is_eps_surplus_less_losses(problem):
     """Bookkeeping: kinetic energy at the latch = eps x surplus (Eq 26) + the cam's kinetic
-    energy after meeting the roller - the contacts' kinetic energy lost at the touch."""
+    energy after meeting the roller - the contacts' kinetic energy lost at the touch - the
+    friction torque's work over the 140 deg stroke."""
     X = np.vstack([problem.vendor_x(), TABLE6])
     mo = problem.motion(X)
     ev = problem.evaluate(X)
-    eps = problem.config.efficiency
     c = problem.config
-    _, _, link = problem.designs(X)
+    A, _, _ = problem.designs(X)
+    dphi0 = A[:, 1]  # phi'(0) = a1
+    ds1 = mo.rod_velocity[:, 0] / mo.omega[:, 0]
     start = 0.5 * mo.omega[:, 0] ** 2 * (
-        c.cam_inertia_kg_m2 + (c.rod_mass_kg + c.contacts_mass_kg)
-        * (mo.rod_velocity[:, 0] / mo.omega[:, 0]) ** 2)
-    expected = eps * ev.extras["surplus_work_j"] + start - mo.touch_loss
+        c.cam_inertia_kg_m2 + c.follower_inertia_kg_m2 * dphi0**2
+        + (c.rod_mass_kg + c.contacts_mass_kg) * ds1**2)
+    expected = (c.efficiency * ev.extras["surplus_work_j"] + start - mo.touch_loss
+                - c.cam_friction_nm * mo.theta_c[-1])
     np.testing.assert_allclose(mo.final_kinetic, expected, rtol=1e-9)
     assert np.all(mo.latched)
 
 
-def test_zero_surplus_stalls_before_the_latch(problem):
+def test_zero_surplus_stalls_before_the_latch():
     """A zero-surplus design (the paper's objective, Eq 26) has nothing left to pay the
-    contacts' impact loss: the cam stops short of 140 deg."""
+    contacts' impact loss and the friction: the cam stops short of 140 deg."""
+    p = VcbProblem(load(CONFIGS / "vcb.toml").case)
     x = np.array([0.0728521, 0.101742, -0.0259065, 4050.72, 4814.89])
-    ev = problem.describe(x[None, :])
+    ev = p.describe(x[None, :])
     assert abs(ev.extras["surplus_work_j"][0]) < 0.05
     assert ev.extras["latched"][0] == 0 and np.isinf(ev.extras["closing_time_ms"][0])
 
 
-def test_identified_inertias_reproduce_the_vendor_adams_run():
-    """configs/vcb_identify_dynamics.toml fits the inertias to the vendor's ADAMS closing
-    1.71 m/s, opening 2.5 m/s and separation 3.2 ms (Sec 3.2), each within 1 %, and the
-    values in configs/vcb.toml are that fit (within 1 %)."""
+@pytest.fixture(scope="module")
+def identification():
+    return VcbDynamicsIdentification(load(CONFIGS / "vcb_identify_dynamics.toml").case)
+
+
+def test_identification_meets_every_adams_datum(identification, reported):
+    """The parameters in configs/vcb.toml meet each of the vendor's seven ADAMS data (Sec
+    3.2, Table 4) within 10 % (closed by the run's end at 45 ms: a bound), with five
+    parameters, at least two fewer than the data; the targets are the paper's."""
+    adams = reported["vcb"]["adams_vendor"]
+    c = load(CONFIGS / "vcb.toml").case
+    x = np.array([[getattr(c, name) for name in PARAMETERS]])
+    ev = identification.evaluate(x)
+    assert len(DATA) >= 6 and len(PARAMETERS) <= len(DATA) - 2
+    for d in DATA:
+        target = adams["closed_by_ms" if d.upper_bound_only else d.name]
+        value = ev.extras[d.name][0]
+        if d.upper_bound_only:
+            assert value <= target, d.name
+        else:
+            assert value == pytest.approx(target, rel=0.10), d.name
+    assert ev.extras["max_residual_pct"][0] <= 10.0
+
+
+def test_identification_run_reproduces_the_config_values():
+    """configs/vcb_identify_dynamics.toml (DE-gr, reduced budget) finds the parameters
+    copied into configs/vcb.toml (within 3 %) and reports n_data, n_parameters, the
+    largest residual and each datum's residual."""
     rec = execute(load(CONFIGS / "vcb_identify_dynamics.toml", "run.repeats=1",
-                       "solver.generations=60"))
+                       "solver.generations=80"))
     m = rec.metrics
-    assert m["closing_velocity_avg_m_s"] == pytest.approx(1.71, rel=0.01)
-    assert m["opening_velocity_avg_m_s"] == pytest.approx(2.5, rel=0.01)
-    assert m["departure_time_ms"] == pytest.approx(3.2, rel=0.01)
+    assert m["n_data"] == 7 and m["n_parameters"] == 5
+    assert m["max_residual_pct"] <= 10.0
+    assert all(f"residual_{d.key}_pct" in m for d in DATA)
     fitted = rec.problem.to_display(rec.best.x)
     case = load(CONFIGS / "vcb.toml").case
-    for key in ("cam_inertia_kg_m2", "rod_mass_kg", "contacts_mass_kg"):
-        assert getattr(case, key) == pytest.approx(fitted[key], rel=0.01), key
+    for key in PARAMETERS:
+        assert getattr(case, key) == pytest.approx(fitted[key], rel=0.03), key
 
 
-def test_table6_velocities_identified_and_predicted():
-    """configs/reference/vcb_table6.toml: the vendor row reproduces 1.71 m/s within 5 %
-    (identified). Table 6's optimum is predicted *not* slower (paper: 1.17 m/s): it
-    releases more spring energy before the touch than the vendor design, so no
-    conservative reading of the force model slows it (docs/assumptions.md)."""
-    rec = execute(load(CONFIGS / "reference" / "vcb_table6.toml"))
-    rows = {row["label"]: row for row in rec.repeats[0].table}
-    vendor, table6 = rows["Table 6 initial"], rows["Table 6 DE-gr"]
-    assert vendor["closing_velocity_avg_m_s"] == pytest.approx(1.71, rel=0.05)
-    assert table6["closing_velocity_avg_m_s"] >= vendor["closing_velocity_avg_m_s"]
-    assert table6["closing_velocity_avg_m_s"] > 1.17 * 1.15
+def test_band_members_are_as_consistent_as_the_fit(identification):
+    """Every parameter set of configs/vcb.toml's dynamics_band predicts each ADAMS event
+    within the reading error (2 % velocities, 0.5 ms times) of the identified set's
+    prediction, and the closing by 45 ms."""
+    c = load(CONFIGS / "vcb.toml").case
+    best = np.array([[getattr(c, name) for name in PARAMETERS]])
+    band = np.array(c.dynamics_band)[:, [0, 2, 3, 4, 5]]
+    assert len(band) >= 2
+    y0, y = identification.predict(best)[0], identification.predict(band)
+    for i, d in enumerate(DATA):
+        if d.upper_bound_only:
+            assert np.all(y[:, i] <= 45.0 + 0.5)
+        elif d.unit == "m/s":
+            assert np.all(np.abs(y[:, i] / y0[i] - 1) <= 0.02 + 1e-9), d.name
+        else:
+            assert np.all(np.abs(y[:, i] - y0[i]) <= 0.5 + 1e-9), d.name
+
+
+def test_table6_against_the_vendor_in_every_reading():
+    """configs/reference/vcb_table6.toml: the vendor row is within 10 % of ADAMS's 1.71 m/s;
+    Table 6's optimum is not predicted 32 % slower (paper: 1.17 m/s): its velocity is at
+    least 0.96 of the vendor's with Table 2 as printed and with the two closing springs'
+    pre-compressions swapped (docs/assumptions.md)."""
+    for swap in ((), ("case.kc1_precompression_mm=100", "case.kc2_precompression_mm=140")):
+        p = VcbProblem(load(CONFIGS / "vcb.toml", *swap).case)
+        v = p.describe(np.vstack([p.vendor_x(), TABLE6])).extras["closing_velocity_avg_m_s"]
+        assert v[0] == pytest.approx(1.71, rel=0.10)
+        assert v[1] / v[0] >= 0.96
+        assert v[1] / v[0] > 1.17 / 1.71 + 0.2
 
 
 @pytest.mark.slow
-def test_velocity_design_meets_the_requirement():
-    """configs/vcb_velocity.toml (reduced: 2 repeats x 200 generations): a feasible best
-    with 0.7 <= v <= 1.1 m/s (Sec 2.1), tau_max < 1194 MPa, phi_max in [23, 26] deg, rod
-    travel 18.0 +- 0.2 mm, latched with no follower lift-off."""
-    rec = execute(load(CONFIGS / "vcb_velocity.toml", "run.repeats=2",
-                       "solver.generations=200"))
+def test_velocity_design_meets_the_requirement_across_the_band():
+    """configs/vcb_velocity.toml (reduced: 1 repeat x 150 generations): a feasible best
+    whose whole closing-velocity band lies in 0.9 +- 0.2 m/s (Sec 2.1), latched under
+    every parameter set of the band, tau_max < 1194 MPa, phi_max in [23, 26] deg, rod
+    travel 18.0 +- 0.2 mm, no follower lift-off."""
+    rec = execute(load(CONFIGS / "vcb_velocity.toml", "run.repeats=1",
+                       "solver.generations=150"))
     m = rec.metrics
     assert rec.best.feasible
-    assert 0.7 <= m["closing_velocity_avg_m_s"] <= 1.1
+    assert 0.7 <= m["closing_velocity_low_m_s"] <= m["closing_velocity_avg_m_s"]
+    assert m["closing_velocity_avg_m_s"] <= m["closing_velocity_high_m_s"] <= 1.1
     assert m["tau_max_mpa"] < 1194 and 23 <= m["phi_max_deg"] <= 26
     assert abs(m["rod_travel_mm"] - 18.0) <= 0.2 + 1e-9
     assert m["latched"] == 1 and m["cam_torque_min_nm"] >= 0

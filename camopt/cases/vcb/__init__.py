@@ -67,6 +67,6 @@ VCB_IDENTIFY = register_case(CaseSpec(
 VCB_IDENTIFY_DYNAMICS = register_case(CaseSpec(
     kind="vcb_identify_dynamics", config=VcbDynamicsIdentifyConfig,
     problem=VcbDynamicsIdentification, default_solver="de_gr",
-    summary="fits the VCB inertias the paper omits to the vendor design's ADAMS results",
+    summary="fits the VCB dynamics' parameters to the vendor design's seven ADAMS data",
     paper_source=SOURCE,
 ))

@@ -82,13 +82,30 @@ class VcbConfig(CaseConfig):
         18.0, description="rod travel the breaker needs, opened to closed (Sec 3.2)")
     rod_travel_tolerance_mm: Stroke = Field(
         0.2, description="allowed deviation of the rod travel (constraint, steps 1 and 2)")
-    # closing dynamics (Sec 3.2; inertias identified: configs/vcb_identify_dynamics.toml)
+    # opening and closing dynamics (Sec 3.2, camopt/cases/vcb/dynamics.py); parameters
+    # identified on the vendor's ADAMS data: configs/vcb_identify_dynamics.toml
     cam_inertia_kg_m2: Inertia = Field(
         1.15e-3, description="cam, shaft, crank and closing springs about O (identified)")
+    follower_inertia_kg_m2: float = Field(
+        0.0, ge=0, le=10.0, description="follower BD, roller and four-bar input about B, "
+        "kg m^2 (the ADAMS data do not separate it from rod_mass_kg: see assumptions)")
     rod_mass_kg: Mass = Field(
-        3.02, description="follower, four-bar and rods as a mass at the rod (identified)")
+        3.02, description="output link, arm and insulated rods as a mass at the rod "
+        "(identified)")
     contacts_mass_kg: Mass = Field(
         2.15, description="the three moving contacts together (identified)")
+    release_offset_deg: float = Field(
+        19.04, gt=0, lt=90, description="the charged spring crank's angle past its dead "
+        "centre when the closing latch lets go (identified; 19.04 = the opened-state crank)")
+    cam_friction_nm: float = Field(
+        0.0, ge=0, le=1000.0, description="Coulomb friction torque referred to the cam shaft, "
+        "against the cam whenever it turns, beyond Eq 26's efficiency (identified)")
+    dynamics_band: list[tuple[float, float, float, float, float, float]] = Field(
+        default_factory=list, max_length=64, description="parameter sets (cam_inertia_kg_m2, "
+        "follower_inertia_kg_m2, rod_mass_kg, contacts_mass_kg, release_offset_deg, "
+        "cam_friction_nm) as "
+        "consistent with the ADAMS data as the identified one: every closing velocity and "
+        "time is reported as the band over them (configs/vcb_identify_dynamics.toml)")
     dynamics_steps: int = Field(
         400, ge=50, le=100_000, description="graded cam-angle intervals of the work-energy "
         "integration (independent of positions)")
@@ -181,14 +198,35 @@ class VcbDynamicsIdentifyConfig(VcbConfig):
     """Fit the inertias the paper leaves out to the vendor design's ADAMS results (Sec 3.2)."""
 
     kind: Literal["vcb_identify_dynamics"] = "vcb_identify_dynamics"  # type: ignore[assignment]
-    closing_velocity_target_m_s: Positive = Field(
-        1.71, description="Sec 3.2: average closing velocity of the vendor design")
-    opening_velocity_target_m_s: Positive = Field(
-        2.5, description="Sec 3.2: average opening velocity of the vendor design")
+    # the ADAMS data of the vendor design (Sec 3.2 and Table 4), times from the release
     departure_time_target_ms: Positive = Field(
         3.2, description="Sec 3.2: the contacts separate 3.2 ms after the hook lets go")
-    cam_inertia_bounds_kg_m2: Bounds = Field(Bounds(lower=1e-5, upper=0.05),
-                                             description="search range")
+    open_time_target_ms: Positive = Field(
+        7.0, description="Sec 3.2: the opening is complete at 7 ms")
+    opening_velocity_target_m_s: Positive = Field(
+        2.5, description="Sec 3.2: average opening velocity of the vendor design")
+    cam_contact_time_target_ms: Positive = Field(
+        13.1, description="Sec 3.2: the freely turning cam meets the roller at 13.1 ms")
+    touch_time_target_ms: Positive = Field(
+        27.8, description="Sec 3.2 and Table 4: the contacts collide at 27.8 ms")
+    closing_velocity_target_m_s: Positive = Field(
+        1.71, description="Sec 3.2: average closing velocity of the vendor design")
+    closed_by_ms: Positive = Field(
+        45.0, description="Sec 3.2 and Table 4: closed when the simulation ends at 45 ms "
+        "(an upper bound on the closing time, not an event)")
+    velocity_reading_pct: Positive = Field(
+        2.0, description="reading error of the reported velocities (band)")
+    time_reading_ms: Positive = Field(
+        0.5, description="reading error of the reported times (band)")
+    cam_inertia_bounds_kg_m2: Bounds = Field(Bounds(lower=5e-4, upper=0.05),
+                                             description="search range (physical)")
+    rod_mass_bounds_kg: Bounds = Field(Bounds(lower=0.1, upper=30.0), description="search range")
+    contacts_mass_bounds_kg: Bounds = Field(Bounds(lower=0.1, upper=15.0),
+                                            description="search range")
+    release_offset_bounds_deg: Bounds = Field(Bounds(lower=0.5, upper=23.0),
+                                              description="search range (physical)")
+    cam_friction_bounds_nm: Bounds = Field(Bounds(lower=0.0, upper=50.0),
+                                           description="search range")
     rod_mass_bounds_kg: Bounds = Field(Bounds(lower=0.1, upper=30.0), description="search range")
     contacts_mass_bounds_kg: Bounds = Field(Bounds(lower=0.1, upper=15.0),
                                             description="search range")

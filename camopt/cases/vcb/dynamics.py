@@ -1,45 +1,58 @@
-"""Closing and opening dynamics of the VCB mechanism by the work-energy equation.
+"""Opening and closing dynamics of the VCB mechanism, from the closed state as in ADAMS.
 
-Kang, Huang & Yang (2023) simulate the closing in ADAMS (Sec 3.2, Figs 23-25, 32) and
-report the average closing velocity of the movable contact over the last third of the
-contact stroke (Sec 2.1): 1.71 m/s for the vendor design, 1.17 m/s for Table 6's. The
-mechanism has one degree of freedom while the cam drives the roller, so with the cam angle
-theta as coordinate its kinetic energy is 1/2 J(theta) omega^2 with a
-configuration-dependent generalised inertia
+Kang, Huang & Yang (2023) simulate the vendor design in ADAMS (Sec 3.2, Table 4, Figs 23-25)
+from the closed state: at t = 0 the hook lets go and the opening, contact and closing springs
+release together; the contacts separate at 3.2 ms, the opening ends at 7 ms, the freely
+turning cam meets the roller at 13.1 ms, the contacts collide at 27.8 ms and the simulation
+ends, closed, at 45 ms; the average opening velocity is 2.5 m/s and the average closing
+velocity 1.71 m/s (Sec 2.1: over the last third of the contact stroke; opening over 3/4
+of it from departure). This module reproduces that sequence with one generalised
+coordinate per phase:
 
-    J(theta) = J_cam + (m_rod + m_contacts) (ds1/dtheta)^2     before the contacts touch
-    J(theta) = J_cam + m_rod (ds1/dtheta)^2                    after (the contacts stop)
+* **closing spring release** (Sec 2.2 Step 8): the charged crank is held ``release_offset``
+  past its dead centre (the crank pointing at the springs' fixed end G), where the springs'
+  torque is small; the cam turns freely, inertia J_cam, until it meets the roller at
+  theta_c = 0 (crank angle QOX + theta0). The time to get away from near the dead centre
+  grows as the offset shrinks (logarithmically), which is what sets the 13.1 ms.
+* **cam drives roller** (cam angle theta_c): kinetic energy 1/2 J(theta) omega^2 with
 
-and the work-energy equation gives omega(theta) directly, without an ODE:
+      J(theta) = J_cam + J_f phi'(theta)^2 + (m_rod + m_c) s1'(theta)^2   before the touch
+      J(theta) = J_cam + J_f phi'(theta)^2 + m_rod s1'(theta)^2           after it
 
-    1/2 J omega^2 = KE_0 + eps (E_cs(0) - E_cs(theta)) - V_r(s1(theta)) - losses at impacts
+  J_f the follower and four-bar input about B (turning with the follower swing phi,
+  Eq 6), m_rod the output link, arm and insulated rods as a mass at the rod, m_c the three
+  moving contacts. The follower's share J_f phi'^2 shrinks along the stroke as phi'
+  does (the cubic's rate falls from a1 toward 0), so the early motion is heavier than a
+  constant lumped mass makes it. The work-energy equation gives omega(theta) without an
+  ODE:
 
-E_cs is the closing springs' elastic energy, V_r the work against the general resistant
-force (opening spring, contact springs, free-contact force; exact potential differences
-from :mod:`camopt.cases.vcb.model`), eps the paper's mechanical efficiency (Eq 26) applied
-to the driving springs' power, so that the surplus of Eq 26 is the kinetic energy left at
-the end divided by eps. Time follows as t = integral d(theta) / omega on a grid graded
-toward the start, theta_c = theta_end u^2, where omega is smallest.
+      1/2 J omega^2 = KE_0 + eps (E_cs(0) - E_cs(theta)) - V_r(s1(theta)) - impact losses
 
-Events, each an impact that loses kinetic energy (Carnot):
-1. release: the cam turns freely through theta0 (Sec 2.2 Step 8) under the springs with
-   J_cam alone, then meets the roller at rest: a plastic impact keeps the generalised
-   momentum, omega+ = J_cam omega- / J(0);
-2. touch: at s1 = contact gap the three moving contacts stop against the fixed ones; the
-   rod goes on compressing the contact springs, omega is continuous and the contacts'
-   kinetic energy 1/2 m_c v^2 is lost.
-A design whose kinetic energy reaches zero before the cam has turned theta_end stalls:
-the hook cannot latch (``latched`` False, closing time infinite).
+  E_cs the closing springs' energy, V_r the resistant potential (opening and contact
+  springs, free-contact force: :class:`camopt.cases.vcb.model.Loads`), eps the paper's
+  mechanical efficiency (Eq 26) as the friction loss on the driving springs' work. Events
+  are plastic impacts (Carnot): the cam meets the roller at rest (generalised momentum
+  kept, J_cam omega- = J(0) omega+), and the contacts stop on the fixed ones at s1 = gap
+  (their kinetic energy 1/2 m_c v^2 is lost, omega continuous). A design whose kinetic
+  energy reaches zero first stalls and never latches (closing time infinite).
+* **opening** (follower angle phi from the closed to the opened state): the contact and
+  opening springs drive the linkage back, eps of their work, with
+  J(phi) = J_f + m_rod (ds1/dphi)^2; the contacts stay closed until the rod is back at the
+  gap (separation), a plastic impact picks them up and the opening spring carries all to
+  s1 = 0 (opening complete).
 
-The inertias are not printed in the paper (Table 1 gives densities only); they are
-identified from the vendor design's dynamic data (``configs/vcb_identify_dynamics.toml``,
-``docs/assumptions.md``). A scipy ODE integration of Lagrange's equation is the
-cross-check in ``tests/cases/test_vcb_dynamics.py``.
+Time follows as t = integral d(coordinate) / rate on grids graded toward the states of rest.
+The parameters are not printed in the paper; they are identified by least squares on every
+ADAMS datum (``configs/vcb_identify_dynamics.toml``, :mod:`camopt.cases.vcb.identify`,
+``docs/assumptions.md``). A scipy ODE integration of Lagrange's equation is the cross-check
+in ``tests/cases/test_vcb_dynamics.py``. Own equations rather than a multibody library: the
+mechanism is one degree of freedom in every phase, so the work-energy form is exact,
+vectorises over a population and needs no time stepping (``docs/design.md``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,23 +61,37 @@ from camopt.cases.vcb.model import Loads, VcbModel
 
 
 @dataclass(frozen=True)
-class Inertia:
-    """Lumped inertias (SI). Each may be a float or an (n, 1) column, one per design.
+class MotionParameters:
+    """The dynamic parameters the paper omits (SI). Each is a float or an (n,) array, one
+    per design or per parameter set.
 
-    ``cam_kg_m2``: cam, shaft, spring crank and the closing springs' share, about O;
-    ``rod_kg``: follower, four-bar and insulated rods as an equivalent mass moving with
-    the rod travel s1; ``contacts_kg``: the three moving contacts, carried by the rod
-    until they touch the fixed contacts."""
+    ``cam_kg_m2`` cam, shaft, spring crank and the closing springs' share, about O;
+    ``follower_kg_m2`` follower BD, roller and the four-bar's input about B;
+    ``rod_kg`` output link, arm and insulated rods as a mass moving with the rod travel s1;
+    ``contacts_kg`` the three moving contacts, carried by the rod until they touch;
+    ``release_offset_rad`` the charged spring crank's angle past its dead centre when the
+    closing latch lets go; ``friction_nm`` a Coulomb friction torque referred to the cam
+    shaft, against the cam's rotation whenever it turns (N m)."""
 
     cam_kg_m2: NDArray | float
+    follower_kg_m2: NDArray | float
     rod_kg: NDArray | float
     contacts_kg: NDArray | float
+    release_offset_rad: NDArray | float
+    friction_nm: NDArray | float = 0.0
 
-    def columns(self, n: int) -> Inertia:
-        """The same inertias as (n, 1) columns (what the motions broadcast against)."""
+    def columns(self, n: int) -> MotionParameters:
+        """The same parameters as (n, 1) columns (what the motions broadcast against)."""
         def col(v: NDArray | float) -> NDArray:
             return np.broadcast_to(np.ravel(np.asarray(v, dtype=float)), (n,))[:, None]
-        return Inertia(col(self.cam_kg_m2), col(self.rod_kg), col(self.contacts_kg))
+        return replace(self, **{f.name: col(getattr(self, f.name)) for f in fields(self)})
+
+    def repeat(self, n: int) -> MotionParameters:
+        """Each of k parameter sets repeated for n designs in a row: (k n,) arrays ordered
+        set-major (set 0 for every design, then set 1, ...)."""
+        return replace(self, **{f.name: np.repeat(np.ravel(np.asarray(getattr(self, f.name),
+                                                                      dtype=float)), n)
+                                for f in fields(self)})
 
 
 @dataclass(frozen=True)
@@ -103,11 +130,13 @@ class ClosingMotion:
 
 @dataclass(frozen=True)
 class OpeningMotion:
-    """The opening of each design from the closed state at rest (n,): contact departure
-    time (s, when the rod has travelled back to the contact gap) and the average opening
-    velocity over 3/4 of the contact stroke from departure (m/s, Sec 2.1)."""
+    """The opening of each design from the closed state at rest, (n,): contact separation
+    (``departure_time``, s: the rod is back at the contact gap), the end of the opening
+    (``open_time``, s: the rod at s1 = 0) and the average opening velocity over 3/4 of the
+    contact stroke from departure (``opening_velocity_avg``, m/s, Sec 2.1)."""
 
     departure_time: NDArray
+    open_time: NDArray
     opening_velocity_avg: NDArray
 
 
@@ -125,6 +154,7 @@ def _cumulative_time(dtheta_du: NDArray, omega: NDArray, du: float) -> NDArray:
     the neighbouring node's value) if the motion is at rest there."""
     with np.errstate(divide="ignore", invalid="ignore"):
         g = dtheta_du / omega
+    g = np.array(np.broadcast_to(g, omega.shape))
     for end, inner in ((0, 1), (-1, -2)):
         if np.all(np.broadcast_to(dtheta_du, g.shape)[:, end] == 0):
             g[:, end] = np.where(omega[:, end] > 0, 0.0, g[:, inner])
@@ -148,31 +178,43 @@ def _crossing(values: NDArray, level: float | NDArray) -> tuple[NDArray, NDArray
 def _at(a: NDArray, k: NDArray, w: NDArray) -> NDArray:
     """Linear interpolation of rows of ``a`` at fraction w of interval k."""
     rows = np.arange(len(a))
-    return (1 - w) * a[rows, np.maximum(k - 1, 0)] + w * a[rows, k]
+    a = np.broadcast_to(a, (len(k), a.shape[-1]))
+    with np.errstate(invalid="ignore"):  # inf x 0 where a row never gets there
+        return (1 - w) * a[rows, np.maximum(k - 1, 0)] + w * a[rows, k]
 
 
-def free_rotation(model: VcbModel, kc: NDArray, inertia: Inertia, steps: int = 200
+def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps: int = 200
                   ) -> tuple[NDArray, NDArray]:
     """Cam speed (rad/s) and time (s) when the freely turning cam meets the roller, (n,):
-    from rest through theta0 under the closing springs with J_cam alone."""
-    inertia = inertia.columns(len(kc))
-    theta0 = model.c.theta0_deg * np.pi / 180
-    theta, dtheta_du = graded_grid(theta0, steps)
-    extension, _ = model.closing_spring_geometry(theta, pre_rotation=0.0)
-    energy = model.closing_energy(kc, extension)
-    kinetic = model.c.efficiency * (energy[:, :1] - energy)
-    omega = np.sqrt(np.maximum(2 * kinetic / inertia.cam_kg_m2, 0.0))
-    time = _cumulative_time(dtheta_du[None, :], omega, 1.0 / steps)
-    return omega[:, -1], time[:, -1]
+    from rest, the crank ``release_offset`` past its dead centre, to the crank angle
+    QOX + theta0 (theta_c = 0), under eps of the closing springs' work with J_cam alone.
+    A crank at or before its dead centre never turns (infinite time)."""
+    p = params.columns(len(kc))
+    # cam angle theta_c of the release: negative, measured back from the roller contact
+    start = model.dead_centre + p.release_offset_rad - model.contact_crank_angle
+    u = np.linspace(0.0, 1.0, steps + 1)[None, :]
+    theta = start - start * u * u  # graded toward the release, where the cam is at rest
+    extension, _ = model.closing_spring_geometry(theta)
+    energy = model.closing_energy_rows(kc, extension)
+    kinetic = model.c.efficiency * (energy[:, :1] - energy) - p.friction_nm * (theta - start)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        omega = np.sqrt(np.maximum(2 * kinetic / p.cam_kg_m2, 0.0))
+    time = _cumulative_time(-2 * start * u, omega, 1.0 / steps)[:, -1]
+    # friction at least the springs' torque: the cam never gets away (or stops on the way)
+    stuck = (p.release_offset_rad[:, 0] <= 0) | ~(start[:, 0] < 0) | np.any(
+        kinetic[:, 1:] <= 0, axis=1)
+    return np.where(stuck, 0.0, omega[:, -1]), np.where(stuck, np.inf, time)
 
 
 def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
-                   rod_offset: NDArray | float, loads: Loads, inertia: Inertia,
+                   rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
                    steps: int) -> ClosingMotion:
     """Closing of n designs (cubic ``A`` (n, 4), spring rates ``kc`` (n, 2) N/m, linkage
-    ``link`` (n, 5)) by the work-energy equation on ``steps`` graded intervals."""
+    ``link`` (n, 5)) from the release of the closing springs, by the work-energy equation
+    on ``steps`` graded intervals of the cam angle."""
     c = model.c
-    inertia = inertia.columns(len(A))
+    n = len(A)
+    p = params.columns(n)
     end = model.theta_c[-1]
     theta, dtheta_du = graded_grid(end, steps)
     kin = model.kinematics(A, link, rod_offset, theta)
@@ -180,34 +222,38 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     extension, rate = model.closing_spring_geometry(theta)
     spring = model.closing_energy(kc, extension)
     eps = c.efficiency
+    follower = p.follower_kg_m2 * kin.dphi * kin.dphi  # J_f phi'^2
     # 1. free rotation, then the plastic impact of the cam on the roller at rest
-    omega_free, t_free = free_rotation(model, kc, inertia)
-    moving = inertia.rod_kg + inertia.contacts_kg
-    j_before = inertia.cam_kg_m2 + moving * ds1 * ds1
-    omega0 = np.ravel(inertia.cam_kg_m2 * omega_free[:, None] / j_before[:, :1])
+    omega_free, t_free = free_rotation(model, kc, params)
+    moving = p.rod_kg + p.contacts_kg
+    j_before = p.cam_kg_m2 + follower + moving * ds1 * ds1
+    omega0 = np.ravel(p.cam_kg_m2 * omega_free[:, None] / j_before[:, :1])
     kinetic = 0.5 * j_before[:, 0] * omega0**2
     # 2. work-energy equation up to the touch
-    ke_before = kinetic[:, None] + eps * (spring[:, :1] - spring) - loads.resistant_energy(s1)
+    ke_before = (kinetic[:, None] + eps * (spring[:, :1] - spring) - loads.resistant_energy(s1)
+                 - p.friction_nm * theta)
     with np.errstate(invalid="ignore"):
         omega_before = np.sqrt(np.maximum(2 * ke_before / j_before, 0.0))
     gap = loads.gap
     k, w = _crossing(s1, gap)
     touched = k > 0
-    rows = np.arange(len(A))
+    rows = np.arange(n)
     # the touch instant from smooth quantities only (Fr steps there, so omega_before at
     # the next node is no smooth continuation to interpolate)
-    theta_touch = _at(np.broadcast_to(theta, s1.shape), k, w)
+    theta_touch = _at(theta[None, :], k, w)
     ds1_touch = _at(ds1, k, w)
+    dphi_touch = _at(kin.dphi, k, w)
     ke_touch = (kinetic + eps * (spring[:, 0] - _at(spring, k, w))
-                - loads.resistant_energy(np.full((len(A), 1), gap))[:, 0])
+                - loads.resistant_energy(np.full((n, 1), gap))[:, 0]
+                - p.friction_nm[:, 0] * theta_touch)
+    j_touch = (p.cam_kg_m2[:, 0] + p.follower_kg_m2[:, 0] * dphi_touch**2
+               + moving[:, 0] * ds1_touch**2)
     with np.errstate(invalid="ignore"):
-        omega_touch = np.sqrt(np.maximum(
-            2 * ke_touch / (inertia.cam_kg_m2[:, 0] + moving[:, 0] * ds1_touch**2), 0.0))
+        omega_touch = np.sqrt(np.maximum(2 * ke_touch / j_touch, 0.0))
     v_touch = np.where(touched, ds1_touch * omega_touch, np.nan)
-    loss = np.where(touched, 0.5 * inertia.contacts_kg[:, 0] * np.nan_to_num(v_touch) ** 2,
-                    0.0)
+    loss = np.where(touched, 0.5 * p.contacts_kg[:, 0] * np.nan_to_num(v_touch) ** 2, 0.0)
     # 3. after the touch the contacts rest; the rod goes on against the contact springs
-    j_after = inertia.cam_kg_m2 + inertia.rod_kg * ds1 * ds1
+    j_after = p.cam_kg_m2 + follower + p.rod_kg * ds1 * ds1
     ke_after = ke_before - loss[:, None]
     with np.errstate(invalid="ignore"):
         omega_after = np.sqrt(np.maximum(2 * ke_after / j_after, 0.0))
@@ -227,12 +273,11 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     t_touch = np.where(touched, t_before[rows, km] + last_cell, np.nan)
     with np.errstate(divide="ignore", invalid="ignore"):
         first_cell = (theta[k] - theta_touch) * 0.5 * (1 / omega_touch + 1 / omega_after[rows, k])
-    t_k = t_touch + first_cell
-    with np.errstate(divide="ignore", invalid="ignore"):
         g = dtheta_du / omega_after
+    t_k = t_touch + first_cell
     cells = 0.5 * (g[:, 1:] + g[:, :-1]) * du  # cell i - 1 .. i at column i - 1
     cells = np.where(index[:, 1:] > k[:, None], cells, 0.0)  # only whole cells after k
-    t_after = t_k[:, None] + np.concatenate([np.zeros((len(A), 1)), np.cumsum(cells, axis=1)],
+    t_after = t_k[:, None] + np.concatenate([np.zeros((n, 1)), np.cumsum(cells, axis=1)],
                                             axis=1)
     time = np.where(after, t_after, t_before)
     time = np.where(index >= stalled_at[:, None], np.inf, time)
@@ -245,10 +290,10 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
         v_avg = np.where(reached, (gap / 3) / (t_touch - t_two_thirds), np.nan)
     rod_velocity = ds1 * omega
     contact_velocity = np.where(after, 0.0, rod_velocity)
-    # torque the cam passes on: eps T - J_cam omega domega/dtheta (negative: lift-off)
-    torque = eps * model.closing_torque(kc, (extension, rate))
+    # torque the cam passes on: eps T - T_f - J_cam omega domega/dtheta (negative: lift-off)
+    torque = eps * model.closing_torque(kc, (extension, rate)) - p.friction_nm
     accel = 0.5 * np.gradient(omega * omega, theta, axis=1)
-    cam_torque = torque - inertia.cam_kg_m2 * accel
+    cam_torque = torque - p.cam_kg_m2 * accel
     return ClosingMotion(
         theta_c=theta, time=time, omega=omega, rod=s1, rod_velocity=rod_velocity,
         contact=np.minimum(s1, gap), contact_velocity=contact_velocity,
@@ -260,30 +305,70 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
         latched=latched, reach=theta[stalled_at - 1] / end)
 
 
-def opening_motion(travel: NDArray, loads: Loads, inertia: Inertia, efficiency: float,
-                   steps: int = 400) -> OpeningMotion:
-    """Opening from the closed state at rest (rod travel ``travel`` (n,) m) when the hook
-    lets go: the contact and opening springs drive the rod back (eps of their work), the
-    contacts stay closed until the rod reaches the gap, then a plastic impact picks them up
-    (m_rod v = (m_rod + m_c) v+) and the opening spring carries both on."""
-    travel = np.asarray(travel, dtype=float)[:, None]
-    inertia = inertia.columns(len(travel))
-    gap = loads.gap
-    u = np.linspace(0.0, 1.0, steps + 1)[None, :]
-    # phase 1: rod alone from the closed position to the gap, graded at the start
-    s = travel - (travel - gap) * u * u
-    ds_du = 2 * (travel - gap) * u
-    ke = efficiency * (loads.resistant_energy(travel) - loads.resistant_energy(s))
-    v = np.sqrt(np.maximum(2 * ke / inertia.rod_kg, 0.0))
-    t1 = _cumulative_time(ds_du, v, 1.0 / steps)[:, -1]
-    # phase 2: rod and contacts from the gap over 3/4 of the contact stroke
-    v_plus = inertia.rod_kg * v[:, -1:] / (inertia.rod_kg + inertia.contacts_kg)
-    s2 = gap - 0.75 * gap * u
-    ke2 = (0.5 * (inertia.rod_kg + inertia.contacts_kg) * v_plus**2
-           + efficiency * (loads.resistant_energy(np.full_like(s2, gap))
-                           - loads.resistant_energy(s2)))
-    v2 = np.sqrt(np.maximum(2 * ke2 / (inertia.rod_kg + inertia.contacts_kg), 0.0))
-    t2 = _cumulative_time(np.full_like(s2, 0.75 * gap), v2, 1.0 / steps)[:, -1]
-    with np.errstate(divide="ignore"):
-        return OpeningMotion(departure_time=t1,
-                             opening_velocity_avg=np.where(t2 > 0, 0.75 * gap / t2, np.nan))
+def _path(model: VcbModel, link: NDArray, rod_offset: NDArray | float, start: NDArray,
+          stop: NDArray, u: NDArray, graded: bool) -> tuple[NDArray, NDArray, NDArray]:
+    """The linkage moved by its follower angle alone (no cam): phi from ``start`` to
+    ``stop`` (n,) rad, quadratically in u (graded at the start) or linearly. Returns the
+    rod travel from the start (m), ds1/du and dphi/du, (n, m)."""
+    span = stop - start
+    zero = np.zeros_like(start)
+    # a "cubic" in u with phi(u) = start + span u^2 (or span u): the four-bar and rod of
+    # :meth:`VcbModel.kinematics` evaluated along any follower path
+    A = (np.column_stack([start, zero, span, zero]) if graded
+         else np.column_stack([start, span, zero, zero]))
+    kin = model.kinematics(A, link, rod_offset, u)
+    return kin.s1, kin.ds1, kin.dphi
+
+
+def opening_motion(model: VcbModel, A: NDArray, link: NDArray, rod_offset: NDArray | float,
+                   loads: Loads, params: MotionParameters, steps: int = 400) -> OpeningMotion:
+    """Opening of n designs from the closed state at rest (the follower at the cubic's end
+    value) when the hook lets go: eps of the contact and opening springs' work drives the
+    linkage back with J(phi) = J_f + m_rod (ds1/dphi)^2; the contacts stay closed until the
+    rod is back at the gap, where a plastic impact picks them up (generalised momentum
+    kept), and the opening spring carries all to s1 = 0."""
+    n = len(A)
+    p = params.columns(n)
+    eps = model.c.efficiency
+    end = model.theta_c[-1]
+    phi_open = A[:, 0]
+    phi_closed = A @ np.array([1.0, end, end**2, end**3])
+    u = np.linspace(0.0, 1.0, steps + 1)
+    # phase 1: from the closed state (phi_closed, at rest) toward the opened one
+    s_rel, ds_du, dphi_du = _path(model, link, rod_offset, phi_closed, phi_open, u, True)
+    travel = -s_rel[:, -1:]  # rod travel of the closed state, from the opened one
+    s = travel + s_rel
+    j1 = p.follower_kg_m2 * dphi_du**2 + p.rod_kg * ds_du**2
+    ke1 = eps * (loads.resistant_energy(travel) - loads.resistant_energy(s))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = np.sqrt(j1 / (2 * ke1))  # du / dt inverted
+    g[:, 0] = g[:, 1]  # 0/0 at rest; the limit is finite (both vanish as u^2)
+    t1 = np.zeros_like(g)
+    np.cumsum(0.5 * (g[:, 1:] + g[:, :-1]) / steps, axis=1, out=t1[:, 1:])
+    k, w = _crossing(-s, -loads.gap)
+    departure = np.where(k > 0, _at(t1, k, w), np.inf)
+    phi_gap = _at(phi_closed[:, None] + (phi_open - phi_closed)[:, None] * u * u, k, w)
+    ke_gap = eps * (loads.resistant_energy(travel[:, 0]) - loads.resistant_energy(
+        np.full(n, loads.gap)))
+    # phase 2: contacts picked up at the gap; from phi_gap to the opened state, linearly
+    s2_rel, ds2_du, dphi2_du = _path(model, link, rod_offset, phi_gap, phi_open, u, False)
+    s2 = loads.gap + s2_rel
+    # the plastic pick-up keeps the generalised momentum on phase 2's coordinate:
+    # KE+ = KE- J- / J+ with J- without, J+ with the contacts, both at the gap
+    j_pick = (p.follower_kg_m2 * dphi2_du**2 + p.rod_kg * ds2_du**2)[:, 0]
+    j2 = p.follower_kg_m2 * dphi2_du**2 + (p.rod_kg + p.contacts_kg) * ds2_du**2
+    ke_plus = ke_gap * j_pick / j2[:, 0]
+    ke2 = ke_plus[:, None] + eps * (loads.resistant_energy(np.full((n, 1), loads.gap))
+                                    - loads.resistant_energy(s2))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g2 = np.sqrt(j2 / (2 * np.maximum(ke2, 0.0)))
+    t2 = np.zeros_like(g2)
+    np.cumsum(0.5 * (g2[:, 1:] + g2[:, :-1]) / steps, axis=1, out=t2[:, 1:])
+    quarter = _crossing(-s2, -0.25 * loads.gap)
+    t_quarter = np.where(quarter[0] > 0, _at(t2, *quarter), np.inf)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v_open = np.where(np.isfinite(t_quarter) & (t_quarter > 0),
+                          0.75 * loads.gap / t_quarter, np.nan)
+    return OpeningMotion(departure_time=departure, open_time=departure + t2[:, -1],
+                         opening_velocity_avg=v_open)
+

@@ -157,6 +157,10 @@ class VcbModel:
         self.vendor_link = np.array([c.l1_mm * MM, c.l3_mm * MM, c.l4_mm * MM,
                                      c.l5_mm * MM, c.theta1_deg * DEG])
         self.vendor_a = self.node_cubic(self.vendor_link)
+        # spring crank angles (rad): dead centre (Q on OG, springs most compressed) and
+        # where the cam meets the roller, QOX + theta0 (Sec 2.2 Step 8)
+        self.dead_centre = float(np.arctan2(self.G[1], self.G[0]))
+        self.contact_crank_angle = (c.preset_qox_deg + c.theta0_deg) * DEG
 
     # ---- geometry ---------------------------------------------------------------
     def closing_spring_geometry(self, theta_c: NDArray, pre_rotation: float | None = None
@@ -252,6 +256,12 @@ class VcbModel:
         left = np.stack([(c.kc1_precompression_mm * MM - extension) ** 2,
                          (c.kc2_precompression_mm * MM - extension) ** 2])
         return 0.5 * (kc @ left.reshape(2, -1)).reshape((len(kc), *np.shape(extension)))
+
+    def closing_energy_rows(self, kc: NDArray, extension: NDArray) -> NDArray:
+        """As :meth:`closing_energy` with one grid per design: ``extension`` (n, m)."""
+        c = self.c
+        return 0.5 * (kc[:, :1] * (c.kc1_precompression_mm * MM - extension) ** 2
+                      + kc[:, 1:2] * (c.kc2_precompression_mm * MM - extension) ** 2)
 
     def closing_torque(self, kc: NDArray, geometry: tuple[NDArray, NDArray] | None = None
                        ) -> NDArray:

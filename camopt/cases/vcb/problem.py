@@ -4,13 +4,14 @@ or step 2 (four-bar), Kang, Huang & Yang (2023), Eqs 37-43."""
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from camopt.capabilities import VariesCase
 from camopt.cases.vcb.config import CamDesign, VcbConfig
-from camopt.cases.vcb.dynamics import ClosingMotion, Inertia, closing_motion
+from camopt.cases.vcb.dynamics import ClosingMotion, MotionParameters, closing_motion
 from camopt.cases.vcb.model import (
     VcbModel,
     follower_dwell,
@@ -72,7 +73,12 @@ class VcbProblem(Problem, VariesCase):
             self.constraint_names += ("lift_off",)
         if c.pressure_angle_max_deg is not None:
             self.constraint_names += ("pressure_angle",)
-        self.inertia = Inertia(c.cam_inertia_kg_m2, c.rod_mass_kg, c.contacts_mass_kg)
+        self.dynamics = MotionParameters(c.cam_inertia_kg_m2, c.follower_inertia_kg_m2,
+                                         c.rod_mass_kg, c.contacts_mass_kg,
+                                         c.release_offset_deg * DEG, c.cam_friction_nm)
+        band = np.asarray(c.dynamics_band, dtype=float).reshape(-1, 6)
+        self.band = MotionParameters(band[:, 0], band[:, 1], band[:, 2], band[:, 3],
+                                     band[:, 4] * DEG, band[:, 5]) if len(band) else None
         self.search_dynamics = (c.closing_velocity_m_s is not None or c.require_latch
                                 or c.forbid_lift_off)
 
@@ -136,10 +142,25 @@ class VcbProblem(Problem, VariesCase):
         return self._evaluate(X, detail=True, link=link)
 
     def motion(self, X: NDArray, link: NDArray | None = None) -> ClosingMotion:
-        """Closing dynamics of each row of ``X`` (:mod:`camopt.cases.vcb.dynamics`)."""
+        """Closing dynamics of each row of ``X`` with the identified parameters
+        (:mod:`camopt.cases.vcb.dynamics`)."""
         A, kc, link = self.designs(X, link)
         return closing_motion(self.model, A, kc, link, self.rod_offset, self.load,
-                              self.inertia, self.config.dynamics_steps)
+                              self.dynamics, self.config.dynamics_steps)
+
+    def motion_band(self, X: NDArray, nominal: ClosingMotion, link: NDArray | None = None
+                    ) -> MotionBand:
+        """The closing of each row under every parameter set of ``dynamics_band`` and the
+        identified one (``nominal``, already computed): the extremes per design. One
+        vectorised call over (sets x designs) rows."""
+        if self.band is None:
+            return MotionBand.of(nominal)
+        A, kc, link = self.designs(X, link)
+        k, n = len(np.ravel(self.band.cam_kg_m2)), len(A)
+        members = closing_motion(self.model, np.tile(A, (k, 1)), np.tile(kc, (k, 1)),
+                                 np.tile(link, (k, 1)), self.rod_offset, self.load,
+                                 self.band.repeat(n), self.config.dynamics_steps)
+        return MotionBand.of(nominal, members, k)
 
     def _evaluate(self, X: NDArray, detail: bool, link: NDArray | None = None) -> Evaluation:
         c, m = self.config, self.model
@@ -155,16 +176,17 @@ class VcbProblem(Problem, VariesCase):
         sigma_max = m.peak_stress(A, kin.follower, torque, zeros)
         tau_max = hertz.max_shear_stress(sigma_max)  # Eq 31
         motion = self.motion(X, link) if (detail or self.search_dynamics) else None
+        motion_band = self.motion_band(X, motion, link) if motion is not None else None
         if motion is not None:  # over the part of the stroke the cam reaches
             cam_torque_min = np.min(np.where(np.isfinite(motion.time), motion.cam_torque,
                                              np.inf), axis=1)
         if detail or c.pressure_angle_max_deg is not None:
             psi_max = np.max(np.abs(cam.pressure_angle(m.l2, m.l6, kin.follower)), axis=1) / DEG
-        def dyn() -> ClosingMotion:  # the dynamic constraints exist only with the motion
-            assert motion is not None
-            return motion
+        def spread() -> MotionBand:  # the dynamic constraints exist only with the motion
+            assert motion_band is not None
+            return motion_band
 
-        def band() -> tuple[float, float]:
+        def limits() -> tuple[float, float]:
             assert c.closing_velocity_m_s is not None
             return c.closing_velocity_m_s
 
@@ -180,12 +202,16 @@ class VcbProblem(Problem, VariesCase):
             "grashof": lambda: -fourbar.grashof_margin(link[:, 0], m.l2, link[:, 1],
                                                        link[:, 2]) / m.l2,  # Eq 43
             "shear_yield": lambda: tau_max / (c.shear_yield_mpa * 1e6) - 1,
-            "closing_velocity_low": lambda: 1 - dyn().closing_velocity_avg / band()[0],
-            "closing_velocity_high": lambda: dyn().closing_velocity_avg / band()[1] - 1,
+            # the whole band of closing velocities inside the requirement
+            "closing_velocity_low": lambda: 1 - spread().velocity_low / limits()[0],
+            "closing_velocity_high": lambda: spread().velocity_high / limits()[1] - 1,
             # continuous across the limit: the kinetic energy left (share of the driving
-            # work) when the cam latches, the share of the stroke it misses when it stalls
-            "latch": lambda: np.where(dyn().latched, c.latch_energy_min_j - dyn().final_kinetic,
-                                      c.latch_energy_min_j + bal.driving * (1 - dyn().reach))
+            # work) when the cam latches, the share of the stroke it misses when it stalls;
+            # the worst parameter set of the band
+            "latch": lambda: np.where(spread().latched,
+                                      c.latch_energy_min_j - spread().kinetic_low,
+                                      c.latch_energy_min_j
+                                      + bal.driving * (1 - spread().reach_low))
             / bal.driving,
         }
         g["lift_off"] = lambda: -cam_torque_min * end / bal.driving
@@ -204,14 +230,20 @@ class VcbProblem(Problem, VariesCase):
         }
         if motion is not None:
             extras.update({
+                # the identified parameters, and the band over the sets equally
+                # consistent with the ADAMS data (dynamics_band)
                 "closing_velocity_avg_m_s": motion.closing_velocity_avg,
+                "closing_velocity_low_m_s": spread().velocity_low,
+                "closing_velocity_high_m_s": spread().velocity_high,
                 "closing_time_ms": motion.closing_time * 1e3,
+                "closing_time_high_ms": spread().closing_time_high * 1e3,
                 "touch_velocity_m_s": motion.touch_velocity,
                 "touch_time_ms": motion.touch_time * 1e3,
                 "cam_contact_time_ms": motion.cam_contact_time * 1e3,
                 "latch_kinetic_energy_j": motion.final_kinetic,
                 "cam_torque_min_nm": cam_torque_min,
-                "latched": motion.latched.astype(float),
+                "latch_kinetic_energy_low_j": spread().kinetic_low,
+                "latched": spread().latched.astype(float),  # at every end of the band
             })
         if detail:
             con = m.contact(kin.follower, torque)
@@ -296,3 +328,35 @@ class VcbProblem(Problem, VariesCase):
         out = self.curves(np.asarray(x, dtype=float))
         out.update({f"initial_{k}": v for k, v in self.curves(self.vendor_x()).items()})
         return out
+
+
+@dataclass(frozen=True)
+class MotionBand:
+    """Extremes of the closing per design (n,) over the identified parameters and the
+    parameter sets equally consistent with the ADAMS data (``dynamics_band``): average
+    closing velocity (m/s; NaN where some set never reaches the contacts), latched under
+    every set, least kinetic energy at the latch (J), least reach (fraction of the
+    stroke) and longest closing time (s)."""
+
+    velocity_low: NDArray
+    velocity_high: NDArray
+    latched: NDArray
+    kinetic_low: NDArray
+    reach_low: NDArray
+    closing_time_high: NDArray
+
+    @classmethod
+    def of(cls, nominal: ClosingMotion, members: ClosingMotion | None = None, k: int = 0
+           ) -> MotionBand:
+        """The band of ``nominal`` (n designs) and ``members`` (k sets x n designs)."""
+        def stack(name: str) -> NDArray:
+            first = getattr(nominal, name)[None, :]
+            if members is None:
+                return first
+            return np.concatenate([first, getattr(members, name).reshape(k, -1)])
+        v = stack("closing_velocity_avg")
+        return cls(velocity_low=v.min(axis=0), velocity_high=v.max(axis=0),
+                   latched=stack("latched").all(axis=0),
+                   kinetic_low=stack("final_kinetic").min(axis=0),
+                   reach_low=stack("reach").min(axis=0),
+                   closing_time_high=stack("closing_time").max(axis=0))

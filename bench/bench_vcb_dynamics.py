@@ -1,0 +1,44 @@
+"""VCB closing dynamics per evaluation (issue #20): the search's evaluation of
+``configs/vcb_velocity.toml`` with the velocity band (the identified parameters and every
+set of ``dynamics_band``) against the same evaluation with the identified set alone (the
+cost of the one-set model the band replaced), as a ratio measured in one run."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from camopt.cases.vcb import VcbProblem
+from camopt.driver import load
+
+CONFIG = Path(__file__).resolve().parents[1] / "configs" / "vcb_velocity.toml"
+
+
+def _per_call(problem: VcbProblem, X: np.ndarray, rounds: int = 7, calls: int = 5) -> float:
+    """Median over rounds of the mean time of ``calls`` population evaluations (s)."""
+    problem.evaluate(X)  # warm-up
+    times = []
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        for _ in range(calls):
+            problem.evaluate(X)
+        times.append((time.perf_counter() - t0) / calls)
+    return float(np.median(times))
+
+
+def main() -> None:
+    band = VcbProblem(load(CONFIG, []).case)
+    single = VcbProblem(load(CONFIG, ["case.dynamics_band=[]"]).case)
+    rng = np.random.default_rng(0)
+    X = band.lower + rng.random((100, band.n_var)) * (band.upper - band.lower)
+    sets = 1 + len(band.config.dynamics_band)
+    t_band, t_single = _per_call(band, X), _per_call(single, X)
+    print(f"vcb_velocity evaluate, population 100: band of {sets} parameter sets "
+          f"{t_band * 1e3:.1f} ms, identified set alone {t_single * 1e3:.1f} ms, "
+          f"ratio {t_band / t_single:.2f} ({t_band / 100 * 1e6:.0f} us per design)")
+
+
+if __name__ == "__main__":
+    main()
