@@ -85,20 +85,20 @@ class VcbConfig(CaseConfig):
     # opening and closing dynamics (Sec 3.2, camopt/cases/vcb/dynamics.py); parameters
     # identified on the vendor's ADAMS data: configs/vcb_identify_dynamics.toml
     cam_inertia_kg_m2: Inertia = Field(
-        1.15e-3, description="cam, shaft, crank and closing springs about O (identified)")
+        5.8e-4, description="cam, shaft, crank and closing springs about O (identified)")
     follower_inertia_kg_m2: float = Field(
         0.0, ge=0, le=10.0, description="follower BD, roller and four-bar input about B, "
         "kg m^2 (the ADAMS data do not separate it from rod_mass_kg: see assumptions)")
     rod_mass_kg: Mass = Field(
-        3.02, description="output link, arm and insulated rods as a mass at the rod "
+        2.8807, description="output link, arm and insulated rods as a mass at the rod "
         "(identified)")
     contacts_mass_kg: Mass = Field(
-        2.15, description="the three moving contacts together (identified)")
+        2.0181, description="the three moving contacts together (identified)")
     release_offset_deg: float = Field(
-        19.04, gt=0, lt=90, description="the charged spring crank's angle past its dead "
-        "centre when the closing latch lets go (identified; 19.04 = the opened-state crank)")
+        14.07, gt=0, lt=90, description="the charged spring crank's angle past its dead "
+        "centre when the closing latch lets go (identified; 19.04 = QOX 95 deg)")
     cam_friction_nm: float = Field(
-        0.0, ge=0, le=1000.0, description="Coulomb friction torque referred to the cam shaft, "
+        11.53, ge=0, le=1000.0, description="Coulomb friction torque referred to the cam shaft, "
         "against the cam whenever it turns, beyond Eq 26's efficiency (identified)")
     dynamics_band: list[tuple[float, float, float, float, float, float]] = Field(
         default_factory=list, max_length=64, description="parameter sets (cam_inertia_kg_m2, "
