@@ -195,7 +195,8 @@ class VcbIdentifyConfig(VcbConfig):
 
 
 class VcbDynamicsIdentifyConfig(VcbConfig):
-    """Fit the inertias the paper leaves out to the vendor design's ADAMS results (Sec 3.2)."""
+    """Fit the dynamics' parameters the paper leaves out to the vendor design's seven ADAMS data
+    (Sec 3.2, Table 4)."""
 
     kind: Literal["vcb_identify_dynamics"] = "vcb_identify_dynamics"  # type: ignore[assignment]
     # the ADAMS data of the vendor design (Sec 3.2 and Table 4), times from the release
@@ -227,6 +228,3 @@ class VcbDynamicsIdentifyConfig(VcbConfig):
                                               description="search range (physical)")
     cam_friction_bounds_nm: Bounds = Field(Bounds(lower=0.0, upper=50.0),
                                            description="search range")
-    rod_mass_bounds_kg: Bounds = Field(Bounds(lower=0.1, upper=30.0), description="search range")
-    contacts_mass_bounds_kg: Bounds = Field(Bounds(lower=0.1, upper=15.0),
-                                            description="search range")

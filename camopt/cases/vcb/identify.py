@@ -22,8 +22,9 @@ from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import VcbDynamicsIdentifyConfig, VcbIdentifyConfig
 from camopt.cases.vcb.dynamics import MotionParameters, closing_motion, opening_motion
-from camopt.cases.vcb.model import DEG, MM, VcbModel
+from camopt.cases.vcb.model import VcbModel
 from camopt.problem import Evaluation, Problem, Variable
+from camopt.units import DEG, MM, MS
 
 
 class VcbIdentification(Problem):
@@ -156,10 +157,10 @@ class VcbDynamicsIdentification(Problem):
                                  self.load, params, c.dynamics_steps)
         opening = opening_motion(m, A, link, self.rod_offset, self.load, params)
         return np.column_stack([
-            opening.departure_time * 1e3, opening.open_time * 1e3,
-            opening.opening_velocity_avg, closing.cam_contact_time * 1e3,
-            closing.touch_time * 1e3, closing.closing_velocity_avg,
-            closing.closing_time * 1e3])
+            opening.departure_time / MS, opening.open_time / MS,
+            opening.opening_velocity_avg, closing.cam_contact_time / MS,
+            closing.touch_time / MS, closing.closing_velocity_avg,
+            closing.closing_time / MS])
 
     def residuals(self, predictions: NDArray) -> NDArray:
         """Relative residuals (n, 7): prediction / datum - 1; the one-sided datum counts
@@ -200,7 +201,8 @@ def fit(problem: VcbDynamicsIdentification, start: NDArray, drop: int | None = N
     return np.exp(least_squares(residuals, x0, bounds=(lower, upper), x_scale=1.0).x)
 
 
-def leave_one_out(problem: VcbDynamicsIdentification, best: NDArray) -> list[dict[str, float]]:
+def leave_one_out(problem: VcbDynamicsIdentification, best: NDArray
+                  ) -> list[dict[str, object]]:
     """Fit without each datum in turn and predict it: one row per datum with its value,
     the prediction of the fit without it and that residual (%), and the largest residual
     of the fit on the remaining data (%)."""

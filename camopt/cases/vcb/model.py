@@ -23,9 +23,7 @@ from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import VcbConfig
 from camopt.mechanics import cam, fourbar, hertz
-
-MM = 1e-3
-DEG = np.pi / 180
+from camopt.units import DEG, MM
 
 
 @dataclass(frozen=True)

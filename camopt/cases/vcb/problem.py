@@ -356,7 +356,7 @@ class MotionBand:
             return np.concatenate([first, getattr(members, name).reshape(k, -1)])
         v = stack("closing_velocity_avg")
         return cls(velocity_low=v.min(axis=0), velocity_high=v.max(axis=0),
-                   latched=stack("latched").all(axis=0),
+                   latched=np.asarray(stack("latched").all(axis=0)),
                    kinetic_low=stack("final_kinetic").min(axis=0),
                    reach_low=stack("reach").min(axis=0),
                    closing_time_high=stack("closing_time").max(axis=0))
