@@ -4,10 +4,12 @@ Each varied input (a design variable of the run, or a ``case.`` field the case c
 per design, capability :class:`~camopt.capabilities.VariesCase`) is drawn around its
 nominal value, uniformly within +-X or normally with sigma = X / 3, X relative (``%``) or
 in the input's own unit. The nominal design, one row per input at each end of its
-tolerance (the tornado chart's one-at-a-time swings) and every sample are evaluated in
-one vectorised call (``Problem.describe``). Reported: the share of feasible samples
-(yield), the 5th/50th/95th percentiles of every metric, and the Spearman rank correlation
-of every metric with every input (scipy.stats), strongest first.
+tolerance (the tornado chart's one-at-a-time swings) and every sample are evaluated
+together in cache-sized row chunks (``Problem.describe`` through :mod:`camopt.batch`):
+memory is the per-sample columns (objective, metrics, constraints: a few hundred MiB at
+10^6 VCB samples) plus one chunk's temporaries, whatever the sample count. Reported: the
+share of feasible samples (yield), the 5th/50th/95th percentiles of every metric, and the
+Spearman rank correlation of every metric with every input (scipy.stats), strongest first.
 """
 
 from __future__ import annotations
@@ -90,7 +92,7 @@ def _inputs(run: RunView, problem: Problem, varies: Sequence[Vary]) -> NDArray:
 def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
             distribution: Distribution = Distribution.uniform) -> Tolerance:
     """Draw ``samples`` sets of the varied inputs from ``SeedSequence(seed)`` and evaluate
-    them, the nominal design and the one-at-a-time ends in one vectorised call."""
+    them, the nominal design and the one-at-a-time ends together (row chunks)."""
     if not varies:
         raise CamoptError(f"{run.path}: --vary: give at least one input to vary")
     if samples < 2:
@@ -112,8 +114,8 @@ def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
     bad = outside(values, ranges)
     ev = mark(ev, bad)
     result = Tolerance(run.path, list(varies), distribution, seed, nominal, drawn,
-                       ev.take(0), ev.take(np.arange(1, 1 + 2 * k)),
-                       ev.take(np.arange(1 + 2 * k, len(ev.f))), problem.objective_name,
+                       ev.take(0), ev.take(slice(1, 1 + 2 * k)),
+                       ev.take(slice(1 + 2 * k, None)), problem.objective_name,
                        problem.constraint_names, outside=bad[1 + 2 * k:])
     result.summary = summarise(result)
     return result

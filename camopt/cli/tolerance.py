@@ -34,7 +34,7 @@ def tolerance(
         "--vary", help="NAME=±X% (relative) or NAME=±X (own unit); NAME a design variable "
         "or case.FIELD; repeatable; default: the case's documented tolerances")] = None,
     samples: Annotated[int, typer.Option(
-        min=1, max=1_000_000, help="samples, evaluated in one pass (at most 10^6: memory)")]
+        min=1, max=1_000_000, help="samples, evaluated in row chunks (at most 10^6)")]
     = 2000,
     seed: Annotated[int, typer.Option(min=0, help="root seed of the draws")] = 0,
     dist: Annotated[Dist, typer.Option(

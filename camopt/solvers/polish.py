@@ -221,13 +221,19 @@ def _slsqp(problem: Problem, x0: NDArray, options: PolishOptions
     start, design = _unit_map(problem, x0)
     n_free = start.size
     cache: dict[bytes, Evaluation] = {}
+    keep = 2 * (n_free + 2)
 
     def evaluate(u: NDArray) -> Evaluation:
+        # SLSQP asks for f and then g at each point, and differences both at the same
+        # n_free + 1 points (the same absolute step): one evaluation serves both (issue
+        # #24: the constraints' Jacobian re-evaluated every point, half the polish)
         key = u.tobytes()
-        if key not in cache:
-            cache.clear()  # SLSQP asks for f and then g at the same point
-            cache[key] = problem.evaluate(design(u)[None, :])
-        return cache[key]
+        hit = cache.get(key)
+        if hit is None:
+            if len(cache) >= keep:
+                del cache[next(iter(cache))]  # the oldest
+            hit = cache[key] = problem.evaluate(design(u)[None, :])
+        return hit
 
     def metric(ev: Evaluation, name: str | None) -> float:
         if name is None or name == problem.objective_name:
