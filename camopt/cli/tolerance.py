@@ -50,10 +50,12 @@ def tolerance(
 ) -> None:
     """Vary a run's optimum within tolerances: yield, percentiles, sensitivities."""
     from camopt import archive
+    from camopt.perf import tune_allocator
     from camopt.report import jsonable
     from camopt.tolerance import Distribution, analyse, default_varies, parse_vary
 
     with errors():
+        tune_allocator()  # chunk temporaries stay mapped (docs/design.md, Performance)
         run = archive.load_run(run_path)
         varies = ([parse_vary(str(run_path), v) for v in vary] if vary
                   else default_varies(run))
