@@ -289,3 +289,27 @@ def test_velocity_design_meets_the_requirement_across_the_band():
     assert m["tau_max_mpa"] < 1194 and 23 <= m["phi_max_deg"] <= 26
     assert abs(m["rod_travel_mm"] - 18.0) <= 0.2 + 1e-9
     assert m["latched"] == 1 and m["cam_torque_min_nm"] >= 0
+
+
+def test_band_is_the_extremes_over_the_parameter_sets():
+    """closing_velocity_low/high_m_s and latched of a design are the min, max and all over
+    the identified set and every set of dynamics_band, each simulated on its own (the band
+    reuses one kinematics per design for all sets); contacts that never meet count as 0."""
+    p = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
+    rng = np.random.default_rng(5)
+    X = np.vstack([p.vendor_x(), p.lower + rng.random((6, p.n_var)) * (p.upper - p.lower)])
+    ev = p.describe(X)
+    v, latched = [], []
+    for row in [None, *p.config.dynamics_band]:
+        sets = () if row is None else (
+            "case.dynamics_band=[]", f"case.cam_inertia_kg_m2={row[0]}",
+            f"case.follower_inertia_kg_m2={row[1]}", f"case.rod_mass_kg={row[2]}",
+            f"case.contacts_mass_kg={row[3]}", f"case.release_offset_deg={row[4]}",
+            f"case.cam_friction_nm={row[5]}")
+        one = VcbProblem(load(CONFIGS / "vcb_velocity.toml", *sets).case).motion(X)
+        v.append(np.nan_to_num(one.closing_velocity_avg, nan=0.0))
+        latched.append(one.latched)
+    np.testing.assert_array_equal(ev.extras["closing_velocity_low_m_s"], np.min(v, axis=0))
+    np.testing.assert_array_equal(ev.extras["closing_velocity_high_m_s"], np.max(v, axis=0))
+    np.testing.assert_array_equal(ev.extras["latched"], np.all(latched, axis=0))
+    assert np.ptp(v, axis=0)[0] > 0  # the vendor's band has a width

@@ -208,21 +208,26 @@ def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps:
 
 def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
                    rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
-                   steps: int) -> ClosingMotion:
+                   steps: int, sets: int = 1) -> ClosingMotion:
     """Closing of n designs (cubic ``A`` (n, 4), spring rates ``kc`` (n, 2) N/m, linkage
     ``link`` (n, 5)) from the release of the closing springs, by the work-energy equation
-    on ``steps`` graded intervals of the cam angle."""
+    on ``steps`` graded intervals of the cam angle. With ``sets`` > 1, ``params`` holds
+    that many parameter sets for every design (:meth:`MotionParameters.repeat`, set-major)
+    and the result has sets x n rows; the kinematics, which do not depend on the
+    parameters, are computed once per design."""
     c = model.c
-    n = len(A)
+    n = len(A) * sets
     p = params.columns(n)
     end = model.theta_c[-1]
     theta, dtheta_du = graded_grid(end, steps)
     kin = model.kinematics(A, link, rod_offset, theta)
-    s1, ds1 = kin.s1, kin.ds1
     extension, rate = model.closing_spring_geometry(theta)
     spring = model.closing_energy(kc, extension)
+    dphi, s1, ds1 = kin.dphi, kin.s1, kin.ds1
+    if sets > 1:
+        dphi, s1, ds1, spring, kc = (np.tile(a, (sets, 1)) for a in (dphi, s1, ds1, spring, kc))
     eps = c.efficiency
-    follower = p.follower_kg_m2 * kin.dphi * kin.dphi  # J_f phi'^2
+    follower = p.follower_kg_m2 * dphi * dphi  # J_f phi'^2
     # 1. free rotation, then the plastic impact of the cam on the roller at rest
     omega_free, t_free = free_rotation(model, kc, params)
     moving = p.rod_kg + p.contacts_kg
@@ -242,7 +247,7 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     # the next node is no smooth continuation to interpolate)
     theta_touch = _at(theta[None, :], k, w)
     ds1_touch = _at(ds1, k, w)
-    dphi_touch = _at(kin.dphi, k, w)
+    dphi_touch = _at(dphi, k, w)
     ke_touch = (kinetic + eps * (spring[:, 0] - _at(spring, k, w))
                 - loads.resistant_energy(np.full((n, 1), gap))[:, 0]
                 - p.friction_nm[:, 0] * theta_touch)

@@ -157,9 +157,8 @@ class VcbProblem(Problem, VariesCase):
             return MotionBand.of(nominal)
         A, kc, link = self.designs(X, link)
         k, n = len(np.ravel(self.band.cam_kg_m2)), len(A)
-        members = closing_motion(self.model, np.tile(A, (k, 1)), np.tile(kc, (k, 1)),
-                                 np.tile(link, (k, 1)), self.rod_offset, self.load,
-                                 self.band.repeat(n), self.config.dynamics_steps)
+        members = closing_motion(self.model, A, kc, link, self.rod_offset, self.load,
+                                 self.band.repeat(n), self.config.dynamics_steps, sets=k)
         return MotionBand.of(nominal, members, k)
 
     def _evaluate(self, X: NDArray, detail: bool, link: NDArray | None = None) -> Evaluation:
@@ -334,7 +333,7 @@ class VcbProblem(Problem, VariesCase):
 class MotionBand:
     """Extremes of the closing per design (n,) over the identified parameters and the
     parameter sets equally consistent with the ADAMS data (``dynamics_band``): average
-    closing velocity (m/s; NaN where some set never reaches the contacts), latched under
+    closing velocity (m/s; 0 under a set with which the contacts never meet), latched under
     every set, least kinetic energy at the latch (J), least reach (fraction of the
     stroke) and longest closing time (s)."""
 
@@ -354,7 +353,9 @@ class MotionBand:
             if members is None:
                 return first
             return np.concatenate([first, getattr(members, name).reshape(k, -1)])
-        v = stack("closing_velocity_avg")
+        # contacts that never meet close at zero speed: finite, so that a search starting
+        # among stalling designs still sees how far it is from the requirement
+        v = np.nan_to_num(stack("closing_velocity_avg"), nan=0.0)
         return cls(velocity_low=v.min(axis=0), velocity_high=v.max(axis=0),
                    latched=np.asarray(stack("latched").all(axis=0)),
                    kinetic_low=stack("final_kinetic").min(axis=0),
