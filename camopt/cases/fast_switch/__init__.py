@@ -11,6 +11,9 @@ TOLERANCES = {  # docs/assumptions.md, "Default tolerances"
     "sud_mm": "±1",  # undeformed (free) spring length
     "sf_mm": "±0.1", "s0_mm": "±0.1",  # installed lengths, set by machined stops
     "r2_mm": "±0.05", "r3_mm": "±0.05",  # link lengths
+    # the spring as made (assumed): drawn wire and coiled diameter; through d^4 / D^3 they
+    # move its rate by about ±4 % and ±3 % (R13) and its stress (R14/R15)
+    "case.wire_diameter_mm": "±0.02", "case.spring_diameter_mm": "±1%",
 }
 
 SPEC = register_case(CaseSpec(

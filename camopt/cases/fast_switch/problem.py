@@ -15,13 +15,15 @@ the full model with :meth:`FastSwitchProblem.full_model`.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.capabilities import HasFamily
+from camopt.capabilities import HasFamily, VariesCase
 from camopt.cases.fast_switch.config import FastSwitchConfig
+from camopt.errors import ConfigError
 from camopt.mechanics import dynamics, springs
 from camopt.mechanics.slider_crank import coupler_angle, coupler_derivatives, crank_angle_for_span
 from camopt.problem import Evaluation, Problem, Variable
@@ -145,7 +147,12 @@ def closure_time(xi: NDArray, omega: NDArray, sf: NDArray, sud: NDArray, s0: NDA
     return (np.pi - np.arcsin(v) - phase) / (root * omega)
 
 
-class FastSwitchProblem(Problem, HasFamily):
+SPRING_FIELDS = ("wire_diameter_mm", "spring_diameter_mm")
+"""Case fields a design may take per row (tolerance analysis, robust design): the spring's
+made wire and coil diameters, through which its rate (R13) and stress (R14/R15) vary."""
+
+
+class FastSwitchProblem(Problem, HasFamily, VariesCase):
     """Reduced fast-switch problem over (coils, sf, sud, s0, r3, r2); minimise closure time."""
 
     objective_name = "closure_time_ms"
@@ -260,6 +267,25 @@ class FastSwitchProblem(Problem, HasFamily):
                   "equality_residual_max": np.max(np.abs(np.stack(list(h.values()))), axis=0),
                   "spring_stress_margin_pct": ev.extras["spring_stress_margin_pct"]}
         return Evaluation(ev.f, ev.g, extras)
+
+    def case_fields(self) -> tuple[str, ...]:
+        """The spring's wire and coil diameters (:data:`SPRING_FIELDS`)."""
+        return SPRING_FIELDS
+
+    def describe_with(self, X: NDArray, fields: Mapping[str, NDArray]) -> Evaluation:
+        """As :meth:`describe`, with the spring's wire and/or coil diameter (mm) per row.
+        Every equation reads the Nomenclature parameters from ``self.p`` and broadcasts
+        over rows, so the parameters are rebuilt with (n,) arrays for the call."""
+        unknown = sorted(set(fields) - set(SPRING_FIELDS))
+        if unknown:
+            raise ConfigError("case", unknown[0], "cannot vary per design; fields that can: "
+                              f"{', '.join(SPRING_FIELDS)}")
+        rows = {k: np.asarray(v, dtype=float) for k, v in fields.items()}
+        saved, self.p = self.p, SwitchParameters.from_config(self.config.model_copy(update=rows))
+        try:
+            return self.describe(X)
+        finally:
+            self.p = saved
 
     def _evaluate(self, X: NDArray) -> tuple[Evaluation, SwitchDesign]:
         X = np.atleast_2d(np.asarray(X, dtype=float))
