@@ -61,7 +61,12 @@ def run_context(view: RunView) -> dict[str, Any]:
     spec = get_case(view.kind)
     summary = report.summary(view)
     stats = report.repeat_statistics(view).as_dict()
+    doc = report.show(view)
     return {
+        **verdict_context(doc), "reference": doc.get("reference"),
+        "pareto": doc.get("pareto_summary"),
+        "pareto_rows": report.pareto_rows(doc["pareto_summary"])
+        if doc.get("pareto_summary") else [], "pareto_columns": report.PARETO_COLUMNS,
         "kind": "run", "title": f"{view.kind} / {view.solver_name}: {Path(view.path).name}",
         "path": view.path, "case_kind": view.kind, "case_summary": spec.summary,
         "paper_source": spec.paper_source, "solver": view.solver_name,
@@ -82,6 +87,15 @@ def run_context(view: RunView) -> dict[str, Any]:
     }
 
 
+def verdict_context(doc: dict[str, Any]) -> dict[str, Any]:
+    """The verdict the page leads with: sentence, pass/fail, the table's cells and which
+    rows fail (``doc``: ``report.show``'s or ``report.rank_sweep``'s)."""
+    return {"verdict": doc["verdict"], "verdict_sentence": doc["verdict_sentence"],
+            "verdict_columns": report.VERDICT_COLUMNS,
+            "verdict_rows": list(zip(report.verdict_rows(doc["requirements"]),
+                                     [r["pass"] is False for r in doc["requirements"]]))}
+
+
 def sweep_context(path: Path) -> dict[str, Any]:
     """What the template shows of a sweep archive (read through ``load_sweep`` only)."""
     from camopt import plots
@@ -89,6 +103,7 @@ def sweep_context(path: Path) -> dict[str, Any]:
     spec, results = load_sweep(path)
     ranking = report.rank_sweep(spec, results)
     return {
+        **verdict_context(ranking), "reference": None,
         "kind": "sweep", "title": f"sweep: {path.name}", "path": str(path),
         "source": spec.source, "grid": spec.grid, "seeds": list(spec.seeds),
         "cells": len(results), "ranking": ranking["ranking"],

@@ -36,6 +36,49 @@ def rows(run: RunView) -> list[dict[str, Any]] | None:
             for row in run.table]
 
 
+def summary(run: RunView) -> dict[str, Any] | None:
+    """What a Pareto run found, for the summary ``show`` and ``report`` lead with (None
+    for a single-objective run): the objectives with their senses, the feasible front's
+    size and extent (least and greatest of each objective), its knee, and what the
+    headline (best) design is. The knee is the front member nearest the ideal point with
+    every objective normalised by the front's extent (0 at the best, 1 at the worst
+    value). The headline design is the case's scalar objective's best, which need not
+    be on the front: ``headline`` says whether it is, or how many front designs dominate
+    it."""
+    names, sign = objectives(run)
+    if len(names) < 2:
+        return None
+    f = front(run)
+    doc: dict[str, Any] = {
+        "objectives": [{"name": n, "sense": "min" if s > 0 else "max"}
+                       for n, s in zip(names, sign)],
+        "front_size": int(len(f)), "designs": len(run.table)}
+    if not len(f):
+        doc.update(extent=None, knee=None, headline="no feasible design on the front")
+        return doc
+    doc["extent"] = {n: [float(lo), float(hi)] for n, lo, hi in
+                     zip(names, f.min(axis=0), f.max(axis=0))}
+    g = f * sign  # minimisation form
+    ideal, nadir = g.min(axis=0), g.max(axis=0)
+    span = np.where(nadir > ideal, nadir - ideal, 1.0)
+    knee = int(np.argmin(np.linalg.norm((g - ideal) / span, axis=1)))
+    feasible_rows = [r for r in run.table if r.get("feasible")]
+    doc["knee"] = {n: feasible_rows[knee].get(n) for n in (*run.best.x, *names)}
+    best = np.array([float(run.best.metrics.get(n, np.nan)) for n in names]) * sign
+    if not np.all(np.isfinite(best)):
+        doc["headline"] = "the headline design does not report the objectives"
+        return doc
+    dominated = int(np.sum(np.all(g <= best, axis=1) & np.any(g < best, axis=1)))
+    on_front = bool(np.any(np.all(np.isclose(g, best, rtol=1e-9, atol=0), axis=1)))
+    what = f"the best by the run's scalar objective ({run.objective_name})"
+    doc["headline_on_front"] = on_front and not dominated
+    doc["headline_dominated_by"] = dominated
+    doc["headline"] = (f"{what}, a member of the front" if on_front and not dominated else
+                       f"{what}, dominated by {dominated} of the {len(f)} front designs"
+                       if dominated else f"{what}, not on the front")
+    return doc
+
+
 def front(run: RunView) -> NDArray:
     """The feasible Pareto designs' objectives, (n, n_obj), in their own units."""
     names, _ = objectives(run)

@@ -10,15 +10,23 @@ import numpy as np
 
 from camopt import pareto, stats
 from camopt.errors import ConfigError
+from camopt.requirements import Requirement, check, sentence
+from camopt.requirements import verdict as verdict_of
 from camopt.runview import RunView
 
 SHOW_KEYS = ("case", "solver", "best", "repeats", "table")
 
 
+NOISE = 1e-12
+"""Values below this in magnitude are round-off (a margin of 2.2e-14 %, a residual of
+5e-16) and print as 0; the archive and JSON keep them."""
+
+
 def format_value(value: Any) -> str:
     """A value as tables and the HTML report print it: 6 significant digits; infinities as
     'inf' (a stress with no bound, a design that never closes), NaN as 'n/a' (a quantity
-    that does not exist for this design), booleans as yes/no, None as '-'."""
+    that does not exist for this design), booleans as yes/no, None as '-', round-off
+    (below :data:`NOISE`) as 0."""
     if isinstance(value, bool):
         return "yes" if value else "no"
     if isinstance(value, float):
@@ -26,6 +34,8 @@ def format_value(value: Any) -> str:
             return "n/a"
         if math.isinf(value):
             return "inf" if value > 0 else "-inf"
+        if abs(value) < NOISE:
+            return "0"
         return f"{value:.6g}"
     if isinstance(value, (list, tuple)):
         return ", ".join(format_value(v) for v in value)
@@ -50,16 +60,27 @@ REPEAT_KEYS = ("seed", "objective", "feasible", "nfev", "wall_s", "converged_nit
 
 
 def show(run: RunView) -> dict[str, Any]:
-    """The ``show --format json`` document: case, solver, best, repeats, table, and for a
-    multi-objective run (a solver with ``objectives``) ``pareto``. These keys are a
-    contract scripts rely on; the two-column view is :func:`summary`."""
+    """The ``show --format json`` document: verdict ("pass"/"fail") with its sentence and
+    requirements (each with name, limit, value, margin, pass), case, solver, best,
+    repeats, table, the reference design with its own verdict, and for a multi-objective
+    run (a solver with ``objectives``) ``pareto``. These keys are a contract scripts rely
+    on; the two-column view is :func:`summary`."""
     repeats = [{k: getattr(r, k) for k in REPEAT_KEYS} for r in run.repeats]
     best = {k: v for k, v in asdict(run.best).items() if k != "repeat"}
-    doc = {"case": run.case, "solver": run.solver, "best": best, "repeats": repeats,
-           "table": run.table}
+    judged = verdict(run)
+    label, ref = reference(run)
+    doc = {"verdict": judged["verdict"], "verdict_sentence": judged["sentence"],
+           "requirements": judged["requirements"], "case": run.case, "solver": run.solver,
+           "best": best, "repeats": repeats, "table": run.table}
+    if label:
+        ref_judged = verdict(run, ref)
+        doc["reference"] = {"label": label, "values": ref, "verdict": ref_judged["verdict"],
+                            "verdict_sentence": ref_judged["sentence"],
+                            "requirements": ref_judged["requirements"]}
     rows = pareto.rows(run)
     if rows is not None:
         doc["pareto"] = rows
+        doc["pareto_summary"] = pareto.summary(run)
     if run.robust:
         doc["robust"] = {"settings": run.robust, "check": run.robust_check}
     return jsonable(doc)
@@ -93,28 +114,117 @@ def robust_summary(run: RunView) -> dict[str, Any] | None:
             "yield_target": run.robust.get("yield_target"), "rows": rows}
 
 
-REFERENCE_PREFIXES = {"initial_": "initial design", "original_": "original design"}
+REFERENCE_PREFIXES = ("initial_", "original_")
 """Metric prefixes under which cases report their reference (vendor's, original) design."""
 
 
 def reference(run: RunView) -> tuple[str, dict[str, Any]]:
-    """The reference design the optimum is shown beside: the metrics a case reports with a
-    prefix of :data:`REFERENCE_PREFIXES` (its initial or original design), else the paper's
-    reported values under the optimum's own names. Returns its label ('' when there is
-    none) and ``{name: value}`` keyed by the optimum's names (``objective`` included)."""
+    """The reference design the optimum is shown beside, under one name everywhere
+    (``reference: vendor, Sec 2.3 and Table 2``: the case's ``CaseSpec.reference``):
+    the metrics a case reports with a prefix of :data:`REFERENCE_PREFIXES`, completed by
+    the ``[case]`` fields named as the design variables (the vendor's spring rates are
+    the config's), else the case's ``reference_values`` (a paper's optimum), else the
+    paper's reported values under the optimum's own names. Returns its label ('' when
+    there is none) and ``{name: value}`` keyed by the optimum's names (``objective``
+    included)."""
     from camopt.cases import get_case
 
+    spec = get_case(run.kind)
     metrics = run.best.metrics
-    for prefix, label in REFERENCE_PREFIXES.items():
+    for prefix in REFERENCE_PREFIXES:
         values = {k[len(prefix):]: v for k, v in metrics.items() if k.startswith(prefix)}
         if values:
-            return label, values
-    paper = get_case(run.kind).paper
+            for name in run.best.x:
+                if name not in values and isinstance(run.case.get(name), (int, float)):
+                    values[name] = run.case[name]
+            label = spec.reference or prefix.rstrip("_") + " design"
+            return f"reference: {label}", values
     names = {run.objective_name, *run.best.x, *metrics}
-    values = {k: v for k, v in paper.items() if k in names and not isinstance(v, list)}
+    source = spec.reference_values or spec.paper
+    values = {k: v for k, v in source.items() if k in names and not isinstance(v, list)}
     if run.objective_name in values:
         values["objective"] = values[run.objective_name]
-    return ("paper", values) if values else ("", {})
+    if not values:
+        return "", {}
+    return f"reference: {spec.reference or 'paper'}", values
+
+
+def design_values(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any]:
+    """A design's quantities by name for requirements: the best design's metrics,
+    variables, objective and feasibility, or the reference design's ``values``."""
+    if values is not None:
+        return dict(values)
+    best = run.best
+    return {**best.metrics, **best.x, run.objective_name: best.objective,
+            "feasible": float(best.feasible)}
+
+
+def requirements(run: RunView, violated: list[str] | None = None
+                 ) -> tuple[Requirement, ...]:
+    """The case's requirements of this run's designs, then every constraint of the run
+    (``violated``: the constraints a failing design breaks, named in the words)."""
+    from camopt.cases import get_case
+
+    spec = get_case(run.kind)
+    names = set(design_values(run))
+    reqs = tuple(spec.requirements(run.case, names)) if spec.requirements else ()
+    violated = ", ".join(violated or [])
+    return (*reqs, Requirement(
+        "every constraint of the run", "feasible", flag=True,
+        source="the run's config ([case] and solver)",
+        failing=f"violates the run's constraints{f' ({violated})' if violated else ''}"))
+
+
+def verdict(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Requirements evaluated on the best design (or on ``values``, the reference's):
+    ``{"requirements": [...], "verdict": "pass"/"fail", "sentence": words}``."""
+    reqs = requirements(run, run.best.violated if values is None else None)
+    checks = check(reqs, design_values(run, values))
+    if values is None:
+        return {"requirements": [c.as_dict() for c in checks], "verdict": verdict_of(checks),
+                "sentence": sentence(checks)}
+    # a reference known by a few reported values: judged on those, incomplete when some
+    # requirement's quantity is not among them (verdict None unless it already fails)
+    known = [c for c in checks if c.passed is not None]
+    judged = verdict_of(known) if known else None
+    if judged == "pass" and len(known) < len(checks):
+        judged = None
+    words = sentence(known) if known else "no requirement can be checked on its values"
+    if len(known) < len(checks):
+        words += f" (checked {len(known)} of {len(checks)}: its other values are unknown)"
+    return {"requirements": [c.as_dict() for c in known], "verdict": judged,
+            "sentence": words}
+
+
+VERDICT_COLUMNS = ("requirement", "limit", "value", "margin", "pass")
+
+
+def verdict_rows(requirements: list[dict[str, Any]]) -> list[list[str]]:
+    """The verdict table's cells (:data:`VERDICT_COLUMNS`) of requirements as
+    :func:`verdict` gives them: values and margins with their unit, flags as yes/no."""
+    rows = []
+    for r in requirements:
+        flag = r["limit"] == "yes"
+        unit = f" {r['unit']}" if r["unit"] and r["value"] is not None else ""
+        value = (None if r["value"] is None else bool(r["value"]) if flag else r["value"])
+        margin = "-" if r["margin"] is None or flag else format_value(r["margin"]) + unit
+        rows.append([r["name"], r["limit"], format_value(value) + ("" if flag else unit),
+                     margin, {True: "pass", False: "FAIL", None: "-"}[r["pass"]]])
+    return rows
+
+
+PARETO_COLUMNS = ("objective", "sense", "least", "greatest", "knee")
+
+
+def pareto_rows(doc: dict[str, Any]) -> list[list[str]]:
+    """The Pareto summary's table (:data:`PARETO_COLUMNS`): each objective's extent over
+    the feasible front and its value at the knee (``doc``: ``pareto.summary``'s)."""
+    rows = []
+    for o in doc["objectives"]:
+        lo, hi = (doc["extent"] or {}).get(o["name"], (None, None))
+        rows.append([o["name"], o["sense"], format_value(lo), format_value(hi),
+                     format_value((doc["knee"] or {}).get(o["name"]))])
+    return rows
 
 
 def summary(run: RunView) -> dict[str, Any]:
@@ -188,11 +298,12 @@ def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarra
             "verdict": stats.verdict(name_a, name_b, test)}
 
 
-def compare(runs: list[RunView]) -> dict[str, Any]:
+def compare(runs: list[RunView], raw: bool = False) -> dict[str, Any]:
     """Config differences, best objectives, variables, metrics and repeat statistics;
     for two runs with repeats, a significance test of their final objectives. Runs of
     different case kinds or objectives are not comparable (ConfigError against the second
-    run's ``case_kind`` or ``objective_name``)."""
+    run's ``case_kind`` or ``objective_name``). ``raw`` keeps inf and NaN (for tables);
+    else they are null (JSON)."""
     for run in runs[1:]:
         for key, mine, first in (("case_kind", run.kind, runs[0].kind),
                                  ("objective_name", run.objective_name,
@@ -215,17 +326,55 @@ def compare(runs: list[RunView]) -> dict[str, Any]:
             names += [n for n in getattr(run.best, section) if n not in names]
         return {n: [getattr(run.best, section).get(n) for run in runs] for n in names}
 
-    return jsonable({
+    judged = [verdict(run) for run in runs]
+    doc = {
         "runs": [run.path for run in runs],
+        "verdict": [j["verdict"] for j in judged],
+        "verdict_sentence": [j["sentence"] for j in judged],
+        "requirements": [j["requirements"] for j in judged],
         "config_differences": differences,
         "objective": [run.best.objective for run in runs],
         "feasible": [run.best.feasible for run in runs],
         "x": side_by_side("x"),
         "metrics": side_by_side("metrics"),
+        "same_objective_different_designs": same_objective_different_designs(runs),
         "statistics": [repeat_statistics(run).as_dict() for run in runs],
         "tests": _pairwise(runs),
         **({"hypervolume": hv} if (hv := pareto.compare_fronts(runs)) else {}),
-    })
+    }
+    return doc if raw else jsonable(doc)
+
+
+SAME_OBJECTIVE_RTOL = 1e-6
+"""Objectives this close (relative), or both at or below the run's target, are one
+objective reached ..."""
+DIFFERENT_DESIGN_RTOL = 1e-3
+"""... by different designs when a variable differs by more than this share of its
+magnitude."""
+
+
+def same_objective_different_designs(runs: list[RunView]) -> list[dict[str, Any]]:
+    """Pairs of feasible runs whose best objectives agree (:data:`SAME_OBJECTIVE_RTOL`, or
+    both reach the first run's target) while their designs differ
+    (:data:`DIFFERENT_DESIGN_RTOL`): a flat objective or several optima, which the
+    objective alone hides. Each: ``{"runs": [i, j], "objective", "differ": [names]}``."""
+    found = []
+    for i, a in enumerate(runs):
+        for j in range(i + 1, len(runs)):
+            b = runs[j]
+            fa, fb = a.best.objective, b.best.objective
+            target = runs[0].run.get("target")
+            if not (a.best.feasible and b.best.feasible and math.isfinite(fa)
+                    and math.isfinite(fb)):
+                continue
+            at_target = target is not None and max(fa, fb) <= target
+            if not at_target and abs(fa - fb) > SAME_OBJECTIVE_RTOL * max(abs(fa), abs(fb)):
+                continue
+            differ = [n for n, va in a.best.x.items() if n in b.best.x and abs(
+                va - b.best.x[n]) > DIFFERENT_DESIGN_RTOL * max(abs(va), abs(b.best.x[n]), 1e-12)]
+            if differ:
+                found.append({"runs": [i, j], "objective": fa, "differ": differ})
+    return found
 
 
 def _pairwise(runs: list[RunView]) -> list[dict[str, Any]]:
@@ -257,7 +406,17 @@ def rank_sweep(spec: Any, results: dict) -> dict[str, Any]:
                                             _point_label(spec, best["point"]), b,
                                             best["successes"])
         ranking.append(entry)
-    return jsonable({"sweep": spec.source, "grid": spec.grid, "seeds": list(spec.seeds),
+    floor = spec.data["run"].get("min_success_rate")
+    reqs = [Requirement(f"success rate, {r['label']}", "success_rate", lower=float(floor),
+                        source="run.min_success_rate (sweep --check)")
+            for r in ranking] if floor is not None else []
+    checks = [check([q], {"success_rate": r["success_rate"]})[0]
+              for q, r in zip(reqs, ranking)]
+    judged = {"verdict": verdict_of(checks), "verdict_sentence": sentence(checks)} if checks \
+        else {"verdict": None, "verdict_sentence": "not judged: run.min_success_rate is not "
+              "set (the sweep's --check needs it)"}
+    return jsonable({**judged, "requirements": [c.as_dict() for c in checks],
+                     "sweep": spec.source, "grid": spec.grid, "seeds": list(spec.seeds),
                      "ranking": ranking})
 
 

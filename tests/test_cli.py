@@ -52,7 +52,11 @@ def test_show_json_has_exactly_the_documented_keys(two_runs):
     r = invoke("show", two_runs[0], "--format", "json")
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)
-    assert list(doc) == ["case", "solver", "best", "repeats", "table"]
+    assert list(doc) == ["verdict", "verdict_sentence", "requirements", "case", "solver",
+                         "best", "repeats", "table", "reference"]
+    assert doc["verdict"] == "pass"  # Eq 92's optimum meets R1-R21 and its ratings
+    assert doc["reference"]["label"] == "reference: paper's optimum, Eq 92"
+    assert doc["reference"]["values"]["coils"] == 7
     assert set(doc["best"]) == {"objective", "feasible", "x", "metrics", "active", "violated"}
     assert isinstance(doc["best"]["active"], list)
     for key in ("closure_time_ms", "closure_time_exact_ms", "coils"):

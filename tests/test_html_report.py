@@ -91,7 +91,8 @@ def test_report_is_one_self_contained_page(emb_report):
     table = table[:table.index("</table>")]
     for name, value in view.best.x.items():
         assert f"<td>{name}</td><td class=\"num\">{value:.6g}</td>" in table
-    assert "peak_torque_nm" in table and ">paper<" in table  # beside the paper's 7.72 N m
+    assert "peak_torque_nm" in table and ">reference<" in table  # beside the paper's 7.72 N m
+    assert "beside the reference: paper, Sec 4.4" in html
     assert "7.72" in table
     assert f"SeedSequence({view.seed_entropy})" in html and "numpy" in html
 
@@ -138,3 +139,90 @@ def test_report_refuses_an_existing_file(emb_report, tmp_path):
     r = runner.invoke(app, ["report", str(out.with_name("emb.h5")), "--out", str(out)])
     assert r.exit_code == 2
     assert r.stderr.startswith(f"error: {out}: --out: ") and r.stderr.count("\n") == 1
+
+
+# after load: where the verdict table ends, the window's size and the page's width
+FIRST_SCREEN = """<script>window.addEventListener("load", () => {
+  const t = document.getElementById("verdict-table") || document.getElementById(
+    "verdict-sentence");
+  const r = t.getBoundingClientRect();
+  document.body.dataset.verdicttop = Math.round(r.top);
+  document.body.dataset.verdictbottom = Math.round(r.bottom);
+  document.body.dataset.verdictrows = t.querySelectorAll("tbody tr").length;
+  document.body.dataset.innerheight = window.innerHeight;
+  document.body.dataset.innerwidth = window.innerWidth;
+  document.body.dataset.scrollwidth = document.documentElement.scrollWidth;
+});</script>"""
+SCREEN = (1100, 800)
+
+
+def first_screen(page: Path, tmp_path: Path) -> tuple[dict[str, str], Path]:
+    """Open ``page`` in a 1100 x 800 headless Chromium window: the probe's attributes
+    (:data:`FIRST_SCREEN`) and a screenshot of the first screen."""
+    probed = tmp_path / f"screen-{page.name}"
+    probed.write_text(page.read_text().replace("</body>", FIRST_SCREEN + "</body>"))
+    shot = tmp_path / f"{page.stem}-first-screen.png"
+    base = [BROWSER, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+            f"--user-data-dir={tmp_path / 'profile'}", "--no-first-run",
+            "--proxy-server=127.0.0.1:9", "--host-resolver-rules=MAP * ~NOTFOUND",
+            f"--window-size={SCREEN[0]},{SCREEN[1]}"]
+    env = {**os.environ, "HOME": str(tmp_path), "XDG_CONFIG_HOME": str(tmp_path / "config"),
+           "XDG_CACHE_HOME": str(tmp_path / "cache")}
+    dom = subprocess.run([*base, "--dump-dom", probed.as_uri()], capture_output=True,
+                         text=True, timeout=120, env=env)
+    assert dom.returncode == 0, dom.stderr[-2000:]
+    body = re.search(r"<body([^>]*)>", dom.stdout)
+    attrs = dict(re.findall(r'data-(\w+)="([^"]*)"', body.group(1))) if body else {}
+    subprocess.run([*base, f"--screenshot={shot}", page.as_uri()], capture_output=True,
+                   timeout=120, check=True, env=env)
+    return attrs, shot
+
+
+SMALL = {  # small runs of every kind of report: (config, overrides)
+    "vcb": ("vcb.toml", ["--set", "solver.generations=10", "--set", "solver.population=20",
+                         "--repeats", "1"]),
+    "vcb_velocity": ("vcb_velocity.toml", ["--set", "solver.generations=3", "--set",
+                                           "solver.population=10", "--repeats", "1"]),
+    "pareto": ("fast_switch_pareto.toml", ["--set", "solver.generations=10", "--set",
+                                           "solver.population=20"]),
+}
+
+
+@pytest.fixture(scope="module")
+def every_report(tmp_path_factory, emb_report):
+    """HTML reports of small VCB, vcb_velocity, EMB, Pareto runs and a sweep."""
+    folder = tmp_path_factory.mktemp("every")
+    pages = {"emb": emb_report[1]}
+    for name, (config, extra) in SMALL.items():
+        run = folder / f"{name}.h5"
+        r = runner.invoke(app, ["run", str(CONFIGS / config), "--out", str(run), "--quiet",
+                                *extra])
+        assert r.exit_code == 0, r.output
+        pages[name] = folder / f"{name}.html"
+        r = runner.invoke(app, ["report", str(run), "--out", str(pages[name])])
+        assert r.exit_code == 0, r.output
+    sweep = folder / "sweep.h5"
+    r = runner.invoke(app, ["sweep", str(CONFIGS / "fast_switch.toml"), "--seeds", "0:2",
+                            "--set", "run.min_success_rate=0.5", "--set", "run.target=19",
+                            "--out", str(sweep), "--quiet", "--jobs", "1"])
+    assert r.exit_code == 0, r.output
+    pages["sweep"] = folder / "sweep.html"
+    r = runner.invoke(app, ["report", str(sweep), "--out", str(pages["sweep"])])
+    assert r.exit_code == 0, r.output
+    return pages
+
+
+@needs_browser
+@pytest.mark.parametrize("name", ["vcb", "vcb_velocity", "emb", "pareto", "sweep"])
+def test_verdict_table_is_on_the_first_screen(every_report, name, tmp_path):
+    """Screenshots of every kind of report: the verdict table ends inside the first
+    1100 x 800 screen, the page never runs off to the right (the Pareto front's table
+    included), and the screenshot shows text."""
+    attrs, shot = first_screen(every_report[name], tmp_path)
+    screen = int(attrs["innerheight"])  # the window less the browser's own bars
+    assert 0 <= int(attrs["verdicttop"]) < int(attrs["verdictbottom"]) <= screen, attrs
+    assert int(attrs["scrollwidth"]) <= int(attrs["innerwidth"]), attrs
+    assert not_blank(shot) > 0.02
+    html = every_report[name].read_text()
+    assert re.search(r'id="verdict-sentence">(PASS|FAIL|not judged)', html)
+    assert int(attrs["verdictrows"]) >= 1  # a table, not only the sentence

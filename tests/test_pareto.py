@@ -47,7 +47,8 @@ def test_show_json_has_pareto_rows_of_objectives_and_feasible(fronts):
     r = runner.invoke(app, ["show", str(fronts[1]), "--format", "json"])
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)
-    assert list(doc) == ["case", "solver", "best", "repeats", "table", "pareto"]
+    assert list(doc) == ["verdict", "verdict_sentence", "requirements", "case", "solver",
+                         "best", "repeats", "table", "pareto", "pareto_summary"]
     assert len(doc["pareto"]) == 20
     assert all(list(row) == ["f", "norm", "feasible"] for row in doc["pareto"])
     assert [row["f"] for row in doc["pareto"]] == [row["f"] for row in doc["table"]]
@@ -105,3 +106,30 @@ def test_plot_marks_a_finite_initial_design(fronts):
         **view.best.metrics, "initial_f": float("nan"), "initial_norm": 0.2}))
     ax = plots.pareto_front(unknown).axes[0]
     assert "initial design" not in [c.get_label() for c in ax.collections]
+
+
+def test_summary_names_objectives_extent_knee_and_the_headline(fronts):
+    import dataclasses
+    import math
+
+    run = archive.load_run(fronts[1])
+    doc = pareto.summary(run)
+    assert [o["name"] for o in doc["objectives"]] == ["f", "norm"]
+    pts = [(r["f"], r["norm"]) for r in run.table if r["feasible"]]
+    assert doc["front_size"] == len(pts)
+    assert doc["extent"]["f"] == [min(p[0] for p in pts), max(p[0] for p in pts)]
+    # the knee by hand: nearest (0, 0) after scaling each objective to [0, 1]
+    lo = [min(p[i] for p in pts) for i in (0, 1)]
+    hi = [max(p[i] for p in pts) for i in (0, 1)]
+    dist = [math.hypot(*((p[i] - lo[i]) / (hi[i] - lo[i]) for i in (0, 1))) for p in pts]
+    knee = pts[dist.index(min(dist))]
+    assert (doc["knee"]["f"], doc["knee"]["norm"]) == knee
+    # a headline that the front dominates is said to be so
+    worse = dataclasses.replace(run, best=dataclasses.replace(run.best, metrics={
+        **run.best.metrics, "f": hi[0] + 1, "norm": hi[1] + 1}))
+    said = pareto.summary(worse)
+    assert said["headline_dominated_by"] == len(pts)
+    assert f"dominated by {len(pts)} of the {len(pts)} front designs" in said["headline"]
+    shown = runner.invoke(app, ["show", str(fronts[1])], env={"COLUMNS": "80"})
+    assert "Pareto front:" in shown.stdout and "knee" in shown.stdout
+    assert "headline design below: " in shown.stdout

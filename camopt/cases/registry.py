@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from typing import TYPE_CHECKING, Any, Protocol
@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from camopt.config.models import CaseConfig
 from camopt.errors import ConfigError
 from camopt.problem import Problem
+from camopt.requirements import Requirement
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -27,6 +28,14 @@ if TYPE_CHECKING:
     from camopt.runview import RunView
 
 ENTRY_POINT_GROUP = "camopt.cases"
+
+
+class RequirementsOf(Protocol):
+    """A case's requirements for a run's ``[case]`` (as a dict) whose designs report the
+    quantities ``names`` (``camopt/cases/<kind>/requirements.py``)."""
+
+    def __call__(self, case: Mapping[str, Any], names: Collection[str]
+                 ) -> tuple[Requirement, ...]: ...
 
 
 class ArchiveLoader(Protocol):
@@ -84,6 +93,15 @@ class CaseSpec:
     ``{design variable or "case.FIELD": "±X%" or "±X"}`` (docs/assumptions.md); those
     that do not apply to a run (not its variables, not a field its case varies) are
     skipped."""
+    requirements: RequirementsOf | None = None
+    """What a design must meet whatever the run optimised (:mod:`camopt.requirements`);
+    ``show``, ``report``, ``compare`` and ``tolerance`` evaluate them."""
+    reference: str = ""
+    """The one name of the design the optimum is shown beside: ``"vendor, Sec 2.3"``
+    (shown as ``reference: vendor, Sec 2.3``)."""
+    reference_values: Mapping[str, Any] = field(default_factory=dict)
+    """The reference design's values by the run's names when the case does not report
+    them as ``initial_``/``original_`` metrics (a paper's optimum)."""
 
     def build(self, config: CaseConfig) -> Problem:
         """The case's Problem for a validated config of this kind."""

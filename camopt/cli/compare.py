@@ -12,6 +12,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from camopt.cli.app import Format, app, errors, fmt, out
+from camopt.cli.layout import print_table
 from camopt.errors import CamoptError
 
 
@@ -35,25 +36,20 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
             return
         if len(runs) < 2:
             raise CamoptError("compare: RUN: give at least two run archives, or one sweep")
-        doc = report.compare([archive.load_run(p) for p in runs])
+        doc = report.compare([archive.load_run(p) for p in runs], raw=True)
     if format is Format.json:
-        sys.stdout.write(json.dumps(doc, indent=2) + "\n")
+        sys.stdout.write(json.dumps(report.jsonable(doc), indent=2) + "\n")
         return
     names = [Path(p).name for p in doc["runs"]]
-    table = Table(title="compare")
-    table.add_column("")
-    for n in names:
-        table.add_column(escape(n), justify="right", overflow="fold")
-    for key, values in doc["config_differences"].items():
-        table.add_row(f"[dim]{escape(key)}[/]", *(fmt(v) for v in values))
-    table.add_row("[bold]objective[/]", *(fmt(v) for v in doc["objective"]))
-    table.add_row("feasible", *(fmt(v) for v in doc["feasible"]))
-    for section in ("x", "metrics"):
-        for key, values in doc[section].items():
-            table.add_row(key, *(fmt(v) for v in values))
-    for stat in ("runs", "best", "median", "worst", "feasible_fraction", "success_rate"):
-        table.add_row(f"repeats: {stat}", *(fmt(s[stat]) for s in doc["statistics"]))
-    out.print(table)
+    _print_verdicts(doc, names)
+    print_table("compare", ["", *names], _rows(doc),
+                numeric=[False, *(True for _ in names)])
+    for same in doc["same_objective_different_designs"]:
+        i, j = same["runs"]
+        out.print(f"[bold]note[/]: {escape(names[i])} and {escape(names[j])} reach one "
+                  f"objective ({report.format_value(same['objective'])}) with different "
+                  f"designs (differing in {escape(', '.join(same['differ']))}): the "
+                  "objective is flat there or has several optima", highlight=False)
     if "hypervolume" in doc:
         _print_hypervolume(doc["hypervolume"], names)
     for test in doc["tests"]:
@@ -62,6 +58,47 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
                   f"P(A better) = {test['p_a_better']:.2f}; success A "
                   f"{_rate(test['success_a'])}, B {_rate(test['success_b'])}")
         out.print(f"[bold]{escape(test['verdict'])}[/]")
+
+
+def _print_verdicts(doc: dict[str, Any], names: list[str]) -> None:
+    """Each run's verdict in words, then requirement | limit | one value per run (with
+    pass or FAIL)."""
+    from camopt import report
+
+    for name, judged, words in zip(names, doc["verdict"], doc["verdict_sentence"]):
+        style = "green" if judged == "pass" else "bold red"
+        out.print(f"{escape(name)}: [{style}]{escape(words)}[/]", highlight=False)
+    rows: dict[str, list[str]] = {}
+    for k, reqs in enumerate(doc["requirements"]):
+        for cells in report.verdict_rows(reqs):
+            row = rows.setdefault(cells[0], [cells[0], cells[1], *("-" for _ in names)])
+            row[2 + k] = f"{cells[2]} {cells[4]}"
+    print_table("requirements", ["requirement", "limit", *names], list(rows.values()),
+                numeric=[False, True, *(True for _ in names)])
+
+
+def _rows(doc: dict[str, Any]) -> list[list[str]]:
+    """The compare table's rows: config differences, objective, feasibility, variables,
+    metrics (without those already shown: a variable repeated as a metric, ``feasible``
+    as 1, the reference design's ``initial_*`` when equal in every run) and repeat
+    statistics; values as :func:`camopt.report.format_value` prints them."""
+    from camopt import report
+
+    def row(name: str, values: list[Any]) -> list[str]:
+        return [name, *(report.format_value(v) for v in values)]
+
+    rows = [row(k, v) for k, v in doc["config_differences"].items()]
+    rows += [row("objective", doc["objective"]), row("feasible", doc["feasible"])]
+    rows += [row(k, v) for k, v in doc["x"].items()]
+    shown = {"feasible", "objective", *doc["x"]}
+    for key, values in doc["metrics"].items():
+        same = all(v == values[0] for v in values)
+        if key in shown or (key.startswith(report.REFERENCE_PREFIXES) and same):
+            continue
+        rows.append(row(key, values))
+    for stat in ("runs", "best", "median", "worst", "feasible_fraction", "success_rate"):
+        rows.append(row(f"repeats: {stat}", [s[stat] for s in doc["statistics"]]))
+    return rows
 
 
 def _print_hypervolume(hv: dict[str, Any], names: list[str]) -> None:
@@ -79,8 +116,9 @@ def _rate(s: dict[str, float]) -> str:
 def print_ranking(doc: dict[str, Any]) -> None:
     """A sweep's grid points ranked (``report.rank_sweep``) as a rich table: numbers are
     never wrapped or cut (the grid point's label folds instead)."""
-    from camopt.cli.show import cell
+    from camopt.cli.show import cell, print_verdict
 
+    print_verdict(doc, "sweep (run.min_success_rate)")
     table = Table(title=escape(f"sweep {doc['sweep']}: grid points ranked"),
                   title_justify="left",
                   caption="success: successful/runs; nfev: median evaluations to the target; "

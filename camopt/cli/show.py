@@ -13,6 +13,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from camopt.cli.app import Format, app, errors, out
+from camopt.cli.layout import print_table
 
 if TYPE_CHECKING:
     from camopt.runview import RunView
@@ -66,9 +67,12 @@ def print_show(view: RunView, rows: int | None = None) -> None:
               f"{done} repeats, seed {view.run.get('seed', '-')}", highlight=False)
     if view.interrupted:
         out.print("[bold red]interrupted[/]: the archive holds the finished repeats only")
+    print_verdict(doc)
+    if doc.get("pareto_summary"):
+        print_pareto(doc["pareto_summary"])
     style = "green" if view.best.feasible else "bold red"
-    out.print(f"[{style}]{escape(report.status(view))}[/]", highlight=False)
-    out.print(best_table(report.summary(view)))  # raw values: inf and NaN are shown
+    out.print(f"run's constraints: [{style}]{escape(report.status(view))}[/]", highlight=False)
+    print_best(report.summary(view))  # raw values: inf and NaN are shown
     robust = report.robust_summary(view)
     if robust is not None:
         out.print(robust_table(robust))
@@ -83,24 +87,56 @@ def print_show(view: RunView, rows: int | None = None) -> None:
         print_fitted("solver's table", doc["table"], columns, rows)
 
 
-def best_table(summary: dict[str, Any]) -> Table:
+def print_verdict(doc: dict[str, Any], title: str = "best design") -> None:
+    """The overall verdict in words, the requirement | limit | value | margin | pass table
+    of ``doc`` (``report.show``'s), and the reference design's verdict in one line."""
+    from camopt import report
+
+    style = "bold green" if doc["verdict"] == "pass" else "bold red"
+    out.print(f"[{style}]{escape(doc['verdict_sentence'])}[/]", highlight=False)
+    rows = report.verdict_rows(doc["requirements"])
+    styles = ["red" if r["pass"] is False else None for r in doc["requirements"]]
+    if rows:
+        print_table(f"requirements of the {title}", report.VERDICT_COLUMNS, rows,
+                    numeric=[False, True, True, True, True], styles=styles)
+    ref = doc.get("reference")
+    if ref:
+        judged = {"pass": "[green]PASS[/]", "fail": "[red]FAIL[/]"}.get(ref["verdict"] or "",
+                                                                      "not judged")
+        words = ref["verdict_sentence"].removeprefix("PASS: ").removeprefix("FAIL: ")
+        out.print(f"{escape(ref['label'])}: {judged}: {escape(words)}", highlight=False)
+
+
+def print_pareto(doc: dict[str, Any]) -> None:
+    """A Pareto run's front: objectives, extent and knee, and what the headline is."""
+    from camopt import report
+
+    print_table(f"Pareto front: {doc['front_size']} feasible of {doc['designs']} designs",
+                report.PARETO_COLUMNS, report.pareto_rows(doc),
+                numeric=[False, False, True, True, True])
+    if doc["knee"]:
+        knee = ", ".join(f"{k} {report.format_value(v)}" for k, v in doc["knee"].items())
+        out.print(f"knee (nearest the ideal, objectives normalised): {escape(knee)}",
+                  highlight=False)
+    out.print(f"headline design below: {escape(doc['headline'])}", highlight=False)
+
+
+def print_best(summary: dict[str, Any]) -> None:
     """The best design beside the reference design (``report.summary``)."""
+    from camopt import report
+
     label = summary["reference_label"]
-    table = Table(title="best design" + (f" beside the {label}" if label else ""),
-                  title_justify="left")
-    table.add_column("", overflow="fold")
-    table.add_column("optimum", justify="right", no_wrap=True)
-    if label:
-        table.add_column(label, justify="right", no_wrap=True)
-    section = None
-    for row in summary["rows"]:
-        if section is not None and row["section"] != section:
-            table.add_section()
+    columns = ["quantity", "optimum", *(["reference"] if label else [])]
+    rows, sections, section = [], [], None
+    for i, row in enumerate(summary["rows"]):
+        if row["section"] != section:
+            sections.append(i)
         section = row["section"]
         values = [row["optimum"], row["reference"]] if label else [row["optimum"]]
-        name = f"objective: {row['name']}" if row is summary["rows"][0] else row["name"]
-        table.add_row(escape(name), *(cell(v) for v in values))
-    return table
+        name = f"objective: {row['name']}" if i == 0 else row["name"]
+        rows.append([name, *(report.format_value(v) for v in values)])
+    print_table("best design" + (f" beside the {label}" if label else ""), columns, rows,
+                sections=sections)
 
 
 def robust_table(summary: dict[str, Any]) -> Table:

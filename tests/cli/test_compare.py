@@ -37,3 +37,36 @@ def test_runs_of_different_kinds_are_refused(tmp_path):
     assert r.exit_code == 2
     assert r.stderr == (f"error: {b}: case_kind: 'fast_switch', but {a} has "
                         "'opening_spring': runs of different kinds are not comparable\n")
+
+
+VCB_SMALL = ["--set", "solver.generations=20", "--set", "solver.population=20",
+             "--repeats", "1"]
+
+
+def test_compare_leads_with_verdicts_and_repeats_no_row(tmp_path):
+    import dataclasses
+
+    from camopt import archive, report
+
+    a = run(tmp_path, "a.h5", str(CONFIGS / "vcb.toml"), "--seed", "1", *VCB_SMALL)
+    b = run(tmp_path, "b.h5", str(CONFIGS / "vcb.toml"), "--seed", "2", *VCB_SMALL)
+    r = runner.invoke(app, ["compare", a, b], env={"COLUMNS": "80"})
+    assert r.exit_code == 0, r.output
+    lines = r.stdout.splitlines()
+    assert lines[0].startswith("a.h5: ") and "requirement" in r.stdout.split("compare")[0]
+    names = [line.strip("│").split("│")[0].strip() for line in lines if line.startswith("│")]
+    names = [n for n in names if n]
+    for name in ("a1", "a2", "a3", "feasible"):
+        assert names.count(name) == 1, name  # not again as a metric (a1, feasible as 1)
+    assert not any(n.startswith("initial_") for n in names)  # the same vendor in both
+    assert "True" not in r.stdout and "e-14" not in r.stdout
+    doc = json.loads(runner.invoke(app, ["compare", a, b, "--format", "json"]).stdout)
+    assert doc["verdict"] == ["fail", "fail"]  # the paper's problem never asks to latch
+    # two designs with one objective are noticed; the same design is not
+    va, vb = archive.load_run(a), archive.load_run(b)
+    vb = dataclasses.replace(vb, best=dataclasses.replace(
+        vb.best, objective=va.best.objective, feasible=True))
+    va = dataclasses.replace(va, best=dataclasses.replace(va.best, feasible=True))
+    (same,) = report.same_objective_different_designs([va, vb])
+    assert same["runs"] == [0, 1] and "a1" in same["differ"]
+    assert report.same_objective_different_designs([va, va]) == []

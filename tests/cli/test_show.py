@@ -45,7 +45,7 @@ def test_summary_shows_optimum_beside_the_initial_design_in_80_columns(vcb_run):
     r = invoke("show", vcb_run)
     assert r.exit_code == 0, r.output
     assert max(len(line) for line in r.stdout.splitlines()[1:]) <= 80  # line 0: the path
-    assert "best design beside the initial design" in r.stdout
+    assert "best design beside the reference: vendor, Sec 2.3 and Table 2" in r.stdout
     rows = best_rows(r.stdout)
     view = archive.load_run(vcb_run)
     m = view.best.metrics
@@ -59,11 +59,39 @@ def test_summary_shows_optimum_beside_the_initial_design_in_80_columns(vcb_run):
     assert list(rows).count("feasible") == 1
     for x in view.best.x:
         assert rows[x][0] == f"{view.best.x[x]:.6g}"
+    # the vendor's spring rates are the config's (Table 2), not '-'
+    assert rows["kc1_n_per_mm"][1] == "7.72" and rows["kc2_n_per_mm"][1] == "9.33"
+
+
+def test_verdict_leads_and_says_in_words_why_the_paper_optimum_fails(vcb_run):
+    """The paper's zero-surplus problem does not ask the cam to latch: its optimum stalls
+    (latched = 0) and fails the requirement, said in words on the first screen."""
+    r = invoke("show", vcb_run)
+    first_screen = "\n".join(r.stdout.splitlines()[:24])
+    assert "FAIL: does not latch" in first_screen
+    assert "requirements of the best design" in first_screen
+    for name in ("rod travel", "18 ± 0.2 mm", "cam contact shear stress", "<= 1194 MPa"):
+        assert name in first_screen
+    doc = json.loads(invoke("show", vcb_run, "--format", "json").stdout)
+    assert doc["verdict"] == "fail"
+    reqs = {q["name"]: q for q in doc["requirements"]}
+    latch = reqs["cam latches at the end of the stroke"]
+    assert latch["value"] == 0 and latch["pass"] is False
+    travel = reqs["rod travel"]
+    m = archive.load_run(vcb_run).best.metrics
+    assert travel["value"] == pytest.approx(m["rod_travel_mm"])
+    assert travel["margin"] == pytest.approx(0.2 - abs(m["rod_travel_mm"] - 18.0))
+    assert travel["pass"] is (abs(m["rod_travel_mm"] - 18.0) <= 0.2)
+    for q in doc["requirements"]:
+        assert set(q) >= {"name", "limit", "value", "margin", "pass"}
+    assert doc["reference"]["label"] == "reference: vendor, Sec 2.3 and Table 2"
+    assert doc["reference"]["verdict"] == "fail"  # the vendor closes at 1.71 m/s (ADAMS)
 
 
 def test_json_keys_unchanged(vcb_run):
     doc = json.loads(invoke("show", vcb_run, "--format", "json").stdout)
-    assert list(doc) == ["case", "solver", "best", "repeats", "table"]
+    assert list(doc) == ["verdict", "verdict_sentence", "requirements", "case", "solver",
+                         "best", "repeats", "table", "reference"]
     assert doc["best"]["metrics"]["initial_tau_max_mpa"] is None  # inf as null: valid JSON
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from camopt.cases.emb_cam.config import EmbCamConfig
 from camopt.cases.emb_cam.paper import PAPER
 from camopt.cases.emb_cam.problem import EmbCamProblem
+from camopt.cases.emb_cam.requirements import requirements
 from camopt.cases.registry import CaseSpec, ProfileCircle, ProfileCurve, register_case
 
 TOLERANCES = {  # docs/assumptions.md, "Default tolerances": a ground cam profile
@@ -20,5 +21,6 @@ SPEC = register_case(CaseSpec(
     profiles=(ProfileCurve("cam-profile", ("profile_x_mm", "nonworking_x_mm"),
                            ("profile_y_mm", "nonworking_y_mm")),),
     circles=(ProfileCircle("base-circle", "r_st_mm"),),
-    tolerances=TOLERANCES,
+    tolerances=TOLERANCES, requirements=requirements, reference="paper, Sec 4.4",
+    reference_values={k: PAPER[k] for k in ("peak_torque_nm", "clearance_angle_rad")},
 ))

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from camopt.cases.fast_switch.config import FastSwitchConfig
-from camopt.cases.fast_switch.paper import PAPER
+from camopt.cases.fast_switch.paper import OPTIMUM, PAPER
+from camopt.cases.fast_switch.requirements import requirements
 from camopt.cases.fast_switch.problem import FastSwitchProblem
 from camopt.cases.registry import CaseSpec, register_case
 
@@ -22,4 +23,5 @@ SPEC = register_case(CaseSpec(
     summary="minimum closure time of a spring-driven slider-crank switch",
     paper_source="Clauss & Papalambros (1982), UM-MEAM-81-3",
     figures="camopt.cases.fast_switch.figures:figures", paper=PAPER, tolerances=TOLERANCES,
+    requirements=requirements, reference="paper's optimum, Eq 92", reference_values=OPTIMUM,
 ))

@@ -385,6 +385,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
             out["closure_speed_rad_s"] = exact.speed
         g_full, _ = self.full_model(self.complete(np.atleast_2d(x)))
         out["full_model_feasible"] = float(all(v[0] <= 1e-9 for v in g_full.values()))
+        out["joint_load_n"] = float((g_full["R20"][0] + 1.0) * self.p.F_rated)  # R20, Eq 41
         return out
 
     def exact_closure(self, x: NDArray) -> dynamics.Travel:

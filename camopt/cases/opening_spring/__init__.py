@@ -5,6 +5,7 @@ from __future__ import annotations
 from camopt.cases.opening_spring.config import OpeningSpringConfig
 from camopt.cases.opening_spring.paper import PAPER
 from camopt.cases.opening_spring.problem import OpeningSpringProblem
+from camopt.cases.opening_spring.requirements import requirements
 from camopt.cases.registry import CaseSpec, register_case
 
 TOLERANCES = {  # docs/assumptions.md, "Default tolerances"
@@ -18,5 +19,5 @@ SPEC = register_case(CaseSpec(
     summary="opening spring of a 40 kA VCB for a specified opening motion (energy method)",
     paper_source="Ahn, Cho, Park & Kim, design of a spring-actuated linkage",
     figures="camopt.cases.opening_spring.figures:figures", paper=PAPER,
-    tolerances=TOLERANCES,
+    tolerances=TOLERANCES, requirements=requirements, reference="original design, Table 1",
 ))

@@ -20,6 +20,7 @@ from camopt.cases.vcb.config import (
 from camopt.cases.vcb.identify import VcbDynamicsIdentification, VcbIdentification
 from camopt.cases.vcb.paper import PAPER
 from camopt.cases.vcb.problem import VcbProblem
+from camopt.cases.vcb.requirements import requirements
 from camopt.config.models import CaseConfig
 from camopt.errors import ConfigError
 
@@ -56,7 +57,8 @@ VCB = register_case(CaseSpec(
               ProfileCurve("cam-pitch-curve", ("pitch_x_mm",), ("pitch_y_mm",))),
     circles=(ProfileCircle("base-circle", "rb_mm"),
              ProfileCircle("roller", "rf_mm", ("pitch_x_mm", "pitch_y_mm"))),
-    resolve=resolve_cam_archive, tolerances=TOLERANCES,
+    resolve=resolve_cam_archive, tolerances=TOLERANCES, requirements=requirements,
+    reference="vendor, Sec 2.3 and Table 2",
 ))
 VCB_IDENTIFY = register_case(CaseSpec(
     kind="vcb_identify", config=VcbIdentifyConfig, problem=VcbIdentification,

@@ -1,0 +1,63 @@
+"""What a VCB closing mechanism must meet (Kang, Huang & Yang 2023), whatever the run
+optimised: the breaker's rod travel, the follower swing of Eq 40, the cam's contact stress
+below shear yield, no undercut, the allowable pressure angle, a closing velocity of
+0.9 +- 0.2 m/s (Sec 2.1) and a stroke that latches. Limits come from the run's ``[case]``
+where it holds them, else from the paper."""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Mapping
+from typing import Any
+
+from camopt.requirements import Requirement
+
+CLOSING_VELOCITY_M_S = (0.7, 1.1)  # Sec 2.1: 0.9 +- 0.2 m/s
+PRESSURE_ANGLE_MAX_DEG = 45.0  # Sec 2.3: allowable pressure angle
+
+
+def requirements(case: Mapping[str, Any], names: Collection[str]) -> tuple[Requirement, ...]:
+    """The requirements of a ``vcb`` run's designs; ``names`` are the quantities its
+    designs report (the closing-velocity band is read from its low and high ends when the
+    dynamics report them, else from the average)."""
+    travel, tol = float(case["rod_travel_mm"]), float(case["rod_travel_tolerance_mm"])
+    lo_v, hi_v = case.get("closing_velocity_m_s") or CLOSING_VELOCITY_M_S
+    v_source = ("config closing_velocity_m_s" if case.get("closing_velocity_m_s")
+                else "Sec 2.1: 0.9 ± 0.2 m/s")
+    psi = case.get("pressure_angle_max_deg")
+    reqs = [
+        Requirement("cam latches at the end of the stroke", "latched", flag=True,
+                    source="Sec 3.2: the breaker closes and latches",
+                    failing="does not latch (the cam stalls before the end of its stroke)"),
+        Requirement("rod travel", "rod_travel_mm", "mm", travel - tol, travel + tol,
+                    source="Sec 3.2; ± config rod_travel_tolerance_mm",
+                    failing="the breaker's stroke changes"),
+    ]
+    if "closing_velocity_low_m_s" in names and "closing_velocity_high_m_s" in names:
+        reqs += [Requirement("closing velocity, low end", "closing_velocity_low_m_s", "m/s",
+                             lower=float(lo_v), source=v_source),
+                 Requirement("closing velocity, high end", "closing_velocity_high_m_s", "m/s",
+                             upper=float(hi_v), source=v_source)]
+    else:
+        reqs.append(Requirement("average closing velocity", "closing_velocity_avg_m_s", "m/s",
+                                float(lo_v), float(hi_v), source=v_source))
+    reqs += [
+        Requirement("cam contact shear stress", "tau_max_mpa", "MPa",
+                    upper=float(case["shear_yield_mpa"]),
+                    source="Table 1 shear yield, Eq 31 (config shear_yield_mpa)"),
+        Requirement("follower swing", "phi_max_deg", "deg", *map(float, case["phi_max_deg"]),
+                    source="Eq 40 (config phi_max_deg)"),
+        Requirement("pressure angle", "pressure_angle_max_deg", "deg",
+                    upper=float(psi if psi is not None else PRESSURE_ANGLE_MAX_DEG),
+                    source="config pressure_angle_max_deg" if psi is not None
+                    else "Sec 2.3: allowable 45 deg"),
+        Requirement("cam curvature radius (no undercut)", "curvature_min_mm", "mm",
+                    lower=float(case["rf_mm"]), source="Sec 2.3: > roller radius rf_mm"),
+    ]
+    if case.get("require_latch") and case.get("latch_energy_min_j"):
+        reqs.append(Requirement("kinetic energy left to latch", "latch_kinetic_energy_j", "J",
+                                lower=float(case["latch_energy_min_j"]),
+                                source="config latch_energy_min_j (assumed)"))
+    if case.get("forbid_lift_off"):
+        reqs.append(Requirement("least cam torque (no lift-off)", "cam_torque_min_nm", "N m",
+                                lower=0.0, source="config forbid_lift_off"))
+    return tuple(reqs)
