@@ -26,12 +26,23 @@ def _band(histories: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return mid, low, high
 
 
+SPREAD = 20.0
+"""Positive values spanning more than this factor are drawn on a log axis."""
+
+
 def _scale(ax: Any, values: np.ndarray) -> None:
+    """Fit the y axis to what the data reach: a log axis from the least to the greatest
+    positive value when they span more than :data:`SPREAD` (zeros, a violation reaching 0,
+    fall below it and are not drawn), else the linear axis matplotlib fits. Never a
+    symlog axis, whose linear band near 0 left half the height to decades never reached."""
     finite = values[np.isfinite(values)]
-    if finite.size and finite.min() >= 0 and finite.max() > 0:
-        positive = finite[finite > 0]
-        floor = positive.min() if positive.size else 1.0
-        ax.set_yscale("symlog", linthresh=max(floor, finite.max() * 1e-12))
+    positive = finite[finite > 0]
+    if not positive.size or finite.min() < 0:
+        return
+    lo, hi = float(positive.min()), float(positive.max())
+    if hi > SPREAD * lo:
+        ax.set_yscale("log")
+        ax.set_ylim(lo / 1.5, hi * 1.5)
 
 
 def convergence(curves: dict[str, list[np.ndarray]], objective: str,
@@ -59,8 +70,13 @@ def convergence(curves: dict[str, list[np.ndarray]], objective: str,
         x = np.arange(1, med.size + 1, dtype=float)
         if evaluations and evaluations.get(label):
             x = _band([np.asarray(e, dtype=float) for e in evaluations[label]])[0][:med.size]
-        ax.plot(x, med, label=f"{label} (n = {len(hist)})")
+        # a one-pass solver (enumeration) has one point per run: a marker, not a line
+        ax.plot(x, med, marker="o" if med.size <= 2 else None,
+                label=f"{label} (n = {len(hist)})")
         ax.fill_between(x, lo, hi, alpha=0.25)
+        if med.size == 1:
+            ax.set_xlim(x[0] - 0.5, x[0] + 0.5)
+            ax.set_xticks([x[0]])
         allv.append(med)
     if target is not None and np.isfinite(target):
         ax.axhline(target, color="black", linestyle=":", linewidth=1.2,

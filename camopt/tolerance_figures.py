@@ -76,6 +76,7 @@ def tornado(t: Tolerance, metric: str) -> Figure:
 
 
 def figures(t: Tolerance, metric: str | None = None) -> dict[str, Figure]:
-    """``constraints``, ``metrics`` and ``tornado`` (of ``metric``, default the objective)."""
+    """``constraints``, ``metrics`` and ``tornado`` (of ``metric``, default the quantity
+    of the requirement that limits the yield, else the objective)."""
     return {"constraints": constraint_histograms(t), "metrics": metric_histograms(t),
-            "tornado": tornado(t, metric or t.objective_name)}
+            "tornado": tornado(t, metric or t.summary.get("limiting") or t.objective_name)}

@@ -153,3 +153,22 @@ def test_convergence_draws_the_target_and_never_an_empty_axes(tmp_path):
     ax = plots.run_figures(view)["convergence"].axes[0]
     assert ax.get_ylabel() == "best constraint violation"
     assert np.isfinite(ax.lines[0].get_ydata()).all()
+
+
+def test_convergence_axis_fits_what_the_data_reach():
+    """Best-so-far curves from 1e6 down to 1e-5 on a log axis bounded by them (no symlog
+    band of decades never reached); a one-pass solver's single point is drawn as a marker
+    inside the axes (the fast switch's figure was empty)."""
+    fig = plots.convergence({"runs": [np.array([1e6, 1e2, 1e-3, 1e-5])]}, "objective_j")
+    ax = fig.axes[0]
+    assert ax.get_yscale() == "log"
+    lo, hi = ax.get_ylim()
+    assert 1e-5 / 2 <= lo < 1e-5 and 1e6 < hi <= 2e6
+    close(fig)
+    fig = plots.convergence({"runs": [np.array([18.9039])]}, "closure_time_ms")
+    ax = fig.axes[0]
+    (line,) = ax.get_lines()
+    assert line.get_marker() == "o" and list(line.get_ydata()) == [18.9039]
+    x0, x1 = ax.get_xlim()
+    assert x0 < 1 < x1 and ax.get_yscale() == "linear"
+    close(fig)

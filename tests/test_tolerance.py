@@ -171,3 +171,32 @@ def test_default_tolerances_are_the_cases_documented_ones(vcb_run):
         for name, tol in spec.tolerances.items():
             v = parse_vary("spec", f"{name}={tol}")
             assert v.tolerance > 0 and v.name == name
+
+
+def test_yield_per_requirement_raw_metrics_and_json_only_on_stdout(vcb_run, tmp_path):
+    """Each requirement's yield is the share of samples within its limit (counted here
+    from the samples); the objective's percentiles are over feasible samples (never the
+    penalty); the tornado defaults to the quantity that limits the yield; with --format
+    json stdout parses and the figures' paths are on stderr."""
+    run = archive.load_run(vcb_run)
+    t = analyse(run, [parse_vary("r", "kc1_n_per_mm=±5%"),
+                      parse_vary("r", "case.l1_mm=±0.1")], 400, 0)
+    by = {q["quantity"]: q for q in t.summary["requirements"]}
+    travel = t.samples.extras["rod_travel_mm"]
+    tol = run.case["rod_travel_tolerance_mm"]
+    assert by["rod_travel_mm"]["yield"] == np.mean(np.abs(travel - 18.0) <= tol + 1e-9)
+    assert by["feasible"]["yield"] == t.summary["yield"]
+    limiting = min((q for q in t.summary["requirements"] if q["quantity"] != "feasible"),
+                   key=lambda q: q["yield"])
+    assert t.summary["limiting"] == limiting["quantity"]
+    f = t.samples.f[t.samples.feasible]
+    p95 = t.summary["metrics"][t.objective_name]["p95"]
+    if f.size:
+        assert p95 == pytest.approx(np.percentile(f, 95)) and p95 <= f.max()
+    ax = figures(t)["tornado"].axes[0]
+    assert ax.get_xlabel() == readable(t.summary["limiting"])
+    r = runner.invoke(app, ["tolerance", str(vcb_run), "--samples", "100", *VARY, "--format",
+                            "json", "--plot", str(tmp_path / "p")])
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["requirements"]
+    assert r.stderr.count(".png") == 3

@@ -36,8 +36,9 @@ def print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]
                 sections: Sequence[int] = ()) -> None:
     """Print ``rows`` of plain-text cells under ``columns``: as a table when it fits the
     console without splitting a word, else vertically (the first cell as a heading, then
-    ``column: value`` lines). ``numeric`` right-justifies columns; ``styles`` colours
-    whole rows (``"red"``); ``sections`` are row indices a rule goes before."""
+    its ``column: value`` pairs, wrapped at spaces). ``numeric`` right-justifies columns;
+    ``styles`` colours whole rows (``"red"``); ``sections`` are row indices a rule goes
+    before."""
     numeric = list(numeric) if numeric is not None else [i > 0 for i in range(len(columns))]
     styles = list(styles) + [None] * (len(rows) - len(styles))
     if title:  # a line of its own: a table's title wraps at the table's width
@@ -58,5 +59,5 @@ def print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]
         head = escape(row[0]) if row else ""
         out.print(f"[bold]{head}[/]" if style is None else f"[bold {style}]{head}[/]",
                   highlight=False, soft_wrap=True)
-        for c, v in zip(columns[1:], row[1:]):
-            out.print(f"  {escape(c)}: {escape(v)}", highlight=False, soft_wrap=True)
+        pairs = "; ".join(f"{escape(c)}: {escape(v)}" for c, v in zip(columns[1:], row[1:]))
+        out.print(f"  {pairs}", highlight=False)  # wraps at spaces, never inside a word

@@ -10,13 +10,13 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.markup import escape
-from rich.table import Table
 
 from camopt.cli.app import Format, app, errors, fmt, out
+from camopt.cli.layout import print_table
+from camopt.errors import CamoptError
 
 if TYPE_CHECKING:  # imported inside the command: the CLI starts without numpy
     from camopt.tolerance import Tolerance
-from camopt.errors import CamoptError
 
 
 class Dist(str, enum.Enum):
@@ -45,7 +45,8 @@ def tolerance(
     plot: Annotated[Path | None, typer.Option(
         help="write histograms and a tornado chart (PNG) to this folder")] = None,
     tornado: Annotated[str | None, typer.Option(
-        help="metric of the tornado chart (default the objective)")] = None,
+        help="metric of the tornado chart (default the quantity of the requirement that "
+        "limits the yield)")] = None,
     force: Annotated[bool, typer.Option(help="overwrite an existing --out")] = False,
 ) -> None:
     """Vary a run's optimum within tolerances: yield, percentiles, sensitivities."""
@@ -69,10 +70,12 @@ def tolerance(
         if out_path is not None:
             _write(result, out_path, force)
         written = _figures(result, plot, tornado, run_path.stem) if plot else []
-    if format is Format.json:
+    if format is Format.json:  # stdout holds only the JSON; the figures' paths on stderr
         sys.stdout.write(json.dumps(doc, indent=2) + "\n")
-    else:
-        print_tolerance(doc)
+        for p in written:
+            print(p, file=sys.stderr)
+        return
+    print_tolerance(doc)
     for p in written:
         print(p)
 
@@ -94,6 +97,8 @@ def _figures(result: Tolerance, folder: Path, metric: str | None, stem: str) -> 
 
 def print_tolerance(doc: dict) -> None:
     """The analysis as rich tables: yield, then each metric's spread and its driver."""
+    from camopt import report
+
     varied = ", ".join(f"{v['input']} ±{fmt(v['tolerance'])}{'%' if v['unit'] == '%' else ''}"
                        for v in doc["vary"])
     run = escape(str(doc["run"]))
@@ -101,16 +106,27 @@ def print_tolerance(doc: dict) -> None:
               f"seed {doc['seed']}) of {varied}")
     out.print(f"yield (feasible share): [bold]{doc['yield']:.1%}[/]"
               f"{'' if doc['nominal_feasible'] else ' (the nominal design is infeasible)'}")
-    table = Table(title="metrics (driver: largest |Spearman rho|)")
-    for col in ("metric", "nominal", "p05", "p50", "p95", "driver", "rho"):
-        table.add_column(col, justify="left" if col in ("metric", "driver") else "right",
-                         overflow="fold")
+    if doc["requirements"]:
+        rows = [[r["name"], r["limit"], f"{r['yield']:.1%}", report.format_value(
+                 r["margin_p5"]) + (f" {r['unit']}" if r["unit"] and r["margin_p5"]
+                                   is not None else ""),
+                 "pass" if r["nominal_pass"] else "FAIL"] for r in doc["requirements"]]
+        print_table("yield per requirement (margin p05: 5 % of samples are closer to the "
+                    "limit)", ["requirement", "limit", "yield", "margin p05", "nominal"],
+                    rows, numeric=[False, True, True, True, True])
+        if doc["limiting"]:
+            out.print(f"limits the yield: [bold]{escape(doc['limiting'])}[/] (the tornado's "
+                      "default)", highlight=False)
+    rows = []
     for name, p in doc["metrics"].items():
         top = doc["sensitivity"][name][0]
-        table.add_row(name, fmt(doc["nominal"][name]), fmt(p["p05"]), fmt(p["p50"]),
-                      fmt(p["p95"]), top["input"] if top["spearman"] is not None else "-",
-                      fmt(top["spearman"]))
-    out.print(table)
+        rows.append([name, *(report.format_value(v) for v in (
+            doc["nominal"][name], p["p05"], p["p50"], p["p95"])),
+            top["input"] if top["spearman"] is not None else "-",
+            report.format_value(top["spearman"])])
+    print_table(f"metrics, raw (objective over {doc['objective_over']}; driver: largest "
+                "|Spearman rho|)", ["metric", "nominal", "p05", "p50", "p95", "driver", "rho"],
+                rows, numeric=[False, True, True, True, True, False, True])
     broken = {k: v for k, v in doc["violated_share"].items() if v}
     if broken:
         out.print("violated in: " + ", ".join(f"{k} {v:.1%}" for k, v in broken.items()))

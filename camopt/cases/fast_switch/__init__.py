@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from camopt.cases.fast_switch.config import FastSwitchConfig
 from camopt.cases.fast_switch.paper import OPTIMUM, PAPER
-from camopt.cases.fast_switch.requirements import requirements
 from camopt.cases.fast_switch.problem import FastSwitchProblem
+from camopt.cases.fast_switch.requirements import requirements
 from camopt.cases.registry import CaseSpec, register_case
 
 TOLERANCES = {  # docs/assumptions.md, "Default tolerances"
