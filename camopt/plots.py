@@ -103,8 +103,8 @@ def run_figures(run: RunView) -> dict[str, Figure]:
 
 def pareto_front(run: RunView) -> Figure:
     """The Pareto set in its first two objectives, infeasible members hollow, and the
-    paper's design (the case's ``paper`` values of those metrics) and the case's initial
-    design (metrics ``initial_<name>``) marked when known."""
+    reference design (:func:`camopt.report.reference`) marked when both its values are
+    known."""
     names, _ = pareto.objectives(run)
     a, b = names[:2]
     fig, ax = new_figure(f"Pareto front ({len(run.table)} designs)", readable(a), readable(b))
@@ -115,15 +115,13 @@ def pareto_front(run: RunView) -> Figure:
         if len(pts):
             ax.scatter(pts[:, 0], pts[:, 1], s=18, label="feasible" if feasible
                        else "infeasible", **style)
-    paper = get_case(run.kind).paper
-    if a in paper and b in paper:
-        ax.scatter([paper[a]], [paper[b]], marker="*", s=160, color=PAPER_STYLE["color"],
-                   label="paper's design", zorder=3)
-    m = run.best.metrics  # a case's initial design, reported with the prefix initial_
-    initial = [m.get(f"initial_{n}") for n in (a, b)]
-    if all(isinstance(v, float) and np.isfinite(v) for v in initial):
-        ax.scatter([initial[0]], [initial[1]], marker="D", s=60,
-                   color="black", label="initial design", zorder=3)
+    from camopt.report import reference
+
+    label, ref = reference(run)  # one name everywhere: "reference: vendor, Sec 2.3 ..."
+    point = [ref.get(n) for n in (a, b)]
+    if label and all(isinstance(v, (int, float)) and np.isfinite(v) for v in point):
+        ax.scatter([point[0]], [point[1]], marker="*", s=160, color=PAPER_STYLE["color"],
+                   label=label, zorder=3)
     ax.legend()
     return fig
 

@@ -99,13 +99,13 @@ def test_plot_marks_a_finite_initial_design(fronts):
         **view.best.metrics, "initial_f": 0.1, "initial_norm": 0.2}))
     ax = plots.pareto_front(marked).axes[0]
     labels = [c.get_label() for c in ax.collections]
-    assert "initial design" in labels
-    pts = ax.collections[labels.index("initial design")].get_offsets()
+    assert "reference: initial design" in labels
+    pts = ax.collections[labels.index("reference: initial design")].get_offsets()
     np.testing.assert_array_equal(pts, [[0.1, 0.2]])
     unknown = replace(view, best=replace(view.best, metrics={
         **view.best.metrics, "initial_f": float("nan"), "initial_norm": 0.2}))
     ax = plots.pareto_front(unknown).axes[0]
-    assert "initial design" not in [c.get_label() for c in ax.collections]
+    assert "reference: initial design" not in [c.get_label() for c in ax.collections]
 
 
 def test_summary_names_objectives_extent_knee_and_the_headline(fronts):

@@ -10,7 +10,7 @@ from camopt.cases.vcb.paper import PAPER
 from camopt.plotting import PAPER_STYLE, log_scale_if_spread, new_figure
 from camopt.runview import RunView
 
-DESIGNS = (("", "optimum", "-"), ("initial_", "vendor", ":"))
+DESIGNS = (("", "optimum", "-"), ("initial_", "reference: vendor", ":"))
 
 
 def figures(run: RunView) -> dict[str, Figure]:
@@ -41,7 +41,7 @@ def figures(run: RunView) -> dict[str, Figure]:
     ):
         fig, ax = new_figure(title, "cam angle theta_c (deg)", ylabel)
         ax.plot(a["cam_angle_deg"], a[key], label="optimum")
-        ax.plot(a["initial_cam_angle_deg"], a["initial_" + key], ":", label="vendor")
+        ax.plot(a["initial_cam_angle_deg"], a["initial_" + key], ":", label="reference: vendor")
         if mark is not None:
             ax.axhline(mark, label=mark_label, **PAPER_STYLE)
         if key in ("tau_max_mpa", "sigma_max_mpa", "curvature_mm"):
