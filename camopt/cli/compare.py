@@ -9,7 +9,6 @@ from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
-from rich.table import Table
 
 from camopt.cli.app import Format, app, errors, fmt, out
 from camopt.cli.layout import print_table
@@ -114,27 +113,26 @@ def _rate(s: dict[str, float]) -> str:
 
 
 def print_ranking(doc: dict[str, Any]) -> None:
-    """A sweep's grid points ranked (``report.rank_sweep``) as a rich table: numbers are
-    never wrapped or cut (the grid point's label folds instead)."""
-    from camopt.cli.show import cell, print_verdict
+    """A sweep's verdict (each grid point's success rate against run.min_success_rate)
+    and its grid points ranked (``report.rank_sweep``): a table, or ``name: value`` lines
+    when a word would not fit."""
+    from camopt import report
+    from camopt.cli.show import print_verdict
 
     print_verdict(doc, "sweep (run.min_success_rate)")
-    table = Table(title=escape(f"sweep {doc['sweep']}: grid points ranked"),
-                  title_justify="left",
-                  caption="success: successful/runs; nfev: median evaluations to the target; "
-                          "p: Mann-Whitney against rank 1; worst and more: --format json",
-                  caption_justify="left")
-    for col in ("rank", "grid point", "success", "best", "median", "nfev", "p"):
-        if col == "grid point":
-            table.add_column(col, overflow="fold", min_width=10)
-        else:
-            table.add_column(col, justify="right", no_wrap=True)
+
+    rows = []
     for r in doc["ranking"]:
         vs = r.get("vs_best")
-        table.add_row(str(r["rank"]), escape(r["label"]), f"{r['successes']}/{r['runs']}",
-                      cell(r["best"]), cell(r["median"]), cell(r["median_nfev_to_target"]),
-                      f"{vs['p_value']:.3g}" if vs else "-")
-    out.print(table)
+        rows.append([str(r["rank"]), r["label"], f"{r['successes']}/{r['runs']}",
+                     *(report.format_value(r[k]) for k in ("best", "median",
+                                                            "median_nfev_to_target")),
+                     f"{vs['p_value']:.3g}" if vs else "-"])
+    print_table(f"sweep {doc['sweep']}: grid points ranked", ["rank", "grid point",
+                "success", "best", "median", "nfev", "p"], rows,
+                numeric=[True, False, True, True, True, True, True])
+    out.print("success: successful/runs; nfev: median evaluations to the target; p: "
+              "Mann-Whitney against rank 1; worst and more: --format json", highlight=False)
     for r in doc["ranking"]:
         if r.get("vs_best"):
             out.print(escape(r["vs_best"]["verdict"]))
