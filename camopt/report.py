@@ -168,11 +168,11 @@ def requirements(run: RunView, violated: list[str] | None = None
     spec = get_case(run.kind)
     names = set(design_values(run))
     reqs = tuple(spec.requirements(run.case, names)) if spec.requirements else ()
-    violated = ", ".join(violated or [])
+    broken = ", ".join(violated or [])
     return (*reqs, Requirement(
         "every constraint of the run", "feasible", flag=True,
         source="the run's config ([case] and solver)",
-        failing=f"violates the run's constraints{f' ({violated})' if violated else ''}"))
+        failing=f"violates the run's constraints{f' ({broken})' if broken else ''}"))
 
 
 def verdict(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any]:

@@ -44,8 +44,8 @@ def requirements(case: Mapping[str, Any], names: Collection[str]) -> tuple[Requi
         Requirement("cam contact shear stress", "tau_max_mpa", "MPa",
                     upper=float(case["shear_yield_mpa"]),
                     source="Table 1 shear yield, Eq 31 (config shear_yield_mpa)"),
-        Requirement("follower swing", "phi_max_deg", "deg", *map(float, case["phi_max_deg"]),
-                    source="Eq 40 (config phi_max_deg)"),
+        Requirement("follower swing", "phi_max_deg", "deg", float(case["phi_max_deg"][0]),
+                    float(case["phi_max_deg"][1]), source="Eq 40 (config phi_max_deg)"),
         Requirement("pressure angle", "pressure_angle_max_deg", "deg",
                     upper=float(psi if psi is not None else PRESSURE_ANGLE_MAX_DEG),
                     source="config pressure_angle_max_deg" if psi is not None
