@@ -208,7 +208,10 @@ def verdict_rows(requirements: list[dict[str, Any]]) -> list[list[str]]:
         unit = f" {r['unit']}" if r["unit"] and r["value"] is not None else ""
         value = (None if r["value"] is None else bool(r["value"]) if flag else r["value"])
         margin = "-" if r["margin"] is None or flag else format_value(r["margin"]) + unit
-        rows.append([r["name"], r["limit"], format_value(value) + ("" if flag else unit),
+        shown = format_value(value) + ("" if flag else unit)
+        if value is None and r["pass"] is False:
+            shown = "n/a"  # NaN: a quantity the design does not reach (a stroke unfinished)
+        rows.append([r["name"], r["limit"], shown,
                      margin, {True: "pass", False: "FAIL", None: "-"}[r["pass"]]])
     return rows
 

@@ -105,9 +105,10 @@ class Check:
         r = self.requirement
         if r.flag:
             return r.failing or f"not {r.name}"
-        value = "n/a" if self.value is None else _fmt(self.value)
         unit = f" {r.unit}" if r.unit else ""
-        text = f"{r.name} {value}{unit}, required {r.limit}"
+        value = ("n/a (the design does not reach it)" if self.value is None
+                 or math.isnan(self.value) else f"{_fmt(self.value)}{unit}")
+        text = f"{r.name} {value}, required {r.limit}"
         return f"{r.failing}: {text}" if r.failing else text
 
 
