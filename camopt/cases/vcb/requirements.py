@@ -54,7 +54,10 @@ def requirements(case: Mapping[str, Any], names: Collection[str]) -> tuple[Requi
                     lower=float(case["rf_mm"]), source="Sec 2.3: > roller radius rf_mm"),
     ]
     if case.get("require_latch") and case.get("latch_energy_min_j"):
-        reqs.append(Requirement("kinetic energy left to latch", "latch_kinetic_energy_j", "J",
+        low = "latch_kinetic_energy_low_j" in names  # the band's least, when reported
+        reqs.append(Requirement("kinetic energy left to latch" + (", low end" if low else ""),
+                                "latch_kinetic_energy_low_j" if low
+                                else "latch_kinetic_energy_j", "J",
                                 lower=float(case["latch_energy_min_j"]),
                                 source="config latch_energy_min_j (assumed)"))
     if case.get("forbid_lift_off"):
