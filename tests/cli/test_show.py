@@ -51,7 +51,7 @@ def test_summary_shows_optimum_beside_the_initial_design_in_80_columns(vcb_run):
     m = view.best.metrics
     # every number whole on one line, under the optimum and the reference columns
     for name in ("tau_max_mpa", "driving_work_j", "rod_travel_mm", "closing_velocity_avg_m_s"):
-        assert rows[name][0] == f"{m[name]:.6g}"
+        assert rows[name][0] == report.format_value(m[name])  # NaN (never closes): n/a
     assert rows["driving_work_j"][1] == f"{m['initial_driving_work_j']:.6g}"
     assert rows["objective: objective_j"][0] == f"{view.best.objective:.6g}"
     assert rows["tau_max_mpa"][1] == "inf"  # the vendor's follower dwells: unbounded stress
@@ -70,7 +70,7 @@ def test_verdict_leads_and_says_in_words_why_the_paper_optimum_fails(vcb_run):
     first_screen = "\n".join(r.stdout.splitlines()[:24])
     assert "FAIL: does not latch" in first_screen
     assert "requirements of the best design" in first_screen
-    for name in ("rod travel", "18 ± 0.2 mm", "cam contact shear stress", "<= 1194 MPa"):
+    for name in ("rod travel", "18 ± 0.2 mm", "cam contact", "<= 1194 MPa"):
         assert name in first_screen
     doc = json.loads(invoke("show", vcb_run, "--format", "json").stdout)
     assert doc["verdict"] == "fail"
