@@ -23,7 +23,7 @@ from camopt.cases.vcb.model import (
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, fourbar, hertz
 from camopt.problem import Evaluation, ObjectiveFloor, Problem, Variable
-from camopt.units import DEG, MM
+from camopt.units import DEG, MM, MS
 
 LINK_FIELDS = ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
 """The linkage fields of ``[case]`` in the order of a linkage row (``designs``)."""
@@ -230,18 +230,19 @@ class VcbProblem(Problem, VariesCase):
         if motion is not None:
             extras.update({
                 # the identified parameters, and the band over the sets equally
-                # consistent with the ADAMS data (dynamics_band)
+                # consistent with the ADAMS data (dynamics_band): every velocity and time
                 "closing_velocity_avg_m_s": motion.closing_velocity_avg,
                 "closing_velocity_low_m_s": spread().velocity_low,
                 "closing_velocity_high_m_s": spread().velocity_high,
-                "closing_time_ms": motion.closing_time * 1e3,
-                "closing_time_high_ms": spread().closing_time_high * 1e3,
-                "touch_velocity_m_s": motion.touch_velocity,
-                "touch_time_ms": motion.touch_time * 1e3,
-                "cam_contact_time_ms": motion.cam_contact_time * 1e3,
+            })
+            for name, (field, unit, scale) in BANDED.items():
+                extras[name] = getattr(motion, field) / scale
+                extras[name.replace(unit, "_low" + unit)] = spread().low[field] / scale
+                extras[name.replace(unit, "_high" + unit)] = spread().high[field] / scale
+            extras.update({
                 "latch_kinetic_energy_j": motion.final_kinetic,
-                "cam_torque_min_nm": cam_torque_min,
                 "latch_kinetic_energy_low_j": spread().kinetic_low,
+                "cam_torque_min_nm": cam_torque_min,
                 "latched": spread().latched.astype(float),  # at every end of the band
             })
         if detail:
@@ -335,14 +336,15 @@ class MotionBand:
     parameter sets equally consistent with the ADAMS data (``dynamics_band``): average
     closing velocity (m/s; 0 under a set with which the contacts never meet), latched under
     every set, least kinetic energy at the latch (J), least reach (fraction of the
-    stroke) and longest closing time (s)."""
+    stroke), and the least and greatest of every :data:`BANDED` motion quantity (SI)."""
 
     velocity_low: NDArray
     velocity_high: NDArray
     latched: NDArray
     kinetic_low: NDArray
     reach_low: NDArray
-    closing_time_high: NDArray
+    low: dict[str, NDArray]
+    high: dict[str, NDArray]
 
     @classmethod
     def of(cls, nominal: ClosingMotion, members: ClosingMotion | None = None, k: int = 0
@@ -356,8 +358,21 @@ class MotionBand:
         # contacts that never meet close at zero speed: finite, so that a search starting
         # among stalling designs still sees how far it is from the requirement
         v = np.nan_to_num(stack("closing_velocity_avg"), nan=0.0)
-        return cls(velocity_low=v.min(axis=0), velocity_high=v.max(axis=0),
-                   latched=np.asarray(stack("latched").all(axis=0)),
-                   kinetic_low=stack("final_kinetic").min(axis=0),
-                   reach_low=stack("reach").min(axis=0),
-                   closing_time_high=stack("closing_time").max(axis=0))
+        fields = {field: stack(field) for field, _, _ in BANDED.values()}
+        with np.errstate(invalid="ignore"):
+            return cls(velocity_low=v.min(axis=0), velocity_high=v.max(axis=0),
+                       latched=np.asarray(stack("latched").all(axis=0)),
+                       kinetic_low=stack("final_kinetic").min(axis=0),
+                       reach_low=stack("reach").min(axis=0),
+                       low={f: a.min(axis=0) for f, a in fields.items()},
+                       high={f: a.max(axis=0) for f, a in fields.items()})
+
+
+BANDED = {
+    "touch_velocity_m_s": ("touch_velocity", "_m_s", 1.0),
+    "cam_contact_time_ms": ("cam_contact_time", "_ms", MS),
+    "touch_time_ms": ("touch_time", "_ms", MS),
+    "closing_time_ms": ("closing_time", "_ms", MS),
+}
+"""Reported with their band: extra name -> (ClosingMotion field, the name's unit suffix,
+SI factor); the band's extras insert low/high before the unit (``touch_time_low_ms``)."""
