@@ -313,3 +313,17 @@ def test_band_is_the_extremes_over_the_parameter_sets():
     np.testing.assert_array_equal(ev.extras["closing_velocity_high_m_s"], np.max(v, axis=0))
     np.testing.assert_array_equal(ev.extras["latched"], np.all(latched, axis=0))
     assert np.ptp(v, axis=0)[0] > 0  # the vendor's band has a width
+
+
+def test_a_cam_the_springs_cannot_release_never_closes():
+    """Friction above the closing springs' torque at the release crank angle: the cam never
+    leaves it, so nothing of the closing happens (no contact, no latch), whatever the
+    springs could do further on."""
+    p = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]",
+                        "case.release_offset_deg=1.0", "case.cam_friction_nm=30").case)
+    mo = p.motion(p.vendor_x())
+    assert np.isinf(mo.cam_contact_time[0]) and not mo.latched[0]
+    assert np.isinf(mo.closing_time[0]) and mo.reach[0] == 0
+    free = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]",
+                           "case.release_offset_deg=1.0", "case.cam_friction_nm=0").case)
+    assert free.motion(free.vendor_x()).latched[0]  # the same springs close without it

@@ -268,6 +268,9 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     kinetic_now = np.where(after, ke_after, ke_before)
     stalled_at = np.where((kinetic_now[:, 1:] <= 0).any(axis=1),
                           np.argmax(kinetic_now[:, 1:] <= 0, axis=1) + 1, theta.size)
+    # a cam the springs cannot turn away from its release (friction at least their torque)
+    # never reaches the roller: nothing of the closing happens
+    stalled_at = np.where(np.isfinite(t_free), stalled_at, 1)
     # 4. time: before the touch from omega_before; after it from the touch instant on
     du = 1.0 / steps
     t_before = t_free[:, None] + _cumulative_time(dtheta_du[None, :], omega_before, du)
