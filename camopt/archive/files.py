@@ -25,6 +25,7 @@ import io
 import os
 import platform
 import re
+import secrets
 import socket
 import stat
 import tempfile
@@ -226,7 +227,7 @@ def atomic_write(path: Path, write: Callable[[h5py.File], None], replace: bool =
     data = buffer.getbuffer()
     tmp: str | None = None
     try:
-        fd, tmp = tempfile.mkstemp(dir=_folder(path), prefix=f".{path.name}.", suffix=".tmp")
+        fd, tmp = _new_temporary(path)
         try:
             view = memoryview(data)
             while view:
@@ -246,6 +247,21 @@ def atomic_write(path: Path, write: Callable[[h5py.File], None], replace: bool =
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
     return path
+
+
+def _new_temporary(path: Path) -> tuple[int, str]:
+    """A new file ``.<name>.<8 random>.tmp`` beside ``path`` (``O_EXCL``), open for writing,
+    with the permissions any new file gets (0666 less the umask; mkstemp's 0600 would
+    keep the archive from the user's group)."""
+    folder = _folder(path)
+    for _ in range(100):
+        tmp = folder / f".{path.name}.{secrets.token_hex(4)}.tmp"
+        try:
+            return os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC,
+                           0o666), str(tmp)
+        except FileExistsError:
+            continue
+    raise FileExistsError(errno.EEXIST, "no free temporary name", str(folder))
 
 
 def _publish(tmp: Path, path: Path, replace: bool) -> None:

@@ -9,6 +9,7 @@ import sys
 from camopt.cli import (  # noqa: F401  (commands)
     catalog,
     compare,
+    listing,
     outputs,
     run,
     show,

@@ -26,7 +26,9 @@ from camopt.errors import CamoptError
 if TYPE_CHECKING:
     from camopt.config import LoadedConfig
 
-app = typer.Typer(rich_markup_mode="rich", no_args_is_help=True, add_completion=False,
+# -h as --help on every command; typer's --install-completion / --show-completion
+app = typer.Typer(rich_markup_mode="rich", no_args_is_help=True, add_completion=True,
+                  context_settings={"help_option_names": ["-h", "--help"]},
                   help="Batch optimiser for spring-actuated mechanisms.")
 out = Console()
 err = Console(stderr=True)

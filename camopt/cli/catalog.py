@@ -17,8 +17,8 @@ from camopt.errors import CamoptError
 @app.command()
 def validate(case: Annotated[Path, typer.Argument(help="case file (TOML)")],
              set_: Annotated[list[str] | None, typer.Option("--set")] = None) -> None:
-    """Check a case file without running it; warn (stderr, exit 0) of a ``run.target`` no
-    design can reach or inherited from a file with another ``[case]``."""
+    """Check a case file without running it; warn (stderr, exit 0) of a run.target no
+    design can reach, or one inherited from a file whose case table differs."""
     import numpy as np
 
     from camopt.driver import build_solver, prepare
@@ -61,7 +61,7 @@ def write_text(path: Path, text: str, force: bool) -> None:
     archive.check_writable(path, force)
     tmp = path.parent / f".{path.name}.{os.getpid()}.tmp"
     try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # less the umask
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(text)
         if force:
@@ -78,8 +78,8 @@ def write_text(path: Path, text: str, force: bool) -> None:
 
 @app.command(name="solvers")
 def list_solvers() -> None:
-    """List solvers with their options (TOML lines for a ``[solver]`` table) and the case
-    kinds each runs on."""
+    """List solvers with their options (TOML lines for a solver table, each with its
+    meaning) and the case kinds each runs on."""
     from camopt.capabilities import capability_name
     from camopt.cases import cases
     from camopt.solvers import solvers

@@ -20,29 +20,36 @@ if TYPE_CHECKING:
 
 
 @app.command()
-def show(run_path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP",
-                                                  help="run or sweep archive")],
+def show(run_paths: Annotated[list[Path], typer.Argument(
+             metavar="RUN_OR_SWEEP...", help="run or sweep archives (a glob may match several)")],
          format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
          ) -> None:
-    """Show an archive: a run's best design beside the reference design, its repeats and
-    table; a sweep's grid points ranked (as ``compare SWEEP``)."""
+    """Show archives: a run's best design beside the reference design, its repeats and
+    table; a sweep's grid points ranked (as compare SWEEP). Several archives (a glob such
+    as runs/fast_switch-*.h5) are each shown, in the order given (a glob's order: oldest
+    first, as the names carry the time); with --format json, as a JSON array."""
     from camopt import archive, report
     from camopt.archive.sweeps import load_sweep
     from camopt.cli.compare import print_ranking
 
-    with errors():
-        if archive.archive_kind(run_path) == "sweep":
-            doc = report.rank_sweep(*load_sweep(run_path))
-            if format is Format.json:
-                sys.stdout.write(json.dumps(doc, indent=2) + "\n")
+    with errors():  # every archive read before anything is printed
+        loaded: list[tuple[str, Any]] = []
+        for path in run_paths:
+            if archive.archive_kind(path) == "sweep":
+                loaded.append(("sweep", report.rank_sweep(*load_sweep(path))))
             else:
-                print_ranking(doc)
-            return
-        view = archive.load_run(run_path)
+                loaded.append(("run", archive.load_run(path)))
     if format is Format.json:
-        sys.stdout.write(json.dumps(report.show(view), indent=2) + "\n")
-    else:
-        print_show(view)
+        docs = [item if kind == "sweep" else report.show(item) for kind, item in loaded]
+        sys.stdout.write(json.dumps(docs[0] if len(docs) == 1 else docs, indent=2) + "\n")
+        return
+    for i, (kind, item) in enumerate(loaded):
+        if i:
+            out.print()
+        if kind == "sweep":
+            print_ranking(item)
+        else:
+            print_show(item)
 
 
 def cell(value: Any) -> str:

@@ -190,3 +190,15 @@ def _alive(pid: int) -> bool:
         return open(f"/proc/{pid}/stat").read().split()[2] != "Z"
     except OSError:
         return False
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o002, 0o077])
+def test_archives_get_the_permissions_of_any_new_file(tmp_path, umask):
+    """0666 less the umask (issue #22: they were 0600 whatever the umask)."""
+    old = os.umask(umask)
+    try:
+        path = files.atomic_write(tmp_path / "a.h5", lambda f: f.attrs.update(x=1))
+    finally:
+        os.umask(old)
+    assert os.stat(path).st_mode & 0o777 == 0o666 & ~umask
+    assert not list(tmp_path.glob(".*.tmp"))

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import pytest
 import tomllib
 from typer.testing import CliRunner
@@ -10,6 +13,9 @@ from camopt import __version__
 from camopt.cases import cases
 from camopt.cli import app
 from camopt.solvers import solvers
+from tests.helpers import load
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
 runner = CliRunner()
 
@@ -41,3 +47,53 @@ def test_validate_warns_of_an_unreachable_target_and_still_passes(tmp_path):
     assert r.exit_code == 0, r.output
     assert r.stderr.startswith("warning: configs/vcb.toml: run.target: -1 is below 0")
     assert r.stdout.startswith("ok: configs/vcb.toml")
+
+
+# the shipped case file each template reproduces (issue #22: `init` is the reference case)
+REFERENCE = {"vcb": "vcb.toml", "vcb_identify": "vcb_identify.toml",
+             "vcb_identify_dynamics": "vcb_identify_dynamics.toml", "emb_cam": "emb.toml",
+             "fast_switch": "fast_switch_de.toml", "opening_spring": "opening_spring_pp3.toml"}
+
+
+BUILT_IN = sorted(k for k, spec in cases().items() if spec.config.__module__.startswith("camopt."))
+
+
+@pytest.mark.parametrize("kind", BUILT_IN)
+def test_init_prints_the_shipped_reference_case(kind, tmp_path):
+    assert kind in REFERENCE, f"name the shipped case file that `init {kind}` reproduces"
+    r = runner.invoke(app, ["init", kind])
+    assert r.exit_code == 0, r.output
+    (tmp_path / "init.toml").write_text(r.stdout)
+    shipped = load(CONFIGS / REFERENCE[kind]).case.model_dump(mode="json")
+    assert load(tmp_path / "init.toml").case.model_dump(mode="json") == shipped
+
+
+@pytest.mark.parametrize("command", [[], ["run"], ["show"]])
+def test_dash_h_is_help(command):
+    short, long = (runner.invoke(app, [*command, flag], env={"COLUMNS": "80"})
+                   for flag in ("-h", "--help"))
+    assert short.exit_code == long.exit_code == 0
+    assert short.stdout == long.stdout and "Usage: " in short.stdout
+
+
+def test_shell_completion_is_offered():
+    r = runner.invoke(app, ["--help"], env={"COLUMNS": "80"})
+    assert "--install-completion" in r.stdout and "--show-completion" in r.stdout
+
+
+def test_runs_lists_each_archive_with_case_verdict_and_date(tmp_path):
+    """Runs and sweeps newest first; a file that is not an archive is a row, not an error."""
+    first = runner.invoke(app, ["run", str(CONFIGS / "fast_switch.toml"), "--quiet",
+                                "--out", str(tmp_path / "a.h5")])
+    assert first.exit_code == 0, first.output
+    (tmp_path / "junk.h5").write_text("not hdf5")
+    r = runner.invoke(app, ["runs", str(tmp_path), "--format", "json"])
+    assert r.exit_code == 0, r.output
+    rows = json.loads(r.stdout)
+    assert [Path(row["path"]).name for row in rows] == ["a.h5", "junk.h5"]
+    assert rows[0]["case"] == "fast_switch" and rows[0]["verdict"] == "feasible"
+    assert rows[0]["created"].startswith("20") and rows[1]["verdict"].startswith("file: not")
+    table = runner.invoke(app, ["runs", str(tmp_path)], env={"COLUMNS": "100"})
+    assert table.exit_code == 0 and "fast_switch" in table.stdout
+    missing = runner.invoke(app, ["runs", str(tmp_path / "none")])
+    assert missing.exit_code == 2 and missing.stderr.startswith("error: ")

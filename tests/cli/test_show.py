@@ -129,3 +129,20 @@ def test_show_reads_a_sweep(tmp_path):
                                                    "solver.population=20"}
     for row in doc["ranking"]:
         assert re.search(rf"{row['successes']}/{row['runs']}", shown.stdout)
+
+
+def test_show_of_a_glob_matching_two_archives_shows_each(vcb_run, tmp_path):
+    """`show runs/fast_switch-*.h5` once two archives match (issue #22): each in the order
+    given; --format json, a list; a bad one among them prints nothing but the error."""
+    other = tmp_path / "fs.h5"
+    r = invoke("run", CONFIGS / "fast_switch.toml", "--out", other, "--quiet")
+    assert r.exit_code == 0, r.output
+    r = invoke("show", vcb_run, other)
+    assert r.exit_code == 0, r.output
+    assert r.stdout.index("case vcb") < r.stdout.index("case fast_switch")
+    docs = json.loads(invoke("show", vcb_run, other, "--format", "json").stdout)
+    assert [d["case"]["kind"] for d in docs] == ["vcb", "fast_switch"]
+    assert isinstance(json.loads(invoke("show", other, "--format", "json").stdout), dict)
+    (tmp_path / "bad.h5").write_text("x")
+    r = invoke("show", vcb_run, tmp_path / "bad.h5")
+    assert r.exit_code == 2 and r.stdout == "" and r.stderr.startswith("error: ")

@@ -43,7 +43,8 @@ class EmbCamConfig(CaseConfig):
     screw_lead_mm: Length | None = Field(
         2.40, description="cap the rotation at that of this ball-screw lead (Eq 45); None: none")
     clearance_angle_max_rad: Positive | None = Field(
-        None, description="optional cap on the clearance-elimination angle")
+        1.72, description="cap on the clearance-elimination angle: the paper's design's "
+        "(Sec 4.4); unset: no cap")
     torque_ramp_rms_max_pct: Positive | None = Field(
         None, description="optional cap on the torque's RMS deviation from a straight line "
         "over the clamping section, % of the peak")

@@ -49,7 +49,8 @@ class VcbConfig(CaseConfig):
     crank_l8_mm: Length = Field(25.0, description="closing springs' crank OQ on the cam shaft")
     preset_qox_deg: float = Field(95.0, description="angle QOX in the opened state")
     rod_arm_offset_deg: float = Field(
-        0.0, description="angle of EM from the extension of LE beyond E (identified)")
+        7.46, description="angle of EM from the extension of LE beyond E (identified: "
+        "configs/vcb_identify.toml, 18.0 mm rod travel)")
     # cam (Sec 2.2-2.3)
     rb_mm: Length = Field(23.0, description="base circle radius")
     rf_mm: Length = Field(15.0, description="roller radius")
@@ -70,7 +71,8 @@ class VcbConfig(CaseConfig):
     opening_k_n_per_mm: Rate = Field(16.6, description="opening spring")
     opening_stretch_closed_mm: Stroke = Field(33.6, description="opening spring, closed state")
     opening_arm_ratio: Positive = Field(
-        1.0, description="opening-spring elongation per mm of rod travel, r7/r6 (identified)")
+        1.85, description="opening-spring elongation per mm of rod travel, r7/r6 "
+        "(identified, at its physical bound)")
     wipe_k_n_per_mm: Rate = Field(82.4, description="one contact (wipe) spring")
     wipe_count: int = Field(3, ge=1, description="contact springs, one per phase")
     wipe_compression_closed_mm: Stroke = Field(17.0, description="closed state, vendor")
