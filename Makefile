@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-$(shell cat pyproject.toml | cksum | cut -d' ' -f1)
 RUN_CASE ?= configs/vcb.toml
 
-.PHONY: install run test lint typecheck bench sweep-ci clean
+.PHONY: install run test lint typecheck bench sweep-ci docs clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -27,6 +27,10 @@ lint: typecheck
 # types and units as a gate: mypy's settings are in pyproject.toml ([tool.mypy])
 typecheck: install
 	$(BIN)/mypy
+
+# docs/cases/<kind>.md from the case config models' field descriptions (a test checks them)
+docs: install
+	$(BIN)/python -m camopt.casedocs
 
 bench: install
 	$(BIN)/python -m bench

@@ -85,8 +85,9 @@ def list_solvers() -> None:
     from camopt.solvers import solvers
 
     for name, cls in solvers().items():
-        options = [toml_line(k, v.get_default(call_default_factory=True))
-                   for k, v in cls.Options.model_fields.items() if k != "name"]
+        options = [line for k, v in cls.Options.model_fields.items() if k != "name"
+                   for line in (f"# {v.description}" if v.description else "",
+                                toml_line(k, v.get_default(call_default_factory=True))) if line]
         runs_on = ", ".join(k for k, spec in cases().items() if cls.supports(spec.problem))
         needs = ", ".join(capability_name(c) for c in cls.requires)
         # plain print, never wrapped: each block is a valid [solver] table to copy

@@ -82,10 +82,25 @@ class Strict(BaseModel):
         return value
 
 
+# a field name's unit suffix and the unit it names, longest suffixes first
+UNIT_SUFFIXES = (
+    ("_kn_per_mm3", "kN/mm^3"), ("_n_per_mm", "N/mm"), ("_sqrt_mpa", "sqrt(MPa)"),
+    ("_kg_m2", "kg m^2"), ("_m_s", "m/s"), ("_mm", "mm"), ("_deg", "deg"), ("_rad", "rad"),
+    ("_kg", "kg"), ("_gpa", "GPa"), ("_mpa", "MPa"), ("_nm", "N m"), ("_n", "N"),
+    ("_ms", "ms"), ("_s", "s"), ("_j", "J"), ("_pct", "%"), ("_m", "m"),
+)
+
+
+def unit_of(name: str) -> str:
+    """The unit a field's name carries ('mm' for ``l1_mm``, 'N/mm' for ``k_n_per_mm``);
+    '' for a name without a unit suffix (SI or unitless)."""
+    return next((unit for suffix, unit in UNIT_SUFFIXES if name.endswith(suffix)), "")
+
+
 def _unit(name: str) -> str:
     """' mm' for ``l1_mm``, '' for a field without a unit suffix."""
-    match = re.search(r"_(mm|kg|deg|rad|gpa|mpa|n|ms|s|n_per_mm|kn_per_mm3|kg_m2)$", name)
-    return f" {match.group(1).replace('_per_', '/')}" if match else ""
+    unit = unit_of(name)
+    return f" {unit}" if unit else ""
 
 
 class Bounds(Strict):
@@ -252,7 +267,8 @@ def _section(title: str, model: BaseModel) -> list[str]:
             lines += [f"# {info.description}", f"# {name} = {{ }}"] if info.description else []
             continue
         if info.description:
-            lines.append(f"# {info.description}")
+            unit = unit_of(name)
+            lines.append(f"# {info.description}" + (f" [{unit}]" if unit else ""))
         if value is None:
             lines.append(f"# {name} =   (unset)")
         else:

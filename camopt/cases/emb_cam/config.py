@@ -20,26 +20,28 @@ class EmbCamConfig(CaseConfig):
 
     kind: Literal["emb_cam"] = "emb_cam"
     clearance_mm: SmallLength = Field(1.0, description="x1, brake clearance (Sec 3.1)")
-    deformation_mm: SmallLength = Field(1.0, description="x2, caliper deformation at full force")
+    deformation_mm: SmallLength = Field(1.0, description="x2, caliper deformation at full force "
+        "(Sec 3.1)")
     k_kn_per_mm3: Annotated[Positive, Plausible(1e-3, 1e6)] = Field(
-        50.0, description="K in F = K (s - x1)^3; the text's kN/mm is a misprint")
-    r_st_mm: Length = Field(15.0, description="initial polar radius")
-    r_g_mm: Length = Field(20.0, description="inner radius of the driven bearing")
+        50.0, description="K in F = K (s - x1)^3; the text's kN/mm is a misprint (Sec 3.1)")
+    r_st_mm: Length = Field(15.0, description="initial polar radius (Sec 3.1)")
+    r_g_mm: Length = Field(20.0, description="inner radius of the driven bearing (Sec 3.1)")
     key_points: int = Field(10, ge=4, le=40, description="N, spline key points (assumed)")
     samples_per_segment: int = Field(40, ge=4, le=1000,
-                                     description="profile samples between key points")
+                                     description="profile samples between key points (assumed, "
+        "docs/assumptions.md)")
     weights: list[float] = Field(
         [1.0, 0.02, 1.0, 0.05, 0.2, 1.0],
         description="w1..w6 of Eq 27: clearance angle (rad), torque-slope variance "
         "((N m/rad)^2), peak torque (N m), curvature steps (mm), tan alpha before and after "
         "the clearance is taken up (assumed)")
     allowable_stress_mpa: Stress = Field(2500.0, description="[sigma]_H (assumed)")
-    z_e_sqrt_mpa: Positive = Field(189.8, description="Z_E for steel on steel")
+    z_e_sqrt_mpa: Positive = Field(189.8, description="Z_E for steel on steel (handbook value)")
     contact_length_mm: Length = Field(20.0, description="L, contact line length (assumed)")
     lift_tolerance_mm: Positive = Field(
         0.002, description="|s(end) - s_max| allowed: the paper's 2 mm held to +-0.002 mm by "
         "default; a looser value (e.g. 0.01) lets the clamping force drop with the lift "
-        "(K x2^3: -3 % at 0.99 mm) and so flatters the torque")
+        "(K x2^3: -3 % at 0.99 mm) and so flatters the torque (assumed, docs/assumptions.md)")
     screw_lead_mm: Length | None = Field(
         2.40, description="cap the rotation at that of this ball-screw lead (Eq 45); None: none")
     clearance_angle_max_rad: Positive | None = Field(
@@ -47,7 +49,7 @@ class EmbCamConfig(CaseConfig):
         "(Sec 4.4); unset: no cap")
     torque_ramp_rms_max_pct: Positive | None = Field(
         None, description="optional cap on the torque's RMS deviation from a straight line "
-        "over the clamping section, % of the peak")
+        "over the clamping section, % of the peak (beyond the paper: configs/emb_linear.toml)")
     knot_density: tuple[float, float, float] | None = Field(
         None, description="None: key points evenly spaced in profile angle (Eq 25); "
         "[centre, peak, width]: their density peaks 'peak' times higher around the fraction "
@@ -56,6 +58,8 @@ class EmbCamConfig(CaseConfig):
     penalty_p2: float = Field(100.0, ge=0, description="P2 of Eq 30 (per unit of err)")
     kappa_bounds: Bounds | None = Field(
         None, description="initial tangent angle (rad); None: [0, acos(r_st / 2 r_g)] (Eq 21)")
-    offset_bounds_mm: Bounds = Field(Bounds(lower=0, upper=20), description="e, 0 < e < r_g")
+    offset_bounds_mm: Bounds = Field(Bounds(lower=0, upper=20), description="e, 0 < e < r_g "
+        "(Sec 3.3)")
     radius_bounds_mm: Bounds | None = Field(
-        None, description="key radii; None: [r_st, 2 r_g] (repair keeps r_j < r_g + e)")
+        None, description="key radii; None: [r_st, 2 r_g] (repair keeps r_j < r_g + e) "
+                          "(search range)")

@@ -29,10 +29,10 @@ class OpeningSpringConfig(CaseConfig):
     kind: Literal["opening_spring"] = "opening_spring"
     mode: Literal["design", "identify"] = Field(
         "design", description="design: solve spring parameters; identify: solve the lumped "
-        "inertia and self-closing force from a published design")
+        "inertia and self-closing force from a published design (camopt option)")
     free: list[str] = Field(
         ["k_n_per_mm", "l0_mm"], description="parameters to solve for (the others are fixed "
-        "at the values below)")
+        "at the values below) (camopt option)")
     desired_coefficients: list[float] = Field(
         [-0.105, 3.42, 2.34e2, -2.53e3], description="Eq 7: theta(t) = c0 + c1 t + c2 t^2 + "
         "c3 t^3, t in s")
@@ -45,39 +45,51 @@ class OpeningSpringConfig(CaseConfig):
         [15.85, 24.85, 25.80], description="times on Eq 7 of the precision points; the first "
         "is the initial point")
     # spring design (Table 1 'original' by default)
-    k_n_per_mm: Stiffness = Field(14.59, description="stiffness of each of the two springs")
-    l0_mm: FreeLength = Field(128.0, description="free length")
-    u_mm: Length = Field(83.0, description="ground point A, x")
-    v_mm: Length = Field(207.0, description="ground point A, y")
-    s_mm: Length = Field(135.0, description="link point B along OD")
+    k_n_per_mm: Stiffness = Field(14.59, description="stiffness of each of the two springs "
+                                  "(Table 1)")
+    l0_mm: FreeLength = Field(128.0, description="free length (Table 1)")
+    u_mm: Length = Field(83.0, description="ground point A, x (Table 1)")
+    v_mm: Length = Field(207.0, description="ground point A, y (Table 1)")
+    s_mm: Length = Field(135.0, description="link point B along OD (Table 1)")
     t_mm: Length = Field(0.0, description="link point B across OD (Sec 4.3: zero)")
-    spring_count: int = Field(2, ge=1, le=100, description="symmetric opening springs")
+    spring_count: int = Field(2, ge=1, le=100, description="symmetric opening springs (Table 1)")
     # lumped dynamics (not in the paper; identified or assumed, docs/assumptions.md)
-    inertia_kg_m2: Inertia = Field(0.5436, description="I_o of the follower about O")
+    inertia_kg_m2: Inertia = Field(0.5436, description="I_o of the follower about O (identified: "
+                                   "configs/opening_spring_identify.toml)")
     self_closing_force_n: Force = Field(
-        210.4, description="F_r per contact; positive resists opening")
-    contact_mass_kg: Mass = Field(1.5, ge=0, description="m_c, one moving contact assembly")
-    contact_count: int = Field(3, ge=1, le=100, description="three phases")
-    follower_mass_kg: Mass = Field(0.0, ge=0, description="m_f (lumped into I_o if 0)")
-    follower_centroid_mm: Arm = Field(0.0, ge=0, description="C_f")
-    follower_centroid_deg: float = Field(0.0, description="psi = angle C_f O B")
-    gravity: Gravity = Field(9.81, ge=0, description="m/s^2")
+        210.4, description="F_r per contact; positive resists opening (identified: "
+        "configs/opening_spring_identify.toml)")
+    contact_mass_kg: Mass = Field(1.5, ge=0,
+                                  description="m_c, one moving contact assembly (assumed)")
+    contact_count: int = Field(3, ge=1, le=100, description="three phases (three-phase breaker)")
+    follower_mass_kg: Mass = Field(0.0, ge=0, description="m_f (lumped into I_o if 0) (assumed)")
+    follower_centroid_mm: Arm = Field(0.0, ge=0, description="C_f (assumed)")
+    follower_centroid_deg: float = Field(0.0, description="psi = angle C_f O B (assumed)")
+    gravity: Gravity = Field(9.81, ge=0, description="m/s^2 (standard gravity)")
     regularization: float = Field(
         0.0, ge=0, description="weight of a pull toward the original design (pins the "
-        "least-squares optimum)")
+        "least-squares optimum) (camopt option)")
     original: dict[str, float] = Field(
         {"k_n_per_mm": 14.59, "l0_mm": 128.0, "u_mm": 83.0, "v_mm": 207.0, "s_mm": 135.0},
         description="Table 1 original design (regularisation target and comparison)")
     compare_designs: dict[str, dict[str, float]] = Field(
         default_factory=dict, description="more designs to simulate beside this one, "
-        "{label = {k_n_per_mm = ..., ...}}; unlisted parameters take the values above")
-    k_bounds_n_per_mm: Bounds = Field(Bounds(lower=5, upper=60), description="search bounds")
-    l0_bounds_mm: Bounds = Field(Bounds(lower=50, upper=250), description="search bounds")
-    u_bounds_mm: Bounds = Field(Bounds(lower=0, upper=200), description="search bounds")
-    v_bounds_mm: Bounds = Field(Bounds(lower=100, upper=300), description="search bounds")
-    s_bounds_mm: Bounds = Field(Bounds(lower=60, upper=200), description="search bounds")
-    inertia_bounds_kg_m2: Bounds = Field(Bounds(lower=0.01, upper=5), description="identify")
-    self_closing_bounds_n: Bounds = Field(Bounds(lower=-2000, upper=2000), description="identify")
+        "{label = {k_n_per_mm = ..., ...}}; unlisted parameters take the values above "
+        "(camopt option)")
+    k_bounds_n_per_mm: Bounds = Field(Bounds(lower=5, upper=60), description="search bounds "
+                                                                             "(search range)")
+    l0_bounds_mm: Bounds = Field(Bounds(lower=50, upper=250), description="search bounds "
+                                                                          "(search range)")
+    u_bounds_mm: Bounds = Field(Bounds(lower=0, upper=200), description="search bounds "
+                                                                        "(search range)")
+    v_bounds_mm: Bounds = Field(Bounds(lower=100, upper=300), description="search bounds "
+                                                                          "(search range)")
+    s_bounds_mm: Bounds = Field(Bounds(lower=60, upper=200), description="search bounds "
+                                                                         "(search range)")
+    inertia_bounds_kg_m2: Bounds = Field(Bounds(lower=0.01, upper=5),
+                                         description="identify (search range)")
+    self_closing_bounds_n: Bounds = Field(Bounds(lower=-2000, upper=2000),
+                                          description="identify (search range)")
 
     @model_validator(mode="after")
     def _check(self) -> OpeningSpringConfig:

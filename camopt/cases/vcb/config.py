@@ -38,52 +38,56 @@ class VcbConfig(CaseConfig):
         "cam", description="cam: a1, a2, a3, kc1, kc2 (Eq 37); fourbar: l1, l3, l4, l5, "
         "theta1 (Eq 41)")
     # four-bar and pivots (Sec 2.3)
-    l1_mm: Length = Field(139.79, description="fixed link BE")
-    l2_mm: Length = Field(70.0, description="follower (input) link BD")
-    l3_mm: Length = Field(124.7, description="coupler DL")
-    l4_mm: Length = Field(140.0, description="output arm EL")
-    l5_mm: Length = Field(90.0, description="output arm EM to the insulated rod")
+    l1_mm: Length = Field(139.79, description="fixed link BE (Sec 2.3)")
+    l2_mm: Length = Field(70.0, description="follower (input) link BD (Sec 2.3)")
+    l3_mm: Length = Field(124.7, description="coupler DL (Sec 2.3)")
+    l4_mm: Length = Field(140.0, description="output arm EL (Sec 2.3)")
+    l5_mm: Length = Field(90.0, description="output arm EM to the insulated rod (Sec 2.3)")
     theta1_deg: float = Field(-121.98, description="fixed-link angle (Table 7 initial)")
-    pivot_b_mm: Pair = Field((-72.0, -55.0), description="follower pivot B (cam pivot O at 0,0)")
-    pivot_g_mm: Pair = Field((50.0, 200.0), description="closing springs' fixed end G")
-    crank_l8_mm: Length = Field(25.0, description="closing springs' crank OQ on the cam shaft")
-    preset_qox_deg: float = Field(95.0, description="angle QOX in the opened state")
+    pivot_b_mm: Pair = Field((-72.0, -55.0), description="follower pivot B (cam pivot O at 0,0) "
+                                                         "(Sec 2.3)")
+    pivot_g_mm: Pair = Field((50.0, 200.0), description="closing springs' fixed end G (Sec 2.3)")
+    crank_l8_mm: Length = Field(25.0, description="closing springs' crank OQ on the cam shaft "
+                                "(Sec 2.3, assumed reading)")
+    preset_qox_deg: float = Field(95.0, description="angle QOX in the opened state (Sec 2.3)")
     rod_arm_offset_deg: float = Field(
         7.46, description="angle of EM from the extension of LE beyond E (identified: "
         "configs/vcb_identify.toml, 18.0 mm rod travel)")
     # cam (Sec 2.2-2.3)
-    rb_mm: Length = Field(23.0, description="base circle radius")
-    rf_mm: Length = Field(15.0, description="roller radius")
+    rb_mm: Length = Field(23.0, description="base circle radius (Sec 2.3)")
+    rf_mm: Length = Field(15.0, description="roller radius (Sec 2.3)")
     alpha: Positive = Field(0.95, description="loss coefficient of contact (Eq 1)")
     beta_mm: float = Field(2.0, ge=0, description="cam-roller clearance (Eq 1)")
     gamma_mm: float = Field(1.0, ge=0, description="hook-roller clearance (Eq 1)")
     node_clearance_mm: float = Field(
         1.0, ge=0, description="clearance in Eqs 2 and 8 that reproduces a0..a3 (not beta)")
-    theta0_deg: float = Field(4.0, ge=0, description="pre-rotation before contact")
+    theta0_deg: float = Field(4.0, ge=0, description="pre-rotation before contact (Sec 2.2 Step 8)")
     s1_bar_mm: Stroke = Field(16.0, description="overall displacement of M (Eq 1)")
     node_cam_deg: list[float] = Field([0.0, 70.0, 100.0, 140.0], description="theta_ci (Fig 4)")
     node_fractions: list[float] = Field([0.0, 0.7, 0.9, 1.0], description="s2i / s2bar (Fig 4)")
     # springs and loads (Table 2, Sec 3.2)
-    kc1_n_per_mm: Rate = Field(7.72, description="vendor closing spring 1")
-    kc2_n_per_mm: Rate = Field(9.33, description="vendor closing spring 2")
-    kc1_precompression_mm: Stroke = Field(140.0, description="spring 1, opened state")
-    kc2_precompression_mm: Stroke = Field(100.0, description="spring 2, opened state")
-    opening_k_n_per_mm: Rate = Field(16.6, description="opening spring")
-    opening_stretch_closed_mm: Stroke = Field(33.6, description="opening spring, closed state")
+    kc1_n_per_mm: Rate = Field(7.72, description="vendor closing spring 1 (Table 2)")
+    kc2_n_per_mm: Rate = Field(9.33, description="vendor closing spring 2 (Table 2)")
+    kc1_precompression_mm: Stroke = Field(140.0, description="spring 1, opened state (Table 2)")
+    kc2_precompression_mm: Stroke = Field(100.0, description="spring 2, opened state (Table 2)")
+    opening_k_n_per_mm: Rate = Field(16.6, description="opening spring (Table 2)")
+    opening_stretch_closed_mm: Stroke = Field(33.6, description="opening spring, closed state "
+                                              "(Table 2)")
     opening_arm_ratio: Positive = Field(
         1.85, description="opening-spring elongation per mm of rod travel, r7/r6 "
         "(identified, at its physical bound)")
-    wipe_k_n_per_mm: Rate = Field(82.4, description="one contact (wipe) spring")
-    wipe_count: int = Field(3, ge=1, description="contact springs, one per phase")
-    wipe_compression_closed_mm: Stroke = Field(17.0, description="closed state, vendor")
-    contact_gap_mm: Stroke = Field(11.0, description="rod travel where contacts touch")
+    wipe_k_n_per_mm: Rate = Field(82.4, description="one contact (wipe) spring (Table 2)")
+    wipe_count: int = Field(3, ge=1, description="contact springs, one per phase (assumed)")
+    wipe_compression_closed_mm: Stroke = Field(17.0, description="closed state, vendor (Table 2)")
+    contact_gap_mm: Stroke = Field(11.0, description="rod travel where contacts touch (Sec 3.2)")
     free_contact_force_n: float = Field(
         0.0, description="self-closing force of the interrupters before touch (identified)")
     efficiency: float = Field(0.85, gt=0, le=1, description="mechanical efficiency (Eq 26)")
     rod_travel_mm: Stroke = Field(
         18.0, description="rod travel the breaker needs, opened to closed (Sec 3.2)")
     rod_travel_tolerance_mm: Stroke = Field(
-        0.2, description="allowed deviation of the rod travel (constraint, steps 1 and 2)")
+        0.2, description="allowed deviation of the rod travel (constraint, steps 1 and 2) "
+                         "(assumed, docs/assumptions.md)")
     # opening and closing dynamics (Sec 3.2, camopt/cases/vcb/dynamics.py); parameters
     # identified on the vendor's ADAMS data: configs/vcb_identify_dynamics.toml
     cam_inertia_kg_m2: Inertia = Field(
@@ -110,49 +114,54 @@ class VcbConfig(CaseConfig):
         "time is reported as the band over them (configs/vcb_identify_dynamics.toml)")
     dynamics_steps: int = Field(
         400, ge=50, le=100_000, description="graded cam-angle intervals of the work-energy "
-        "integration (independent of positions)")
+        "integration (independent of positions) (camopt option)")
     closing_velocity_m_s: Pair | None = Field(
         None, description="bounds on the average closing velocity (constraint; Sec 2.1 asks "
         "0.9 +- 0.2 m/s); none: reported only")
     require_latch: bool = Field(
         False, description="constraint: the cam reaches the end of the stroke (no stall) "
-        "with at least latch_energy_min_j of kinetic energy left")
+        "with at least latch_energy_min_j of kinetic energy left (camopt option)")
     pressure_angle_max_deg: float | None = Field(
         None, gt=0, lt=90, description="constraint on the cam's pressure angle (Sec 2.3 names "
         "45 deg allowable); none: reported only")
     forbid_lift_off: bool = Field(
         False, description="constraint: the cam never pulls the roller (torque it passes on "
-        ">= 0 along the closing)")
+        ">= 0 along the closing) (camopt option)")
     latch_energy_min_j: float = Field(
-        0.0, ge=0, description="kinetic energy the hook needs at the end of the stroke")
+        0.0, ge=0, description="kinetic energy the hook needs at the end of the stroke "
+        "(assumed, docs/assumptions.md)")
     # contact stress (Table 1, Eqs 27-31)
-    cam_modulus_gpa: Modulus = Field(210.0, description="E of cam and roller (S45C)")
-    poisson: float = Field(0.3, ge=0, lt=0.5, description="Poisson's ratio")
-    contact_length_mm: Length = Field(15.0, description="cam-roller contact length")
-    shear_yield_mpa: StressMpa = Field(1194.0, description="tau_y = 0.577 sigma_y")
-    stress_constraint: bool = Field(True, description="require tau_max <= shear_yield")
+    cam_modulus_gpa: Modulus = Field(210.0, description="E of cam and roller (S45C) (Table 1)")
+    poisson: float = Field(0.3, ge=0, lt=0.5, description="Poisson's ratio (Table 1)")
+    contact_length_mm: Length = Field(15.0, description="cam-roller contact length (assumed)")
+    shear_yield_mpa: StressMpa = Field(1194.0, description="tau_y = 0.577 sigma_y (Table 1)")
+    stress_constraint: bool = Field(True, description="require tau_max <= shear_yield (Eq 31)")
     # objective (Eqs 39-40)
     objective_form: Literal["net", "abs_sum"] = Field(
         "net", description="net: |surplus| of Eq 26 in J, exact; abs_sum: sum |Fo - Fr/eps| "
         "in N, as printed")
     positions: int = Field(140, ge=10, le=1_000_000,
-                           description="Ns, cam positions over 0-140 deg (sampled curves)")
+                           description="Ns, cam positions over 0-140 deg (sampled curves) (Eq 39)")
     penalty: float = Field(1e6, ge=0, description="M in Eq 39")
-    phi_max_deg: Pair = Field((23.0, 26.0), description="bounds on the follower's maximum angle")
+    phi_max_deg: Pair = Field((23.0, 26.0),
+                              description="bounds on the follower's maximum angle (Eq 40)")
     # search bounds
     a1_bounds: Bounds = Field(Bounds(lower=0, upper=0.5), description="Eq 38")
     a2_bounds: Bounds = Field(Bounds(lower=0, upper=0.5), description="Eq 38")
     a3_bounds: Bounds = Field(Bounds(lower=-0.5, upper=0), description="Eq 38")
-    kc1_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10), description="see assumptions")
-    kc2_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10), description="see assumptions")
+    kc1_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),
+                                        description="Eq 38 widened, docs/assumptions.md")
+    kc2_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),
+                                        description="Eq 38 widened, docs/assumptions.md")
     l1_bounds_mm: Bounds = Field(Bounds(lower=70, upper=150), description="Eq 42")
     l3_bounds_mm: Bounds = Field(Bounds(lower=70, upper=150), description="Eq 42")
     l4_bounds_mm: Bounds = Field(Bounds(lower=70, upper=150), description="Eq 42")
     l5_bounds_mm: Bounds = Field(Bounds(lower=50, upper=100), description="Eq 42")
     theta1_bounds_deg: Bounds = Field(Bounds(lower=-180, upper=-90), description="Eq 42")
-    cam_design: CamDesign | None = Field(None, description="step-1 design used by step 2")
+    cam_design: CamDesign | None = Field(None, description="step-1 design used by step 2 (Sec 3.3)")
     cam_archive: str | None = Field(
-        None, description="run archive whose best design is the step-1 design (step 2)")
+        None, description="run archive whose best design is the step-1 design (step 2) "
+                          "(camopt option)")
 
     @model_validator(mode="after")
     def _nodes(self) -> VcbConfig:
@@ -187,13 +196,14 @@ class VcbIdentifyConfig(VcbConfig):
     paper_optimum: CamDesign = Field(
         CamDesign(a1=0.238432, a2=0.000226, a3=-0.011492, kc1_n_per_mm=9.315336,
                   kc2_n_per_mm=7.788183), description="Table 6 DE-gr design")
-    rod_offset_bounds_deg: Bounds = Field(Bounds(lower=-15, upper=15), description="unknown")
+    rod_offset_bounds_deg: Bounds = Field(Bounds(lower=-15, upper=15),
+                                          description="unknown (search range)")
     opening_arm_bounds: Bounds = Field(
         Bounds(lower=0.1, upper=1.85), description="r7/r6; above 1.86 the opening spring "
-        "would be compressed in the opened state")
+        "would be compressed in the opened state (search range)")
     free_contact_bounds_n: Bounds = Field(
         Bounds(lower=0, upper=1000), description="self-closing force of three interrupters; "
-        "it helps closing, so not negative")
+        "it helps closing, so not negative (search range)")
 
 
 class VcbDynamicsIdentifyConfig(VcbConfig):
