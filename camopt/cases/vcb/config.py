@@ -19,6 +19,20 @@ Mass = Annotated[Positive, Plausible(1e-3, 1000.0)]  # kg
 Inertia = Annotated[Positive, Plausible(1e-7, 10.0)]  # kg m^2
 
 
+# the parameter sets configs/vcb_identify_dynamics.toml finds as consistent with the ADAMS
+# data as the identified one (configs/vcb.toml's dynamics_band: `camopt init vcb` prints it)
+IDENTIFIED_BAND = (
+    (5.64626e-04, 0.0, 3.54841, 1.81367, 14.1861, 11.6054),
+    (6.78154e-04, 0.0, 2.20351, 2.17329, 14.1862, 11.4612),
+    (6.43821e-04, 0.0, 2.72897, 1.96873, 14.1876, 11.5294),
+    (6.60326e-04, 0.0, 2.07452, 2.13524, 14.0754, 11.4291),
+    (5.25923e-04, 0.0, 3.65582, 1.76595, 13.9024, 11.4151),
+    (5.51211e-04, 0.0, 3.80522, 1.73414, 14.0637, 11.5555),
+    (5.81539e-04, 0.0, 2.48737, 2.15945, 13.9477, 11.4056),
+    (5.00000e-04, 0.0, 3.48440, 1.88934, 13.9240, 11.5155),
+)
+
+
 class CamDesign(Strict):
     """A step-1 design: cubic coefficients (rad, per rad^k) and closing spring rates."""
 
@@ -94,7 +108,7 @@ class VcbConfig(CaseConfig):
         5.8e-4, description="cam, shaft, crank and closing springs about O (identified)")
     follower_inertia_kg_m2: float = Field(
         0.0, ge=0, le=10.0, description="follower BD, roller and four-bar input about B, "
-        "kg m^2 (the ADAMS data do not separate it from rod_mass_kg: see assumptions)")
+        "kg m^2 (the ADAMS data do not separate it from rod_mass_kg: docs/assumptions.md)")
     rod_mass_kg: Mass = Field(
         2.8807, description="output link, arm and insulated rods as a mass at the rod "
         "(identified)")
@@ -107,7 +121,8 @@ class VcbConfig(CaseConfig):
         11.53, ge=0, le=1000.0, description="Coulomb friction torque referred to the cam shaft, "
         "against the cam whenever it turns, beyond Eq 26's efficiency (identified)")
     dynamics_band: list[tuple[float, float, float, float, float, float]] = Field(
-        default_factory=list, max_length=64, description="parameter sets (cam_inertia_kg_m2, "
+        default_factory=lambda: list(IDENTIFIED_BAND), max_length=64,
+        description="parameter sets (cam_inertia_kg_m2, "
         "follower_inertia_kg_m2, rod_mass_kg, contacts_mass_kg, release_offset_deg, "
         "cam_friction_nm) as "
         "consistent with the ADAMS data as the identified one: every closing velocity and "
@@ -228,9 +243,9 @@ class VcbDynamicsIdentifyConfig(VcbConfig):
         45.0, description="Sec 3.2 and Table 4: closed when the simulation ends at 45 ms "
         "(an upper bound on the closing time, not an event)")
     velocity_reading_pct: Positive = Field(
-        2.0, description="reading error of the reported velocities (band)")
+        2.0, description="reading error of the reported velocities (band; assumed)")
     time_reading_ms: Positive = Field(
-        0.5, description="reading error of the reported times (band)")
+        0.5, description="reading error of the reported times (band; assumed)")
     cam_inertia_bounds_kg_m2: Bounds = Field(Bounds(lower=5e-4, upper=0.05),
                                              description="search range (physical)")
     rod_mass_bounds_kg: Bounds = Field(Bounds(lower=0.1, upper=30.0), description="search range")
