@@ -100,8 +100,8 @@ class VcbProblem(Problem, VariesCase):
 
     def objective_floor(self) -> ObjectiveFloor:
         """Both forms of Eq 39 are absolute values (``|surplus|`` in J, a sum of ``|Fo -
-        Fr/eps|`` in N): 0. A required latch does not raise it: the cam's free turn before
-        it meets the roller (theta0) adds kinetic energy the surplus of Eq 26 leaves out."""
+        Fr/eps|`` in N): 0, whatever the dynamics model (a bound from the latch energy would
+        depend on it: docs/design.md, Sec Performance)."""
         return ObjectiveFloor(0.0, "the objective is an absolute value")
 
     def vendor_x(self) -> NDArray:
