@@ -25,7 +25,7 @@ def describe(path: Path) -> dict[str, Any]:
             row.update(archive=kind, created=str(attrs.get("created", "-")))
             if kind == "run":
                 best = f["best"].attrs
-                row.update(case=str(attrs["case_kind"]),
+                row.update(case=str(attrs["case_kind"]), feasible=bool(best["feasible"]),
                            verdict="feasible" if bool(best["feasible"]) else "infeasible",
                            objective=float(best["objective"]),
                            objective_name=str(attrs["objective_name"]))

@@ -18,13 +18,23 @@ from camopt.cli.app import Format, app, errors, out
 def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")] = Path("runs"),
               format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
               ) -> None:
-    """List the archives in a folder (default runs/), newest first: case, verdict (the best
-    design feasible or not; a sweep's cells done), objective and date."""
+    """List the archives in a folder (default runs/), newest first: case, verdict (a run's
+    best design against its case's requirements, pass or fail; a sweep's cells done),
+    objective and date."""
+    from camopt import archive
     from camopt.archive.listing import list_archives
-    from camopt.report import format_value
+    from camopt.errors import CamoptError
+    from camopt.report import format_value, verdict
 
     with errors():
         rows = list_archives(folder)
+        for row in rows:
+            if row["archive"] != "run" or row["verdict"].startswith(("file:", "damaged")):
+                continue
+            try:  # the requirements' verdict (show's first line); feasibility when unreadable
+                row["verdict"] = verdict(archive.load_run(row["path"]))["verdict"] or "-"
+            except CamoptError:
+                pass
     if format is Format.json:
         sys.stdout.write(json.dumps(rows, indent=2) + "\n")
         return

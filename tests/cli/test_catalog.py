@@ -91,9 +91,16 @@ def test_runs_lists_each_archive_with_case_verdict_and_date(tmp_path):
     assert r.exit_code == 0, r.output
     rows = json.loads(r.stdout)
     assert [Path(row["path"]).name for row in rows] == ["a.h5", "junk.h5"]
-    assert rows[0]["case"] == "fast_switch" and rows[0]["verdict"] == "feasible"
+    assert rows[0]["case"] == "fast_switch" and rows[0]["feasible"] is True
+    assert rows[0]["verdict"] == invoke_verdict(tmp_path / "a.h5")
     assert rows[0]["created"].startswith("20") and rows[1]["verdict"].startswith("file: not")
     table = runner.invoke(app, ["runs", str(tmp_path)], env={"COLUMNS": "100"})
     assert table.exit_code == 0 and "fast_switch" in table.stdout
     missing = runner.invoke(app, ["runs", str(tmp_path / "none")])
     assert missing.exit_code == 2 and missing.stderr.startswith("error: ")
+
+
+def invoke_verdict(path: Path) -> str:
+    """show's verdict of a run, what `camopt runs` lists."""
+    return json.loads(runner.invoke(app, ["show", str(path), "--format", "json"]).stdout)[
+        "verdict"]
