@@ -28,8 +28,9 @@ Deb's rules on those draws is the repeat's result (:meth:`RobustProblem.select`)
 design is feasible when the Wilson lower bound of its yield reaches ``yield_target``.
 
 With ``screen`` a candidate whose nominal design breaks a constraint is not sampled: its
-columns are its nominal constraints and its nominal worst constraint (it cannot be
-feasible, and Deb's rules only need its violation). The best design is checked at the end
+columns are its nominal constraints, and its yield column its nominal worst constraint
+plus ``SCREENED`` (1e6), so that it ranks behind every sampled candidate while Deb's rules
+still lead the unsampled ones towards nominal feasibility. The best design is checked at the end
 with ``check_samples`` fresh draws (:func:`check`), and the Wilson interval of its yield
 is reported. Seeds: repeat ``i``'s draws come from ``SeedSequence(run.seed,
 spawn_key=(i, ROBUST_KEY, 0))``, its selection's from ``(i, ROBUST_KEY, 1)``, the final
@@ -67,6 +68,8 @@ from camopt.variation import (
     unit_draws,
 )
 
+SCREENED = 1e6
+"""Added to the yield column of a candidate not sampled (its nominal design infeasible)."""
 YIELD = "yield"
 """Name of the yield constraint column and of the yield estimate among the extras."""
 ROBUST_KEY = 0x524F42  # "ROB": the spawn-key word of every robust draw
@@ -250,7 +253,10 @@ class RobustProblem(Problem):
         nom_g = np.where(np.isnan(nominal.g), np.inf, nominal.g)
         nom_worst = nom_g.max(axis=1) if nom_g.shape[1] else np.full(len(X), -np.inf)
         nom_worst = np.where(np.isfinite(nominal.f), nom_worst, np.inf)
-        g = np.column_stack([nom_g, nom_worst])
+        # an unsampled candidate ranks behind every sampled one: without the offset a
+        # nominal design just outside a limit (violation 1e-3) beats a nominally feasible
+        # one whose draws fail (violation ~1), and the search never leaves the limit
+        g = np.column_stack([nom_g, SCREENED + np.maximum(nom_worst, 0.0)])
         f = np.array(nominal.f, dtype=float)
         estimate = np.full(len(X), np.nan)
         todo = np.flatnonzero(nominal.feasible) if spec.screen else np.arange(len(X))
