@@ -80,11 +80,11 @@ class MotionParameters:
     release_offset_rad: NDArray | float
     friction_nm: NDArray | float = 0.0
 
-    def columns(self, n: int) -> MotionParameters:
+    def columns(self, n: int) -> ParameterColumns:
         """The same parameters as (n, 1) columns (what the motions broadcast against)."""
         def col(v: NDArray | float) -> NDArray:
             return np.broadcast_to(np.ravel(np.asarray(v, dtype=float)), (n,))[:, None]
-        return replace(self, **{f.name: col(getattr(self, f.name)) for f in fields(self)})
+        return ParameterColumns(**{f.name: col(getattr(self, f.name)) for f in fields(self)})
 
     def repeat(self, n: int) -> MotionParameters:
         """Each of k parameter sets repeated for n designs in a row: (k n,) arrays ordered
@@ -92,6 +92,18 @@ class MotionParameters:
         return replace(self, **{f.name: np.repeat(np.ravel(np.asarray(getattr(self, f.name),
                                                                       dtype=float)), n)
                                 for f in fields(self)})
+
+
+@dataclass(frozen=True)
+class ParameterColumns:
+    """:class:`MotionParameters` as (n, 1) columns, one row per design (SI)."""
+
+    cam_kg_m2: NDArray
+    follower_kg_m2: NDArray
+    rod_kg: NDArray
+    contacts_kg: NDArray
+    release_offset_rad: NDArray
+    friction_nm: NDArray
 
 
 @dataclass(frozen=True)

@@ -220,10 +220,11 @@ class VcbModel:
         """
         grid = self.theta_c if theta_c is None else theta_c
         f = cam.Follower.cubic(A, grid, self.xi)
-        if np.all(link == link[0]):  # shared linkage (step 1): scalars broadcast fastest
-            l1, l3, l4, l5, th1 = (float(v) for v in link[0])
-        else:
-            l1, l3, l4, l5, th1 = (link[:, i : i + 1] for i in range(5))
+        # shared linkage (step 1): scalars broadcast fastest; else one column per design
+        parts: list[float] | list[NDArray] = (
+            [float(v) for v in link[0]] if np.all(link == link[0])
+            else [link[:, i : i + 1] for i in range(5)])
+        l1, l3, l4, l5, th1 = parts
         frame = self.theta_bo - th1  # theta1 in the mirrored frame
         c4, s4, rate = fourbar.output_motion(l1, self.l2, l3, l4, np.cos(frame),
                                              np.sin(frame), f.cos_a, f.sin_a, -1.0)  # Eq 3
