@@ -19,7 +19,6 @@ import click
 import typer
 from rich.console import Console
 from rich.markup import escape
-from rich.table import Table
 
 from camopt.errors import CamoptError
 
@@ -119,15 +118,23 @@ def fmt(value: Any) -> str:
 
 def print_rows(title: str, rows: list[dict[str, Any]], columns: list[str],
                limit: int | None) -> None:
-    """A rich table of the given columns (those present); every column is in the JSON."""
+    """The given columns (those present) through the word-safe layout
+    (:func:`camopt.cli.layout.print_table`); every column is in the JSON."""
+    from camopt.cli.layout import print_table
+
     columns = [c for c in columns if c in rows[0]]
     note = "all columns: --format json"
     if limit is not None and len(rows) > limit:
         note = (f"first {limit} of {len(rows)} rows; camopt show for all, "
                 "--format json for all columns")
-    table = Table(title=escape(f"{title} ({note})"))
-    for col in columns:
-        table.add_column(escape(col), justify="right", overflow="fold")
-    for row in rows[:limit]:
-        table.add_row(*(fmt(row.get(c)) for c in columns))
-    out.print(table)
+    cells = [[_plain(row.get(c)) for c in columns] for row in rows[:limit]]
+    print_table(f"{title} ({note})", columns, cells, numeric=[True] * len(columns))
+
+
+def _plain(value: Any) -> str:
+    """:func:`fmt` without markup escaping (the layout escapes)."""
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, list):
+        return ",".join(_plain(v) for v in value)
+    return "-" if value is None else str(value)

@@ -42,3 +42,22 @@ def test_narrow_is_vertical_and_wide_is_a_table():
     assert "┃" not in narrow and "closing_velocity_avg_m_s\n  nominal: 0.771234;" in narrow
     wide = _printed(200)
     assert "┃ metric" in wide and fits(COLUMNS, ROWS, 200)
+
+
+def test_sweep_rows_keep_their_numbers_whole_at_80_columns():
+    """``sweep``'s summary (print_rows) split 'successes' and '36.1001' at 80 columns."""
+    from camopt.cli.app import print_rows
+
+    rows = [{"point": 0, "runs": 2, "successes": 2, "success_rate": 1.0, "best": 36.1001,
+             "median": 36.1002, "worst": 36.1003, "median_nfev_to_target": 3850,
+             "wall_s_median": 229.225}]
+    old = out.width
+    out.width = 80
+    try:
+        with out.capture() as cap:
+            print_rows("sweep s.h5", rows, list(rows[0]), None)
+    finally:
+        out.width = old
+    words = cap.get().replace(";", " ").split()
+    for token in ("successes:", "36.1001", "median_nfev_to_target:", "229.225"):
+        assert token in words
