@@ -40,11 +40,11 @@ def _same(a: Evaluation, b: Evaluation, exact: bool = True) -> None:
 @pytest.mark.parametrize("config", CASES)
 def test_chunks_are_bit_identical_to_one_call(config):
     problem = build_problem(load(CONFIGS / config).case)
-    X = problem.sample(np.random.default_rng(np.random.SeedSequence(7)), 230)
+    X = problem.sample(np.random.default_rng(np.random.SeedSequence(7)), 150)
     exact = config not in BLAS_ROUNDING
-    _same(batch.evaluate(problem, X, size=64), problem.evaluate(X), exact)
-    few = X[:21]  # describe simulates each opening-spring design: a few rows
-    _same(batch.describe(problem, few, size=8), problem.describe(few), exact)
+    _same(batch.evaluate(problem, X, size=48), problem.evaluate(X), exact)
+    few = X[:11]  # describe simulates each opening-spring design: a few rows
+    _same(batch.describe(problem, few, size=4), problem.describe(few), exact)
 
 
 def test_case_fields_are_chunked_with_their_rows():
