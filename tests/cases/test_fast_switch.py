@@ -183,14 +183,23 @@ def _nlp_per_coil_count(problem: FastSwitchProblem) -> tuple[float, float]:
     family = problem.family()
 
     def solve(row: np.ndarray, u0: np.ndarray) -> tuple[float, np.ndarray]:
+        seen: dict[bytes, object] = {}  # f and g, and their differences, at the same points
+
         def design(u):
             x = row.copy()
             x[free] = lo + u * span
             return x[None, :]
-        res = minimize(lambda u: float(problem.evaluate(design(u)).f[0]), u0,
+
+        def cached(u):
+            key = u.tobytes()
+            if key not in seen:
+                if len(seen) > 16:
+                    seen.clear()
+                seen[key] = problem.evaluate(design(u))
+            return seen[key]
+        res = minimize(lambda u: float(cached(u).f[0]), u0,
                        method="SLSQP", bounds=[(0, 1)] * len(u0),
-                       constraints=[{"type": "ineq",
-                                     "fun": lambda u: -problem.evaluate(design(u)).g[0]}],
+                       constraints=[{"type": "ineq", "fun": lambda u: -cached(u).g[0]}],
                        options={"maxiter": 500, "ftol": 1e-12})
         ev = problem.evaluate(design(res.x))
         return (float(ev.f[0]) if ev.feasible[0] else np.inf), res.x
