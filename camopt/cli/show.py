@@ -26,7 +26,7 @@ def show(run_paths: Annotated[list[Path], typer.Argument(
          ) -> None:
     """Show archives: a run's best design beside the reference design, its repeats and
     table; a sweep's grid points ranked (as compare SWEEP). Several archives (a glob such
-    as runs/fast_switch-*.h5) are each shown, in the order given (a glob's order: oldest
+    as runs/NAME-*.h5) are each shown, in the order given (a glob's order: oldest
     first, as the names carry the time); with --format json, as a JSON array."""
     from camopt import archive, report
     from camopt.archive.sweeps import load_sweep
