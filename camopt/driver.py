@@ -9,6 +9,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import as_completed
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -16,11 +17,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt import batch, robust
+from camopt import batch, interrupts, robust
 from camopt.cases import build_problem, case_configs, get_case
 from camopt.config import LoadedConfig, load_config, validate_data
 from camopt.errors import ConfigError, SolverError
-from camopt.perf import fork_pool, kill_pool
+from camopt.interrupts import deferred
+from camopt.perf import fork_pool, kill_pool, pin_blas_threads
 from camopt.problem import Problem, deb_best
 from camopt.solvers import Solver, StopReason, get_solver, solvers
 
@@ -72,10 +74,13 @@ class RunRecord:
     metrics: dict[str, object]
     analysis: dict[str, NDArray]
     interrupted: bool = False
-    """True when Ctrl-C (or SIGTERM) stopped the run: ``repeats`` holds the finished ones."""
+    """True when Ctrl-C (or SIGTERM) or a failure stopped the run: ``repeats`` holds the
+    finished ones."""
     robust_check: dict[str, Any] | None = None
     """Robust runs: the final check of the best design (``robust``) and of the best design
     seen whose nominal evaluation is feasible (``nominal``), :func:`camopt.robust.check`."""
+    failure: str | None = None
+    """What stopped the run when it was not a signal (a worker process died)."""
 
 
 def solver_options() -> dict[str, Any]:
@@ -96,7 +101,10 @@ def validate(data: dict[str, Any], source: str = "<data>") -> LoadedConfig:
 def prepare(config: LoadedConfig) -> tuple[Problem, type[Solver]]:
     """Build the case's problem and check the solver can run on it with these options
     (a capability the case lacks is bad input against ``solver``). With ``[robust]`` the
-    problem is the case's wrapped for yield (:mod:`camopt.robust`)."""
+    problem is the case's wrapped for yield (:mod:`camopt.robust`). BLAS runs on one
+    thread from here on (``perf.pin_blas_threads``), so results do not depend on the
+    thread count of the process or machine that evaluates them."""
+    pin_blas_threads()
     with np.errstate(all="ignore"):  # a non-assembling mechanism is reported below
         problem = build_problem(config.case)
     _check_bounds(problem, config)
@@ -155,6 +163,7 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
     while (reason := _stop(solver, start, max_nfev, max_s)) is None:
         if robust_problem is not None:
             robust_problem.new_generation()  # common random numbers: one set per generation
+        interrupts.check()
         X = solver.ask()
         ev = batch.evaluate(problem, X)  # a population is one chunk; given designs, many
         solver.tell(X, ev)
@@ -238,6 +247,7 @@ def _parallel_repeats(problem: Problem, solver_cls: type[Solver], config: Loaded
     global _REPEATS
     _REPEATS = (problem, solver_cls, config, children)
     pool = fork_pool(min(jobs, len(children)))
+    futures: list[Any] = []
     try:
         futures = [pool.submit(_repeat_in_worker, i) for i in range(len(children))]
         for fut in as_completed(futures):
@@ -245,6 +255,14 @@ def _parallel_repeats(problem: Problem, solver_cls: type[Solver], config: Loaded
             finished.append(rec)
             if callback:
                 callback(Progress(len(finished) - 1, len(children), rec.nit, rec.nit, rec.fun))
+    except BrokenProcessPool:  # a worker was killed (OOM killer, kill): keep what finished
+        kept = {r.index for r in finished}
+        for fut in futures:
+            if fut.done() and not fut.cancelled() and fut.exception() is None \
+                    and fut.result().index not in kept:
+                finished.append(fut.result())
+        kill_pool(pool)
+        raise
     except BaseException:
         kill_pool(pool)
         raise
@@ -270,7 +288,7 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
     repeats = config.run.repeats if repeats is None else repeats
     children = np.random.SeedSequence(seed).spawn(repeats)
     records: list[RepeatRecord] = []
-    interrupted = False
+    interrupted, failure = False, None
     try:
         if jobs > 1 and repeats > 1:
             _parallel_repeats(problem, solver_cls, config, children, jobs, callback, records)
@@ -281,12 +299,22 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
     except KeyboardInterrupt:
         if not records:
             raise
+        interrupts.handled()
         interrupted = True
-    records.sort(key=lambda r: r.index)
-    best = best_repeat(records)
-    return RunRecord(config, problem, seed, records, best, dict(problem.metrics(best.x)),
-                     dict(problem.analysis(best.x)), interrupted,
-                     _robust_check(problem, records, best, seed))
+    except BrokenProcessPool:
+        failure = "a worker process died (killed, or out of memory)"
+        if not records:
+            raise SolverError(f"{config.path}: --jobs: {failure} before any repeat "
+                              "finished; nothing written") from None
+        interrupted = True
+    with deferred() as signals:  # finished repeats are kept whatever Ctrl-C comes now
+        records.sort(key=lambda r: r.index)
+        best = best_repeat(records)
+        record = RunRecord(config, problem, seed, records, best, dict(problem.metrics(best.x)),
+                           dict(problem.analysis(best.x)), interrupted,
+                           _robust_check(problem, records, best, seed), failure)
+    record.interrupted |= bool(signals)
+    return record
 
 
 def _robust_check(problem: Problem, records: list[RepeatRecord], best: RepeatRecord,

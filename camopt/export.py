@@ -5,6 +5,7 @@ their base circle and roller as a DXF drawing (ezdxf)."""
 from __future__ import annotations
 
 import csv
+import io
 import json
 from pathlib import Path
 
@@ -22,55 +23,61 @@ def _series(analysis: dict[str, np.ndarray], keys: tuple[str, ...]) -> np.ndarra
     return np.concatenate([np.asarray(analysis[k]) for k in keys])
 
 
-def export_run(run: RunView, out_dir: Path, stem: str, fmt: str) -> list[Path]:
+def export_run(run: RunView, out_dir: Path, stem: str, fmt: str, force: bool = False,
+               inputs: tuple[Path, ...] = ()) -> list[Path]:
     """Write the export files (``fmt`` one of :data:`FORMATS`; every format also writes the
     profiles' point files); returns their paths. A DXF of a case without profiles is bad
-    input (ConfigError against ``--format``)."""
+    input (ConfigError against ``--format``). The files are built in memory and written
+    all or nothing (:func:`camopt.archive.files.write_files`): never over an existing
+    file without ``force``, never through a link, never over one of ``inputs``."""
+    from camopt.archive.files import ensure_folder, write_files
+
     spec = get_case(run.kind)
     curves = profiles(run)
     if fmt == "dxf" and not curves:
         raise ConfigError(run.path, "--format", f"dxf: case '{run.kind}' has no cam profile "
                           "to draw; use csv or json")
-    out_dir.mkdir(parents=True, exist_ok=True)
+    ensure_folder(out_dir)
+    return write_files(export_files(run, out_dir, stem, fmt, spec, curves), force, inputs)
+
+
+def export_files(run: RunView, out_dir: Path, stem: str, fmt: str, spec: object,
+                 curves: dict[str, np.ndarray]) -> dict[Path, bytes]:
+    """The export files' contents by path (nothing written)."""
     analysis = run.analysis
     doc = report.show(run)
-    written = []
+    files: dict[Path, bytes] = {}
     if fmt == "dxf":
-        path = out_dir / f"{stem}.dxf"
-        write_dxf(path, curves, circles(run, spec.circles))
-        written.append(path)
+        files[out_dir / f"{stem}.dxf"] = dxf_bytes(curves, circles(run, spec.circles))  # type: ignore[attr-defined]
     elif fmt == "json":
-        path = out_dir / f"{stem}.json"
         doc["analysis"] = {k: report.jsonable(np.asarray(v).tolist()) for k, v in analysis.items()}
-        path.write_text(json.dumps(doc, indent=2))
-        written.append(path)
+        files[out_dir / f"{stem}.json"] = json.dumps(doc, indent=2).encode()
     else:
-        path = out_dir / f"{stem}-summary.csv"
-        with path.open("w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["section", "name", "value"])
-            w.writerow(["best", "objective", doc["best"]["objective"]])
-            w.writerow(["best", "feasible", doc["best"]["feasible"]])
-            for section in ("x", "metrics"):
-                for k, v in doc["best"][section].items():
-                    w.writerow([section, k, json.dumps(v) if isinstance(v, list) else v])
-        written.append(path)
+        rows: list[list[object]] = [["section", "name", "value"],
+                                    ["best", "objective", doc["best"]["objective"]],
+                                    ["best", "feasible", doc["best"]["feasible"]]]
+        for section in ("x", "metrics"):
+            for k, v in doc["best"][section].items():
+                rows.append([section, k, json.dumps(v) if isinstance(v, list) else v])
+        files[out_dir / f"{stem}-summary.csv"] = _csv(rows)
         groups: dict[int, list[str]] = {}
         for k, v in analysis.items():
             groups.setdefault(np.asarray(v).size, []).append(k)
         for i, (_, keys) in enumerate(sorted(groups.items())):
-            path = out_dir / f"{stem}-curves-{i + 1}.csv"
-            with path.open("w", newline="") as fh:
-                w = csv.writer(fh)
-                w.writerow(keys)
-                w.writerows(np.column_stack([np.asarray(analysis[k]) for k in keys]).tolist())
-            written.append(path)
+            table = np.column_stack([np.asarray(analysis[k]) for k in keys]).tolist()
+            files[out_dir / f"{stem}-curves-{i + 1}.csv"] = _csv([keys, *table])
     for name, points in curves.items():
-        path = out_dir / f"{stem}-{name}.txt"
-        np.savetxt(path, np.column_stack([points, np.zeros(len(points))]), fmt="%.6f",
+        text = io.BytesIO()
+        np.savetxt(text, np.column_stack([points, np.zeros(len(points))]), fmt="%.6f",
                    delimiter=",")
-        written.append(path)
-    return written
+        files[out_dir / f"{stem}-{name}.txt"] = text.getvalue()
+    return files
+
+
+def _csv(rows: list[list[object]]) -> bytes:
+    text = io.StringIO(newline="")
+    csv.writer(text).writerows(rows)
+    return text.getvalue().encode()
 
 
 def profiles(run: RunView) -> dict[str, np.ndarray]:
@@ -107,6 +114,14 @@ def circles(run: RunView, specs: tuple) -> dict[str, tuple[tuple[float, float], 
 
 def write_dxf(path: Path, curves: dict[str, np.ndarray],
               rings: dict[str, tuple[tuple[float, float], float]]) -> None:
+    """Write :func:`dxf_bytes` to ``path`` (a new file, never over an existing one)."""
+    from camopt.archive.files import write_files
+
+    write_files({Path(path): dxf_bytes(curves, rings)})
+
+
+def dxf_bytes(curves: dict[str, np.ndarray],
+              rings: dict[str, tuple[tuple[float, float], float]]) -> bytes:
     """A DXF (R2010) in millimetres: each curve a 2-D polyline (LWPOLYLINE) on a layer of
     its name, each circle a CIRCLE on its own layer."""
     import ezdxf
@@ -123,4 +138,6 @@ def write_dxf(path: Path, curves: dict[str, np.ndarray],
     for name, (centre, radius) in rings.items():
         doc.layers.add(name, color=next(colours))
         msp.add_circle(centre, radius, dxfattribs={"layer": name})
-    doc.saveas(path)
+    text = io.StringIO()
+    doc.write(text)
+    return text.getvalue().encode(doc.output_encoding)

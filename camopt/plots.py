@@ -4,6 +4,7 @@ labels; :func:`save` writes them as PNGs."""
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 from typing import Any
 
@@ -159,13 +160,21 @@ def _objective_name(spec: Any) -> str:
         return "objective"
 
 
-def save(figures: dict[str, Figure], out_dir: Path, stem: str) -> list[Path]:
-    """Write each figure as ``<stem>-<name>.png``; close them."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for name, fig in figures.items():
-        path = out_dir / f"{stem}-{name}.png"
-        fig.savefig(path, dpi=110)
-        close(fig)
-        paths.append(path)
-    return paths
+def save(figures: dict[str, Figure], out_dir: Path, stem: str, force: bool = False,
+         inputs: tuple[Path, ...] = (), key: str = "--out") -> list[Path]:
+    """Write each figure as ``<stem>-<name>.png`` and close them: rendered in memory, then
+    written all or nothing (:func:`camopt.archive.files.write_files`: never over an
+    existing file without ``force``, never through a link, never over one of ``inputs``)."""
+    from camopt.archive.files import ensure_folder, write_files
+
+    ensure_folder(out_dir, key)
+    files = {}
+    try:
+        for name, fig in figures.items():
+            png = io.BytesIO()
+            fig.savefig(png, dpi=110, format="png")
+            files[out_dir / f"{stem}-{name}.png"] = png.getvalue()
+    finally:
+        for fig in figures.values():
+            close(fig)
+    return write_files(files, force, inputs)

@@ -87,8 +87,13 @@ def test_export_csv_and_json(case_run, tmp_path):
     assert runner.invoke(app, ["export", str(path), "--out", str(tmp_path)]).exit_code == 0
     rows = list(csv.reader((tmp_path / f"{path.stem}-summary.csv").open()))
     assert rows[0] == ["section", "name", "value"] and len(rows) > 3
-    assert runner.invoke(app, ["export", str(path), "--format", "json", "--out",
-                               str(tmp_path)]).exit_code == 0
+    # the profiles' point files exist now: a second export replaces them only with --force
+    again = ["export", str(path), "--format", "json", "--out", str(tmp_path)]
+    if name in ("vcb", "emb_cam"):  # cases with cam profiles
+        refused = runner.invoke(app, again)
+        assert refused.exit_code == 2 and "pass --force" in refused.output
+        assert not (tmp_path / f"{path.stem}.json").exists()  # all or nothing
+    assert runner.invoke(app, [*again, "--force"]).exit_code == 0
     doc = json.loads((tmp_path / f"{path.stem}.json").read_text())
     assert {"case", "best", "analysis"} <= set(doc)
     if name in ("vcb", "emb_cam"):

@@ -6,18 +6,22 @@ from camopt.archive.files import (
     Claim,
     archive_kind,
     atomic_write,
+    check_not_input,
     check_writable,
     claim,
     default_path,
     describe_file,
+    ensure_folder,
     open_archive,
+    read_regular,
     versions,
+    write_files,
 )
 from camopt.archive.references import resolve_references
 from camopt.archive.runs import load_run, write_run
 from camopt.archive.tables import read_table, write_table
 
-__all__ = ["Claim", "archive_kind", "atomic_write", "check_writable", "claim", "default_path",
-           "describe_file", "load_run",
-           "open_archive", "read_table", "resolve_references", "versions", "write_run",
-           "write_table"]
+__all__ = ["Claim", "archive_kind", "atomic_write", "check_not_input", "check_writable", "claim",
+           "default_path", "describe_file", "ensure_folder", "load_run", "open_archive",
+           "read_regular", "read_table", "resolve_references", "versions", "write_files",
+           "write_run", "write_table"]

@@ -29,7 +29,7 @@ import secrets
 import socket
 import stat
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
@@ -82,10 +82,14 @@ def check_writable(path: Path, force: bool) -> None:
     folder = _folder(path)
     if not folder.is_dir():
         raise ArchiveError(f"{path}: --out: folder {folder} does not exist")
+    _probe(folder, f"{path}: --out")
+
+
+def _probe(folder: Path, where: str) -> None:
     try:  # a real probe: os.access says yes to root even where writing fails
         fd, probe = tempfile.mkstemp(dir=folder, prefix=".camopt-probe-")
     except OSError as exc:
-        raise ArchiveError(f"{path}: --out: folder {folder} is not writable "
+        raise ArchiveError(f"{where}: folder {folder} is not writable "
                            f"({exc.strerror})") from None
     os.close(fd)
     os.unlink(probe)
@@ -99,7 +103,12 @@ def _try_lock(path: Path) -> int | None:
     """Lock ``path``'s lock file; its descriptor, or None when another process holds it."""
     lock = _lock_path(path)
     while True:
-        fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC | os.O_NOFOLLOW
+                     | os.O_NONBLOCK, 0o644)
+        if not stat.S_ISREG(os.fstat(fd).st_mode):  # a FIFO or device planted there
+            os.close(fd)
+            raise ArchiveError(f"{path}: --out: its lock file {lock} is not a regular "
+                               "file; remove it")
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
@@ -122,7 +131,8 @@ def _unlock(path: Path, fd: int) -> None:
 
 def _holder(path: Path) -> str:
     try:
-        return _lock_path(path).read_text().strip() or "unknown process"
+        text = read_regular(_lock_path(path), "lock") or b""
+        return text.decode().strip() or "unknown process"
     except (OSError, UnicodeDecodeError):
         return "unknown process"
 
@@ -149,6 +159,8 @@ def claim(path: Path, force: bool = False) -> Iterator[Claim]:
     check_writable(path, force)
     try:
         fd = _try_lock(path)
+    except ArchiveError:
+        raise
     except OSError as exc:
         raise ArchiveError(f"{path}: --out: cannot create its lock file "
                            f"({exc.strerror})") from None
@@ -227,14 +239,7 @@ def atomic_write(path: Path, write: Callable[[h5py.File], None], replace: bool =
     data = buffer.getbuffer()
     tmp: str | None = None
     try:
-        fd, tmp = _new_temporary(path)
-        try:
-            view = memoryview(data)
-            while view:
-                view = view[os.write(fd, view):]
-            os.fsync(fd)
-        finally:
-            os.close(fd)
+        tmp = _write_temp(path, data)
         _publish(Path(tmp), path, replace)
         tmp = None
     except OSError as exc:
@@ -262,6 +267,76 @@ def _new_temporary(path: Path) -> tuple[int, str]:
         except FileExistsError:
             continue
     raise FileExistsError(errno.EEXIST, "no free temporary name", str(folder))
+
+
+def _write_temp(path: Path, data: bytes | memoryview) -> str:
+    """``data`` in a new, synced temporary file ``.<name>.<random>.tmp`` beside ``path``
+    (plain ``os.write``: a full disk is an OSError); its name. Removed on failure."""
+    fd, tmp = _new_temporary(path)
+    try:
+        try:
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view):]
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    return tmp
+
+
+def ensure_folder(folder: Path, key: str = "--out") -> Path:
+    """``folder`` made if missing; a file, FIFO or device of that name, or a folder that
+    cannot be made, is an ArchiveError naming ``key`` (checked before any work)."""
+    folder = Path(folder)
+    if os.path.lexists(folder) and not folder.is_dir():
+        raise ArchiveError(f"{folder}: {key}: exists and is not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ArchiveError(f"{folder}: {key}: cannot create the folder "
+                           f"({exc.strerror})") from None
+    _probe(folder, f"{folder}: {key}")
+    return folder
+
+
+def write_files(contents: dict[Path, bytes], force: bool = False,
+                inputs: Sequence[Path] = ()) -> list[Path]:
+    """Write several output files (plots, exports) all or nothing. Each target is checked
+    first (``check_writable``: never over an existing file without ``force``, never a
+    link, FIFO or device, even with it; never one of ``inputs``), every file is written
+    to a temporary file beside it and synced (a full disk fails here, before anything is
+    published), then moved into place (``_publish``: a hard link without ``force``). On
+    any failure the temporary files and the files this call already published are
+    removed: no truncated or partial set is left. The paths written."""
+    for path in contents:
+        check_writable(path, force)
+        check_not_input(path, inputs)
+    temps: dict[Path, str] = {}
+    published: list[Path] = []
+    try:
+        for path, data in contents.items():
+            temps[path] = _write_temp(path, data)
+        for path, tmp in temps.items():
+            _publish(Path(tmp), path, force)
+            published.append(path)
+    except BaseException as exc:  # KeyboardInterrupt too: nothing half-done stays
+        for tmp in temps.values():
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+        if not force:  # without --force every published file is new: ours to remove
+            for path in published:
+                with contextlib.suppress(OSError):
+                    os.unlink(path)
+        if isinstance(exc, OSError) and not isinstance(exc, ArchiveError):
+            where = exc.filename or next(iter(contents), "")
+            raise ArchiveError(f"{where}: --out: cannot write ({exc.strerror or exc}); "
+                               "nothing written") from None
+        raise
+    return published
 
 
 def _publish(tmp: Path, path: Path, replace: bool) -> None:
@@ -302,7 +377,10 @@ def describe_file(path: Path) -> str | None:
 
 
 def open_archive(path: str | Path) -> h5py.File:
-    """Open an archive read-only; anything else is an ArchiveError naming the file."""
+    """Open an archive read-only; anything else is an ArchiveError naming the file. Only a
+    regular file is opened, and one whose objects reach outside it (external links, virtual
+    or externally stored datasets: HDF5 would open those files, a FIFO among them, and
+    block) is refused."""
     path = Path(path)
     try:
         info = os.stat(path)
@@ -321,7 +399,84 @@ def open_archive(path: str | Path) -> h5py.File:
     if not ok:
         f.close()
         raise ArchiveError(f"{path}: file: not a camopt archive (no camopt attributes)")
+    try:
+        outside = _reaches_outside(f)
+    except Exception:  # a damaged link table
+        f.close()
+        raise ArchiveError(f"{path}: archive: damaged or incomplete: its objects cannot "
+                           "be listed") from None
+    if outside:
+        f.close()
+        raise ArchiveError(f"{path}: archive: {outside}; camopt reads only what the file "
+                           "itself holds")
     return f
+
+
+def _reaches_outside(f: h5py.File) -> str | None:
+    """The first object of ``f`` that would make HDF5 open another file: an external
+    link, a virtual dataset or a dataset stored in external raw files (None if none).
+    Links are visited without being followed."""
+    found: list[str] = []
+
+    def visit(name: str, link: object) -> bool | None:
+        if isinstance(link, h5py.ExternalLink):
+            found.append(f"/{name}: an external link to {link.filename}")
+        elif isinstance(link, h5py.HardLink):
+            obj = f.get(name)
+            if isinstance(obj, h5py.Dataset):
+                plist = obj.id.get_create_plist()
+                if plist.get_layout() == h5py.h5d.VIRTUAL:
+                    found.append(f"/{name}: a virtual dataset")
+                elif plist.get_external_count() > 0:
+                    found.append(f"/{name}: a dataset stored in external files")
+        return True if found else None  # a non-None value stops the visit
+
+    f.visititems_links(visit)
+    return found[0] if found else None
+
+
+def read_regular(path: Path, what: str) -> bytes | None:
+    """The bytes of the regular file ``path`` (None if there is none). Opened without
+    following a symlink and without blocking, and checked with ``fstat`` before reading:
+    a FIFO, device or link put there is an ArchiveError naming ``what``, never a hang."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_NOFOLLOW | os.O_CLOEXEC)
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        reason = "a symbolic link" if exc.errno == errno.ELOOP else exc.strerror
+        raise ArchiveError(f"{path}: {what}: cannot read ({reason})") from None
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise ArchiveError(f"{path}: {what}: not a regular file (a FIFO or device); "
+                               "remove it")
+        chunks = []
+        while chunk := os.read(fd, 1 << 20):
+            chunks.append(chunk)
+        return b"".join(chunks)
+    except ArchiveError:
+        raise
+    except OSError as exc:
+        raise ArchiveError(f"{path}: {what}: cannot read ({exc.strerror})") from None
+    finally:
+        os.close(fd)
+
+
+def same_file(a: Path, b: Path) -> bool:
+    """True when ``a`` and ``b`` name the same existing file (links resolved)."""
+    try:
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):
+        return False
+
+
+def check_not_input(target: Path, inputs: Sequence[Path], key: str = "--out") -> None:
+    """An output that is one of the command's own inputs is refused, with or without
+    ``--force`` (``tolerance RUN --out RUN --force`` would destroy what it reads)."""
+    for source in inputs:
+        if same_file(target, source):
+            raise ArchiveError(f"{target}: {key}: is this command's own input {source}; "
+                               "choose another name")
 
 
 KINDS = ("run", "sweep", "tolerance")

@@ -36,7 +36,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from camopt.archive.files import atomic_write, open_archive, versions
+from camopt.archive.files import atomic_write, open_archive, read_regular, versions
 from camopt.archive.runs import check_schema, damaged
 from camopt.archive.tables import write_table
 from camopt.errors import ArchiveError
@@ -48,6 +48,7 @@ _FIELDS = tuple(f.name for f in fields(CellResult))
 _SCALARS = tuple(name for name in _FIELDS if name not in ("x", "history"))
 _INTS = ("point", "seed", "nfev", "nit", "converged_nit", "nfev_to_target")
 _BOOLS = ("feasible", "success")
+SWEEP_KEY = "sweep"  # each journal line's sweep id (SweepSpec.sweep_id)
 
 
 def journal_path(path: Path) -> Path:
@@ -116,15 +117,21 @@ class SweepWriter:
         journal = journal_path(self.path)
         with contextlib.suppress(FileNotFoundError):
             os.unlink(journal)  # every cell it held is in the snapshot just written
-        self._fd: int | None = os.open(journal, os.O_WRONLY | os.O_CREAT | os.O_APPEND
-                                       | os.O_CLOEXEC, 0o644)
+        try:  # a new regular file (O_EXCL: never a FIFO or link planted meanwhile)
+            self._fd: int | None = os.open(journal, os.O_WRONLY | os.O_CREAT | os.O_EXCL
+                                           | os.O_APPEND | os.O_CLOEXEC | os.O_NOFOLLOW,
+                                           0o644)
+        except OSError as exc:
+            raise ArchiveError(f"{self.path}: archive: cannot create its journal {journal} "
+                               f"({exc.strerror}); finish with --resume") from None
+        self._id = spec.sweep_id
         self._snapshot_size = max(len(results), 1)
         self._snapshot_time = time.monotonic()
 
     def add(self, result: CellResult) -> None:
         """Store one finished cell; it counts as done only once its line is written."""
         assert self._fd is not None
-        row = {name: getattr(result, name) for name in _FIELDS}  # shallow: no deep copy
+        row = {SWEEP_KEY: self._id, **{name: getattr(result, name) for name in _FIELDS}}
         line = (json.dumps(row, separators=(",", ":")) + "\n").encode()
         try:
             view = memoryview(line)
@@ -159,19 +166,21 @@ class SweepWriter:
 
 def read_journal(path: Path, spec: SweepSpec) -> list[CellResult]:
     """The complete lines of an archive's journal as cells (none without a journal)."""
-    try:
-        text = journal_path(path).read_bytes()
-    except FileNotFoundError:
+    journal = journal_path(path)
+    text = read_regular(journal, "journal")  # a FIFO there is refused, never waited on
+    if text is None:
         return []
-    except OSError as exc:
-        raise ArchiveError(f"{path}: archive: cannot read its journal ({exc.strerror})") \
-            from None
-    cells = []
-    for line in text.split(b"\n")[:-1]:  # the part after the last newline is cut short
+    cells, sweep_id = [], spec.sweep_id
+    for number, line in enumerate(text.split(b"\n")[:-1], 1):  # the rest is cut short
+        where = f"journal {journal.name} line {number}"
         try:
-            cells.append(_cell(json.loads(line), spec, "journal"))
-        except (ValueError, TypeError) as exc:
-            raise ArchiveError(f"journal: a damaged line ({exc})") from None
+            row = json.loads(line)
+        except ValueError as exc:
+            raise ArchiveError(f"{where}: damaged ({exc})") from None
+        if not isinstance(row, dict) or row.pop(SWEEP_KEY, None) != sweep_id:
+            raise ArchiveError(f"{where}: not a line of this sweep (its {SWEEP_KEY} is "
+                               f"not {sweep_id}); remove the journal to drop it")
+        cells.append(_cell(row, spec, where))
     return cells
 
 
@@ -179,12 +188,36 @@ def _cell(a: dict[str, Any], spec: SweepSpec, where: str) -> CellResult:
     expected = sorted(_FIELDS)
     if sorted(a) != expected:
         raise ArchiveError(f"{where}: cell fields {sorted(a)}, expected {expected}")
+    wrong = [name for name in _FIELDS if not _TYPES[name](a[name])]
+    if wrong:
+        raise ArchiveError(f"{where}: {wrong[0]} = {str(a[wrong[0]])[:40]}: not a "
+                           f"{_TYPE_NAMES[wrong[0]]}")
     r = CellResult(**a)
     n_points, (start, stop) = len(spec.points()), spec.seeds
-    if not (isinstance(r.point, int) and isinstance(r.seed, int)
-            and 0 <= r.point < n_points and start <= r.seed < stop):
+    if not (0 <= r.point < n_points and start <= r.seed < stop):
         raise ArchiveError(f"{where}: grid point or seed outside the sweep")
     return r
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)  # JSON true is no grid point
+
+
+def _is_real(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _is_reals(v: Any) -> bool:
+    return isinstance(v, list) and all(_is_real(e) for e in v)
+
+
+_TYPES = {**{name: _is_real for name in _SCALARS}, **{name: _is_int for name in _INTS},
+          **{name: lambda v: isinstance(v, bool) for name in _BOOLS}, "x": _is_reals,
+          "history": lambda v: isinstance(v, dict) and all(
+              isinstance(k, str) and _is_reals(e) for k, e in v.items())}
+_TYPE_NAMES = {**{name: "number" for name in _SCALARS}, **{name: "integer" for name in _INTS},
+               **{name: "boolean" for name in _BOOLS}, "x": "list of numbers",
+               "history": "table of number lists"}
 
 
 def load_sweep(path: str | Path) -> tuple[SweepSpec, dict[tuple[int, int], CellResult]]:

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import os
-import signal
 import sys
 
+from camopt import interrupts
 from camopt.cli import (  # noqa: F401  (commands)
     catalog,
     compare,
@@ -19,14 +19,10 @@ from camopt.cli import (  # noqa: F401  (commands)
 from camopt.cli.app import app, internal_error
 
 
-def _terminate(signum: int, frame: object) -> None:
-    raise KeyboardInterrupt  # SIGTERM unwinds like Ctrl-C: temporary files are removed
-
-
 def main() -> None:
     """Console-script entry point: SIGTERM handled like Ctrl-C; whatever escapes a
     command (a closed pipe, a bug) is still one line, never a traceback."""
-    signal.signal(signal.SIGTERM, _terminate)
+    interrupts.install()
     try:
         app(standalone_mode=True)
     except SystemExit:

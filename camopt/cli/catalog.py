@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -11,7 +10,6 @@ import typer
 from rich.markup import escape
 
 from camopt.cli.app import app, errors, load_case, out
-from camopt.errors import CamoptError
 
 
 @app.command()
@@ -54,26 +52,11 @@ def init(kind: Annotated[str, typer.Argument(help="case kind")],
 
 
 def write_text(path: Path, text: str, force: bool) -> None:
-    """Write a new file (``O_EXCL``: never over another's), or with ``force`` replace a
-    regular file, through a temporary file beside it."""
+    """Write a new file (never over another's), or with ``force`` replace a regular file,
+    through a temporary file beside it (:func:`camopt.archive.files.write_files`)."""
     from camopt import archive
 
-    archive.check_writable(path, force)
-    tmp = path.parent / f".{path.name}.{os.getpid()}.tmp"
-    try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # less the umask
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        if force:
-            os.replace(tmp, path)
-        else:
-            os.link(tmp, path)
-    except FileExistsError:
-        raise CamoptError(f"{path}: --out: exists; pass --force to overwrite") from None
-    except OSError as exc:
-        raise CamoptError(f"{path}: --out: cannot write ({exc.strerror})") from None
-    finally:
-        tmp.unlink(missing_ok=True)
+    archive.write_files({path: text.encode()}, force)
 
 
 @app.command(name="solvers")

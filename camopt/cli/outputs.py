@@ -38,7 +38,9 @@ class ExportFormat(str, enum.Enum):
 @app.command()
 def plot(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="archive")],
          out_dir: Annotated[Path | None, typer.Option("--out", help="folder for the PNGs")]
-         = None) -> None:
+         = None,
+         force: Annotated[bool, typer.Option(help="replace existing PNGs of these names")]
+         = False) -> None:
     """Write PNG figures: convergence and the case's curves."""
     from camopt import archive, plots
     from camopt.archive.sweeps import load_sweep
@@ -50,7 +52,7 @@ def plot(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="arch
         else:
             figures = plots.run_figures(archive.load_run(path))
         with writing(folder):
-            written = plots.save(figures, folder, path.stem)
+            written = plots.save(figures, folder, path.stem, force, (path,))
     for p in written:
         print(p)
 
@@ -59,8 +61,9 @@ def plot(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="arch
 def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run archive")],
            format: Annotated[ExportFormat, typer.Option("--format", help="file format")]
            = ExportFormat.csv,
-           out_dir: Annotated[Path | None, typer.Option("--out", help="output folder")] = None
-           ) -> None:
+           out_dir: Annotated[Path | None, typer.Option("--out", help="output folder")] = None,
+           force: Annotated[bool, typer.Option(help="replace existing files of these names")]
+           = False) -> None:
     """Export the summary and analysis curves (csv or json) or the cam profiles, base
     circle and roller as a DXF drawing in mm (dxf); every format also writes the profiles'
     point files (x,y,z in mm)."""
@@ -71,7 +74,8 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
         view = archive.load_run(run_path)
         folder = out_dir or run_path.parent
         with writing(folder):
-            written = export_run(view, folder, run_path.stem, format.value)
+            written = export_run(view, folder, run_path.stem, format.value, force,
+                                 (run_path,))
     for p in written:
         print(p)
 
@@ -92,5 +96,6 @@ def report(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="ar
     with errors():
         target = out or path.with_suffix(".html")
         archive.check_writable(target, force)
+        archive.check_not_input(target, [path])
         write_text(target, render(path), force)
     print(target)

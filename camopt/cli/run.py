@@ -12,6 +12,7 @@ import typer
 
 from camopt.cli.app import app, err, errors, load_case
 from camopt.errors import ArchiveError
+from camopt.interrupts import deferred
 
 
 @app.command()
@@ -44,18 +45,26 @@ def run(
         config = load_case(case, overrides)
         prepare(config)
         path = out_path or default_out(config.run.name)
-        with claim_out(path, force):
+        with claim_out(path, force, inputs=(case,)):
             tune_allocator()
             with progress(quiet) as callback:
                 record = execute(config, callback=callback, jobs=jobs)
-            archive.write_run(record, path, force=force)
+            with deferred() as signals:  # a Ctrl-C now must not discard finished work
+                archive.write_run(record, path, force=force)
     if quiet:
         print(str(path))  # plain print: a script reads exactly the path, never wrapped
     else:
         print_show(archive.load_run(path), rows=10)
+    kept = f"{len(record.repeats)} finished of {config.run.repeats} repeats in {path}"
+    if record.failure:
+        print(f"error: {case}: --jobs: {record.failure}; kept the {kept} (marked "
+              "interrupted)", file=sys.stderr)
+        raise typer.Exit(2)
     if record.interrupted:
-        print(f"error: interrupted; kept the {len(record.repeats)} finished of "
-              f"{config.run.repeats} repeats in {path} (marked interrupted)", file=sys.stderr)
+        print(f"error: interrupted; kept the {kept} (marked interrupted)", file=sys.stderr)
+        raise typer.Exit(130)
+    if signals:
+        print(f"error: interrupted while writing; kept all {kept}", file=sys.stderr)
         raise typer.Exit(130)
 
 
@@ -73,12 +82,15 @@ def default_out(name: str) -> Path:
 
 
 @contextlib.contextmanager
-def claim_out(path: Path, force: bool, resuming: bool = False) -> Iterator[None]:
+def claim_out(path: Path, force: bool, resuming: bool = False,
+              inputs: tuple[Path, ...] = ()) -> Iterator[None]:
     """Hold ``path`` for writing (``archive.claim``: one writer per archive); report stale
     temporary files removed and, with ``--force``, what the new archive replaced (not when
-    ``resuming`` the archive's own sweep)."""
+    ``resuming`` the archive's own sweep). One of the command's ``inputs`` is never
+    replaced, even with ``--force``."""
     from camopt import archive
 
+    archive.check_not_input(path, inputs)
     replaced = archive.describe_file(path) if force and not resuming else None
     with archive.claim(path, force) as held:
         for stale in held.stale:

@@ -53,7 +53,8 @@ def sweep(
             if check and config.run.min_success_rate is None:
                 raise CamoptError(f"{case}: run.min_success_rate: not set; --check needs it")
             path = out_path or default_out(f"{config.run.name}-sweep")
-        with claim_out(path, force or resume is not None, resuming=resume is not None):
+        with claim_out(path, force or resume is not None, resuming=resume is not None,
+                       inputs=(case,) if case is not None else ()):
             spec, results = _sweep_setup(case, seeds, grid or [], set_ or [], resume)
             if check and spec.data["run"].get("min_success_rate") is None:
                 raise CamoptError(f"{path}: run.min_success_rate: not set; --check needs it")

@@ -47,7 +47,8 @@ def tolerance(
     tornado: Annotated[str | None, typer.Option(
         help="metric of the tornado chart (default the quantity of the requirement that "
         "limits the yield)")] = None,
-    force: Annotated[bool, typer.Option(help="overwrite an existing --out")] = False,
+    force: Annotated[bool, typer.Option(
+        help="overwrite an existing --out and --plot's PNGs")] = False,
 ) -> None:
     """Vary a run's optimum within tolerances: yield, percentiles, sensitivities."""
     from camopt import archive
@@ -62,6 +63,9 @@ def tolerance(
                   else default_varies(run))
         if out_path is not None:
             archive.check_writable(out_path, force)
+            archive.check_not_input(out_path, [run_path])
+        if plot is not None:  # a file, FIFO or unwritable folder: one line, before any work
+            archive.ensure_folder(plot, "--plot")
         result = analyse(run, varies, samples, seed, Distribution(dist.value))
         doc = jsonable(result.summary)
         if tornado is not None and tornado not in doc["metrics"]:
@@ -69,7 +73,7 @@ def tolerance(
                               f"reports {', '.join(doc['metrics'])}")
         if out_path is not None:
             _write(result, out_path, force)
-        written = _figures(result, plot, tornado, run_path.stem) if plot else []
+        written = _figures(result, plot, tornado, run_path.stem, force) if plot else []
     if format is Format.json:  # stdout holds only the JSON; the figures' paths on stderr
         sys.stdout.write(json.dumps(doc, indent=2) + "\n")
         for p in written:
@@ -88,11 +92,13 @@ def _write(result: Tolerance, path: Path, force: bool) -> None:
                   result.samples.g, result.constraint_names, result.samples.feasible, force)
 
 
-def _figures(result: Tolerance, folder: Path, metric: str | None, stem: str) -> list[Path]:
+def _figures(result: Tolerance, folder: Path, metric: str | None, stem: str,
+             force: bool) -> list[Path]:
     from camopt import plots
     from camopt.tolerance_figures import figures
 
-    return plots.save(figures(result, metric), folder, f"{stem}-tolerance")
+    return plots.save(figures(result, metric), folder, f"{stem}-tolerance", force,
+                      key="--plot")
 
 
 def print_tolerance(doc: dict) -> None:

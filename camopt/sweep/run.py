@@ -8,20 +8,25 @@ loses at most the batches running. A worker prepares each grid point's problem o
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import time
 from collections import OrderedDict, deque
 from collections.abc import Callable
-from concurrent.futures import FIRST_COMPLETED, wait
+from concurrent.futures import FIRST_COMPLETED, CancelledError, wait
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 import numpy as np
 
+from camopt import interrupts
 from camopt.archive.sweeps import SweepWriter
 from camopt.config import LoadedConfig
 from camopt.driver import prepare, run_repeat, validate
-from camopt.errors import ConfigError, SolverError
-from camopt.perf import fork_pool, kill_pool, tune_allocator
+from camopt.errors import CamoptError, ConfigError, SolverError
+from camopt.interrupts import deferred
+from camopt.perf import fork_pool, kill_pool, pin_blas_threads, tune_allocator
 from camopt.problem import Problem
 from camopt.solvers import Solver
 from camopt.stats import succeeded
@@ -29,6 +34,10 @@ from camopt.sweep.spec import CellResult, CellSpec, SweepSpec
 
 BATCH_SECONDS = 0.2
 MAX_BATCH = 256
+WORKERS_PER_CORE = 2  # local workers at most per usable core (see ``workers``)
+CONNECT_TIMEOUT = "20s"  # reaching a Dask scheduler
+LOST_SECONDS = 60.0  # a Dask cluster without scheduler or workers this long is lost
+POLL_SECONDS = 1.0  # how often a Dask sweep checks its cluster while waiting
 _PREPARED: OrderedDict[str, tuple[LoadedConfig, Problem, type[Solver]]] = OrderedDict()
 
 
@@ -84,7 +93,19 @@ def batch_size(seconds_per_cell: float) -> int:
     return int(min(MAX_BATCH, max(1, BATCH_SECONDS / max(seconds_per_cell, 1e-9))))
 
 
+def workers(jobs: int, cells: int) -> int:
+    """Worker processes a local sweep starts for ``--jobs`` and ``cells`` cells to run: never
+    more than the cells, nor more than ``WORKERS_PER_CORE`` x the usable cores (cells are
+    CPU-bound: more processes only share the cores and add memory)."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cores = os.cpu_count() or 1
+    return max(1, min(jobs, cells, WORKERS_PER_CORE * cores))
+
+
 def _local(cells: list[CellSpec], jobs: int, done: Callable[[CellResult], None]) -> None:
+    jobs = workers(jobs, len(cells))
     if jobs <= 1:
         for cell in cells:
             done(run_cell(cell))
@@ -95,12 +116,17 @@ def _local(cells: list[CellSpec], jobs: int, done: Callable[[CellResult], None])
     pending: set = set()
     try:
         while queue or pending:
+            interrupts.check()
             while queue and len(pending) < 2 * jobs:
                 batch = [queue.popleft() for _ in range(min(size, len(queue)))]
                 pending.add(pool.submit(run_cells, batch))
             finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for fut in finished:
-                results, seconds = fut.result()
+            for fut in sorted(finished, key=lambda f: f.exception() is not None):
+                try:  # the batches that finished are stored before a broken one is reported
+                    results, seconds = fut.result()
+                except BrokenProcessPool:
+                    raise SolverError("--jobs: a worker process died (killed, or out of "
+                                      "memory); the finished cells are kept") from None
                 for r in results:
                     done(r)
                 size = batch_size(seconds / len(results))
@@ -112,33 +138,81 @@ def _local(cells: list[CellSpec], jobs: int, done: Callable[[CellResult], None])
             kill_pool(pool)
 
 
-def _dask(cells: list[CellSpec], scheduler: str, done: Callable[[CellResult], None]) -> None:
+def _connect(scheduler: str):  # type: ignore[no-untyped-def]
+    """A Dask client of ``scheduler``; an unreachable or malformed address is bad input
+    (checked before the sweep archive is created, so a refused sweep leaves nothing)."""
     try:
-        from distributed import Client, as_completed
+        from distributed import Client
     except ImportError:
         raise ConfigError("--executor", "dask",
                           "needs the 'distributed' package: pip install 'camopt[dask]'") from None
     try:
-        client = Client(scheduler, timeout="20s")
+        return Client(scheduler, timeout=CONNECT_TIMEOUT)
     except (OSError, TimeoutError, ValueError, TypeError) as exc:
         raise ConfigError("--scheduler", scheduler,
                           f"cannot reach the Dask scheduler: {_first_line(exc)}") from None
+
+
+def _dask(client, cells: list[CellSpec], scheduler: str,  # type: ignore[no-untyped-def]
+          done: Callable[[CellResult], None]) -> None:
+    """Run ``cells`` on the cluster, storing each batch's cells as it finishes. A batch
+    whose worker died is run again elsewhere (same seeds, same result); a cluster left
+    without workers, or without its scheduler, for ``LOST_SECONDS`` ends the sweep with
+    one error (the finished cells are stored: ``--resume`` finishes it)."""
+    from distributed import wait as dask_wait
+
+    lost = SolverError(f"--scheduler: {scheduler}: lost the Dask cluster (no scheduler or "
+                       f"no worker for {LOST_SECONDS:g} s); finish with --resume")
     try:
-        with client:
-            client.run(tune_allocator)
-            workers = max(1, len(client.scheduler_info().get("workers", {})))
-            # batches of cells without timing them first (tasks are spread at once): about
-            # 16 batches per worker keeps every worker busy and the scheduler's work small
-            size = min(MAX_BATCH, max(1, -(-len(cells) // (16 * workers))))
-            batches = [cells[i:i + size] for i in range(0, len(cells), size)]
-            # a batch whose worker died is run again elsewhere (same seeds, same result)
-            futures = client.map(run_cells, batches, pure=False, retries=2)
-            for fut in as_completed(futures):
+        client.run(pin_blas_threads)
+        client.run(tune_allocator)
+        n_workers = max(1, len(client.scheduler_info().get("workers", {})))
+        # batches of cells without timing them first (tasks are spread at once): about
+        # 16 batches per worker keeps every worker busy and the scheduler's work small
+        size = min(MAX_BATCH, max(1, -(-len(cells) // (16 * n_workers))))
+        batches = [cells[i:i + size] for i in range(0, len(cells), size)]
+        pending = set(client.map(run_cells, batches, pure=False, retries=2))
+        healthy = time.monotonic()
+        while pending:
+            try:
+                finished, pending = dask_wait(pending, timeout=POLL_SECONDS,
+                                              return_when="FIRST_COMPLETED")
+            except TimeoutError:  # nothing finished within POLL_SECONDS
+                finished = set()
+            for fut in finished:
+                if fut.status != "finished":  # cancelled or lost with the cluster
+                    raise lost
                 for r in fut.result()[0]:
                     done(r)
-    except (OSError, TimeoutError) as exc:  # the scheduler or its workers went away
+            if finished or _cluster_alive(client):
+                healthy = time.monotonic()
+            elif time.monotonic() - healthy > LOST_SECONDS:
+                raise lost
+    except CamoptError:
+        raise
+    except (OSError, TimeoutError, CancelledError) as exc:  # scheduler or workers gone
         raise SolverError(f"--scheduler: {scheduler}: lost the Dask cluster: "
                           f"{_first_line(exc)}; finish with --resume") from None
+    except Exception as exc:
+        if type(exc).__module__.split(".")[0] not in ("distributed", "tornado", "dask"):
+            raise  # a task's own error (a bug): not the cluster's
+        raise SolverError(f"--scheduler: {scheduler}: lost the Dask cluster: "
+                          f"{type(exc).__name__}: {_first_line(exc)}; finish with "
+                          "--resume") from None
+    finally:
+        with contextlib.suppress(Exception):
+            client.close(timeout=5)
+
+
+def _cluster_alive(client) -> bool:  # type: ignore[no-untyped-def]
+    """The client is connected and the scheduler has at least one worker."""
+    if client.status != "running":
+        return False
+    try:
+        info = client.scheduler_info(n_workers=1)
+    except Exception:  # the scheduler does not answer
+        return False
+    return bool(info.get("workers"))
 
 
 def _first_line(exc: BaseException) -> str:
@@ -156,7 +230,13 @@ def run_sweep(spec: SweepSpec, path: Path, results: dict[tuple[int, int], CellRe
         raise ConfigError("--scheduler", "", "give the Dask scheduler's address")
     cells = [c for c in spec.cells() if c.key not in results]
     total = len(results) + len(cells)
-    writer = SweepWriter(path, spec, results, total, replace=replace)
+    client = _connect(scheduler) if executor == "dask" and scheduler else None
+    try:
+        writer = SweepWriter(path, spec, results, total, replace=replace)
+    except BaseException:
+        if client is not None:
+            client.close()
+        raise
     if progress:
         progress(len(results), total)
 
@@ -164,15 +244,23 @@ def run_sweep(spec: SweepSpec, path: Path, results: dict[tuple[int, int], CellRe
         writer.add(r)  # adds r to results once stored
         if progress:
             progress(len(results), total)
+        interrupts.check()
 
     try:
-        if executor == "dask":
+        if client is not None:
             assert scheduler is not None
-            _dask(cells, scheduler, done)
+            _dask(client, cells, scheduler, done)
         else:
             _local(cells, jobs, done)
     except KeyboardInterrupt:
-        writer.close()
+        interrupts.handled()
+        with deferred():  # a second Ctrl-C does not stop the final snapshot
+            writer.close()
         raise SweepInterrupted(f"{len(results)} of {total} cells done") from None
-    writer.close()
+    except BaseException:  # the journal already holds every finished cell; a snapshot
+        with contextlib.suppress(CamoptError, OSError), deferred():  # is a bonus
+            writer.close()
+        raise
+    with deferred():
+        writer.close()
     return results

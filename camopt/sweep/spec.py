@@ -9,6 +9,7 @@ of ``SeedSequence(run.seed)``.
 from __future__ import annotations
 
 import copy
+import hashlib
 import itertools
 import json
 import math
@@ -42,6 +43,9 @@ def parse_seeds(text: str) -> tuple[int, int]:
     m = re.fullmatch(r"\s*(\d+)\s*(?::\s*(\d+)\s*)?", text)
     if not m:
         raise ConfigError("--seeds", text, "expected START:STOP (e.g. 0:25) or a count")
+    if any(len(g) > 19 for g in m.groups() if g):  # int() refuses > 4,300 digits anyway
+        raise ConfigError("--seeds", text[:40] + ("..." if len(text) > 40 else ""),
+                          "seed indices below 2^63 expected")
     start, stop = (0, int(m.group(1))) if m.group(2) is None else (int(m.group(1)),
                                                                     int(m.group(2)))
     if stop <= start:
@@ -138,6 +142,12 @@ class SweepSpec:
             data = self.point_data(p)
             out += [CellSpec(data, self.source, self.entropy, s, i) for s in range(*self.seeds)]
         return out
+
+    @property
+    def sweep_id(self) -> str:
+        """What ties a journal line to its sweep: a hash of the spec (config data, grid,
+        seeds). Two sweeps with equal ids run equal cells (same seeds, same results)."""
+        return hashlib.sha256(self.to_json().encode()).hexdigest()[:16]
 
     def to_json(self) -> str:
         """The spec as JSON text (stored in the sweep archive)."""

@@ -1,0 +1,66 @@
+"""Holding Ctrl-C and SIGTERM back while finished work is being saved.
+
+A run interrupted after its repeats have finished (or while its archive is being written)
+still has everything to save; a signal arriving then must not discard it, and neither must
+a second Ctrl-C pressed because the first seemed slow. Inside :func:`deferred` SIGINT and
+SIGTERM are only noted; the caller finishes writing and then reports the interruption
+(exit 130) with the archive kept."""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+from collections.abc import Iterator
+
+_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_pending = False
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    global _pending
+    _pending = True  # kept in case the exception lands where Python ignores it
+    raise KeyboardInterrupt
+
+
+def install() -> None:
+    """Ctrl-C and SIGTERM raise KeyboardInterrupt (SIGTERM unwinds like Ctrl-C, so
+    temporary files are removed) and are remembered: Python ignores an exception raised
+    inside a weakref callback or ``__del__``, and a signal landing there would be lost;
+    :func:`check` raises it again at the next safe point."""
+    for s in _SIGNALS:
+        signal.signal(s, _interrupt)
+
+
+def check() -> None:
+    """Raise KeyboardInterrupt if a signal arrived that no handler has dealt with (call
+    between units of work: iterations, cells)."""
+    if _pending:
+        raise KeyboardInterrupt
+
+
+def handled() -> None:
+    """The interruption has been dealt with (called where KeyboardInterrupt is caught)."""
+    global _pending
+    _pending = False
+
+
+@contextlib.contextmanager
+def deferred() -> Iterator[list[int]]:
+    """SIGINT and SIGTERM noted, not raised, while the block runs; yields the list the
+    signal numbers received are appended to (empty if none). Nests; a no-op outside the
+    main thread (where Python cannot set handlers)."""
+    got: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield got
+        return
+
+    def note(signum: int, frame: object) -> None:
+        got.append(signum)
+
+    old = {s: signal.signal(s, note) for s in _SIGNALS}
+    try:
+        yield got
+    finally:
+        for s, handler in old.items():
+            signal.signal(s, handler)

@@ -1,0 +1,418 @@
+"""Hardening round 3 (issue #23): no hang, no lost work, no write outside the output folder.
+
+Every test here failed on main before the fix it names. Calls that hung there run in a
+subprocess with a timeout, so a regression fails instead of hanging the suite."""
+
+from __future__ import annotations
+
+import dataclasses
+import errno
+import json
+import os
+import resource
+import signal
+import subprocess
+import sys
+
+import h5py
+import pytest
+from typer.testing import CliRunner
+
+from camopt import archive, driver
+from camopt.archive import files
+from camopt.archive.sweeps import journal_path, load_sweep
+from camopt.cli import app
+from camopt.cli.app import INTERNAL
+from camopt.errors import ArchiveError
+from tests.conftest import CONFIGS
+
+runner = CliRunner()
+FAST = str(CONFIGS / "fast_switch.toml")
+DE = str(CONFIGS / "fast_switch_de.toml")
+EMB = str(CONFIGS / "emb.toml")
+CAMOPT = [sys.executable, "-m", "camopt"]
+TINY = ["--set", "solver.generations=3", "--set", "solver.population=8",
+        "--set", "solver.polish.maxiter=5"]
+
+
+def invoke(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+def one_error_line(text: str) -> bool:
+    lines = [line for line in text.splitlines() if not line.startswith("note:")]
+    return (len(lines) == 1 and lines[0].startswith("error: ") and INTERNAL not in text
+            and "Traceback" not in text)
+
+
+def run_all(calls: list[list[str]], timeout: float = 60) -> list[tuple[int | str, str]]:
+    """Run CLI calls side by side; a call still running after ``timeout`` s is killed and
+    reported as 'hang' (so a hang fails the test instead of the suite)."""
+    procs = [subprocess.Popen([*CAMOPT, *map(str, c)], stdin=subprocess.DEVNULL,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             for c in calls]
+    results = []
+    for p in procs:
+        try:
+            _, err = p.communicate(timeout=timeout)
+            results.append((p.returncode, err))
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.communicate()
+            results.append(("hang", ""))
+    return results
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """A fast-switch run archive, an EMB run archive (it has cam profiles) and a small
+    sweep archive."""
+    folder = tmp_path_factory.mktemp("faults")
+    fast, emb, sweep = folder / "fast.h5", folder / "emb.h5", folder / "sweep.h5"
+    assert invoke("run", FAST, "--out", fast, "--quiet").exit_code == 0
+    assert invoke("run", EMB, "--out", emb, "--quiet", "--set", "solver.iterations=3",
+                  "--set", "solver.particles=6", "--set", "solver.polish.evaluations=48",
+                  "--repeats", "2").exit_code == 0
+    assert invoke("sweep", DE, "--out", sweep, "--seeds", "0:3", "--jobs", "1", "--quiet",
+                  *TINY).exit_code == 0
+    return fast, emb, sweep
+
+
+def copy(src, dst):
+    dst.write_bytes(src.read_bytes())
+    return dst
+
+
+# ---- hangs: only regular files are read ------------------------------------------------
+def test_a_fifo_as_a_sweeps_journal_is_refused_by_every_reader(runs, tmp_path):
+    sweep = copy(runs[2], tmp_path / "s.h5")
+    os.mkfifo(journal_path(sweep))
+    calls = [["show", sweep], ["compare", sweep], ["report", sweep, "--out", tmp_path / "r.html"],
+             ["plot", sweep, "--out", tmp_path / "p"], ["sweep", "--resume", sweep, "--jobs", "1"]]
+    for call, (code, err) in zip(calls, run_all(calls, timeout=45)):
+        assert code == 2 and one_error_line(err), (call, code, err)
+        assert "not a regular file" in err, (call, err)
+
+
+def test_an_archive_linking_outside_itself_is_refused(runs, tmp_path):
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    run = copy(runs[0], tmp_path / "r.h5")
+    with h5py.File(run, "a") as f:
+        f["analysis/evil"] = h5py.ExternalLink(str(fifo), "/x")
+    calls = [["show", run], ["export", run, "--out", tmp_path / "e"],
+             ["report", run, "--out", tmp_path / "r.html"], ["plot", run, "--out", tmp_path / "p"],
+             ["tolerance", run, "--samples", "50"], ["compare", run, run]]
+    for call, (code, err) in zip(calls, run_all(calls, timeout=45)):
+        assert code == 2 and one_error_line(err), (call, code, err)
+        assert "external link" in err, (call, err)
+
+
+@pytest.mark.parametrize("kind", ["virtual", "external storage"])
+def test_datasets_stored_outside_the_archive_are_refused(runs, tmp_path, kind):
+    run = copy(runs[0], tmp_path / "r.h5")
+    raw = tmp_path / "raw.bin"
+    raw.write_bytes(b"\0" * 80)
+    with h5py.File(run, "a") as f:
+        if kind == "virtual":
+            layout = h5py.VirtualLayout(shape=(10,), dtype="f8")
+            layout[:] = h5py.VirtualSource(str(raw), "x", shape=(10,))
+            f["analysis"].create_virtual_dataset("v", layout)
+        else:
+            f["analysis"].create_dataset("e", shape=(10,), dtype="f8",
+                                         external=[(str(raw), 0, 80)])
+    with pytest.raises(ArchiveError, match="virtual|external files"):
+        archive.load_run(run)
+
+
+def test_export_into_a_fifo_fails_at_once_and_leaves_it(runs, tmp_path):
+    out = tmp_path / "e"
+    out.mkdir()
+    fifo = out / f"{runs[0].stem}-summary.csv"
+    os.mkfifo(fifo)
+    [(code, err)] = run_all([["export", runs[0], "--out", out]], timeout=45)
+    assert code == 2 and one_error_line(err) and "not a regular file" in err, (code, err)
+    assert [p.name for p in out.iterdir()] == [fifo.name]
+
+
+# ---- writes where they must not ----------------------------------------------------------
+@pytest.mark.parametrize("command", ["export", "plot"])
+def test_export_and_plot_never_overwrite_without_force(runs, tmp_path, command):
+    run = runs[1]
+    first = invoke(command, run, "--out", tmp_path)
+    assert first.exit_code == 0, first.output
+    written = sorted(p for p in tmp_path.iterdir())
+    for p in written:
+        p.write_text("mine")
+    again = invoke(command, run, "--out", tmp_path)
+    assert again.exit_code == 2 and one_error_line(again.stderr), again.output
+    assert "pass --force" in again.stderr
+    assert all(p.read_text() == "mine" for p in written)
+    assert invoke(command, run, "--out", tmp_path, "--force").exit_code == 0
+    assert all(p.read_text() != "mine" for p in written if p.suffix != ".png")
+    assert sorted(p for p in tmp_path.iterdir()) == written  # no temporary file left
+
+
+@pytest.mark.parametrize("command", ["export", "plot"])
+@pytest.mark.parametrize("force", [[], ["--force"]])
+def test_export_and_plot_never_write_through_a_symlink(runs, tmp_path, command, force):
+    outside = tmp_path / "outside.txt"
+    outside.write_text("precious")
+    out = tmp_path / "out"
+    out.mkdir()
+    name = f"{runs[1].stem}-summary.csv" if command == "export" else \
+        f"{runs[1].stem}-convergence.png"
+    (out / name).symlink_to(outside)
+    r = invoke(command, runs[1], "--out", out, *force)
+    assert r.exit_code == 2 and one_error_line(r.stderr), r.output
+    assert outside.read_text() == "precious" and (out / name).is_symlink()
+    assert [p.name for p in out.iterdir()] == [name]  # all or nothing
+
+
+@pytest.mark.parametrize("call", [
+    ["tolerance", "{run}", "--samples", "20", "--out", "{run}", "--force"],
+    ["report", "{run}", "--out", "{run}", "--force"],
+    ["run", "{case}", "--out", "{case}", "--force", "--quiet"],
+    ["sweep", "{case}", "--out", "{case}", "--force", "--quiet", "--seeds", "0:1"],
+])
+def test_force_never_replaces_the_commands_own_input(runs, tmp_path, call):
+    run = copy(runs[0], tmp_path / "in.h5")
+    case = tmp_path / "case.toml"
+    case.write_text((CONFIGS / "fast_switch.toml").read_text())
+    before = run.read_bytes(), case.read_bytes()
+    r = invoke(*[a.format(run=run, case=case) for a in call])
+    assert r.exit_code == 2 and one_error_line(r.stderr), r.output
+    assert "own input" in r.stderr
+    assert (run.read_bytes(), case.read_bytes()) == before
+
+
+def _fsize_limit():  # the kernel's own 'file too large' (EFBIG) on a real write
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (3000, 3000))
+
+
+def test_export_on_a_full_disk_leaves_no_truncated_file(runs, tmp_path):
+    out = tmp_path / "e"
+    out.mkdir()
+    proc = subprocess.run([*CAMOPT, "export", runs[1], "--out", out], capture_output=True,
+                          text=True, timeout=60, preexec_fn=_fsize_limit)
+    assert proc.returncode == 2 and one_error_line(proc.stderr), proc.stderr
+    assert "nothing written" in proc.stderr
+    assert list(out.iterdir()) == []
+
+
+def test_export_with_enospc_mid_file_leaves_nothing(runs, tmp_path, monkeypatch):
+    write, calls = os.write, []
+
+    def full(fd, data):  # the third file fills the disk
+        calls.append(fd)
+        if len(calls) >= 3:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return write(fd, data)
+
+    monkeypatch.setattr(files.os, "write", full)
+    r = invoke("export", runs[1], "--out", tmp_path / "e")
+    assert r.exit_code == 2 and one_error_line(r.stderr), r.output
+    assert "No space left on device" in r.stderr
+    assert list((tmp_path / "e").iterdir()) == []
+
+
+def test_an_unreachable_dask_scheduler_leaves_nothing_behind(tmp_path, monkeypatch):
+    from camopt.sweep import run as sweep_run
+
+    monkeypatch.setattr(sweep_run, "CONNECT_TIMEOUT", "2s", raising=False)
+    r = invoke("sweep", DE, "--out", tmp_path / "d.h5", "--executor", "dask", "--scheduler",
+               "tcp://127.0.0.1:1", "--seeds", "0:1", "--quiet", *TINY)
+    assert r.exit_code == 2 and one_error_line(r.stderr), r.output
+    assert "cannot reach the Dask scheduler" in r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+# ---- wrong results: journal lines tied to their sweep --------------------------------------
+def _journal_line(results, **change):
+    row = dataclasses.asdict(next(iter(results.values())))
+    row.update(change)
+    return (json.dumps(row) + "\n").encode()
+
+
+@pytest.mark.parametrize("line", ["foreign", "point true", "seed string", "x of strings"])
+def test_journal_lines_of_another_sweep_or_the_wrong_type_are_refused(runs, tmp_path, line):
+    sweep = copy(runs[2], tmp_path / "s.h5")
+    spec, results = load_sweep(sweep)
+    change = {"foreign": {}, "point true": {"point": True}, "seed string": {"seed": "1"},
+              "x of strings": {"x": ["a"]}}[line]
+    # a line as another sweep's journal (or an older camopt) wrote it: no sweep id
+    journal_path(sweep).write_bytes(_journal_line(results, **change))
+    r = invoke("sweep", "--resume", sweep, "--jobs", "1", "--quiet")
+    assert r.exit_code == 2 and one_error_line(r.stderr), r.output
+    if line != "foreign":  # with this sweep's id, the types are checked
+        row = json.loads(_journal_line(results, **change))
+        row["sweep"] = spec.sweep_id
+        journal_path(sweep).write_bytes((json.dumps(row) + "\n").encode())
+        with pytest.raises(ArchiveError, match="not a"):
+            load_sweep(sweep)
+
+
+def test_a_journal_line_of_this_sweep_is_kept(runs, tmp_path):
+    sweep = copy(runs[2], tmp_path / "s.h5")
+    spec, results = load_sweep(sweep)
+    row = json.loads(_journal_line(results, objective=-1.0))
+    row["sweep"] = spec.sweep_id
+    journal_path(sweep).write_bytes((json.dumps(row) + "\n").encode())
+    assert min(r.objective for r in load_sweep(sweep)[1].values()) == -1.0
+
+
+# ---- wrong results: BLAS threads ------------------------------------------------------------
+def test_evaluation_runs_blas_on_one_thread_whatever_the_process_had():
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from tests.helpers import load
+
+    with threadpool_limits(limits=2, user_api="blas"):
+        driver.prepare(load(DE))
+        threads = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+    assert threads and set(threads) == {1}
+
+
+def test_a_sweep_gives_the_same_cells_with_one_or_the_default_blas_threads(tmp_path):
+    calls, env = [], []
+    for threads in ("1", None):
+        e = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+        if threads:
+            e["OPENBLAS_NUM_THREADS"] = threads
+        env.append(e)
+        calls.append([*CAMOPT, "sweep", DE, "--out", tmp_path / f"{threads}.h5", "--seeds",
+                      "0:2", "--jobs", "1", "--quiet", "--set", "solver.generations=20",
+                      "--set", "solver.population=20"])
+    procs = [subprocess.Popen(list(map(str, c)), env=e, stdout=subprocess.DEVNULL,
+                              stderr=subprocess.PIPE) for c, e in zip(calls, env)]
+    assert all(p.wait(timeout=120) == 0 for p in procs)
+    one, default = (load_sweep(tmp_path / f"{t}.h5")[1] for t in ("1", None))
+    assert {k: (r.objective, r.x) for k, r in one.items()} == \
+        {k: (r.objective, r.x) for k, r in default.items()}
+
+
+# ---- lost work ----------------------------------------------------------------------------
+def test_a_dying_worker_of_run_jobs_keeps_the_finished_repeats(tmp_path, monkeypatch):
+    original = driver.run_repeat
+
+    def dying(problem, solver_cls, config, child, index, *args, **kwargs):
+        if index == 3:  # the OOM killer takes this worker (after the first repeats finish)
+            import time
+
+            time.sleep(1.0)
+            os.kill(os.getpid(), signal.SIGKILL)
+        return original(problem, solver_cls, config, child, index, *args, **kwargs)
+
+    monkeypatch.setattr(driver, "run_repeat", dying)  # forked workers inherit it
+    out = tmp_path / "a.h5"
+    r = invoke("run", DE, "--out", out, "--quiet", "--repeats", "6", "--jobs", "2", *TINY)
+    assert r.exit_code == 2 and one_error_line(r.stderr), r.output
+    assert "worker process died" in r.stderr and "kept the" in r.stderr
+    kept = list([r.index for r in archive.load_run(out).repeats])
+    assert 1 <= len(kept) < 6 and 3 not in kept
+    with h5py.File(out) as f:
+        assert bool(f.attrs["interrupted"]) and f.attrs["repeats_done"] == len(kept)
+
+
+def test_a_dying_sweep_worker_keeps_the_finished_cells(tmp_path, monkeypatch):
+    from camopt.sweep import run as sweep_run
+
+    original = sweep_run.run_cell
+
+    def dying(cell):
+        if cell.seed == 3:
+            import time
+
+            time.sleep(1.0)
+            os.kill(os.getpid(), signal.SIGKILL)
+        return original(cell)
+
+    monkeypatch.setattr(sweep_run, "run_cell", dying)
+    out = tmp_path / "s.h5"
+    r = invoke("sweep", DE, "--out", out, "--seeds", "0:6", "--jobs", "2", "--quiet", *TINY)
+    assert r.exit_code == 2 and one_error_line(r.stderr), r.output
+    assert "worker process died" in r.stderr
+    assert 1 <= len(load_sweep(out)[1]) < 6
+
+
+@pytest.mark.parametrize("signals", [(signal.SIGINT, signal.SIGINT)])
+def test_ctrl_c_during_the_final_write_keeps_the_archive(tmp_path, monkeypatch, signals):
+    from camopt.archive import runs
+
+    original = runs.atomic_write
+
+    def interrupted(*args, **kwargs):  # Ctrl-C, then again because the first seemed slow
+        for s in signals:
+            os.kill(os.getpid(), s)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(runs, "atomic_write", interrupted)
+    out = tmp_path / "a.h5"
+    r = invoke("run", DE, "--out", out, "--quiet", "--repeats", "3", *TINY)
+    assert r.exit_code == 130, r.output
+    assert one_error_line(r.stderr) and "kept all 3 finished of 3 repeats" in r.stderr
+    assert len([r.index for r in archive.load_run(out).repeats]) == 3
+
+
+def test_sigterm_then_ctrl_c_during_the_final_write_keep_the_archive(tmp_path):
+    out = tmp_path / "a.h5"
+    script = (
+        "import os, signal, sys\n"
+        "from camopt.archive import runs\n"
+        "original = runs.atomic_write\n"
+        "def interrupted(*a, **k):\n"
+        "    os.kill(os.getpid(), signal.SIGTERM)\n"
+        "    os.kill(os.getpid(), signal.SIGINT)\n"
+        "    return original(*a, **k)\n"
+        "runs.atomic_write = interrupted\n"
+        "from camopt.cli import main\n"
+        f"sys.argv = ['camopt', 'run', {DE!r}, '--out', {str(out)!r}, '--quiet',"
+        f" '--repeats', '3', *{TINY!r}]\n"
+        "main()\n")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 130 and one_error_line(proc.stderr), proc.stderr
+    assert len([r.index for r in archive.load_run(out).repeats]) == 3
+
+
+# ---- unbounded or unwrapped -----------------------------------------------------------------
+def test_sweep_jobs_never_starts_more_workers_than_cells(tmp_path, monkeypatch):
+    from camopt.sweep import run as sweep_run
+
+    asked = []
+    real = sweep_run.fork_pool
+
+    def recording(jobs):
+        asked.append(jobs)
+        return real(min(jobs, 2))  # never fork hundreds here, even on a regression
+
+    monkeypatch.setattr(sweep_run, "fork_pool", recording)
+    r = invoke("sweep", DE, "--out", tmp_path / "s.h5", "--seeds", "0:4", "--jobs", "1000",
+               "--quiet", *TINY)
+    assert r.exit_code == 0, r.output
+    assert asked and max(asked) <= 4
+    assert sweep_run.workers(1000, 10**6) <= sweep_run.WORKERS_PER_CORE * (os.cpu_count() or 1)
+
+
+@pytest.mark.parametrize("seeds", ["9" * 5000, "0:" + "9" * 5000, "1" * 4301 + ":2"])
+def test_seeds_with_thousands_of_digits_are_one_line(tmp_path, seeds):
+    r = invoke("sweep", DE, "--out", tmp_path / "s.h5", "--seeds", seeds, "--quiet")
+    assert r.exit_code == 2 and one_error_line(r.stderr), r.output
+    assert len(r.stderr) < 300 and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("target", ["file", "fifo", "unwritable"])
+def test_tolerance_plot_into_a_file_fifo_or_unwritable_folder_is_one_line(runs, tmp_path,
+                                                                           target):
+    path = tmp_path / "p"
+    if target == "file":
+        path.write_text("x")
+    elif target == "fifo":
+        os.mkfifo(path)
+    else:
+        path = "/proc/camopt-plots"  # not even root can create a folder there
+    [(code, err)] = run_all([["tolerance", runs[0], "--samples", "50", "--plot", path]],
+                            timeout=60)
+    assert code == 2 and one_error_line(err), (code, err)
+    assert "--plot" in err
