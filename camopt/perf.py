@@ -41,32 +41,23 @@ def tune_allocator(trim_bytes: int = 256 * 2**20, mmap_bytes: int = 32 * 2**20) 
     return ok
 
 
-_blas_pinned = False
-
-
-def pin_blas_threads() -> bool:
-    """Run BLAS/LAPACK on one thread in this process (once; forked workers inherit it).
+def pin_blas_threads() -> None:
+    """Run BLAS/LAPACK on one thread in this process (forked workers inherit it).
 
     Threaded BLAS splits a product's inner sums across threads, so the rounding of a
     result depends on the thread count (``OPENBLAS_NUM_THREADS``, the machine's cores, a
     Dask worker's setting): the same sweep gave different cells on different executors.
     camopt's parallelism is across processes (repeats, cells), so one BLAS thread per
-    process costs nothing there and makes every result independent of where it ran.
-    True if a BLAS library was found and pinned."""
-    global _blas_pinned
-    if _blas_pinned:
-        return True
+    process costs nothing there and makes every result independent of where it ran."""
     import os
 
     import numpy  # noqa: F401  (loads numpy's BLAS, so threadpoolctl finds it)
     import scipy.linalg  # noqa: F401  (and scipy's, a library of its own)
-    from threadpoolctl import threadpool_info, threadpool_limits
+    from threadpoolctl import threadpool_limits
 
     for name in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS"):
         os.environ[name] = "1"  # for a BLAS loaded later (read when it loads)
-    threadpool_limits(limits=1, user_api="blas")
-    _blas_pinned = True
-    return any(i["user_api"] == "blas" for i in threadpool_info())
+    threadpool_limits(limits=1, user_api="blas")  # again each time: a caller may raise it
 
 
 _PR_SET_PDEATHSIG = 1

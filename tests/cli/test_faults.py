@@ -45,21 +45,23 @@ def one_error_line(text: str) -> bool:
             and "Traceback" not in text)
 
 
-def run_all(calls: list[list[str]], timeout: float = 60) -> list[tuple[int | str, str]]:
-    """Run CLI calls side by side; a call still running after ``timeout`` s is killed and
-    reported as 'hang' (so a hang fails the test instead of the suite)."""
-    procs = [subprocess.Popen([*CAMOPT, *map(str, c)], stdin=subprocess.DEVNULL,
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-             for c in calls]
-    results = []
-    for p in procs:
-        try:
-            _, err = p.communicate(timeout=timeout)
-            results.append((p.returncode, err))
-        except subprocess.TimeoutExpired:
-            p.kill()
-            p.communicate()
-            results.append(("hang", ""))
+def run_all(calls: list[list[str]], timeout: float = 90) -> list[tuple[int | str, str]]:
+    """Run CLI calls, two at a time (the test machine has two cores); a call still running
+    after ``timeout`` s is killed and reported as 'hang' (so a hang fails the test instead
+    of the suite)."""
+    results: list[tuple[int | str, str]] = []
+    for i in range(0, len(calls), 2):
+        procs = [subprocess.Popen([*CAMOPT, *map(str, c)], stdin=subprocess.DEVNULL,
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                 for c in calls[i:i + 2]]
+        for p in procs:
+            try:
+                _, err = p.communicate(timeout=timeout)
+                results.append((p.returncode, err))
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.communicate()
+                results.append(("hang", ""))
     return results
 
 
@@ -89,7 +91,7 @@ def test_a_fifo_as_a_sweeps_journal_is_refused_by_every_reader(runs, tmp_path):
     os.mkfifo(journal_path(sweep))
     calls = [["show", sweep], ["compare", sweep], ["report", sweep, "--out", tmp_path / "r.html"],
              ["plot", sweep, "--out", tmp_path / "p"], ["sweep", "--resume", sweep, "--jobs", "1"]]
-    for call, (code, err) in zip(calls, run_all(calls, timeout=45)):
+    for call, (code, err) in zip(calls, run_all(calls)):
         assert code == 2 and one_error_line(err), (call, code, err)
         assert "not a regular file" in err, (call, err)
 
@@ -103,7 +105,7 @@ def test_an_archive_linking_outside_itself_is_refused(runs, tmp_path):
     calls = [["show", run], ["export", run, "--out", tmp_path / "e"],
              ["report", run, "--out", tmp_path / "r.html"], ["plot", run, "--out", tmp_path / "p"],
              ["tolerance", run, "--samples", "50"], ["compare", run, run]]
-    for call, (code, err) in zip(calls, run_all(calls, timeout=45)):
+    for call, (code, err) in zip(calls, run_all(calls)):
         assert code == 2 and one_error_line(err), (call, code, err)
         assert "external link" in err, (call, err)
 
@@ -130,7 +132,7 @@ def test_export_into_a_fifo_fails_at_once_and_leaves_it(runs, tmp_path):
     out.mkdir()
     fifo = out / f"{runs[0].stem}-summary.csv"
     os.mkfifo(fifo)
-    [(code, err)] = run_all([["export", runs[0], "--out", out]], timeout=45)
+    [(code, err)] = run_all([["export", runs[0], "--out", out]], timeout=90)
     assert code == 2 and one_error_line(err) and "not a regular file" in err, (code, err)
     assert [p.name for p in out.iterdir()] == [fifo.name]
 
