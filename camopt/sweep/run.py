@@ -161,8 +161,10 @@ def _dask(client, cells: list[CellSpec], scheduler: str,  # type: ignore[no-unty
     one error (the finished cells are stored: ``--resume`` finishes it)."""
     from distributed import wait as dask_wait
 
-    lost = SolverError(f"--scheduler: {scheduler}: lost the Dask cluster (no scheduler or "
-                       f"no worker for {LOST_SECONDS:g} s); finish with --resume")
+    def lost(why: str) -> SolverError:
+        return SolverError(f"--scheduler: {scheduler}: lost the Dask cluster ({why}); finish "
+                           "with --resume")
+
     try:
         client.run(pin_blas_threads)
         client.run(tune_allocator)
@@ -180,14 +182,17 @@ def _dask(client, cells: list[CellSpec], scheduler: str,  # type: ignore[no-unty
             except TimeoutError:  # nothing finished within POLL_SECONDS
                 finished = set()
             for fut in finished:
+                if fut.status == "error":  # the task's own error (a bug): raise it
+                    fut.result()
                 if fut.status != "finished":  # cancelled or lost with the cluster
-                    raise lost
+                    raise lost(f"a batch was {fut.status}")
                 for r in fut.result()[0]:
                     done(r)
-            if finished or _cluster_alive(client):
+            trouble = None if finished else _cluster_trouble(client)
+            if trouble is None:
                 healthy = time.monotonic()
             elif time.monotonic() - healthy > LOST_SECONDS:
-                raise lost
+                raise lost(f"{trouble} for {LOST_SECONDS:g} s")
     except CamoptError:
         raise
     except (OSError, TimeoutError, CancelledError) as exc:  # scheduler or workers gone
@@ -204,15 +209,17 @@ def _dask(client, cells: list[CellSpec], scheduler: str,  # type: ignore[no-unty
             client.close(timeout=5)
 
 
-def _cluster_alive(client) -> bool:  # type: ignore[no-untyped-def]
-    """The client is connected and the scheduler has at least one worker."""
+def _cluster_trouble(client) -> str | None:  # type: ignore[no-untyped-def]
+    """What is wrong with the cluster (the client not connected, no worker), None if
+    nothing is. A scheduler slow to answer counts as alive while the client is connected:
+    a dead one disconnects it."""
     if client.status != "running":
-        return False
+        return f"client {client.status}"
     try:
-        info = client.scheduler_info(n_workers=1)
-    except Exception:  # the scheduler does not answer
-        return False
-    return bool(info.get("workers"))
+        workers = client.scheduler_info(n_workers=1).get("workers")
+    except Exception:  # busy or going away: the client's status tells which, next time
+        return None
+    return None if workers else "no worker"
 
 
 def _first_line(exc: BaseException) -> str:
