@@ -17,9 +17,9 @@ runner = CliRunner()
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("config", "span"), [
-    # tau (MPa, minimised) vs closing velocity (m/s, maximised): >= 0.15 m/s of the
-    # 0.7-1.1 m/s band covered
-    ("vcb_pareto.toml", 0.15),
+    # tau (MPa, minimised) vs closing velocity (m/s, maximised): the identified friction
+    # leaves ~0.03 m/s between the slowest design that latches and 1.1 m/s; >= 0.02 covered
+    ("vcb_pareto.toml", 0.02),
     # closure time (ms) vs spring stress margin (%): >= 50 % of margin covered
     ("fast_switch_pareto.toml", 50.0),
 ])
