@@ -227,10 +227,12 @@ def test_identification_meets_every_adams_datum(identification, reported):
     assert ev.extras["max_residual_pct"][0] <= 10.0
 
 
-def test_identification_run_reproduces_the_config_values():
-    """configs/vcb_identify_dynamics.toml (DE-gr, reduced budget) finds the parameters
-    copied into configs/vcb.toml (within 3 %) and reports n_data, n_parameters, the
-    largest residual and each datum's residual."""
+def test_identification_run_reproduces_the_config_values(identification):
+    """configs/vcb_identify_dynamics.toml (DE-gr, reduced budget) reports n_data, n_parameters,
+    the largest residual and each datum's residual, and finds parameters as consistent with
+    the ADAMS data as those copied into configs/vcb.toml: every event predicted within the
+    reading error (2 % velocities, 0.5 ms times) of the config's prediction. (The misfit is
+    flat along J_cam: fits land anywhere in the band, 5.0e-4 - 6.8e-4 kg m^2.)"""
     rec = execute(load(CONFIGS / "vcb_identify_dynamics.toml", "run.repeats=1",
                        "solver.generations=80"))
     m = rec.metrics
@@ -239,8 +241,15 @@ def test_identification_run_reproduces_the_config_values():
     assert all(f"residual_{d.key}_pct" in m for d in DATA)
     fitted = rec.problem.to_display(rec.best.x)
     case = load(CONFIGS / "vcb.toml").case
-    for key in PARAMETERS:
-        assert getattr(case, key) == pytest.approx(fitted[key], rel=0.03), key
+    y = identification.predict(np.array([[fitted[k] for k in PARAMETERS],
+                                         [getattr(case, k) for k in PARAMETERS]]))
+    for i, d in enumerate(DATA):
+        if d.upper_bound_only:
+            continue
+        if d.unit == "m/s":
+            assert y[0, i] == pytest.approx(y[1, i], rel=0.02), d.name
+        else:
+            assert y[0, i] == pytest.approx(y[1, i], abs=0.5), d.name
 
 
 def test_band_members_are_as_consistent_as_the_fit(identification):
