@@ -65,7 +65,8 @@ def export_files(run: RunView, out_dir: Path, stem: str, fmt: str, spec: object,
             groups.setdefault(np.asarray(v).size, []).append(k)
         for i, (_, keys) in enumerate(sorted(groups.items())):
             table = np.column_stack([np.asarray(analysis[k]) for k in keys]).tolist()
-            files[out_dir / f"{stem}-curves-{i + 1}.csv"] = _csv([keys, *table])
+            header: list[object] = list(keys)
+            files[out_dir / f"{stem}-curves-{i + 1}.csv"] = _csv([header, *table])
     for name, points in curves.items():
         text = io.BytesIO()
         np.savetxt(text, np.column_stack([points, np.zeros(len(points))]), fmt="%.6f",

@@ -138,7 +138,7 @@ def _local(cells: list[CellSpec], jobs: int, done: Callable[[CellResult], None])
             kill_pool(pool)
 
 
-def _connect(scheduler: str):  # type: ignore[no-untyped-def]
+def _connect(scheduler: str):
     """A Dask client of ``scheduler``; an unreachable or malformed address is bad input
     (checked before the sweep archive is created, so a refused sweep leaves nothing)."""
     try:
@@ -153,7 +153,7 @@ def _connect(scheduler: str):  # type: ignore[no-untyped-def]
                           f"cannot reach the Dask scheduler: {_first_line(exc)}") from None
 
 
-def _dask(client, cells: list[CellSpec], scheduler: str,  # type: ignore[no-untyped-def]
+def _dask(client, cells: list[CellSpec], scheduler: str,
           done: Callable[[CellResult], None]) -> None:
     """Run ``cells`` on the cluster, storing each batch's cells as it finishes. A batch
     whose worker died is run again elsewhere (same seeds, same result); a cluster left
@@ -209,7 +209,7 @@ def _dask(client, cells: list[CellSpec], scheduler: str,  # type: ignore[no-unty
             client.close(timeout=5)
 
 
-def _cluster_trouble(client) -> str | None:  # type: ignore[no-untyped-def]
+def _cluster_trouble(client) -> str | None:
     """What is wrong with the cluster (the client not connected, no worker), None if
     nothing is. A scheduler slow to answer counts as alive while the client is connected:
     a dead one disconnects it."""
