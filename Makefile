@@ -18,8 +18,9 @@ install: $(STAMP)
 run: install
 	$(BIN)/camopt run $(RUN_CASE)
 
+# one pytest worker per core (pytest-xdist): the suite is ~6 CPU-minutes, ~3 minutes on 2 cores
 test: install
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto
 
 lint: typecheck
 	$(BIN)/ruff check camopt tests bench scripts/mutants.py

@@ -230,15 +230,16 @@ VARIANTS = {  # three switches other than the paper's
 @pytest.mark.parametrize("sets", VARIANTS.values(), ids=VARIANTS.keys())
 def test_de_with_integer_aware_polish_reaches_the_enumerated_optimum(sets):
     """configs/fast_switch_de.toml (10 seeds; 300 generations here, the polish does the
-    rest) on a switch variant: the best of the 10 repeats is within 0.005 % of the optimum
-    found by enumerating coil counts with an NLP per count (either side: a DE design
-    below the enumeration by more would mean the reference missed the optimum)."""
+    rest) on a switch variant: the best of the 10 repeats is within 0.005 % above the
+    optimum found by enumerating coil counts with an NLP per count, and at most 0.05 %
+    below it (the per-count NLP is a local solve: with BLAS pinned to one thread the DE
+    beat it by 0.013 % on the L 250 mm variant; more would mean the reference missed)."""
     cfg = load(CONFIGS / "fast_switch_de.toml", *sets, "solver.generations=300")
     rec = execute(cfg)
     reference, coils = _nlp_per_coil_count(rec.problem)
     assert rec.best.feasible
-    assert abs(rec.best.fun - reference) <= 5e-5 * reference, (rec.best.fun, reference,
-                                                               rec.best.x[0], coils)
+    assert -5e-4 * reference <= rec.best.fun - reference <= 5e-5 * reference, (
+        rec.best.fun, reference, rec.best.x[0], coils)
 
 
 # ---- away from sf = sud: every Table 1 row has sf = sud, so v = 0 there --------------------
