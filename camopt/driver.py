@@ -10,7 +10,7 @@ import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import as_completed
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -24,7 +24,9 @@ from camopt.errors import ConfigError, SolverError
 from camopt.interrupts import deferred
 from camopt.perf import fork_pool, kill_pool, pin_blas_threads
 from camopt.problem import Problem, deb_best
+from camopt.record import Repeat, nfev_to_target, seed_id
 from camopt.solvers import Solver, StopReason, get_solver, solvers
+from camopt.stats import succeeded
 
 
 @dataclass(frozen=True)
@@ -39,38 +41,14 @@ class Progress:
 
 
 @dataclass
-class RepeatRecord:
-    """One solver repeat: result (scipy's field names where they fit) and its history."""
-
-    index: int
-    spawn_key: tuple[int, ...]
-    seed: int
-    x: NDArray
-    fun: float
-    feasible: bool
-    violation: float
-    g: NDArray
-    nfev: int
-    nit: int
-    wall_s: float
-    message: str
-    converged_nit: int
-    history: dict[str, NDArray]
-    table: list[dict[str, Any]] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)
-    nominal_x: NDArray | None = None
-    """Robust runs: the best design seen whose nominal evaluation is feasible."""
-
-
-@dataclass
 class RunRecord:
     """Everything a run archive holds."""
 
     config: LoadedConfig
     problem: Problem
     seed: int
-    repeats: list[RepeatRecord]
-    best: RepeatRecord
+    repeats: list[Repeat]
+    best: Repeat
     metrics: dict[str, object]
     analysis: dict[str, NDArray]
     interrupted: bool = False
@@ -148,7 +126,7 @@ def build_solver(problem: Problem, solver_cls: type[Solver], config: LoadedConfi
 def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
                child: np.random.SeedSequence, index: int, repeats: int,
                callback: Callable[[Progress], None] | None = None, jobs: int = 1
-               ) -> RepeatRecord:
+               ) -> Repeat:
     """Run one repeat of the solver to its stop reason, or to the run's own limits
     (``run.max_evaluations``, ``run.max_seconds``), whichever comes first; ``jobs``
     worker processes are lent to the solver (multi-start solvers spread their starts)."""
@@ -180,16 +158,19 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
     x, bev = solver.best()
     if robust_problem is not None:  # the solver's best and the finalists on fresh draws
         x, bev = robust_problem.select(x, robust.repeat_seed(child, 1))
-    return RepeatRecord(
-        converged_nit=converged_iteration(np.array(best_f), np.array(best_v)),
+    history = {"nfev": np.array(nfev, dtype=np.int64), "best_objective": np.array(best_f),
+               "mean_objective": np.array(mean_f), "best_violation": np.array(best_v)}
+    fun, feasible, target = float(bev.f[0]), bool(bev.feasible[0]), config.run.target
+    return Repeat(
+        x=x, fun=fun, success=bool(succeeded([fun], [feasible], target)[0]),
+        message=reason.value, nfev=solver.nfev, nit=solver.nit,
         index=index, spawn_key=tuple(child.spawn_key),
-        seed=int(child.generate_state(1, np.uint64)[0] >> np.uint64(1)),
-        x=x, fun=float(bev.f[0]), feasible=bool(bev.feasible[0]),
-        violation=float(bev.violation[0]), g=bev.g[0], nfev=solver.nfev, nit=solver.nit,
-        wall_s=time.perf_counter() - start, message=reason.value,
-        history={"nfev": np.array(nfev, dtype=np.int64), "best_objective": np.array(best_f),
-                 "mean_objective": np.array(mean_f), "best_violation": np.array(best_v)},
-        table=solver.table(), notes=solver.notes(),
+        seed=seed_id(child),
+        feasible=feasible, violation=float(bev.violation[0]),
+        converged_nit=converged_iteration(np.array(best_f), np.array(best_v)),
+        nfev_to_target=nfev_to_target(history, target),
+        wall_s=time.perf_counter() - start, history=history, g=bev.g[0],
+        notes=tuple(solver.notes()), table=solver.table(),
         nominal_x=(robust_problem.nominal_best[0]
                    if robust_problem is not None and robust_problem.nominal_best else None),
     )
@@ -222,7 +203,7 @@ def converged_iteration(best_f: NDArray, best_v: NDArray, tol: float = CONVERGEN
     return int(far[-1] + 2) if far.size else 1
 
 
-def best_repeat(records: list[RepeatRecord]) -> RepeatRecord:
+def best_repeat(records: list[Repeat]) -> Repeat:
     """The best repeat by Deb's rules (least violation, then lowest objective; the first
     of equals)."""
     return records[deb_best([r.fun for r in records], [r.violation for r in records])]
@@ -231,7 +212,7 @@ def best_repeat(records: list[RepeatRecord]) -> RepeatRecord:
 _REPEATS: tuple | None = None  # what forked workers of execute(jobs > 1) run
 
 
-def _repeat_in_worker(i: int) -> RepeatRecord:
+def _repeat_in_worker(i: int) -> Repeat:
     assert _REPEATS is not None
     problem, solver_cls, config, children = _REPEATS
     return run_repeat(problem, solver_cls, config, children[i], i, len(children))
@@ -240,7 +221,7 @@ def _repeat_in_worker(i: int) -> RepeatRecord:
 def _parallel_repeats(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
                       children: list[np.random.SeedSequence], jobs: int,
                       callback: Callable[[Progress], None] | None,
-                      finished: list[RepeatRecord]) -> None:
+                      finished: list[Repeat]) -> None:
     """Repeats in ``jobs`` forked workers, appended to ``finished`` as they end (so an
     interruption keeps those); each repeat is independent (its own child seed), so the
     records equal a sequential run's but for wall times and order."""
@@ -287,7 +268,7 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
     seed = config.run.seed if seed is None else seed
     repeats = config.run.repeats if repeats is None else repeats
     children = np.random.SeedSequence(seed).spawn(repeats)
-    records: list[RepeatRecord] = []
+    records: list[Repeat] = []
     interrupted, failure = False, None
     try:
         if jobs > 1 and repeats > 1:
@@ -317,7 +298,7 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
     return record
 
 
-def _robust_check(problem: Problem, records: list[RepeatRecord], best: RepeatRecord,
+def _robust_check(problem: Problem, records: list[Repeat], best: Repeat,
                   seed: int) -> dict[str, Any] | None:
     """Robust runs: the best design and the best nominally feasible design seen (lowest
     nominal objective over the repeats) checked on the same fresh draws."""

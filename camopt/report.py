@@ -55,8 +55,10 @@ def jsonable(value: Any) -> Any:
     return value
 
 
-REPEAT_KEYS = ("seed", "objective", "feasible", "nfev", "wall_s", "converged_nit", "spawn_key",
-               "notes")
+REPEAT_KEYS = {"seed": "seed", "objective": "fun", "feasible": "feasible", "nfev": "nfev",
+               "wall_s": "wall_s", "converged_nit": "converged_nit", "spawn_key": "spawn_key",
+               "notes": "notes"}
+"""``show --format json``'s key for each repeat field it reports (``objective``: ``fun``)."""
 
 
 def show(run: RunView) -> dict[str, Any]:
@@ -65,7 +67,7 @@ def show(run: RunView) -> dict[str, Any]:
     repeats, table, the reference design with its own verdict, and for a multi-objective
     run (a solver with ``objectives``) ``pareto``. These keys are a contract scripts rely
     on; the two-column view is :func:`summary`."""
-    repeats = [{k: getattr(r, k) for k in REPEAT_KEYS} for r in run.repeats]
+    repeats = [{k: getattr(r, attr) for k, attr in REPEAT_KEYS.items()} for r in run.repeats]
     best = {k: v for k, v in asdict(run.best).items() if k != "repeat"}
     judged = verdict(run)
     label, ref = reference(run)
@@ -281,13 +283,13 @@ def _flatten(prefix: str, value: Any, out: dict[str, Any]) -> None:
 
 def repeat_statistics(run: RunView) -> stats.RunStatistics:
     """Statistics of the final objectives over a run's repeats (infeasible as +inf)."""
-    return stats.run_statistics([r.objective for r in run.repeats],
+    return stats.run_statistics([r.fun for r in run.repeats],
                                 [r.feasible for r in run.repeats], run.run.get("target"))
 
 
 def _finals(run: RunView) -> tuple[np.ndarray, int]:
     """Final objectives as ranked (infeasible as +inf) and the number of successes."""
-    f = stats.ranked([r.objective for r in run.repeats], [r.feasible for r in run.repeats])
+    f = stats.ranked([r.fun for r in run.repeats], [r.feasible for r in run.repeats])
     return f, repeat_statistics(run).successes
 
 
@@ -396,7 +398,7 @@ def rank_sweep(spec: Any, results: dict) -> dict[str, Any]:
     order = sorted(rows, key=lambda r: (-r["success_rate"], r["median"]))
     finals: dict[int, list[float]] = {}
     for r in results.values():
-        finals.setdefault(r.point, []).append(float(stats.ranked([r.objective], [r.feasible])[0]))
+        finals.setdefault(r.point, []).append(float(stats.ranked([r.fun], [r.feasible])[0]))
     best = order[0]
     ranking = []
     for rank, row in enumerate(order, 1):

@@ -9,25 +9,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-
-@dataclass(frozen=True)
-class RepeatView:
-    """One solver repeat: its result (scipy's names where they fit) and its history."""
-
-    index: int
-    spawn_key: tuple[int, ...]
-    seed: int
-    objective: float
-    feasible: bool
-    violation: float
-    nfev: int
-    nit: int
-    wall_s: float
-    converged_nit: int
-    message: str
-    notes: tuple[str, ...]
-    x: dict[str, float]
-    history: dict[str, NDArray] = field(repr=False, default_factory=dict)
+from camopt.record import Repeat
 
 
 @dataclass(frozen=True)
@@ -61,7 +43,8 @@ class RunView:
     variables: tuple[str, ...]
     constraints: tuple[str, ...]
     best: BestView
-    repeats: list[RepeatView]
+    repeats: list[Repeat]
+    """Every repeat stored, in index order (``x`` in SI, as the run had it)."""
     table: list[dict[str, Any]]
     analysis: dict[str, NDArray] = field(repr=False, default_factory=dict)
     config_toml: str = ""

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from camopt.driver import (
-    RepeatRecord,
     best_repeat,
     converged_iteration,
     execute,
     validate,
 )
+from camopt.record import Repeat
 from camopt.solvers import StopReason
 from tests.conftest import CONFIGS
 from tests.helpers import load
@@ -23,9 +23,10 @@ def _config(**run):
                      "run": {"seed": 4, "repeats": 3, **run}}, "sphere.toml")
 
 
-def _record(index: int, fun: float, violation: float) -> RepeatRecord:
-    return RepeatRecord(index, (index,), 0, np.zeros(1), fun, violation == 0, violation,
-                        np.zeros(1), 0, 0, 0.0, "", 0, {})
+def _record(index: int, fun: float, violation: float) -> Repeat:
+    return Repeat(x=np.zeros(1), fun=fun, success=violation == 0, message="", nfev=0, nit=0,
+                  index=index, spawn_key=(index,), seed=0, feasible=violation == 0,
+                  violation=violation, converged_nit=0, nfev_to_target=-1, wall_s=0.0)
 
 
 def test_best_repeat_follows_deb_rules_and_keeps_the_first_of_equals():

@@ -13,7 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 from camopt import sweep as sweep_mod
-from camopt.archive.sweeps import load_sweep
+from camopt.archive.sweeps import cell_row, load_sweep
 from camopt.cli import app
 from tests.conftest import CONFIGS
 
@@ -40,7 +40,8 @@ def stable_summary(path):
 
 def cells(path):
     _, results = load_sweep(path)
-    return {k: {f: v for f, v in vars(r).items() if f != "wall_s"} for k, r in results.items()}
+    return {k: {f: v for f, v in cell_row(r).items() if f != "wall_s"}
+            for k, r in results.items()}
 
 
 def test_jobs_do_not_change_results(tmp_path):
@@ -185,7 +186,7 @@ def test_cell_seed_k_is_child_k_of_the_run_seed():
     problem, _ = prepare(validate(data, "sphere.toml"))
     children = np.random.SeedSequence(7).spawn(4)
     for k, r in zip((0, 3), results):
-        assert r.seed == k
+        assert r.index == k and r.spawn_key == (k,)
         np.testing.assert_array_equal(r.x, _first_generation_best(problem, children[k], 12))
 
 

@@ -25,7 +25,9 @@ from camopt.archive.tables import read_table, write_table
 from camopt.driver import RunRecord
 from camopt.errors import ArchiveError
 from camopt.problem import ACTIVE_TOL, FEASIBILITY_TOL
-from camopt.runview import BestView, RepeatView, RunView
+from camopt.record import Repeat, nfev_to_target
+from camopt.runview import BestView, RunView
+from camopt.stats import succeeded
 
 SCHEMA_VERSION = 2
 READABLE_SCHEMAS = (1, 2)
@@ -52,9 +54,11 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
     for r in rec.repeats:
         grp = reps.create_group(f"r{r.index:03d}")
         grp.attrs.update({"spawn_key": json.dumps(list(r.spawn_key)), "seed": r.seed,
-                          "objective": r.fun, "feasible": r.feasible, "violation": r.violation,
+                          "objective": r.fun, "feasible": r.feasible, "success": r.success,
+                          "violation": r.violation,
                           "nfev": r.nfev, "nit": r.nit, "wall_s": r.wall_s, "message": r.message,
-                          "converged_nit": r.converged_nit, "notes": json.dumps(r.notes)})
+                          "converged_nit": r.converged_nit,
+                          "notes": json.dumps(list(r.notes))})
         grp.create_dataset("x", data=np.asarray(r.x, dtype=float) * scale)
         grp.create_dataset("g", data=r.g)
         hist = grp.create_group("history")
@@ -176,11 +180,18 @@ def _json_list(text: object, what: str) -> list[Any]:
 def _load(f: h5py.File, path: str | Path) -> RunView:
     names = tuple(str(n) for n in _json_list(f.attrs["variables"], "variables"))
     constraints = tuple(str(c) for c in _json_list(f.attrs["constraints"], "constraints"))
-    scale = np.asarray(f.attrs["variable_scale"], dtype=float)
-    if scale.shape not in ((), (len(names),)):
+    variable_scale = np.asarray(f.attrs["variable_scale"], dtype=float)
+    if variable_scale.shape not in ((), (len(names),)):
         raise ArchiveError("variable_scale: one value per variable expected")
-    if int(f.attrs["schema_version"]) >= 2:  # x already in the units of its names
-        scale = np.ones_like(scale)
+    # stored x -> display units, and -> SI (the record's): schema 1 stored SI
+    display = int(f.attrs["schema_version"]) >= 2
+    scale = np.ones_like(variable_scale) if display else variable_scale
+    to_si = 1 / variable_scale if display else np.ones_like(variable_scale)
+    config = json.loads(f.attrs["config_effective"])
+    if not isinstance(config, dict) or not all(
+            isinstance(config.get(k), dict) for k in ("case", "solver", "run")):
+        raise ArchiveError("config_effective: expected case, solver and run tables")
+    target = config["run"].get("target")
     repeats = []
     if len(f["repeats"]) == 0:
         raise ArchiveError("/repeats: no repeat")
@@ -194,23 +205,25 @@ def _load(f: h5py.File, path: str | Path) -> RunView:
         if grp["x"].shape != (len(names),):
             raise ArchiveError(f"/repeats/{key}/x: {grp['x'].shape}, expected "
                                f"({len(names)},)")
-        repeats.append(RepeatView(
+        history = {k: v[()] for k, v in grp["history"].items()}
+        fun, feasible = float(a["objective"]), bool(a["feasible"])
+        repeats.append(Repeat(
+            x=grp["x"][()] * to_si, fun=fun,
+            # archives before issue #25 lack it: the same definition, from what they hold
+            success=bool(a["success"]) if "success" in a
+            else bool(succeeded([fun], [feasible], target)[0]),
+            message=str(a["message"]), nfev=int(a["nfev"]), nit=int(a["nit"]),
             index=int(key[1:]), spawn_key=tuple(json.loads(a["spawn_key"])),
-            seed=int(a["seed"]), objective=float(a["objective"]),
-            feasible=bool(a["feasible"]), violation=float(a["violation"]),
-            nfev=int(a["nfev"]), nit=int(a["nit"]), wall_s=float(a["wall_s"]),
-            converged_nit=int(a["converged_nit"]), message=str(a["message"]),
-            notes=tuple(json.loads(a["notes"])),
-            x=dict(zip(names, (grp["x"][()] * scale).tolist())),
-            history={k: v[()] for k, v in grp["history"].items()}))
+            seed=int(a["seed"]), feasible=feasible, violation=float(a["violation"]),
+            converged_nit=int(a["converged_nit"]),
+            nfev_to_target=nfev_to_target(history, target),
+            wall_s=float(a["wall_s"]), history=history,
+            g=grp["g"][()] if "g" in grp else np.zeros(0),
+            notes=tuple(json.loads(a["notes"]))))
     best = f["best"]
     g = best["g"][()]
     if best["x"].shape != (len(names),) or g.shape != (len(constraints),):
         raise ArchiveError("/best: x or g does not match the variables and constraints")
-    config = json.loads(f.attrs["config_effective"])
-    if not isinstance(config, dict) or not all(
-            isinstance(config.get(k), dict) for k in ("case", "solver", "run")):
-        raise ArchiveError("config_effective: expected case, solver and run tables")
     return RunView(
         path=str(path), kind=str(f.attrs["case_kind"]),
         case={"kind": str(f.attrs["case_kind"]), **config["case"]},

@@ -6,8 +6,9 @@ Layout (schema 2), one HDF5 file:
   ``config_toml`` (the case file's text), ``config_path``, ``spec`` (JSON: the validated
   config data, the grid, the seed range), ``seed_entropy``, ``cells_total``,
   ``cells_done``, ``complete``, ``created``;
-- ``/cells``: one row per finished cell, columns ``point``, ``seed``, ``objective``,
-  ``feasible``, ``success``, ``nfev``, ``nit``, ``wall_s``, ``converged_nit``,
+- ``/cells``: one row per finished cell (a :class:`camopt.record.Repeat`), columns
+  ``point``, ``seed`` (the seed index k: the record's ``index``), ``objective`` (its
+  ``fun``), ``feasible``, ``success``, ``nfev``, ``nit``, ``wall_s``, ``converged_nit``,
   ``nfev_to_target`` (1-D datasets), the best designs ``x`` as ragged rows
   (``x/values`` concatenated, SI, and ``x/offsets``, n_cells + 1), and each convergence
   history ``history/<name>/values`` with ``history/<name>/offsets`` likewise;
@@ -28,7 +29,6 @@ import contextlib
 import json
 import os
 import time
-from dataclasses import fields
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -40,12 +40,17 @@ from camopt.archive.files import atomic_write, open_archive, read_regular, versi
 from camopt.archive.runs import check_schema, damaged
 from camopt.archive.tables import write_table
 from camopt.errors import ArchiveError
-from camopt.sweep.spec import CellResult, SweepSpec, summary
+from camopt.record import Repeat, seed_id
+from camopt.sweep.spec import SweepSpec, summary
 
 SCHEMA_VERSION = 2
 SNAPSHOT_SECONDS = 30.0
-_FIELDS = tuple(f.name for f in fields(CellResult))
-_SCALARS = tuple(name for name in _FIELDS if name not in ("x", "history"))
+# a cell's stored names (journal keys, /cells columns) and the Repeat fields they hold
+_ATTRS = {"point": "point", "seed": "index", "objective": "fun", "feasible": "feasible",
+          "success": "success", "nfev": "nfev", "nit": "nit", "wall_s": "wall_s",
+          "converged_nit": "converged_nit", "nfev_to_target": "nfev_to_target"}
+_SCALARS = tuple(_ATTRS)
+_FIELDS = (*_SCALARS, "x", "history")
 _INTS = ("point", "seed", "nfev", "nit", "converged_nit", "nfev_to_target")
 _BOOLS = ("feasible", "success")
 SWEEP_KEY = "sweep"  # each journal line's sweep id (SweepSpec.sweep_id)
@@ -77,7 +82,7 @@ def _unragged(g: h5py.Group, n: int) -> list[list[Any]]:
     return [values[offsets[i]:offsets[i + 1]] for i in range(n)]
 
 
-def write_sweep(path: Path, spec: SweepSpec, results: dict[tuple[int, int], CellResult],
+def write_sweep(path: Path, spec: SweepSpec, results: dict[tuple[int, int], Repeat],
                 total: int, replace: bool = True) -> None:
     """Write the sweep snapshot atomically with every finished cell (``replace=False``:
     never replace an existing file, for a new sweep's first write)."""
@@ -94,7 +99,7 @@ def write_sweep(path: Path, spec: SweepSpec, results: dict[tuple[int, int], Cell
         g = f.create_group("cells")
         for name in _SCALARS:
             dtype = np.int64 if name in _INTS else bool if name in _BOOLS else float
-            g.create_dataset(name, data=np.array([getattr(c, name) for c in cells],
+            g.create_dataset(name, data=np.array([getattr(c, _ATTRS[name]) for c in cells],
                                                  dtype=dtype))
         _ragged(g, "x", [list(c.x) for c in cells])
         hist = g.create_group("history")
@@ -110,7 +115,7 @@ class SweepWriter:
     snapshot now and then (amortised O(1) per cell), a final snapshot on :meth:`close`."""
 
     def __init__(self, path: Path, spec: SweepSpec,
-                 results: dict[tuple[int, int], CellResult], total: int,
+                 results: dict[tuple[int, int], Repeat], total: int,
                  replace: bool = True) -> None:
         self.path, self.spec, self.results, self.total = Path(path), spec, results, total
         write_sweep(self.path, spec, results, total, replace=replace)
@@ -128,10 +133,10 @@ class SweepWriter:
         self._snapshot_size = max(len(results), 1)
         self._snapshot_time = time.monotonic()
 
-    def add(self, result: CellResult) -> None:
+    def add(self, result: Repeat) -> None:
         """Store one finished cell; it counts as done only once its line is written."""
         assert self._fd is not None
-        row = {SWEEP_KEY: self._id, **{name: getattr(result, name) for name in _FIELDS}}
+        row = {SWEEP_KEY: self._id, **cell_row(result)}
         line = (json.dumps(row, separators=(",", ":")) + "\n").encode()
         try:
             view = memoryview(line)
@@ -164,7 +169,7 @@ class SweepWriter:
             os.unlink(journal_path(self.path))
 
 
-def read_journal(path: Path, spec: SweepSpec) -> list[CellResult]:
+def read_journal(path: Path, spec: SweepSpec) -> list[Repeat]:
     """The complete lines of an archive's journal as cells (none without a journal)."""
     journal = journal_path(path)
     text = read_regular(journal, "journal")  # a FIFO there is refused, never waited on
@@ -184,7 +189,18 @@ def read_journal(path: Path, spec: SweepSpec) -> list[CellResult]:
     return cells
 
 
-def _cell(a: dict[str, Any], spec: SweepSpec, where: str) -> CellResult:
+def cell_row(r: Repeat) -> dict[str, Any]:
+    """A cell as its journal line stores it (plain JSON values, the stored names)."""
+    row: dict[str, Any] = {name: getattr(r, attr) for name, attr in _ATTRS.items()}
+    row = {k: v.item() if isinstance(v, np.generic) else v for k, v in row.items()}
+    row["x"] = np.asarray(r.x, dtype=float).tolist()
+    row["history"] = {k: np.asarray(v).tolist() for k, v in r.history.items()}
+    return row
+
+
+def _cell(a: dict[str, Any], spec: SweepSpec, where: str) -> Repeat:
+    """A stored cell (journal line or /cells row) as the Repeat it was; its spawn key and
+    seed identifier follow from the seed index (child k of SeedSequence(run.seed))."""
     expected = sorted(_FIELDS)
     if sorted(a) != expected:
         raise ArchiveError(f"{where}: cell fields {sorted(a)}, expected {expected}")
@@ -192,11 +208,15 @@ def _cell(a: dict[str, Any], spec: SweepSpec, where: str) -> CellResult:
     if wrong:
         raise ArchiveError(f"{where}: {wrong[0]} = {str(a[wrong[0]])[:40]}: not a "
                            f"{_TYPE_NAMES[wrong[0]]}")
-    r = CellResult(**a)
     n_points, (start, stop) = len(spec.points()), spec.seeds
-    if not (0 <= r.point < n_points and start <= r.seed < stop):
+    if not (0 <= a["point"] < n_points and start <= a["seed"] < stop):
         raise ArchiveError(f"{where}: grid point or seed outside the sweep")
-    return r
+    k = a["seed"]
+    return Repeat(**{attr: a[name] for name, attr in _ATTRS.items()},
+                  x=np.asarray(a["x"], dtype=float), spawn_key=(k,),
+                  seed=seed_id(np.random.SeedSequence(spec.entropy, spawn_key=(k,))),
+                  message="", violation=float("nan"),
+                  history={key: np.asarray(v) for key, v in a["history"].items()})
 
 
 def _is_int(v: Any) -> bool:
@@ -220,7 +240,7 @@ _TYPE_NAMES = {**{name: "number" for name in _SCALARS}, **{name: "integer" for n
                "history": "table of number lists"}
 
 
-def load_sweep(path: str | Path) -> tuple[SweepSpec, dict[tuple[int, int], CellResult]]:
+def load_sweep(path: str | Path) -> tuple[SweepSpec, dict[tuple[int, int], Repeat]]:
     """A sweep archive's spec and finished cells (snapshot and journal)."""
     path = Path(path)
     with open_archive(path) as f:

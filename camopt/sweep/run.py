@@ -9,6 +9,7 @@ loses at most the batches running. A worker prepares each grid point's problem o
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import os
 import time
@@ -28,9 +29,9 @@ from camopt.errors import CamoptError, ConfigError, SolverError
 from camopt.interrupts import deferred
 from camopt.perf import fork_pool, kill_pool, pin_blas_threads, tune_allocator
 from camopt.problem import Problem
+from camopt.record import Repeat
 from camopt.solvers import Solver
-from camopt.stats import succeeded
-from camopt.sweep.spec import CellResult, CellSpec, SweepSpec
+from camopt.sweep.spec import CellSpec, SweepSpec
 
 BATCH_SECONDS = 0.2
 MAX_BATCH = 256
@@ -55,32 +56,20 @@ def _prepared(cell: CellSpec) -> tuple[LoadedConfig, Problem, type[Solver]]:
     return hit
 
 
-def run_cells(cells: list[CellSpec]) -> tuple[list[CellResult], float]:
+def run_cells(cells: list[CellSpec]) -> tuple[list[Repeat], float]:
     """Run a batch of cells; their results and the batch's wall time (s)."""
     t0 = time.perf_counter()
     results = [run_cell(c) for c in cells]
     return results, time.perf_counter() - t0
 
 
-def run_cell(cell: CellSpec) -> CellResult:
+def run_cell(cell: CellSpec) -> Repeat:
     """Run one cell (a top-level function: process pools and Dask pickle it by name)."""
     cfg, problem, solver_cls = _prepared(cell)
     child = np.random.SeedSequence(cell.entropy, spawn_key=(cell.seed,))
     rec = run_repeat(problem, solver_cls, cfg, child, cell.seed, 1)
-    target = cfg.run.target
-    h = rec.history
-    ok = h["best_violation"] == 0
-    if target is not None:
-        ok &= h["best_objective"] <= target
-    success = bool(succeeded([rec.fun], [rec.feasible], target)[0])
-    return CellResult(
-        point=cell.point, seed=cell.seed, objective=rec.fun, feasible=rec.feasible,
-        success=success, nfev=rec.nfev, nit=rec.nit, wall_s=rec.wall_s,
-        converged_nit=rec.converged_nit,
-        nfev_to_target=int(h["nfev"][np.argmax(ok)]) if ok.any() else -1,
-        x=rec.x.tolist(),
-        history={k: np.asarray(v).tolist() for k, v in h.items()},
-    )
+    # the solver's table stays behind: a sweep stores none, and it can be large
+    return dataclasses.replace(rec, point=cell.point, table=[])
 
 
 # ---- execution ------------------------------------------------------------------------
@@ -104,7 +93,7 @@ def workers(jobs: int, cells: int) -> int:
     return max(1, min(jobs, cells, WORKERS_PER_CORE * cores))
 
 
-def _local(cells: list[CellSpec], jobs: int, done: Callable[[CellResult], None]) -> None:
+def _local(cells: list[CellSpec], jobs: int, done: Callable[[Repeat], None]) -> None:
     jobs = workers(jobs, len(cells))
     if jobs <= 1:
         for cell in cells:
@@ -154,7 +143,7 @@ def _connect(scheduler: str):
 
 
 def _dask(client, cells: list[CellSpec], scheduler: str,
-          done: Callable[[CellResult], None]) -> None:
+          done: Callable[[Repeat], None]) -> None:
     """Run ``cells`` on the cluster, storing each batch's cells as it finishes. A batch
     whose worker died is run again elsewhere (same seeds, same result); a cluster left
     without workers, or without its scheduler, for ``LOST_SECONDS`` ends the sweep with
@@ -226,7 +215,7 @@ def _first_line(exc: BaseException) -> str:
     return (str(exc).splitlines() or [type(exc).__name__])[0]
 
 
-def run_sweep(spec: SweepSpec, path: Path, results: dict[tuple[int, int], CellResult],
+def run_sweep(spec: SweepSpec, path: Path, results: dict[tuple[int, int], Repeat],
               jobs: int = 1, executor: str = "local", scheduler: str | None = None,
               progress: Callable[[int, int], None] | None = None,
               replace: bool = True) -> dict:
@@ -247,7 +236,7 @@ def run_sweep(spec: SweepSpec, path: Path, results: dict[tuple[int, int], CellRe
     if progress:
         progress(len(results), total)
 
-    def done(r: CellResult) -> None:
+    def done(r: Repeat) -> None:
         writer.add(r)  # adds r to results once stored
         if progress:
             progress(len(results), total)

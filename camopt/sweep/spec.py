@@ -15,7 +15,7 @@ import json
 import math
 import re
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -24,6 +24,7 @@ from camopt.config import LoadedConfig
 from camopt.config.loader import apply_override, parse_value
 from camopt.driver import prepare, validate
 from camopt.errors import ConfigError
+from camopt.record import Repeat
 from camopt.stats import run_statistics
 
 # ---- specification ------------------------------------------------------------------
@@ -177,39 +178,17 @@ class CellSpec:
         return (self.point, self.seed)
 
 
-@dataclass
-class CellResult:
-    """What a cell returns (plain data, so it pickles to any worker and back)."""
-
-    point: int
-    seed: int
-    objective: float
-    feasible: bool
-    success: bool
-    nfev: int
-    nit: int
-    wall_s: float
-    converged_nit: int
-    nfev_to_target: int
-    x: list[float]
-    history: dict[str, list[float]] = field(default_factory=dict)
-
-    @property
-    def key(self) -> tuple[int, int]:
-        return (self.point, self.seed)
-
-
 # ---- summary ------------------------------------------------------------------------
-def summary(spec: SweepSpec, results: Iterable[CellResult]) -> list[dict[str, Any]]:
+def summary(spec: SweepSpec, results: Iterable[Repeat]) -> list[dict[str, Any]]:
     """One row per grid point: success rate, objective statistics, evaluations to target."""
     target = spec.data["run"].get("target")
-    by_point: dict[int, list[CellResult]] = {}
+    by_point: dict[int, list[Repeat]] = {}
     for r in results:
         by_point.setdefault(r.point, []).append(r)
     rows = []
     for i, point in enumerate(spec.points()):
-        cells = sorted(by_point.get(i, []), key=lambda r: r.seed)
-        stats = run_statistics([c.objective for c in cells], [c.feasible for c in cells],
+        cells = sorted(by_point.get(i, []), key=lambda r: r.index)
+        stats = run_statistics([c.fun for c in cells], [c.feasible for c in cells],
                                target)
         reach = [c.nfev_to_target for c in cells if c.nfev_to_target >= 0]
         row: dict[str, Any] = {"point": i, **{k: json.dumps(v) for k, v in point.items()},

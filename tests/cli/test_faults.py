@@ -5,7 +5,6 @@ subprocess with a timeout, so a regression fails instead of hanging the suite.""
 
 from __future__ import annotations
 
-import dataclasses
 import errno
 import json
 import os
@@ -20,7 +19,7 @@ from typer.testing import CliRunner
 
 from camopt import archive, driver
 from camopt.archive import files
-from camopt.archive.sweeps import journal_path, load_sweep
+from camopt.archive.sweeps import cell_row, journal_path, load_sweep
 from camopt.cli import app
 from camopt.cli.app import INTERNAL
 from camopt.errors import ArchiveError
@@ -232,7 +231,7 @@ def test_an_unreachable_dask_scheduler_leaves_nothing_behind(tmp_path, monkeypat
 
 # ---- wrong results: journal lines tied to their sweep --------------------------------------
 def _journal_line(results, **change):
-    row = dataclasses.asdict(next(iter(results.values())))
+    row = cell_row(next(iter(results.values())))
     row.update(change)
     return (json.dumps(row) + "\n").encode()
 
@@ -261,7 +260,7 @@ def test_a_journal_line_of_this_sweep_is_kept(runs, tmp_path):
     row = json.loads(_journal_line(results, objective=-1.0))
     row["sweep"] = spec.sweep_id
     journal_path(sweep).write_bytes((json.dumps(row) + "\n").encode())
-    assert min(r.objective for r in load_sweep(sweep)[1].values()) == -1.0
+    assert min(r.fun for r in load_sweep(sweep)[1].values()) == -1.0
 
 
 # ---- wrong results: BLAS threads ------------------------------------------------------------
@@ -290,8 +289,8 @@ def test_a_sweep_gives_the_same_cells_with_one_or_the_default_blas_threads(tmp_p
                               stderr=subprocess.PIPE) for c, e in zip(calls, env)]
     assert all(p.wait(timeout=120) == 0 for p in procs)
     one, default = (load_sweep(tmp_path / f"{t}.h5")[1] for t in ("1", None))
-    assert {k: (r.objective, r.x) for k, r in one.items()} == \
-        {k: (r.objective, r.x) for k, r in default.items()}
+    assert {k: (r.fun, r.x.tolist()) for k, r in one.items()} == \
+        {k: (r.fun, r.x.tolist()) for k, r in default.items()}
 
 
 # ---- lost work ----------------------------------------------------------------------------
