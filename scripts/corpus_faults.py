@@ -6,7 +6,9 @@ arguments. Each call is a subprocess with a 40 s limit. Counted: calls, exit cod
 error line), losses (a file outside the output folder changed, an existing file replaced
 without --force, a temporary or lock file left, finished work missing after a signal).
 
-    python scripts/corpus_faults.py        # prints the counts as JSON (a few minutes)
+    python scripts/corpus_faults.py        # prints the counts as JSON, then each problem
+    python scripts/corpus_faults.py 'journal fifo' forged-virtual   # only the calls whose
+        # description (arguments and [fixture], as printed with a problem) holds one of these
 """
 import hashlib
 import json
@@ -31,6 +33,7 @@ FS, DE = str(C / "fast_switch.toml"), str(C / "fast_switch_de.toml")
 TINY = ["--set", "solver.generations=3", "--set", "solver.population=8",
         "--set", "solver.polish.maxiter=5"]
 LIMIT = 40
+ONLY = sys.argv[1:]
 rng = random.Random(23)
 stats = {"calls": 0, "exit0": 0, "exit2": 0, "exit130": 0, "other": 0, "hangs": 0,
          "tracebacks": 0, "losses": 0}
@@ -65,13 +68,19 @@ def fsize_limit():
 
 
 def call(args, folder: Path | None = None, keep: list[Path] = (), limit_fs=False,
-         signal_after: float | None = None, expect_archive: Path | None = None):
-    """Run one call; count it. ``keep``: files that must be unchanged afterwards."""
+         signal_after: float | None = None, expect_archive: Path | None = None,
+         fixture: str = ""):
+    """Run one call; count it. ``keep``: files that must be unchanged afterwards;
+    ``fixture``: what was planted for it, named in every problem it reports."""
+    args = [str(a) for a in args]
+    what = f"{args}" + (f" [{fixture}]" if fixture else "")
+    if ONLY and not any(s in what for s in ONLY):
+        return "skipped", "", 0.0
     before = {p: (p.read_bytes() if p.is_file() and not p.is_symlink() else None)
               for p in [OUTSIDE, *keep]}
     outside_before = digest(W / "inputs")
     t0 = time.time()
-    proc = subprocess.Popen(CAM + [str(a) for a in args], stdin=subprocess.DEVNULL,
+    proc = subprocess.Popen(CAM + args, stdin=subprocess.DEVNULL,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             preexec_fn=fsize_limit if limit_fs else None)
     if signal_after is not None:
@@ -87,8 +96,9 @@ def call(args, folder: Path | None = None, keep: list[Path] = (), limit_fs=False
         code = proc.returncode
     except subprocess.TimeoutExpired:
         proc.kill()
-        proc.communicate()
-        code, err = "hang", ""
+        _, err = proc.communicate()
+        code = "hang"
+        problems.append(f"hang: {what}: over {LIMIT} s: {err[-200:]}")
     stats["calls"] += 1
     key = {0: "exit0", 2: "exit2", 130: "exit130", "hang": "hangs"}.get(code, "other")
     stats[key] += 1
@@ -96,7 +106,7 @@ def call(args, folder: Path | None = None, keep: list[Path] = (), limit_fs=False
     if "Traceback" in err or "internal error" in err or len(lines) > 1 or (
             code == 2 and not lines and "Usage:" not in err):
         stats["tracebacks"] += 1
-        problems.append(f"traceback: {args}: {err[-300:]}")
+        problems.append(f"traceback: {what}: {err[-300:]}")
     lost = [str(p) for p, data in before.items()
             if data is not None and (not p.is_file() or p.read_bytes() != data)]
     if digest(W / "inputs") != outside_before:
@@ -110,9 +120,9 @@ def call(args, folder: Path | None = None, keep: list[Path] = (), limit_fs=False
         lost.append("archive said kept but missing")
     if lost:
         stats["losses"] += 1
-        problems.append(f"loss: {args}: {lost} (exit {code}) {err[-200:]}")
-    if code == "other":
-        problems.append(f"exit {code}: {args}: {err[-200:]}")
+        problems.append(f"loss: {what}: {lost} (exit {code}) {err[-200:]}")
+    if key == "other":
+        problems.append(f"exit {code}: {what}: {err[-200:]}")
     return code, err, time.time() - t0
 
 
@@ -164,7 +174,8 @@ for label, (template, names) in OUTPUTS.items():
                 target.mkdir()
             keep = [target] if plant == "existing" and not force else []
             call([a.format(d=d) if isinstance(a, str) else a for a in template] + force,
-                 folder=d, keep=keep)
+                 folder=d, keep=keep, fixture=f"{plant} at {target.name}"
+                 + (" --force" if force else ""))
 
 # 2. --force onto the command's own input
 for args in (["tolerance", RUN, "--out", RUN, "--force", "--samples", "20"],
@@ -222,7 +233,8 @@ for kind in ("external-fifo", "external-dev-zero", "external-self", "virtual",
     a = forged(kind)
     for reader in READERS:
         d = fresh("out-readers")
-        call([x.format(a=a, d=d) if isinstance(x, str) else x for x in reader], folder=d)
+        call([x.format(a=a, d=d) if isinstance(x, str) else x for x in reader], folder=d,
+             fixture=f"archive {kind}")
 
 # 4. forged journals beside a sweep archive, through every reader and --resume
 ROW = {"point": 0, "seed": 1, "objective": 1.0, "feasible": True, "success": True, "nfev": 1,
@@ -255,13 +267,13 @@ for kind, text in JOURNALS.items():
             journal.symlink_to(OUTSIDE)
         else:
             journal.write_text(text)
-        call([x.format(a=a, d=d) for x in reader], keep=[OUTSIDE])
+        call([x.format(a=a, d=d) for x in reader], keep=[OUTSIDE], fixture=f"journal {kind}")
 
 # 5. a full disk under every writer (the kernel's EFBIG past 3,000 bytes)
 for label, (template, _) in OUTPUTS.items():
     d = fresh(f"full-{label}")
     call([a.format(d=d) if isinstance(a, str) else a for a in template], folder=d,
-         limit_fs=True)
+         limit_fs=True, fixture="RLIMIT_FSIZE 3000")
 
 # 6. signals at random moments (a second Ctrl-C half the time)
 for i in range(12):
@@ -273,7 +285,8 @@ for i in range(12):
         args = ["run", DE, "--out", d / "a.h5", "--quiet", "--repeats", "6",
                 "--jobs", str(1 + i % 2), *TINY]
     code, err, _ = call(args, folder=d, signal_after=rng.uniform(1.5, 6.0),
-                        expect_archive=d / ("s.h5" if i % 3 == 2 else "a.h5"))
+                        expect_archive=d / ("s.h5" if i % 3 == 2 else "a.h5"),
+                        fixture=f"signal {i}")
     for p in d.glob("*.h5"):  # what a signal left must be readable
         r = subprocess.run(CAM + ["show", str(p)], capture_output=True, text=True, timeout=LIMIT)
         if r.returncode != 0:

@@ -30,6 +30,7 @@ import socket
 import stat
 import tempfile
 from collections.abc import Callable, Iterator, Sequence
+from typing import BinaryIO
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
@@ -362,18 +363,30 @@ def _publish(tmp: Path, path: Path, replace: bool) -> None:
 
 
 def describe_file(path: Path) -> str | None:
-    """'a camopt run archive, 12345 bytes' for an existing file (what --force replaces)."""
+    """'a camopt run archive, 12345 bytes' for an existing regular file (what --force
+    replaces); None for anything else. Looked at through a descriptor opened without
+    following a link and without blocking, checked with ``fstat`` first: a FIFO planted at
+    the output name (which ``claim`` then refuses) must not block this note on open."""
     try:
-        size = os.stat(path).st_size
-    except OSError:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_NOFOLLOW | os.O_CLOEXEC)
+    except (OSError, ValueError):
         return None
+    with os.fdopen(fd, "rb") as handle:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            return None
+        return f"{_kind_of(handle)}, {info.st_size} bytes"
+
+
+def _kind_of(handle: BinaryIO) -> str:
+    """'a camopt sweep archive', 'an HDF5 file' or 'a file' for an open regular file."""
     try:
-        with h5py.File(path, "r") as f:
+        with h5py.File(handle, "r") as f:
             kind = f"a camopt {f.attrs.get('archive_kind', 'run')} archive" if (
                 "camopt_version" in f.attrs) else "an HDF5 file"
     except Exception:  # anything h5py cannot open is simply 'a file'
         kind = "a file"
-    return f"{kind}, {size} bytes"
+    return kind
 
 
 def open_archive(path: str | Path) -> h5py.File:

@@ -136,6 +136,22 @@ def test_export_into_a_fifo_fails_at_once_and_leaves_it(runs, tmp_path):
     assert [p.name for p in out.iterdir()] == [fifo.name]
 
 
+def test_force_onto_a_fifo_at_the_output_name_fails_at_once(tmp_path):
+    """The corpus's two hangs: with --force, run and sweep described the file they were
+    about to replace by opening it with HDF5 before checking it is a regular file."""
+    run_fifo, sweep_fifo = tmp_path / "a.h5", tmp_path / "s.h5"
+    os.mkfifo(run_fifo)
+    os.mkfifo(sweep_fifo)
+    calls = [["run", FAST, "--out", run_fifo, "--quiet", "--force"],
+             ["sweep", DE, "--out", sweep_fifo, "--seeds", "0:1", "--jobs", "1", "--quiet",
+              "--force", *TINY]]
+    for call, (code, err) in zip(calls, run_all(calls, timeout=40)):
+        assert code == 2 and one_error_line(err), (call, code, err)
+        assert "not a regular file" in err, (call, err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.h5", "s.h5"]
+    assert all(p.is_fifo() for p in tmp_path.iterdir())
+
+
 # ---- writes where they must not ----------------------------------------------------------
 @pytest.mark.parametrize("command", ["export", "plot"])
 def test_export_and_plot_never_overwrite_without_force(runs, tmp_path, command):
