@@ -51,10 +51,13 @@ OUTSIDE = W / "outside.txt"  # stands for any file outside the output folders
 OUTSIDE.write_text("precious")
 
 
-def digest(path: Path) -> str:
-    """Content of every regular file under ``path`` (links and FIFOs by their kind)."""
+def digest(path: Path, skip: tuple[str, ...] = ()) -> str:
+    """Content of every regular file under ``path`` (links and FIFOs by their kind) but
+    those whose names match a pattern of ``skip``."""
     h = hashlib.sha256()
     for p in sorted(path.rglob("*")):
+        if any(p.match(pattern) for pattern in skip):
+            continue
         if p.is_symlink() or not (p.is_file() or p.is_dir()):
             h.update(f"{p}:special".encode())
         elif p.is_file():
@@ -69,16 +72,18 @@ def fsize_limit():
 
 def call(args, folder: Path | None = None, keep: list[Path] = (), limit_fs=False,
          signal_after: float | None = None, expect_archive: Path | None = None,
-         fixture: str = ""):
+         fixture: str = "", may_change: tuple[str, ...] = ()):
     """Run one call; count it. ``keep``: files that must be unchanged afterwards;
-    ``fixture``: what was planted for it, named in every problem it reports."""
+    ``fixture``: what was planted for it, named in every problem it reports;
+    ``may_change``: name patterns in ``inputs/`` this call may write (its own outputs,
+    when its output folder is ``inputs/``): every other file there must stay as it was."""
     args = [str(a) for a in args]
     what = f"{args}" + (f" [{fixture}]" if fixture else "")
     if ONLY and not any(s in what for s in ONLY):
         return "skipped", "", 0.0
     before = {p: (p.read_bytes() if p.is_file() and not p.is_symlink() else None)
               for p in [OUTSIDE, *keep]}
-    outside_before = digest(W / "inputs")
+    outside_before = digest(W / "inputs", may_change)
     t0 = time.time()
     proc = subprocess.Popen(CAM + args, stdin=subprocess.DEVNULL,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -109,7 +114,7 @@ def call(args, folder: Path | None = None, keep: list[Path] = (), limit_fs=False
         problems.append(f"traceback: {what}: {err[-300:]}")
     lost = [str(p) for p, data in before.items()
             if data is not None and (not p.is_file() or p.read_bytes() != data)]
-    if digest(W / "inputs") != outside_before:
+    if digest(W / "inputs", may_change) != outside_before:
         lost.append("inputs/")
     if folder is not None and folder.is_dir():
         lost += [p.name for p in folder.iterdir() if p.name.endswith((".tmp", ".lock"))]
@@ -177,19 +182,30 @@ for label, (template, names) in OUTPUTS.items():
                  folder=d, keep=keep, fixture=f"{plant} at {target.name}"
                  + (" --force" if force else ""))
 
-# 2. --force onto the command's own input
-for args in (["tolerance", RUN, "--out", RUN, "--force", "--samples", "20"],
-             ["report", RUN, "--out", RUN, "--force"],
-             ["run", inputs / "case.toml", "--out", inputs / "case.toml", "--force"],
-             ["sweep", inputs / "case.toml", "--out", inputs / "case.toml", "--force",
-              "--seeds", "0:1"],
-             ["init", "fast_switch", "--out", inputs / "case.toml", "--force"],
-             ["plot", RUN, "--out", inputs, "--force"],
-             ["export", RUN, "--out", inputs, "--force"]):
-    if not (inputs / "case.toml").exists():
-        shutil.copy(FS, inputs / "case.toml")
-    call(args, keep=[RUN, inputs / "case.toml"])
-(inputs / "case.toml").unlink()
+# 2. --force onto the command's own input, and into the folder holding it. The rule
+# (docs/reliability.md section 6): --force replaces only the output names the command
+# announces, never one of its inputs; so each call's inputs must stay as they were, and
+# so must every other file in inputs/ but the call's own output names (``may_change``).
+CASE = inputs / "case.toml"
+(inputs / "notes.txt").write_text("a file of the user's beside the inputs")
+for old in ("run-convergence.png", "run-summary.csv", "run.json"):  # --force replaces these
+    (inputs / old).write_text("an earlier output")
+for args, own, may in (
+        (["tolerance", RUN, "--out", RUN, "--force", "--samples", "20"], [RUN], ()),
+        (["report", RUN, "--out", RUN, "--force"], [RUN], ()),
+        (["run", CASE, "--out", CASE, "--force"], [CASE], ()),
+        (["sweep", CASE, "--out", CASE, "--force", "--seeds", "0:1"], [CASE], ()),
+        (["init", "fast_switch", "--out", CASE, "--force"], [], ("case.toml",)),  # no input
+        (["plot", RUN, "--out", inputs, "--force"], [RUN], ("run-*.png",)),
+        (["export", RUN, "--out", inputs, "--force"], [RUN], ("run-*.csv",)),
+        (["export", RUN, "--format", "json", "--out", inputs, "--force"], [RUN],
+         ("run.json",))):
+    if not CASE.exists():
+        shutil.copy(FS, CASE)
+    call(args, keep=own, may_change=may, fixture="--force in the input's folder")
+for p in inputs.iterdir():  # back to the three archives
+    if p not in (RUN, EMB, SWEEP):
+        p.unlink()
 
 # 3. archives that reach outside themselves or are forged
 fifo = W / "fifo"

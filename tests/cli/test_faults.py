@@ -203,6 +203,33 @@ def test_force_never_replaces_the_commands_own_input(runs, tmp_path, call):
     assert (run.read_bytes(), case.read_bytes()) == before
 
 
+@pytest.mark.parametrize("command, old", [("plot", "in-convergence.png"),
+                                          ("export", "in-summary.csv")])
+def test_force_in_the_inputs_folder_replaces_only_the_commands_own_outputs(runs, tmp_path,
+                                                                           command, old):
+    """The decision of docs/reliability.md section 6: an output folder may hold the input
+    (export's default folder is the archive's own); --force there replaces the names the
+    command writes, nothing else, and never the input."""
+    run = copy(runs[0], tmp_path / "in.h5")
+    notes = tmp_path / "notes.txt"
+    notes.write_text("the user's")
+    (tmp_path / old).write_text("an earlier output")
+    before = run.read_bytes()
+    assert invoke(command, run, "--out", tmp_path).exit_code == 2  # exists: needs --force
+    r = invoke(command, run, "--out", tmp_path, "--force")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / old).read_bytes() != b"an earlier output"
+    assert run.read_bytes() == before and notes.read_text() == "the user's"
+
+
+def test_export_whose_output_name_is_its_input_is_refused_even_with_force(runs, tmp_path):
+    run = copy(runs[0], tmp_path / "in.json")  # an archive named like export's JSON output
+    before = run.read_bytes()
+    r = invoke("export", run, "--format", "json", "--out", tmp_path, "--force")
+    assert r.exit_code == 2 and one_error_line(r.stderr), r.output
+    assert "own input" in r.stderr and run.read_bytes() == before
+
+
 def _fsize_limit():  # the kernel's own 'file too large' (EFBIG) on a real write
     signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
     resource.setrlimit(resource.RLIMIT_FSIZE, (3000, 3000))
