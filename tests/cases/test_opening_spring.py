@@ -56,7 +56,7 @@ def test_three_point_newton_reproduces_table1(pp3, reported):
     assert x["k_n_per_mm"] == pytest.approx(expected["k_n_per_mm"], rel=0.01)
     assert x["l0_mm"] == pytest.approx(expected["l0_mm"], rel=0.01)
     assert pp3.metrics["energy_residual_rel"] < 1e-9
-    assert pp3.best.notes == ["1 distinct roots from 10 starts"]
+    assert pp3.best.notes == ("1 distinct roots from 10 starts",)
     rows = pp3.best.table
     assert all(np.isfinite(r["jacobian_cond"]) for r in rows if r["success"])
 
@@ -107,11 +107,13 @@ def test_table1_designs_simulated():
             < rows["original"]["rms_velocity_error_rad_s"])
 
 
-def test_four_points_have_no_root_and_show_says_so(tmp_path):
+@pytest.mark.parametrize("seed", ["0", "3"])
+def test_four_points_have_no_root_and_show_says_so(tmp_path, seed):
     """configs/opening_spring_pp4.toml: k, l0, s from 4 precision points. No start
     converges inside the bounds (Newton either stalls, residual > 1e-9, or leaves the
     bounds, e.g. k 1992 N/mm, s -16.5 mm), so no feasible best is offered and ``show``
-    says no start converged."""
+    says no start converged. Whatever the seed: seed 0's starts reach roots outside the
+    bounds, seed 3's none at all."""
     from typer.testing import CliRunner
 
     from camopt.cli import app
@@ -119,7 +121,7 @@ def test_four_points_have_no_root_and_show_says_so(tmp_path):
     out = tmp_path / "pp4.h5"
     runner = CliRunner()
     res = runner.invoke(app, ["run", str(CONFIGS / "opening_spring_pp4.toml"), "--out",
-                              str(out), "--quiet"])
+                              str(out), "--quiet", "--seed", seed])
     assert res.exit_code == 0, res.output
     shown = runner.invoke(app, ["show", str(out), "--format", "json"])
     assert shown.exit_code == 0, shown.output
@@ -128,7 +130,8 @@ def test_four_points_have_no_root_and_show_says_so(tmp_path):
     assert doc["best"]["feasible"] is False
     rows = doc["table"]
     assert not any(r["success"] and r["in_bounds"] for r in rows)
-    assert any(r["success"] and not r["in_bounds"] for r in rows)  # roots exist, outside
+    if seed == "0":
+        assert any(r["success"] and not r["in_bounds"] for r in rows)  # roots, outside
     text = runner.invoke(app, ["show", str(out)], terminal_width=200).output
     assert "no start converged inside the bounds" in text
 

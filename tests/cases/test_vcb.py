@@ -175,19 +175,54 @@ def test_step2_grashof_and_output_range(tmp_path):
     assert lo < hi and hi - lo > 5  # the output link swings; compared with [-6, 6] in docs
 
 
-def test_identification_reproduces_rod_travel():
+def _misfit_minima_along_the_rod_offset(problem) -> list[tuple[float, float]]:
+    """(offset in deg, misfit) of every local minimum of the identification's misfit
+    along the rod arm offset, the arm ratio and free-contact force at the bounds where
+    every fit ends (1.85, 0 N): a 0.05 deg grid over the bounds, each minimum refined by
+    a bounded scalar search. Independent of DE."""
+    from scipy.optimize import minimize_scalar
+
+    (lo, hi), arm = (problem.lower[0], problem.upper[0]), problem.upper[1]
+
+    def f(offset):
+        X = np.column_stack([np.atleast_1d(offset), np.full(np.size(offset), arm),
+                             np.zeros(np.size(offset))])
+        return problem.evaluate(X).f
+
+    grid = np.linspace(lo, hi, int(round(np.degrees(hi - lo) / 0.05)) + 1)
+    y = f(grid)
+    inner = np.flatnonzero((y[1:-1] < y[:-2]) & (y[1:-1] < y[2:])) + 1
+    out = []
+    for i in inner:
+        res = minimize_scalar(lambda t: f(t)[0], bounds=(grid[i - 1], grid[i + 1]),
+                              method="bounded", options={"xatol": 1e-9})
+        out.append((float(np.degrees(res.x)), float(res.fun)))
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_identification_reproduces_rod_travel(seed):
     """configs/vcb_identify.toml fits the rod arm so the vendor rod travel is 18 mm (Sec
-    3.2); the physically bounded fit cannot make Table 6's surpluses vanish (documented)."""
+    3.2); the physically bounded fit cannot make Table 6's surpluses vanish (documented).
+    The misfit has two minima along the rod offset, 11.65 deg apart (two rod arm angles
+    give 18 mm of travel; misfits 0.4343 and 0.4350): whatever the seed, one repeat of DE
+    ends on one of them, and configs/vcb.toml holds the lower."""
     rec = execute(load(CONFIGS / "vcb_identify.toml", "run.repeats=1",
-                       "solver.generations=80"))
+                       "solver.generations=80", f"run.seed={seed}"))
     m = rec.metrics
     assert m["rod_travel_mm"] == pytest.approx(18.0, abs=0.05)
     assert m["vendor_surplus_j"] > 20  # the gap written down in docs/assumptions.md
     cfg = load(CONFIGS / "vcb.toml").case
     x = rec.problem.to_display(rec.best.x)
-    assert x["rod_arm_offset_deg"] == pytest.approx(cfg.rod_arm_offset_deg, abs=0.05)
     assert x["opening_arm_ratio"] == pytest.approx(cfg.opening_arm_ratio, abs=0.01)
     assert x["free_contact_force_n"] == pytest.approx(cfg.free_contact_force_n, abs=1.0)
+    minima = _misfit_minima_along_the_rod_offset(rec.problem)
+    assert len(minima) == 2
+    landed = min(minima, key=lambda mf: abs(mf[0] - x["rod_arm_offset_deg"]))
+    assert x["rod_arm_offset_deg"] == pytest.approx(landed[0], abs=0.05)
+    assert rec.best.fun == pytest.approx(landed[1], rel=1e-6)
+    assert cfg.rod_arm_offset_deg == pytest.approx(min(minima, key=lambda mf: mf[1])[0],
+                                                   abs=0.05)
 
 
 def test_peak_stress_fast_path_equals_the_full_contact_analysis(problem):

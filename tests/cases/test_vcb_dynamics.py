@@ -227,29 +227,29 @@ def test_identification_meets_every_adams_datum(identification, reported):
     assert ev.extras["max_residual_pct"][0] <= 10.0
 
 
-def test_identification_run_reproduces_the_config_values(identification):
-    """configs/vcb_identify_dynamics.toml (DE-gr, reduced budget) reports n_data, n_parameters,
-    the largest residual and each datum's residual, and finds parameters as consistent with
-    the ADAMS data as those copied into configs/vcb.toml: every event predicted within the
-    reading error (2 % velocities, 0.5 ms times) of the config's prediction. (The misfit is
-    flat along J_cam: fits land anywhere in the band, 5.0e-4 - 6.8e-4 kg m^2.)"""
-    rec = execute(load(CONFIGS / "vcb_identify_dynamics.toml", "run.repeats=1",
-                       "solver.generations=80"))
+def test_identification_run_reproduces_the_config_values():
+    """configs/vcb_identify_dynamics.toml (DE-gr, its 3 repeats, 80 generations) reports
+    n_data, n_parameters, the largest residual and each datum's residual, and fits the
+    ADAMS data as well as the parameters copied into configs/vcb.toml: misfit within 2 %
+    of theirs (the misfit is flat along J_cam: fits land anywhere in the band, 5.0e-4 -
+    6.8e-4 kg m^2; test_band_members_are_as_consistent_as_the_fit), every datum within
+    10 %. The misfit has other basins (0.016 - 0.09: J_cam 1e-3 - 2e-3 with less friction)
+    where a repeat ends for about 1 seed in 3 (8 of 21 repeats of seeds 0-6): such a
+    repeat misses run.target (0.016), so it is no success, and its fit is worse than the
+    config's. Checked for seeds 0-6: the best of 3 was within 1.5 % of the config's
+    misfit for each (about 5 % of seeds would have all three repeats in another basin)."""
+    rec = execute(load(CONFIGS / "vcb_identify_dynamics.toml", "solver.generations=80"))
     m = rec.metrics
     assert m["n_data"] == 7 and m["n_parameters"] == 5
     assert m["max_residual_pct"] <= 10.0
     assert all(f"residual_{d.key}_pct" in m for d in DATA)
-    fitted = rec.problem.to_display(rec.best.x)
     case = load(CONFIGS / "vcb.toml").case
-    y = identification.predict(np.array([[fitted[k] for k in PARAMETERS],
-                                         [getattr(case, k) for k in PARAMETERS]]))
-    for i, d in enumerate(DATA):
-        if d.upper_bound_only:
-            continue
-        if d.unit == "m/s":
-            assert y[0, i] == pytest.approx(y[1, i], rel=0.02), d.name
-        else:
-            assert y[0, i] == pytest.approx(y[1, i], abs=0.5), d.name
+    config_x = rec.problem.from_display({k: getattr(case, k) for k in PARAMETERS})
+    config_f = rec.problem.evaluate(config_x[None, :]).f[0]
+    assert rec.best.success and len(rec.repeats) == 3
+    assert rec.best.fun <= 1.02 * config_f
+    for r in rec.repeats:
+        assert r.success or r.fun > config_f  # another basin: a worse fit, said so
 
 
 def test_band_members_are_as_consistent_as_the_fit(identification):
