@@ -1,10 +1,11 @@
 """Sweeps: cost per cell as sweeps grow (issue #12), a 10,000-cell sweep killed in its
-middle and resumed, and the 3 x 5 VCB sweep on 1 and 2 workers. Every figure is a ratio
-measured in this run."""
+middle and resumed, --jobs 2 against --jobs 1 on small and tiny cells (issue #24), and the
+3 x 5 VCB sweep on 1 and 2 workers. Every figure is a ratio measured in this run."""
 
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -12,8 +13,10 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
 from camopt import sweep as sw
-from camopt.archive.sweeps import load_sweep
+from camopt.archive.sweeps import cell_row, load_sweep
 from camopt.driver import load
 from camopt.sweep.run import run_sweep
 
@@ -28,11 +31,65 @@ generations = 5
 '''
 
 
-def _tiny_spec(n_seeds: int, folder: Path) -> tuple[sw.SweepSpec, Path]:
+# small cells: the VCB cam design at 30 generations of 50 (~50 ms a cell on this host)
+SMALL = f'''extends = "{VCB}"
+[solver]
+name = "de_gr"
+population = 50
+generations = 30
+'''
+
+
+def _tiny_spec(n_seeds: int, folder: Path, text: str = TINY) -> tuple[sw.SweepSpec, Path]:
     case = folder / "tiny.toml"
-    case.write_text(TINY)
+    case.write_text(text)
     cfg = load(case)
     return sw.SweepSpec(cfg.effective(), str(case), cfg.text, [], (0, n_seeds)), case
+
+
+def _same_cells(a: dict, b: dict) -> bool:
+    """Two sweeps' cells equal as stored, but for their wall times."""
+    return a.keys() == b.keys() and all(
+        {**cell_row(a[k]), "wall_s": 0} == {**cell_row(b[k]), "wall_s": 0} for k in a)
+
+
+def _timed_sweep(spec: sw.SweepSpec, path: Path, jobs: int) -> tuple[float, float, dict]:
+    """Wall time (s), CPU time of this process and its finished workers (s), results."""
+    t0, c0 = time.perf_counter(), os.times()
+    results = run_sweep(spec, path, {}, jobs=jobs)
+    wall, c1 = time.perf_counter() - t0, os.times()
+    cpu = sum(c1[:4]) - sum(c0[:4])  # user + system, self + reaped children
+    return wall, cpu, results
+
+
+def small_and_tiny_workers(rounds: int = 3) -> None:
+    """--jobs 2 against --jobs 1 on small cells (32 VCB cells of ~50 ms) and tiny ones
+    (400 fast-switch cells of ~3 ms), in this process (no interpreter start counted):
+    median wall-time speed-up over interleaved rounds, the CPU both spend (parallel
+    overhead: 1.0 is none), identical cells. The host's other load takes cores from
+    both sides; the load average is printed with the figures."""
+    load_before = os.getloadavg()[0]
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        for name, text, n in (("small", SMALL, 32), ("tiny", TINY, 400)):
+            spec, _ = _tiny_spec(n, folder, text)
+            run_sweep(spec, folder / "warm.h5", {}, jobs=1)  # imports, caches
+            walls: dict[int, list[float]] = {1: [], 2: []}
+            cpus: dict[int, list[float]] = {1: [], 2: []}
+            cells = {}
+            for k in range(rounds):
+                for jobs in ((1, 2) if k % 2 == 0 else (2, 1)):
+                    wall, cpu, cells[jobs] = _timed_sweep(spec, folder / f"{k}-{jobs}.h5", jobs)
+                    walls[jobs].append(wall)
+                    cpus[jobs].append(cpu)
+            same = _same_cells(cells[1], cells[2])
+            speed = [a / b for a, b in zip(walls[1], walls[2])]
+            print(f"{name} cells ({n}): jobs=1 {np.median(walls[1]):.2f} s, jobs=2 "
+                  f"{np.median(walls[2]):.2f} s, speed-up {np.median(speed):.2f}x "
+                  f"(rounds {min(speed):.2f}-{max(speed):.2f}); CPU jobs=2 / jobs=1 "
+                  f"{np.median(cpus[2]) / np.median(cpus[1]):.2f}; identical cells: {same}")
+    print(f"  load average {load_before:.1f} before, {os.getloadavg()[0]:.1f} after "
+          f"({os.cpu_count()} cores)")
 
 
 def per_cell_scaling() -> None:
@@ -77,8 +134,7 @@ def ten_thousand_cells(n: int = 10_000) -> None:
         run_sweep(spec, full, {}, jobs=1)  # in this process: no interpreter start counted
         wall = time.perf_counter() - t0
         a, b = load_sweep(killed)[1], load_sweep(full)[1]
-        same = a.keys() == b.keys() and all(
-            {**vars(a[k]), "wall_s": 0} == {**vars(b[k]), "wall_s": 0} for k in a)
+        same = _same_cells(a, b)
         inside = sum(r.wall_s for r in b.values())
     print(f"{n} tiny cells: killed with {stored} stored, resumed: identical to an "
           f"uninterrupted sweep: {same}; uninterrupted {wall:.1f} s, "
@@ -107,6 +163,7 @@ def vcb_workers() -> None:
 
 
 def main() -> None:
+    small_and_tiny_workers()
     per_cell_scaling()
     ten_thousand_cells()
     vcb_workers()

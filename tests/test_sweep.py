@@ -192,17 +192,19 @@ def test_cell_seed_k_is_child_k_of_the_run_seed():
 
 def test_cells_go_to_a_journal_and_snapshots_double(tmp_path, monkeypatch):
     """Issue #12: a finished cell costs one journal line; the HDF5 snapshot is rewritten
-    only when the stored cells have doubled (and at the end), so a sweep of n cells
-    rewrites it O(log n) times, and no journal is left once the sweep is complete."""
+    only when the stored cells have doubled (from SNAPSHOT_MIN_CELLS on) and at the end
+    (unless the last one holds every cell), so a sweep of n cells rewrites it O(log n)
+    times, and no journal is left once the sweep is complete."""
     from camopt.archive import sweeps as store
 
     calls = []
     real = store.write_sweep
     monkeypatch.setattr(store, "write_sweep", lambda *a, **k: (calls.append(len(a[2])),
                                                                real(*a, **k)))
+    monkeypatch.setattr(store, "SNAPSHOT_MIN_CELLS", 4)  # 64 in use: fewer cells here
     out = sweep(tmp_path, "s.h5", "--seeds", "0:32", "--set", "solver.generations=2",
                 "--set", "solver.population=6", "--jobs", "1")
-    assert calls == [0, 2, 4, 8, 16, 32, 32]
+    assert calls == [0, 4, 8, 16, 32]  # the last one holds every cell: not written again
     assert not store.journal_path(out).exists()
     _, results = load_sweep(out)
     assert sorted(results) == [(0, s) for s in range(32)]
@@ -215,6 +217,34 @@ def test_batches_do_not_change_results(tmp_path):
 
     assert sweep_run.batch_size(1e-4) == sweep_run.MAX_BATCH
     assert sweep_run.batch_size(10.0) == 1
+    # near the end a batch is at most a 1 / (TAIL_SHARES x workers) share of what is left
+    assert sweep_run.batch_size(1e-4, left=80, jobs=2) == 80 // (2 * sweep_run.TAIL_SHARES)
+    assert sweep_run.batch_size(1e-4, left=3, jobs=2) == 1
+    assert sweep_run.batch_size(0.05, left=10**6, jobs=2) == 4  # 0.2 s of 50 ms cells
     args = ["--seeds", "0:24", "--set", "solver.generations=2", "--set", "solver.population=6"]
     assert cells(sweep(tmp_path, "a.h5", *args, "--jobs", "1")) == \
         cells(sweep(tmp_path, "b.h5", *args, "--jobs", "2"))
+
+
+def test_workers_inherit_the_parents_problems(tmp_path, monkeypatch):
+    """The parent prepares every grid point's problem before it forks its workers, which
+    inherit them: no worker validates or builds a problem (each did, per point, before).
+    Forked workers inherit the patched ``prepare``; it records the process it ran in."""
+    import os
+
+    from camopt.sweep import run as sweep_run
+
+    log = tmp_path / "prepared-in"
+    real = sweep_run.prepare
+
+    def recording(cfg):
+        with open(log, "a") as f:
+            f.write(f"{os.getpid()}\n")
+        return real(cfg)
+
+    monkeypatch.setattr(sweep_run, "prepare", recording)
+    monkeypatch.setattr(sweep_run, "_PREPARED", type(sweep_run._PREPARED)())  # none cached
+    sweep(tmp_path, "s.h5", "--seeds", "0:4", "--grid", "solver.population=6,8",
+          "--set", "solver.generations=2", "--jobs", "2")
+    pids = log.read_text().split()
+    assert len(pids) == 2 and set(pids) == {str(os.getpid())}, pids

@@ -17,8 +17,9 @@ Layout (schema 2), one HDF5 file:
 Cost per cell is O(1): a finished cell is appended to a journal beside the archive,
 ``.<archive name>.cells`` (one JSON line per cell, written with one ``os.write``), and
 the HDF5 snapshot is rewritten (atomically, :func:`camopt.archive.files.atomic_write`)
-only when the number of cells has doubled since the last snapshot, after
-``SNAPSHOT_SECONDS``, and at the end, when the journal is removed. Readers take the
+only when the number of cells has doubled since the last snapshot (and is at least
+``SNAPSHOT_MIN_CELLS``), after ``SNAPSHOT_SECONDS``, and at the end, when the journal is
+removed. Readers take the
 snapshot and every complete journal line (a line cut short by a kill is ignored), so
 they never see a partial cell, and ``--resume`` after SIGKILL loses only running cells.
 """
@@ -45,6 +46,10 @@ from camopt.sweep.spec import SweepSpec, summary
 
 SCHEMA_VERSION = 2
 SNAPSHOT_SECONDS = 30.0
+# no snapshot before this many cells: a journal this short is read at once, and each
+# snapshot costs ~25 ms (a whole HDF5 file written and synced), which at 1, 2, 4, ... 32
+# cells was 10-25 % of a small sweep's time, spent in the parent its workers wait on
+SNAPSHOT_MIN_CELLS = 64
 # a cell's stored names (journal keys, /cells columns) and the Repeat fields they hold
 _ATTRS = {"point": "point", "seed": "index", "objective": "fun", "feasible": "feasible",
           "success": "success", "nfev": "nfev", "nit": "nit", "wall_s": "wall_s",
@@ -130,7 +135,7 @@ class SweepWriter:
             raise ArchiveError(f"{self.path}: archive: cannot create its journal {journal} "
                                f"({exc.strerror}); finish with --resume") from None
         self._id = spec.sweep_id
-        self._snapshot_size = max(len(results), 1)
+        self._snapshot_cells = len(results)  # the cells the snapshot on disk holds
         self._snapshot_time = time.monotonic()
 
     def add(self, result: Repeat) -> None:
@@ -146,7 +151,7 @@ class SweepWriter:
             raise ArchiveError(f"{self.path}: archive: cannot append a cell "
                                f"({exc.strerror}); finish with --resume") from None
         self.results[result.key] = result
-        if (len(self.results) >= 2 * self._snapshot_size
+        if (len(self.results) >= max(2 * self._snapshot_cells, SNAPSHOT_MIN_CELLS)
                 or time.monotonic() - self._snapshot_time > SNAPSHOT_SECONDS):
             self.snapshot()
 
@@ -155,14 +160,16 @@ class SweepWriter:
         write_sweep(self.path, self.spec, self.results, self.total)
         assert self._fd is not None
         os.ftruncate(self._fd, 0)
-        self._snapshot_size = max(len(self.results), 1)
+        self._snapshot_cells = len(self.results)
         self._snapshot_time = time.monotonic()
 
     def close(self) -> None:
-        """Final snapshot; the journal is removed."""
+        """Final snapshot (unless the last one holds every stored cell: the journal is
+        empty then); the journal is removed."""
         if self._fd is None:
             return
-        self.snapshot()
+        if len(self.results) != self._snapshot_cells:
+            self.snapshot()
         os.close(self._fd)
         self._fd = None
         with contextlib.suppress(FileNotFoundError):

@@ -364,13 +364,13 @@ def test_a_dying_sweep_worker_keeps_the_finished_cells(tmp_path, monkeypatch):
 
     original = sweep_run.run_cell
 
-    def dying(cell):
+    def dying(cell, *args):
         if cell.seed == 3:
             import time
 
             time.sleep(1.0)
             os.kill(os.getpid(), signal.SIGKILL)
-        return original(cell)
+        return original(cell, *args)
 
     monkeypatch.setattr(sweep_run, "run_cell", dying)
     out = tmp_path / "s.h5"
