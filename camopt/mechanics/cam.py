@@ -42,16 +42,18 @@ class Follower:
         return self.angle - self.xi
 
     @classmethod
-    def cubic(cls, a: NDArray, theta_c: NDArray, xi: float) -> Follower:
-        """Cubic motion phi, phi', phi'' (Eqs 6, 12, 15) for coefficient rows ``a`` (n, 4)
-        on a 1-D grid ``theta_c``, as one matrix product per derivative."""
+    def polynomial(cls, a: NDArray, theta_c: NDArray, xi: float) -> Follower:
+        """Polynomial motion phi = sum_k a_k theta_c^k, with phi' and phi'' (Eqs 6, 12,
+        15: the paper's cubic when ``a`` is (n, 4); (n, d + 1) for degree d) on a 1-D grid
+        ``theta_c``, as one matrix product per derivative."""
         t = np.ravel(theta_c)
-        one, zero = np.ones_like(t), np.zeros_like(t)
-        powers = np.stack([one, t, t * t, t**3])
+        k = np.arange(a.shape[1], dtype=float)[:, None]
+        powers = t[None, :] ** k  # (d + 1, m); t^0 = 1 also at t = 0
         angle = a @ powers
         angle += xi  # after the product: a row's value must not depend on the batch
-        dphi = a @ np.stack([zero, one, 2 * t, 3 * t * t])
-        ddphi = a @ np.stack([zero, zero, 2 * one, 6 * t])
+        shifted = np.vstack([np.zeros_like(t), powers[:-1]])  # t^(k - 1)
+        dphi = a @ (k * shifted)
+        ddphi = a @ (k * (k - 1) * np.vstack([np.zeros_like(t), shifted[:-1]]))
         # |xi + phi| <= |xi| + sum |a_k| max |t|^k: spares sincos its range check
         bound = float(np.max(np.abs(a) @ np.abs(powers).max(axis=1))) + abs(xi)
         cos_a, sin_a = sincos(angle, bound if np.isfinite(bound) else None)

@@ -39,13 +39,13 @@ def roller_centre(theta):
 
 
 def follower() -> cam.Follower:
-    return cam.Follower.cubic(A, THETA, xi())
+    return cam.Follower.polynomial(A, THETA, xi())
 
 
 def test_base_angle_is_the_law_of_cosines():
     """Eq 10 at the paper's construction: with phi = 0 the roller centre is rb + rf from O."""
     assert cam.base_angle(L2, L6, RB + RF) == pytest.approx(xi(), rel=1e-14)
-    f = cam.Follower.cubic(np.zeros((1, 4)), THETA, xi())
+    f = cam.Follower.polynomial(np.zeros((1, 4)), THETA, xi())
     xp, yp, _, _ = cam.pitch_curve(L2, L6, f)
     np.testing.assert_allclose(np.hypot(xp, yp), RB + RF, rtol=1e-12)
 
@@ -96,7 +96,7 @@ def test_profile_curvature_eq15_is_the_pitch_curvature_less_the_roller():
 
 def test_base_circle_curvature_is_the_base_radius():
     """On the base circle (phi = 0) Eq 15 gives rb: pitch radius rb + rf less rf."""
-    f = cam.Follower.cubic(np.zeros((1, 4)), THETA, xi())
+    f = cam.Follower.polynomial(np.zeros((1, 4)), THETA, xi())
     np.testing.assert_allclose(cam.curvature_radius(L2, L6, f, RF), RB, rtol=1e-12)
 
 
@@ -135,3 +135,18 @@ def test_peak_stress_follows_the_curvature_with_phi_double_prime():
     rho_e = 1 / (1 / rho_ref + 1 / RF)
     np.testing.assert_allclose(sigma, np.sqrt(force * e_eq / (2 * np.pi * length * rho_e)),
                                rtol=1e-6)
+
+
+def test_quintic_law_and_its_derivatives_by_hand():
+    """The law beyond the paper's cubic (degree 5, every term non-zero): phi, phi' and
+    phi'' against the polynomial written out term by term."""
+    a = np.array([[0.01, 0.05, 0.15, -0.03, 0.004, -0.0007]])
+    f = cam.Follower.polynomial(a, THETA, xi())
+    t = THETA
+    c = a[0]
+    phi = sum(c[k] * t**k for k in range(6))
+    dphi = sum(k * c[k] * t ** (k - 1) for k in range(1, 6))
+    ddphi = sum(k * (k - 1) * c[k] * t ** (k - 2) for k in range(2, 6))
+    np.testing.assert_allclose(f.phi[0], phi, rtol=1e-13)
+    np.testing.assert_allclose(f.dphi[0], dphi, rtol=1e-13)
+    np.testing.assert_allclose(f.ddphi[0], ddphi, rtol=1e-13)

@@ -45,6 +45,7 @@ def resolve_cam_archive(config: CaseConfig, load: ArchiveLoader) -> CaseConfig:
         raise ConfigError(config.cam_archive, "case.cam_archive",
                           "not a VCB step-1 (cam) run archive")
     design = CamDesign(a0=run.best.metrics["a0"], a1=x["a1"], a2=x["a2"], a3=x["a3"],
+                       a4=x.get("a4", 0.0), a5=x.get("a5", 0.0),
                        kc1_n_per_mm=x["kc1_n_per_mm"], kc2_n_per_mm=x["kc2_n_per_mm"])
     return config.model_copy(update={"cam_design": design})
 

@@ -40,6 +40,8 @@ class CamDesign(Strict):
     a1: float
     a2: float
     a3: float
+    a4: float = Field(0.0, description="quartic term (beyond the paper; 0: its cubic)")
+    a5: float = Field(0.0, description="quintic term (beyond the paper; 0: its cubic)")
     kc1_n_per_mm: Positive
     kc2_n_per_mm: Positive
 
@@ -164,6 +166,12 @@ class VcbConfig(CaseConfig):
     a1_bounds: Bounds = Field(Bounds(lower=0, upper=0.5), description="Eq 38")
     a2_bounds: Bounds = Field(Bounds(lower=0, upper=0.5), description="Eq 38")
     a3_bounds: Bounds = Field(Bounds(lower=-0.5, upper=0), description="Eq 38")
+    a4_bounds: Bounds | None = Field(
+        None, description="beyond the paper: the follower law's quartic term a4 (rad/rad^4) "
+        "becomes a design variable; unset: the paper's cubic (Eq 9)")
+    a5_bounds: Bounds | None = Field(
+        None, description="beyond the paper: the quintic term a5 (rad/rad^5), with a4; unset: "
+        "no quintic term")
     kc1_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),
                                         description="Eq 38 widened, docs/assumptions.md")
     kc2_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),
@@ -194,6 +202,9 @@ class VcbConfig(CaseConfig):
         v = self.closing_velocity_m_s
         if v is not None and not 0 <= v[0] < v[1]:
             raise ValueError("closing_velocity_m_s: need 0 <= lower < upper")
+        if self.a5_bounds is not None and self.a4_bounds is None:
+            raise ValueError("a5_bounds needs a4_bounds: the law's terms are taken in "
+                             "order (a quintic has a quartic term)")
         if (self.kind == "vcb" and self.step == "fourbar" and self.cam_design is None
                 and self.cam_archive is None):
             raise ValueError("step 'fourbar' needs the step-1 design: set cam_design or "

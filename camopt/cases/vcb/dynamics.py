@@ -58,6 +58,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from camopt.cases.vcb.model import Loads, VcbModel
+from camopt.units import MM
 
 
 @dataclass(frozen=True)
@@ -107,28 +108,15 @@ class ParameterColumns:
 
 
 @dataclass(frozen=True)
-class ClosingMotion:
-    """The closing of each design, arrays (n, m) on the graded cam-angle grid and per-design
-    metrics (n,). Time is measured from the release of the closing springs.
+class ClosingEvents:
+    """The closing's events per design (n,), time from the release of the closing springs:
+    ``cam_contact_time`` (s), ``touch_time`` (s), ``touch_velocity`` (m/s),
+    ``closing_velocity_avg`` (m/s, over the last third of the contact stroke, Sec 2.1),
+    ``closing_time`` (s, to theta_end; inf if stalled), ``final_kinetic`` (J, at
+    theta_end), ``touch_loss`` (J), ``latched`` and ``reach``, the fraction of theta_end
+    the cam turns before it stalls (1 if latched). What a band member contributes
+    (:func:`closing_events`)."""
 
-    ``theta_c`` cam angle from the cam meeting the roller (rad, (m,)); ``time`` (s);
-    ``omega`` cam speed (rad/s); ``rod`` and ``rod_velocity`` rod travel s1 (m) and its
-    velocity (m/s); ``contact`` and ``contact_velocity`` the movable contact's travel and
-    velocity (it stops at touch); ``cam_torque`` the torque the cam passes to the roller
-    (N m, negative: the follower would lift off). Per design: ``cam_contact_time`` (s),
-    ``touch_time`` (s), ``touch_velocity`` (m/s), ``closing_velocity_avg`` (m/s, over the
-    last third of the contact stroke, Sec 2.1), ``closing_time`` (s, to theta_end; inf if
-    stalled), ``final_kinetic`` (J, at theta_end), ``touch_loss`` (J), ``latched`` and
-    ``reach``, the fraction of theta_end the cam turns before it stalls (1 if latched)."""
-
-    theta_c: NDArray
-    time: NDArray
-    omega: NDArray
-    rod: NDArray
-    rod_velocity: NDArray
-    contact: NDArray
-    contact_velocity: NDArray
-    cam_torque: NDArray
     cam_contact_time: NDArray
     touch_time: NDArray
     touch_velocity: NDArray
@@ -138,6 +126,26 @@ class ClosingMotion:
     touch_loss: NDArray
     latched: NDArray
     reach: NDArray
+
+
+@dataclass(frozen=True)
+class ClosingMotion(ClosingEvents):
+    """The closing of each design: its :class:`ClosingEvents` and the curves, arrays
+    (n, m) on the graded cam-angle grid. ``theta_c`` cam angle from the cam meeting the
+    roller (rad, (m,)); ``time`` (s, inf after a stall); ``omega`` cam speed (rad/s);
+    ``rod`` and ``rod_velocity`` rod travel s1 (m) and its velocity (m/s); ``contact``
+    and ``contact_velocity`` the movable contact's travel and velocity (it stops at
+    touch); ``cam_torque`` the torque the cam passes to the roller (N m, negative: the
+    follower would lift off)."""
+
+    theta_c: NDArray
+    time: NDArray
+    omega: NDArray
+    rod: NDArray
+    rod_velocity: NDArray
+    contact: NDArray
+    contact_velocity: NDArray
+    cam_torque: NDArray
 
 
 @dataclass(frozen=True)
@@ -205,10 +213,16 @@ def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps:
     # cam angle theta_c of the release: negative, measured back from the roller contact
     start = model.dead_centre + p.release_offset_rad - model.contact_crank_angle
     u = np.linspace(0.0, 1.0, steps + 1)[None, :]
-    theta = start - start * u * u  # graded toward the release, where the cam is at rest
+    # the path depends on the release offset alone (a handful of values: one per
+    # parameter set), the energy on it linearly on the rates: geometry once per offset
+    offsets, which = np.unique(start[:, 0], return_inverse=True)
+    theta = offsets[:, None] * (1 - u * u)  # graded toward the release, at rest there
     extension, _ = model.closing_spring_geometry(theta)
-    energy = model.closing_energy_rows(kc, extension)
-    kinetic = model.c.efficiency * (energy[:, :1] - energy) - p.friction_nm * (theta - start)
+    per_rate = 0.5 * np.stack([(model.c.kc1_precompression_mm * MM - extension) ** 2,
+                               (model.c.kc2_precompression_mm * MM - extension) ** 2])
+    released = per_rate[:, :, :1] - per_rate  # (2, offsets, m): energy given up per N/m
+    work = kc[:, :1] * released[0][which] + kc[:, 1:2] * released[1][which]
+    kinetic = model.c.efficiency * work - p.friction_nm * (theta[which] - start)
     with np.errstate(invalid="ignore", divide="ignore"):
         omega = np.sqrt(np.maximum(2 * kinetic / p.cam_kg_m2, 0.0))
     time = _cumulative_time(-2 * start * u, omega, 1.0 / steps)[:, -1]
@@ -220,13 +234,31 @@ def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps:
 
 def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
                    rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
-                   steps: int, sets: int = 1) -> ClosingMotion:
-    """Closing of n designs (cubic ``A`` (n, 4), spring rates ``kc`` (n, 2) N/m, linkage
-    ``link`` (n, 5)) from the release of the closing springs, by the work-energy equation
-    on ``steps`` graded intervals of the cam angle. With ``sets`` > 1, ``params`` holds
-    that many parameter sets for every design (:meth:`MotionParameters.repeat`, set-major)
-    and the result has sets x n rows; the kinematics, which do not depend on the
-    parameters, are computed once per design."""
+                   steps: int) -> ClosingMotion:
+    """Closing of n designs (follower law ``A`` (n, d + 1), spring rates ``kc`` (n, 2)
+    N/m, linkage ``link`` (n, 5)) from the release of the closing springs, by the
+    work-energy equation on ``steps`` graded intervals of the cam angle: the events and
+    the curves."""
+    motion = _closing(model, A, kc, link, rod_offset, loads, params, steps, 1, True)
+    assert isinstance(motion, ClosingMotion)
+    return motion
+
+
+def closing_events(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
+                   rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
+                   steps: int, sets: int = 1) -> ClosingEvents:
+    """The events of :func:`closing_motion` alone (no curves: what a band member gives),
+    for ``sets`` parameter sets per design: ``params`` holds that many for every design
+    (:meth:`MotionParameters.repeat`, set-major) and the result has sets x n rows. The
+    kinematics and the resisting springs' work, which do not depend on the parameters,
+    are computed once per design."""
+    return _closing(model, A, kc, link, rod_offset, loads, params, steps, sets, False)
+
+
+def _closing(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
+             rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
+             steps: int, sets: int, curves: bool) -> ClosingEvents:
+    """:func:`closing_motion` (``curves``) or :func:`closing_events`."""
     c = model.c
     n = len(A) * sets
     p = params.columns(n)
@@ -236,8 +268,10 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     extension, rate = model.closing_spring_geometry(theta)
     spring = model.closing_energy(kc, extension)
     dphi, s1, ds1 = kin.dphi, kin.s1, kin.ds1
+    resisting = loads.resistant_energy(s1)
     if sets > 1:
-        dphi, s1, ds1, spring, kc = (np.tile(a, (sets, 1)) for a in (dphi, s1, ds1, spring, kc))
+        dphi, s1, ds1, spring, resisting, kc = (
+            np.tile(a, (sets, 1)) for a in (dphi, s1, ds1, spring, resisting, kc))
     eps = c.efficiency
     follower = p.follower_kg_m2 * dphi * dphi  # J_f phi'^2
     # 1. free rotation, then the plastic impact of the cam on the roller at rest
@@ -247,8 +281,8 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     omega0 = np.ravel(p.cam_kg_m2 * omega_free[:, None] / j_before[:, :1])
     kinetic = 0.5 * j_before[:, 0] * omega0**2
     # 2. work-energy equation up to the touch
-    ke_before = (kinetic[:, None] + eps * (spring[:, :1] - spring) - loads.resistant_energy(s1)
-                 - p.friction_nm * theta)
+    ke_before = kinetic[:, None] + eps * (spring[:, :1] - spring) - resisting
+    ke_before -= p.friction_nm * theta
     with np.errstate(invalid="ignore"):
         omega_before = np.sqrt(np.maximum(2 * ke_before / j_before, 0.0))
     gap = loads.gap
@@ -276,7 +310,6 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
         omega_after = np.sqrt(np.maximum(2 * ke_after / j_after, 0.0))
     index = np.arange(theta.size)[None, :]
     after = touched[:, None] & (index >= k[:, None])
-    omega = np.where(after, omega_after, omega_before)
     kinetic_now = np.where(after, ke_after, ke_before)
     stalled_at = np.where((kinetic_now[:, 1:] <= 0).any(axis=1),
                           np.argmax(kinetic_now[:, 1:] <= 0, axis=1) + 1, theta.size)
@@ -297,17 +330,27 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     t_k = t_touch + first_cell
     cells = 0.5 * (g[:, 1:] + g[:, :-1]) * du  # cell i - 1 .. i at column i - 1
     cells = np.where(index[:, 1:] > k[:, None], cells, 0.0)  # only whole cells after k
+    latched = stalled_at == theta.size
+    # 5. the paper's average closing velocity: the last third of the contact stroke
+    k3, w3 = _crossing(s1, 2 * gap / 3)
+    t_two_thirds = np.where(k3 > 0, _at(t_before, k3, w3), np.nan)
+    reached = touched & (stalled_at > k)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v_avg = np.where(reached, (gap / 3) / (t_touch - t_two_thirds), np.nan)
+    events = dict(
+        cam_contact_time=t_free, touch_time=np.where(reached, t_touch, np.inf),
+        touch_velocity=v_touch, closing_velocity_avg=v_avg,
+        final_kinetic=np.where(latched, kinetic_now[:, -1], 0.0), touch_loss=loss,
+        latched=latched, reach=theta[stalled_at - 1] / end)
+    if not curves:  # the end time alone: the last node's, after the touch if it came
+        # (the running sum's last term: the same bits as the curve's last time)
+        t_end = np.where(touched, t_k + np.cumsum(cells, axis=1)[:, -1], t_before[:, -1])
+        return ClosingEvents(closing_time=np.where(latched, t_end, np.inf), **events)
     t_after = t_k[:, None] + np.concatenate([np.zeros((n, 1)), np.cumsum(cells, axis=1)],
                                             axis=1)
     time = np.where(after, t_after, t_before)
     time = np.where(index >= stalled_at[:, None], np.inf, time)
-    # 5. the paper's average closing velocity: the last third of the contact stroke
-    k3, w3 = _crossing(s1, 2 * gap / 3)
-    t_two_thirds = np.where(k3 > 0, _at(t_before, k3, w3), np.nan)
-    latched = stalled_at == theta.size
-    reached = touched & (stalled_at > k)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        v_avg = np.where(reached, (gap / 3) / (t_touch - t_two_thirds), np.nan)
+    omega = np.where(after, omega_after, omega_before)
     rod_velocity = ds1 * omega
     contact_velocity = np.where(after, 0.0, rod_velocity)
     # torque the cam passes on: eps T - T_f - J_cam omega domega/dtheta (negative: lift-off)
@@ -317,12 +360,8 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     return ClosingMotion(
         theta_c=theta, time=time, omega=omega, rod=s1, rod_velocity=rod_velocity,
         contact=np.minimum(s1, gap), contact_velocity=contact_velocity,
-        cam_torque=cam_torque, cam_contact_time=t_free,
-        touch_time=np.where(reached, t_touch, np.inf), touch_velocity=v_touch,
-        closing_velocity_avg=v_avg,
-        closing_time=np.where(latched, time[:, -1], np.inf),
-        final_kinetic=np.where(latched, kinetic_now[:, -1], 0.0), touch_loss=loss,
-        latched=latched, reach=theta[stalled_at - 1] / end)
+        cam_torque=cam_torque, closing_time=np.where(latched, time[:, -1], np.inf),
+        **events)
 
 
 def _path(model: VcbModel, link: NDArray, rod_offset: NDArray | float, start: NDArray,
@@ -352,7 +391,7 @@ def opening_motion(model: VcbModel, A: NDArray, link: NDArray, rod_offset: NDArr
     eps = model.c.efficiency
     end = model.theta_c[-1]
     phi_open = A[:, 0]
-    phi_closed = A @ np.array([1.0, end, end**2, end**3])
+    phi_closed = A @ end ** np.arange(A.shape[1])
     u = np.linspace(0.0, 1.0, steps + 1)
     # phase 1: from the closed state (phi_closed, at rest) toward the opened one
     s_rel, ds_du, dphi_du = _path(model, link, rod_offset, phi_closed, phi_open, u, True)

@@ -11,7 +11,13 @@ from numpy.typing import NDArray
 
 from camopt.capabilities import VariesCase
 from camopt.cases.vcb.config import CamDesign, VcbConfig
-from camopt.cases.vcb.dynamics import ClosingMotion, MotionParameters, closing_motion
+from camopt.cases.vcb.dynamics import (
+    ClosingEvents,
+    ClosingMotion,
+    MotionParameters,
+    closing_events,
+    closing_motion,
+)
 from camopt.cases.vcb.model import (
     VcbModel,
     follower_dwell,
@@ -49,7 +55,8 @@ class VcbProblem(Problem, VariesCase):
                          c.kc1_bounds_n_per_mm.upper * 1e3, 1e-3),
                 Variable("kc2_n_per_mm", c.kc2_bounds_n_per_mm.lower * 1e3,
                          c.kc2_bounds_n_per_mm.upper * 1e3, 1e-3),
-            )
+            ) + tuple(Variable(name, b.lower, b.upper)
+                      for name, b in (("a4", c.a4_bounds), ("a5", c.a5_bounds)) if b is not None)
             self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly",
                                      "rod_travel")
         else:
@@ -84,16 +91,20 @@ class VcbProblem(Problem, VariesCase):
 
     def _cam(self, d: CamDesign) -> tuple[NDArray, NDArray]:
         a0 = self.model.phi0() if d.a0 is None else d.a0
-        return np.array([a0, d.a1, d.a2, d.a3]), np.array([d.kc1_n_per_mm, d.kc2_n_per_mm]) * 1e3
+        coefficients = np.array([a0, d.a1, d.a2, d.a3, d.a4, d.a5])
+        degree = 5 if d.a5 else 4 if d.a4 else 3  # the paper's cubic unless a design has more
+        return coefficients[:degree + 1], np.array([d.kc1_n_per_mm, d.kc2_n_per_mm]) * 1e3
 
     def designs(self, X: NDArray, link: NDArray | None = None
                 ) -> tuple[NDArray, NDArray, NDArray]:
-        """Cubic coefficients (n, 4), spring rates (n, 2) and linkage (n, 5) of each row;
-        step 1 takes the config's linkage unless ``link`` (n, 5) gives one per row."""
+        """Follower-law coefficients (n, d + 1: the cubic's 4, or with a4/a5 as design
+        variables 5 or 6), spring rates (n, 2) and linkage (n, 5) of each row; step 1 takes
+        the config's linkage unless ``link`` (n, 5) gives one per row."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         n = len(X)
         if self.config.step == "cam":
-            A = np.column_stack([np.full(n, self.model.phi0()), X[:, :3]])
+            # a1..a3, kc1, kc2, then any higher terms (a4, a5): the paper's order first
+            A = np.column_stack([np.full(n, self.model.phi0()), X[:, :3], X[:, 5:]])
             return A, X[:, 3:5], np.tile(self.model.vendor_link, (n, 1)) if link is None \
                 else link
         return np.tile(self.cam_a, (n, 1)), np.tile(self.cam_kc, (n, 1)), X[:, :5]
@@ -108,7 +119,9 @@ class VcbProblem(Problem, VariesCase):
         """The vendor's design in this step's variables (initial design of Tables 6, 7)."""
         if self.config.step == "cam":
             c = self.config
-            return np.r_[self.model.vendor_a[1:], c.kc1_n_per_mm * 1e3, c.kc2_n_per_mm * 1e3]
+            higher = np.zeros(len(self.variables) - 5)  # the vendor's law is a cubic
+            return np.r_[self.model.vendor_a[1:], c.kc1_n_per_mm * 1e3, c.kc2_n_per_mm * 1e3,
+                         higher]
         return self.model.vendor_link.copy()
 
     def evaluate(self, X: NDArray) -> Evaluation:
@@ -157,7 +170,7 @@ class VcbProblem(Problem, VariesCase):
             return MotionBand.of(nominal)
         A, kc, link = self.designs(X, link)
         k, n = len(np.ravel(self.band.cam_kg_m2)), len(A)
-        members = closing_motion(self.model, A, kc, link, self.rod_offset, self.load,
+        members = closing_events(self.model, A, kc, link, self.rod_offset, self.load,
                                  self.band.repeat(n), self.config.dynamics_steps, sets=k)
         return MotionBand.of(nominal, members, k)
 
@@ -251,7 +264,7 @@ class VcbProblem(Problem, VariesCase):
             dwell = follower_dwell(A, end, zeros) / DEG
             eq39 = m.abs_sum(bal)
             extras.update({
-                "a0": A[:, 0], "a1": A[:, 1], "a2": A[:, 2], "a3": A[:, 3],
+                **{f"a{k}": A[:, k] for k in range(A.shape[1])},
                 "pressure_angle_max_deg": psi_max,
                 "curvature_min_mm": np.min(con.curvature, axis=1) / MM,
                 # unbounded where the follower dwells (Fn = T / arm, arm = 0 there)
@@ -347,7 +360,7 @@ class MotionBand:
     high: dict[str, NDArray]
 
     @classmethod
-    def of(cls, nominal: ClosingMotion, members: ClosingMotion | None = None, k: int = 0
+    def of(cls, nominal: ClosingEvents, members: ClosingEvents | None = None, k: int = 0
            ) -> MotionBand:
         """The band of ``nominal`` (n designs) and ``members`` (k sets x n designs)."""
         def stack(name: str) -> NDArray:

@@ -1,0 +1,61 @@
+"""The VCB follower law beyond the paper's cubic (``a4_bounds``/``a5_bounds``): the
+rate's zeros and the exact largest swing against dense sampling, and the cubic path
+unchanged when the higher terms are zero."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from camopt.cases.vcb.model import phi_max, polynomial_value, rate_zeros
+from camopt.cases.vcb.problem import VcbProblem
+from camopt.driver import load
+from camopt.errors import ConfigError
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+END = 140 * np.pi / 180
+
+
+def test_quintic_rate_zeros_and_largest_swing_against_dense_sampling():
+    """phi' of random quintics: every sign change of phi' on a fine grid is within
+    the grid step of a returned zero, and phi_max is the grid maximum within 1e-9 rad
+    (never below it)."""
+    rng = np.random.default_rng(3)
+    A = np.column_stack([rng.uniform(-0.5, 0.5, (300, 4)), rng.uniform(-0.03, 0.03, 300),
+                         rng.uniform(-0.006, 0.006, 300)])
+    t = np.linspace(0.0, END, 20001)
+    dphi = np.polynomial.polynomial.polyval(t, (A[:, 1:] * np.arange(1, 6)).T)
+    zeros = rate_zeros(A, END)
+    assert zeros.shape == (300, 4)
+    changes = 0
+    for row, z in zip(np.sign(dphi), zeros):
+        where = np.flatnonzero(row[1:] * row[:-1] < 0)
+        changes += len(where)
+        for i in where:
+            assert np.nanmin(np.abs(z - t[i])) <= 2 * (t[1] - t[0])
+    assert changes > 50  # the sample exercises the root finder
+    dense = polynomial_value(A, t).max(axis=1)
+    exact = phi_max(A, END, zeros)
+    assert np.all(exact >= dense - 1e-12)
+    np.testing.assert_allclose(exact, dense, atol=1e-9)
+
+
+def test_higher_terms_at_zero_give_the_cubic():
+    """A quintic design whose a4 = a5 = 0 evaluates exactly as the cubic one."""
+    cubic = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
+    quintic = VcbProblem(load(CONFIGS / "vcb_velocity.toml", ["case.a4_bounds=[-0.01,0.01]",
+                                                              "case.a5_bounds=[-0.002,0.002]"]
+                              ).case)
+    assert [v.name for v in quintic.variables][-2:] == ["a4", "a5"]
+    x = cubic.vendor_x()
+    a, b = cubic.describe(x[None, :]), quintic.describe(np.r_[x, 0.0, 0.0][None, :])
+    np.testing.assert_allclose(b.f, a.f, rtol=1e-12)
+    np.testing.assert_allclose(b.g, a.g, rtol=1e-9, atol=1e-12)
+    np.testing.assert_array_equal(quintic.vendor_x(), np.r_[x, 0.0, 0.0])
+
+
+def test_a5_without_a4_is_refused():
+    with pytest.raises(ConfigError, match="a4_bounds"):
+        load(CONFIGS / "vcb_velocity.toml", ["case.a5_bounds=[-0.002,0.002]"])
