@@ -41,7 +41,9 @@ TAIL_SHARES = 4  # a batch is at most 1 / (TAIL_SHARES x workers) of the cells l
 WORKERS_PER_CORE = 2  # local workers at most per usable core (see ``workers``)
 CONNECT_TIMEOUT = "20s"  # reaching a Dask scheduler
 LOST_SECONDS = 60.0  # a Dask cluster without scheduler or workers this long is lost
+LOST_CHECKS = 3  # ...and seen so on this many checks in a row (never on one observation)
 POLL_SECONDS = 1.0  # how often a Dask sweep checks its cluster while waiting
+FETCH_SECONDS = 5.0  # fetching a finished batch longer than this: its worker died meanwhile
 _PREPARED: OrderedDict[str, tuple[LoadedConfig, Problem, type[Solver]]] = OrderedDict()
 _PREPARED_MAX = 64  # grid points whose problems a process keeps
 
@@ -184,9 +186,10 @@ def _connect(scheduler: str):
 def _dask(client, cells: list[CellSpec], scheduler: str,
           done: Callable[[Repeat], None]) -> None:
     """Run ``cells`` on the cluster, storing each batch's cells as it finishes. A batch
-    whose worker died is run again elsewhere (same seeds, same result); a cluster left
-    without workers, or without its scheduler, for ``LOST_SECONDS`` ends the sweep with
-    one error (the finished cells are stored: ``--resume`` finishes it)."""
+    whose worker died (running it, or holding its finished result) is run again elsewhere
+    (same seeds, same result); a cluster left without workers, or without its scheduler,
+    for ``LOST_SECONDS`` and ``LOST_CHECKS`` checks in a row ends the sweep with one error
+    (the finished cells are stored: ``--resume`` finishes it)."""
     from distributed import wait as dask_wait
 
     def lost(why: str) -> SolverError:
@@ -202,25 +205,23 @@ def _dask(client, cells: list[CellSpec], scheduler: str,
         size = min(MAX_BATCH, max(1, -(-len(cells) // (16 * n_workers))))
         batches = [cells[i:i + size] for i in range(0, len(cells), size)]
         pending = set(client.map(run_cells, batches, pure=False, retries=2))
-        healthy = time.monotonic()
+        healthy, strikes = time.monotonic(), 0
         while pending:
             try:
                 finished, pending = dask_wait(pending, timeout=POLL_SECONDS,
                                               return_when="FIRST_COMPLETED")
             except TimeoutError:  # nothing finished within POLL_SECONDS
                 finished = set()
-            for fut in finished:
-                if fut.status == "error":  # the task's own error (a bug): raise it
-                    fut.result()
-                if fut.status != "finished":  # cancelled or lost with the cluster
-                    raise lost(f"a batch was {fut.status}")
-                for r in fut.result()[0]:
-                    done(r)
-            trouble = None if finished else _cluster_trouble(client)
+            stored = _store_finished(finished, pending, done)
+            if stored is None:
+                raise lost("a batch was cancelled")
+            trouble = None if stored else _cluster_trouble(client)
             if trouble is None:
-                healthy = time.monotonic()
-            elif time.monotonic() - healthy > LOST_SECONDS:
-                raise lost(f"{trouble} for {LOST_SECONDS:g} s")
+                healthy, strikes = time.monotonic(), 0
+            else:
+                strikes += 1
+                if strikes >= LOST_CHECKS and time.monotonic() - healthy > LOST_SECONDS:
+                    raise lost(f"{trouble} for {LOST_SECONDS:g} s")
     except CamoptError:
         raise
     except (OSError, TimeoutError, CancelledError) as exc:  # scheduler or workers gone
@@ -237,17 +238,46 @@ def _dask(client, cells: list[CellSpec], scheduler: str,
             client.close(timeout=5)
 
 
+def _store_finished(finished: set, pending: set, done: Callable[[Repeat], None]) -> int | None:
+    """Store the cells of the ``finished`` batches; the number stored, None if a batch was
+    cancelled. A batch whose result is gone (its worker died after finishing it: Dask
+    marks it lost and runs it again) or cannot be fetched within ``FETCH_SECONDS`` goes
+    back to ``pending``, with the batches not yet looked at: waiting for it without a
+    bound would wait forever on a cluster left without workers."""
+    stored = 0
+    order = list(finished)
+    for i, fut in enumerate(order):
+        if fut.status == "error":  # the task's own error (a bug): raise it
+            fut.result()
+        if fut.status == "cancelled":
+            return None
+        try:
+            if fut.status != "finished":
+                raise TimeoutError
+            results = fut.result(timeout=FETCH_SECONDS)[0]
+        except TimeoutError:
+            pending.update(order[i:])
+            break
+        for r in results:
+            done(r)
+        stored += 1
+    return stored
+
+
 def _cluster_trouble(client) -> str | None:
     """What is wrong with the cluster (the client not connected, no worker), None if
-    nothing is. A scheduler slow to answer counts as alive while the client is connected:
-    a dead one disconnects it."""
+    nothing is. The workers are asked of the scheduler itself, each time (one RPC):
+    ``client.scheduler_info()`` returns the client's cached copy, which a background
+    refresh replaces with one that lists no workers, so read at the wrong moment it said
+    "no worker" while workers ran. A scheduler slow to answer counts as alive while the
+    client is connected: a dead one disconnects it."""
     if client.status != "running":
         return f"client {client.status}"
     try:
-        workers = client.scheduler_info(n_workers=1).get("workers")
+        threads = client.nthreads(callback_timeout=10)
     except Exception:  # busy or going away: the client's status tells which, next time
         return None
-    return None if workers else "no worker"
+    return None if threads else "no worker"
 
 
 def _first_line(exc: BaseException) -> str:

@@ -12,6 +12,7 @@ import resource
 import signal
 import subprocess
 import sys
+import time
 
 import h5py
 import pytest
@@ -460,3 +461,120 @@ def test_tolerance_plot_into_a_file_fifo_or_unwritable_folder_is_one_line(runs, 
                             timeout=60)
     assert code == 2 and one_error_line(err), (code, err)
     assert "--plot" in err
+
+
+# ---- a Dask cluster losing its workers -------------------------------------------------------
+@pytest.fixture
+def dask_cluster():
+    """A LocalCluster's scheduler on 127.0.0.1 with two worker processes of its own kind
+    but nanny-less (``dask worker --no-nanny``): a killed worker stays dead, as on a node
+    the OOM killer visited, instead of being restarted by a nanny."""
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=0, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
+        workers = [subprocess.Popen(
+            [sys.executable, "-m", "distributed.cli.dask_worker", cluster.scheduler_address,
+             "--no-nanny", "--nthreads", "1", "--host", "127.0.0.1", "--no-dashboard"],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) for _ in range(2)]
+        try:
+            with distributed.Client(cluster.scheduler_address, timeout="30s") as client:
+                client.wait_for_workers(2, timeout=60)
+            yield cluster.scheduler_address, workers
+        finally:
+            for w in workers:
+                w.kill()
+                w.wait(timeout=10)
+
+
+def test_the_dask_watchdog_asks_the_scheduler_not_a_stale_copy(dask_cluster, monkeypatch):
+    """The draft's false "no worker": the client's cached cluster identity is refreshed in
+    the background without its worker list; when the watchdog's own fetch failed (an
+    identity call timing out on a loaded machine) it read that copy and saw no worker
+    while two ran."""
+    import distributed
+
+    from camopt.sweep.run import _cluster_trouble
+
+    address, _ = dask_cluster
+    with distributed.Client(address, timeout="30s") as client:
+        client.sync(client._update_scheduler_info)  # what the background refresh does
+
+        async def timed_out(**kwargs):
+            raise OSError("timed out")
+
+        monkeypatch.setattr(client.scheduler, "identity", timed_out, raising=False)
+        assert _cluster_trouble(client) is None
+
+
+@pytest.mark.slow
+def test_a_dask_sweep_survives_a_killed_worker_and_resumes_after_losing_all(
+        dask_cluster, tmp_path, monkeypatch):
+    """The worker holding the first finished batch SIGKILLed before the batch is fetched
+    (its result lost: Dask runs it again): the sweep goes on on the other worker, and its
+    cells are those of an inline sweep. The last worker killed once a cell is stored: one
+    error line naming --resume within seconds (LOST_SECONDS shortened; the watchdog still
+    needs LOST_CHECKS checks in a row), exit 2, the finished cells kept, and ``sweep
+    --resume`` finishes them into the inline sweep's cells."""
+    import distributed
+
+    from camopt.archive.sweeps import SweepWriter
+    from camopt.sweep import run as sweep_run
+
+    address, workers = dask_cluster
+    monkeypatch.setattr(sweep_run, "LOST_SECONDS", 2.0)
+    args = ["sweep", DE, "--seeds", "0:8", "--quiet", *TINY]
+    assert invoke(*args, "--out", tmp_path / "inline.h5", "--jobs", "1").exit_code == 0
+    inline = load_sweep(tmp_path / "inline.h5")[1]
+
+    def same_cells(results):
+        return {k: (r.fun, r.x.tolist()) for k, r in results.items()} == \
+            {k: (r.fun, r.x.tolist()) for k, r in inline.items()}
+
+    def kill(pid):
+        [victim] = [w for w in workers if w.pid == pid]
+        victim.kill()
+        victim.wait(timeout=10)
+
+    wait, lost_batches = distributed.wait, []
+
+    def wait_then_kill_the_holder(futures, **kwargs):
+        finished, pending = wait(futures, **kwargs)
+        if finished and not lost_batches:
+            first = next(iter(finished))
+            holder = first.client.who_has([first])[first.key][0]
+            kill(first.client.run(os.getpid)[holder])
+            deadline = time.monotonic() + 20
+            while first.status == "finished" and time.monotonic() < deadline:
+                time.sleep(0.05)  # until the scheduler has told the client it is lost
+            lost_batches.append(first.status)
+        return finished, pending
+
+    monkeypatch.setattr(distributed, "wait", wait_then_kill_the_holder)
+    dask = [*args, "--executor", "dask", "--scheduler", address]
+    r = invoke(*dask, "--out", tmp_path / "one.h5")
+    assert lost_batches == ["lost"], lost_batches
+    assert r.exit_code == 0, r.output
+    assert sorted(w.poll() is None for w in workers) == [False, True]
+    assert same_cells(load_sweep(tmp_path / "one.h5")[1])
+    monkeypatch.setattr(distributed, "wait", wait)
+
+    add = SweepWriter.add
+
+    def add_then_kill_the_last(self, r):
+        add(self, r)
+        for w in workers:
+            if w.poll() is None:
+                kill(w.pid)
+
+    monkeypatch.setattr(SweepWriter, "add", add_then_kill_the_last)
+    lost = tmp_path / "none.h5"
+    t0 = time.monotonic()
+    r = invoke(*dask, "--out", lost)
+    assert r.exit_code == 2 and one_error_line(r.stderr), r.output
+    assert "lost the Dask cluster (no worker" in r.stderr and "--resume" in r.stderr
+    assert time.monotonic() - t0 < 30
+    assert 1 <= len(load_sweep(lost)[1]) < 8
+    assert not any(p.name.endswith((".tmp", ".lock")) for p in tmp_path.iterdir())
+    r = invoke("sweep", "--resume", lost, "--jobs", "1", "--quiet")
+    assert r.exit_code == 0, r.output
+    assert same_cells(load_sweep(lost)[1])
