@@ -4,7 +4,8 @@ driver, solver and statistics modules. A mutant is killed when those tests fail.
 
     .venv/bin/python scripts/mutants.py [NAME ...]      # all, or the named ones
 
-Prints one line per mutant and a closing 'mutants: N killed, N survived'; exits 1 if any survived.
+Prints one line per mutant (what killed it: the mirror tests of its module, else the fast
+tests) and a closing 'mutants: N killed, N survived'; exits 1 if any survived.
 The list and the last results are in docs/design.md (Mutation check).
 """
 
@@ -130,8 +131,9 @@ def fails(scratch: Path, tests: list[str]) -> bool:
     return proc.returncode != 0
 
 
-def run(name: str, scratch: Path) -> bool:
-    """Apply mutant ``name`` alone to a fresh copy; True when the fast tests kill it."""
+def run(name: str, scratch: Path) -> str | None:
+    """Apply mutant ``name`` alone to a fresh copy; what killed it (its module's mirror
+    tests, else the fast tests), None when it survived."""
     path, old, new = MUTANTS[name]
     if scratch.exists():
         shutil.rmtree(scratch)
@@ -143,7 +145,10 @@ def run(name: str, scratch: Path) -> bool:
         raise SystemExit(f"error: {path}: {name}: the original text occurs {text.count(old)} "
                          "times (the source changed; update the mutant)")
     target.write_text(text.replace(old, new))
-    return fails(scratch, MIRROR.get(path, TESTS)) or fails(scratch, TESTS)
+    mirror = MIRROR.get(path, TESTS)
+    if fails(scratch, mirror):
+        return " ".join(mirror)
+    return "the fast tests" if fails(scratch, TESTS) else None
 
 
 def main(names: list[str]) -> int:
@@ -157,9 +162,9 @@ def main(names: list[str]) -> int:
         raise SystemExit(f"error: {' '.join(mirrors)}: fail without a mutant; fix them first")
     killed = 0
     for name in names:
-        dead = run(name, scratch)
-        killed += dead
-        print(f"{name}: {'killed' if dead else 'SURVIVED'}", flush=True)
+        by = run(name, scratch)
+        killed += by is not None
+        print(f"{name}: {f'killed by {by}' if by else 'SURVIVED'}", flush=True)
     shutil.rmtree(scratch.parent)
     print(f"mutants: {killed} killed, {len(names) - killed} survived")
     return 0 if killed == len(names) else 1
