@@ -1,6 +1,6 @@
 """Hand-made mutants of the equations and seeds, each applied alone in a scratch copy of
 the repository, against the fast tests (``-m "not slow"``) of the mechanics, case, sweep,
-driver, solver and statistics modules. A mutant is killed when those tests fail.
+driver, record, solver and statistics modules. A mutant is killed when those tests fail.
 
     .venv/bin/python scripts/mutants.py [NAME ...]      # all, or the named ones
 
@@ -20,7 +20,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 TESTS = ["tests/mechanics", "tests/cases", "tests/test_sweep.py", "tests/solvers",
-         "tests/test_stats.py", "tests/test_driver.py"]
+         "tests/test_stats.py", "tests/test_driver.py", "tests/test_record.py"]
 
 # name: (file, original text, mutated text); each original must occur exactly once
 MUTANTS: dict[str, tuple[str, str, str]] = {
@@ -83,6 +83,12 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
                            "SeedSequence(cell.entropy + 1,"),
     "driver_seed": ("camopt/driver.py", "np.random.SeedSequence(seed).spawn(repeats)",
                     "np.random.SeedSequence(seed + 1).spawn(repeats)"),
+    # the repeat record's success and evaluations to target (issue #25)
+    "driver_success_target": ("camopt/driver.py", "succeeded([fun], [feasible], target)",
+                              "succeeded([fun], [feasible], None)"),
+    "record_nfev_to_target": ("camopt/record.py",
+                              'ok &= np.asarray(history["best_objective"]) <= target',
+                              'ok &= np.asarray(history["best_objective"]) >= target'),
     # DE-gr operators
     "de_crossover_direction": ("camopt/solvers/de_gr.py", "rng.random((n, d)) < rate",
                                "rng.random((n, d)) > rate"),
@@ -116,6 +122,7 @@ MIRROR = {
     "camopt/cases/fast_switch/problem.py": ["tests/cases/test_fast_switch.py"],
     "camopt/sweep/run.py": ["tests/test_sweep.py"],
     "camopt/driver.py": ["tests/test_driver.py"],
+    "camopt/record.py": ["tests/test_record.py"],
     "camopt/solvers/de_gr.py": ["tests/solvers/test_de_gr.py"],
     "camopt/solvers/pso.py": ["tests/solvers/test_pso.py"],
     "camopt/stats.py": ["tests/test_stats.py"],

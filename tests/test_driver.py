@@ -104,3 +104,33 @@ def test_repeat_i_draws_from_child_i_of_the_run_seed():
     for i, r in enumerate(rec.repeats):
         np.testing.assert_array_equal(r.x, _first_generation_best(rec.problem, children[i], 12))
     assert len({tuple(r.x) for r in rec.repeats}) == 3
+
+
+def _first_hit(history: dict) -> int:
+    """Evaluations at the first iteration whose best design was feasible."""
+    feasible = np.flatnonzero(history["best_violation"] == 0)
+    return int(history["nfev"][feasible[0]]) if feasible.size else -1
+
+
+def _sphere(target: float | None = None, **solver):
+    return validate({"case": {"kind": "sphere"},
+                     "solver": {"name": "de_gr", "population": 12, "generations": 30,
+                                **solver},
+                     "run": {"seed": 2, "repeats": 1,
+                             **({} if target is None else {"target": target})}},
+                    "sphere.toml")
+
+
+def test_success_is_feasible_at_or_below_the_target_and_false_when_the_solver_fails():
+    """The sphere's optimum is 0 (x = 0.3, the constraint inactive): DE reaches below
+    0.05 feasibly (success), not below a target of -1 (no success); a simplex run whose
+    only start cannot converge in one iteration has no design (objective +inf)."""
+    r = execute(_sphere()).repeats[0]
+    assert r.feasible and r.fun < 0.05 and r.success
+    assert r.nfev_to_target == _first_hit(r.history) > 0
+    r = execute(_sphere(target=-1.0)).repeats[0]
+    assert r.feasible and not r.success and r.nfev_to_target == -1
+    failed = execute(load(CONFIGS / "opening_spring_lse6.toml", "solver.starts=1",
+                          "solver.maxiter=1", "run.repeats=1")).repeats[0]
+    assert failed.fun == np.inf and not failed.feasible and not failed.success
+    assert failed.message == "search space exhausted"
