@@ -106,10 +106,11 @@ def write_sweep(path: Path, spec: SweepSpec, results: dict[tuple[int, int], Repe
             dtype = np.int64 if name in _INTS else bool if name in _BOOLS else float
             g.create_dataset(name, data=np.array([getattr(c, _ATTRS[name]) for c in cells],
                                                  dtype=dtype))
-        _ragged(g, "x", [list(c.x) for c in cells])
+        # plain Python numbers (tolist): _ragged's type test is per value
+        _ragged(g, "x", [np.asarray(c.x).tolist() for c in cells])
         hist = g.create_group("history")
         for key in sorted({k for c in cells for k in c.history}):
-            _ragged(hist, key, [list(c.history.get(key, [])) for c in cells])
+            _ragged(hist, key, [np.asarray(c.history.get(key, [])).tolist() for c in cells])
         write_table(f.create_group("summary"), summary(spec, results.values()))
 
     atomic_write(path, write, replace=replace)
