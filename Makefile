@@ -23,7 +23,7 @@ test: install
 	$(BIN)/python -m pytest -q -n auto
 
 lint: typecheck
-	$(BIN)/ruff check camopt tests bench scripts/mutants.py
+	$(BIN)/ruff check camopt tests bench scripts/mutants.py scripts/vcb_release_margin.py
 
 # types and units as a gate: mypy's settings are in pyproject.toml ([tool.mypy])
 typecheck: install

@@ -30,10 +30,10 @@ import socket
 import stat
 import tempfile
 from collections.abc import Callable, Iterator, Sequence
-from typing import BinaryIO
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
+from typing import BinaryIO
 
 import h5py
 import numpy as np
