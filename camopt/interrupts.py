@@ -15,6 +15,7 @@ from collections.abc import Iterator
 
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
 _pending = False
+_installed = False  # the CLI's handlers are in place (not when camopt is a library)
 
 
 def _interrupt(signum: int, frame: object) -> None:
@@ -28,8 +29,10 @@ def install() -> None:
     temporary files are removed) and are remembered: Python ignores an exception raised
     inside a weakref callback or ``__del__``, and a signal landing there would be lost;
     :func:`check` raises it again at the next safe point."""
+    global _installed
     for s in _SIGNALS:
         signal.signal(s, _interrupt)
+    _installed = True
 
 
 def check() -> None:
@@ -40,9 +43,17 @@ def check() -> None:
 
 
 def handled() -> None:
-    """The interruption has been dealt with (called where KeyboardInterrupt is caught)."""
+    """The interruption has been dealt with (called where KeyboardInterrupt is caught).
+    In the CLI, SIGINT and SIGTERM are ignored from here on: all the process still does is
+    keep what it has (already inside :func:`deferred`) and report it. A second Ctrl-C
+    pressed then used to land after the report, while Python was exiting (its own
+    handlers already removed), and killed the process by SIGINT instead of exit 130.
+    ``SIG_IGN`` is what outlives Python's shutdown; SIGKILL still ends a stuck exit."""
     global _pending
     _pending = False
+    if _installed and threading.current_thread() is threading.main_thread():
+        for s in _SIGNALS:
+            signal.signal(s, signal.SIG_IGN)
 
 
 @contextlib.contextmanager

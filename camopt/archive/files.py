@@ -371,11 +371,14 @@ def describe_file(path: Path) -> str | None:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_NOFOLLOW | os.O_CLOEXEC)
     except (OSError, ValueError):
         return None
-    with os.fdopen(fd, "rb") as handle:
+    try:
         info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode):
+        if not stat.S_ISREG(info.st_mode):  # a directory opens too, and fdopen refuses it
             return None
-        return f"{_kind_of(handle)}, {info.st_size} bytes"
+        with os.fdopen(fd, "rb", closefd=False) as handle:
+            return f"{_kind_of(handle)}, {info.st_size} bytes"
+    finally:
+        os.close(fd)
 
 
 def _kind_of(handle: BinaryIO) -> str:

@@ -28,6 +28,7 @@ def main() -> None:
     except SystemExit:
         raise
     except KeyboardInterrupt:
+        interrupts.handled()
         print("error: interrupted", file=sys.stderr)
         sys.exit(130)
     except BrokenPipeError:  # `camopt show ... | head`: the reader left; not an error

@@ -20,6 +20,7 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
+from camopt import interrupts
 from camopt.errors import CamoptError
 
 if TYPE_CHECKING:
@@ -65,6 +66,7 @@ def errors() -> Iterator[None]:
         print(f"error: {exc}", file=sys.stderr)
         raise typer.Exit(2) from None
     except KeyboardInterrupt:
+        interrupts.handled()
         print("error: interrupted; no archive written", file=sys.stderr)
         raise typer.Exit(130) from None
     except (typer.Exit, typer.Abort, click.exceptions.Exit, click.exceptions.ClickException,

@@ -137,20 +137,22 @@ def test_export_into_a_fifo_fails_at_once_and_leaves_it(runs, tmp_path):
     assert [p.name for p in out.iterdir()] == [fifo.name]
 
 
-def test_force_onto_a_fifo_at_the_output_name_fails_at_once(tmp_path):
+@pytest.mark.parametrize("plant", ["fifo", "directory"])
+def test_force_onto_a_fifo_or_directory_at_the_output_name_fails_at_once(tmp_path, plant):
     """The corpus's two hangs: with --force, run and sweep described the file they were
-    about to replace by opening it with HDF5 before checking it is a regular file."""
-    run_fifo, sweep_fifo = tmp_path / "a.h5", tmp_path / "s.h5"
-    os.mkfifo(run_fifo)
-    os.mkfifo(sweep_fifo)
-    calls = [["run", FAST, "--out", run_fifo, "--quiet", "--force"],
-             ["sweep", DE, "--out", sweep_fifo, "--seeds", "0:1", "--jobs", "1", "--quiet",
+    about to replace by opening it with HDF5 before checking it is a regular file (a
+    FIFO blocked that open; the first fix then met a directory with an internal error)."""
+    run_out, sweep_out = tmp_path / "a.h5", tmp_path / "s.h5"
+    for p in (run_out, sweep_out):
+        os.mkfifo(p) if plant == "fifo" else p.mkdir()
+    calls = [["run", FAST, "--out", run_out, "--quiet", "--force"],
+             ["sweep", DE, "--out", sweep_out, "--seeds", "0:1", "--jobs", "1", "--quiet",
               "--force", *TINY]]
     for call, (code, err) in zip(calls, run_all(calls, timeout=40)):
         assert code == 2 and one_error_line(err), (call, code, err)
-        assert "not a regular file" in err, (call, err)
+        assert ("not a regular file" if plant == "fifo" else "is a directory") in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.h5", "s.h5"]
-    assert all(p.is_fifo() for p in tmp_path.iterdir())
+    assert all(p.is_fifo() if plant == "fifo" else p.is_dir() for p in tmp_path.iterdir())
 
 
 # ---- writes where they must not ----------------------------------------------------------
@@ -422,6 +424,33 @@ def test_sigterm_then_ctrl_c_during_the_final_write_keep_the_archive(tmp_path):
 
 
 # ---- unbounded or unwrapped -----------------------------------------------------------------
+def test_a_second_ctrl_c_while_exiting_after_the_first_changes_nothing(tmp_path):
+    """The corpus's 'other' exits: Ctrl-C once a repeat finished, then Ctrl-C again
+    landing after camopt reported the first (here while Python exits): the second went
+    to camopt's handler in an exit callback (a traceback) or, once Python had removed
+    its handlers, killed the process by SIGINT instead of exit 130."""
+    out = tmp_path / "a.h5"
+    script = (
+        "import atexit, os, signal, sys\n"
+        "from camopt import driver\n"
+        "original = driver.run_repeat\n"
+        "def first_ctrl_c(*a, **k):\n"
+        "    if a[4] == 1:\n"
+        "        os.kill(os.getpid(), signal.SIGINT)\n"
+        "    return original(*a, **k)\n"
+        "driver.run_repeat = first_ctrl_c\n"
+        "atexit.register(lambda: os.kill(os.getpid(), signal.SIGINT))  # the second\n"
+        "from camopt.cli import main\n"
+        f"sys.argv = ['camopt', 'run', {DE!r}, '--out', {str(out)!r}, '--quiet',"
+        f" '--repeats', '3', *{TINY!r}]\n"
+        "main()\n")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 130 and one_error_line(proc.stderr), proc.stderr
+    assert "kept the 1 finished of 3 repeats" in proc.stderr
+    assert [r.index for r in archive.load_run(out).repeats] == [0]
+
+
 def test_sweep_jobs_never_starts_more_workers_than_cells(tmp_path, monkeypatch):
     from camopt.sweep import run as sweep_run
 
