@@ -25,9 +25,20 @@ TESTS = ["tests/mechanics", "tests/cases", "tests/test_sweep.py", "tests/solvers
 # name: (file, original text, mutated text); each original must occur exactly once
 MUTANTS: dict[str, tuple[str, str, str]] = {
     # Kang 2023, disc cam (Eqs 6-15)
-    "cam_ddphi_6t": ("camopt/mechanics/cam.py", "2 * one, 6 * t", "2 * one, 3 * t"),
-    "cam_ddphi_2": ("camopt/mechanics/cam.py", "2 * one, 6 * t", "one, 6 * t"),
-    "cam_dphi_3t2": ("camopt/mechanics/cam.py", "2 * t, 3 * t * t", "2 * t, 2 * t * t"),
+    # the follower law's derivatives (a polynomial since the quintic: k a_k t^(k-1) and
+    # k (k-1) a_k t^(k-2)); the cubic's phi'' = 2 a2 + 6 a3 t becomes 1, 4 or a2 t + a3 t^2
+    "cam_ddphi_6t": ("camopt/mechanics/cam.py", "k * (k - 1) * np.vstack",
+                     "(k - 1) * (k - 1) * np.vstack"),
+    "cam_ddphi_2": ("camopt/mechanics/cam.py", "np.vstack([np.zeros_like(t), shifted[:-1]])",
+                    "shifted"),
+    "cam_dphi_3t2": ("camopt/mechanics/cam.py", "dphi = a @ (k * shifted)",
+                     "dphi = a @ (k * powers)"),
+    # the quintic's rate zeros (companion matrix) and the band members' closing time
+    "vcb_companion_sign": ("camopt/cases/vcb/model.py", "comp[:, 0, :] = -c[rows",
+                           "comp[:, 0, :] = c[rows"),
+    "vcb_event_closing_time": ("camopt/cases/vcb/dynamics.py",
+                               "t_end = np.where(touched, t_k + np.cumsum(cells, axis=1)[:, -1]",
+                               "t_end = np.where(touched, t_k"),
     "cam_pitch_w": ("camopt/mechanics/cam.py", "w = l2 * (1 - f.dphi)", "w = l2 * (1 + f.dphi)"),
     "cam_base_angle": ("camopt/mechanics/cam.py", "/ (2 * l2 * l6))", "/ (l2 * l6))"),
     "cam_psi_eta_sign": ("camopt/mechanics/cam.py", "np.pi / 2 - eta - f.angle",

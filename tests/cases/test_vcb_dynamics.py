@@ -12,6 +12,7 @@ from scipy.integrate import solve_ivp
 from camopt.cases.vcb import VcbProblem
 from camopt.cases.vcb.identify import DATA, PARAMETERS, VcbDynamicsIdentification
 from camopt.driver import execute
+from camopt.units import MS
 from tests.conftest import CONFIGS
 from tests.helpers import load
 
@@ -308,7 +309,7 @@ def test_band_is_the_extremes_over_the_parameter_sets():
     rng = np.random.default_rng(5)
     X = np.vstack([p.vendor_x(), p.lower + rng.random((6, p.n_var)) * (p.upper - p.lower)])
     ev = p.describe(X)
-    v, latched = [], []
+    v, latched, closed, touched = [], [], [], []
     for row in [None, *p.config.dynamics_band]:
         sets = () if row is None else (
             "case.dynamics_band=[]", f"case.cam_inertia_kg_m2={row[0]}",
@@ -318,9 +319,16 @@ def test_band_is_the_extremes_over_the_parameter_sets():
         one = VcbProblem(load(CONFIGS / "vcb_velocity.toml", *sets).case).motion(X)
         v.append(np.nan_to_num(one.closing_velocity_avg, nan=0.0))
         latched.append(one.latched)
+        closed.append(one.closing_time)
+        touched.append(one.touch_time)
     np.testing.assert_array_equal(ev.extras["closing_velocity_low_m_s"], np.min(v, axis=0))
     np.testing.assert_array_equal(ev.extras["closing_velocity_high_m_s"], np.max(v, axis=0))
     np.testing.assert_array_equal(ev.extras["latched"], np.all(latched, axis=0))
+    # the members' times come from the events-only path, the nominal's from the curves
+    for name, values in (("closing_time", closed), ("touch_time", touched)):
+        np.testing.assert_array_equal(ev.extras[f"{name}_low_ms"], np.min(values, axis=0) / MS)
+        np.testing.assert_array_equal(ev.extras[f"{name}_high_ms"], np.max(values, axis=0) / MS)
+    assert np.isfinite(closed).any()  # some designs close: the times are exercised
     assert np.ptp(v, axis=0)[0] > 0  # the vendor's band has a width
 
 
