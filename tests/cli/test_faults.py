@@ -607,3 +607,65 @@ def test_a_dask_sweep_survives_a_killed_worker_and_resumes_after_losing_all(
     r = invoke("sweep", "--resume", lost, "--jobs", "1", "--quiet")
     assert r.exit_code == 0, r.output
     assert same_cells(load_sweep(lost)[1])
+
+
+@pytest.mark.slow
+def test_a_dask_sweep_whose_scheduler_is_killed_ends_in_one_line_and_resumes(
+        tmp_path, monkeypatch):
+    """The scheduler SIGKILLed once a cell is stored (a scheduler process of its own, on
+    127.0.0.1, with one nanny-less worker): one error line naming --resume, exit 2, no
+    traceback nor distributed's FutureCancelledError, the finished cells kept, and
+    ``sweep --resume`` finishes them into the inline sweep's cells."""
+    pytest.importorskip("distributed")
+    from camopt.archive.sweeps import SweepWriter
+    from camopt.sweep import run as sweep_run
+
+    monkeypatch.setattr(sweep_run, "LOST_SECONDS", 2.0)
+    info = tmp_path / "scheduler.json"
+    common = ["--scheduler-file", str(info), "--no-dashboard"]
+    procs = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler",
+                               "--host", "127.0.0.1", "--port", "0", *common],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        deadline = time.monotonic() + 60
+        while not info.exists() or not info.read_text().strip().endswith("}"):
+            assert time.monotonic() < deadline, "the scheduler did not start"
+            time.sleep(0.1)
+        address = json.loads(info.read_text())["address"]
+        procs.append(subprocess.Popen(
+            [sys.executable, "-m", "distributed.cli.dask_worker", "--no-nanny", "--nthreads",
+             "1", "--host", "127.0.0.1", *common],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        import distributed
+
+        with distributed.Client(address, timeout="30s") as client:
+            client.wait_for_workers(1, timeout=60)
+        args = ["sweep", DE, "--seeds", "0:6", "--quiet", *TINY]
+        assert invoke(*args, "--out", tmp_path / "inline.h5", "--jobs", "1").exit_code == 0
+        inline = load_sweep(tmp_path / "inline.h5")[1]
+        add = SweepWriter.add
+
+        def add_then_kill_the_scheduler(self, r):
+            add(self, r)
+            if procs[0].poll() is None:
+                procs[0].kill()
+                procs[0].wait(timeout=10)
+
+        monkeypatch.setattr(SweepWriter, "add", add_then_kill_the_scheduler)
+        out = tmp_path / "s.h5"
+        t0 = time.monotonic()
+        r = invoke(*args, "--out", out, "--executor", "dask", "--scheduler", address)
+        assert r.exit_code == 2 and one_error_line(r.stderr), r.output
+        assert "lost the Dask cluster" in r.stderr and "--resume" in r.stderr, r.stderr
+        assert "Traceback" not in r.output and "FutureCancelled" not in r.output
+        assert time.monotonic() - t0 < 40
+        assert 1 <= len(load_sweep(out)[1]) < 6
+        monkeypatch.setattr(SweepWriter, "add", add)
+        r = invoke("sweep", "--resume", out, "--jobs", "1", "--quiet")
+        assert r.exit_code == 0, r.output
+        assert {k: (x.fun, x.x.tolist()) for k, x in load_sweep(out)[1].items()} == \
+            {k: (x.fun, x.x.tolist()) for k, x in inline.items()}
+    finally:
+        for p in procs:
+            p.kill()
+            p.wait(timeout=10)
