@@ -48,16 +48,18 @@ def emb_report(tmp_path_factory):
     return archive.load_run(run), out
 
 
-def load_in_browser(page: Path, tmp_path: Path) -> tuple[list[str], dict[str, str], Path]:
-    """Open ``page`` in headless Chromium with the network blocked: its console messages,
-    the body's data attributes after load (with :data:`PROBE` added) and a screenshot."""
-    probed = tmp_path / f"probed-{page.name}"
-    probed.write_text(page.read_text().replace("</body>", PROBE + "</body>"))
-    shot = tmp_path / f"{page.stem}.png"
+def open_in_browser(page: Path, tmp_path: Path, probe: str, window: tuple[int, int],
+                    tag: str, *extra: str) -> tuple[list[str], dict[str, str], Path]:
+    """Open ``page`` with ``probe`` (a script) added in headless Chromium, network blocked,
+    in a ``window`` (width, height) px: its console messages, the body's data attributes
+    after load, and a screenshot of the page without the probe (files named by ``tag``)."""
+    probed = tmp_path / f"{tag}-{page.name}"
+    probed.write_text(page.read_text().replace("</body>", probe + "</body>"))
+    shot = tmp_path / f"{page.stem}-{tag}.png"
     base = [BROWSER, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
             f"--user-data-dir={tmp_path / 'profile'}", "--no-first-run",
             "--proxy-server=127.0.0.1:9", "--host-resolver-rules=MAP * ~NOTFOUND",
-            "--enable-logging=stderr", "--v=0", "--window-size=1100,1600"]
+            *extra, f"--window-size={window[0]},{window[1]}"]
     # the browser's profile, cache and config stay in the test's folder
     env = {**os.environ, "HOME": str(tmp_path), "XDG_CONFIG_HOME": str(tmp_path / "config"),
            "XDG_CACHE_HOME": str(tmp_path / "cache")}
@@ -70,6 +72,12 @@ def load_in_browser(page: Path, tmp_path: Path) -> tuple[list[str], dict[str, st
     subprocess.run([*base, f"--screenshot={shot}", page.as_uri()], capture_output=True,
                    timeout=120, check=True, env=env)
     return console, attrs, shot
+
+
+def load_in_browser(page: Path, tmp_path: Path) -> tuple[list[str], dict[str, str], Path]:
+    """The page in a 1100 x 1600 window with :data:`PROBE`: console, attributes, shot."""
+    return open_in_browser(page, tmp_path, PROBE, (1100, 1600), "probed",
+                           "--enable-logging=stderr", "--v=0")
 
 
 def not_blank(shot: Path) -> float:
@@ -159,22 +167,7 @@ SCREEN = (1100, 800)
 def first_screen(page: Path, tmp_path: Path) -> tuple[dict[str, str], Path]:
     """Open ``page`` in a 1100 x 800 headless Chromium window: the probe's attributes
     (:data:`FIRST_SCREEN`) and a screenshot of the first screen."""
-    probed = tmp_path / f"screen-{page.name}"
-    probed.write_text(page.read_text().replace("</body>", FIRST_SCREEN + "</body>"))
-    shot = tmp_path / f"{page.stem}-first-screen.png"
-    base = [BROWSER, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
-            f"--user-data-dir={tmp_path / 'profile'}", "--no-first-run",
-            "--proxy-server=127.0.0.1:9", "--host-resolver-rules=MAP * ~NOTFOUND",
-            f"--window-size={SCREEN[0]},{SCREEN[1]}"]
-    env = {**os.environ, "HOME": str(tmp_path), "XDG_CONFIG_HOME": str(tmp_path / "config"),
-           "XDG_CACHE_HOME": str(tmp_path / "cache")}
-    dom = subprocess.run([*base, "--dump-dom", probed.as_uri()], capture_output=True,
-                         text=True, timeout=120, env=env)
-    assert dom.returncode == 0, dom.stderr[-2000:]
-    body = re.search(r"<body([^>]*)>", dom.stdout)
-    attrs = dict(re.findall(r'data-(\w+)="([^"]*)"', body.group(1))) if body else {}
-    subprocess.run([*base, f"--screenshot={shot}", page.as_uri()], capture_output=True,
-                   timeout=120, check=True, env=env)
+    _, attrs, shot = open_in_browser(page, tmp_path, FIRST_SCREEN, SCREEN, "first-screen")
     return attrs, shot
 
 

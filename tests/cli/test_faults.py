@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import h5py
 import pytest
@@ -37,6 +38,17 @@ TINY = ["--set", "solver.generations=3", "--set", "solver.population=8",
 
 def invoke(*args):
     return runner.invoke(app, [str(a) for a in args])
+
+
+def run_three_repeats_patched(patch: str, out: Path) -> subprocess.CompletedProcess[str]:
+    """``camopt run`` of three tiny fast-switch repeats into ``out`` in a fresh Python
+    whose modules ``patch`` (Python source, run first) has changed: a fault planted at an
+    exact moment of the run."""
+    script = (patch + "from camopt.cli import main\n"
+              f"sys.argv = ['camopt', 'run', {DE!r}, '--out', {str(out)!r}, '--quiet',"
+              f" '--repeats', '3', *{TINY!r}]\nmain()\n")
+    return subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=60)
 
 
 def one_error_line(text: str) -> bool:
@@ -413,12 +425,8 @@ def test_sigterm_then_ctrl_c_during_the_final_write_keep_the_archive(tmp_path):
         "    os.kill(os.getpid(), signal.SIGINT)\n"
         "    return original(*a, **k)\n"
         "runs.atomic_write = interrupted\n"
-        "from camopt.cli import main\n"
-        f"sys.argv = ['camopt', 'run', {DE!r}, '--out', {str(out)!r}, '--quiet',"
-        f" '--repeats', '3', *{TINY!r}]\n"
-        "main()\n")
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          timeout=60)
+    )
+    proc = run_three_repeats_patched(script, out)
     assert proc.returncode == 130 and one_error_line(proc.stderr), proc.stderr
     assert len([r.index for r in archive.load_run(out).repeats]) == 3
 
@@ -440,12 +448,8 @@ def test_a_second_ctrl_c_while_exiting_after_the_first_changes_nothing(tmp_path)
         "    return original(*a, **k)\n"
         "driver.run_repeat = first_ctrl_c\n"
         "atexit.register(lambda: os.kill(os.getpid(), signal.SIGINT))  # the second\n"
-        "from camopt.cli import main\n"
-        f"sys.argv = ['camopt', 'run', {DE!r}, '--out', {str(out)!r}, '--quiet',"
-        f" '--repeats', '3', *{TINY!r}]\n"
-        "main()\n")
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          timeout=60)
+    )
+    proc = run_three_repeats_patched(script, out)
     assert proc.returncode == 130 and one_error_line(proc.stderr), proc.stderr
     assert "kept the 1 finished of 3 repeats" in proc.stderr
     assert [r.index for r in archive.load_run(out).repeats] == [0]
