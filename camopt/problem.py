@@ -111,6 +111,11 @@ class Problem:
     variables: tuple[Variable, ...] = ()
     constraint_names: tuple[str, ...] = ()
     objective_name: str = "objective"
+    redraws_each_generation: bool = False
+    """True when an evaluation depends on draws renewed every generation (a robust
+    problem's parts): a solver that keeps evaluations across generations to compare new
+    candidates with (DE's parents) evaluates the kept designs again on each generation's
+    draws, so that both sides of the comparison see the same parts."""
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -104,7 +104,8 @@ def robust_summary(run: RunView) -> dict[str, Any] | None:
         return None
     designs = [d for d in (check.get("robust"), check.get("nominal")) if d]
     scalars = [k for k in designs[0] if k.startswith("objective_") or k.startswith("yield")]
-    rows = [{"name": k.replace("objective_", f"{run.objective_name} "),
+    objective = designs[0].get("case_objective", run.objective_name)  # older archives
+    rows = [{"name": k.replace("objective_", f"{objective} "),
              "values": [d.get(k) for d in designs]} for k in scalars]
     for c in designs[0]["margins"]:
         pairs = [d["margins"][c] for d in designs]

@@ -16,7 +16,11 @@ and at ``S`` perturbed copies, population x samples in one vectorised call (in c
   is continuous in ``x``, so an infeasible candidate still tells the search how far off it
   is (a yield count is flat at 0 far from the feasible set).
 - ``f``: the nominal objective, its mean over the samples with a finite objective, or its
-  ``quantile``.
+  ``quantile``; or (``objective = "margin"``, objective name ``yield_margin``) the yield
+  column itself: among designs that meet the target the search then prefers the one
+  whose worst part at the target's order statistic keeps the most margin to every limit
+  (a max-min margin design, for cases whose own objective pulls against the margins, as
+  the VCB's least surplus work pulls against its latch energy).
 - ``extras``: the nominal design's metrics and ``yield`` (the estimate, share of samples
   meeting every constraint with a finite objective).
 
@@ -72,6 +76,9 @@ SCREENED = 1e6
 """Added to the yield column of a candidate not sampled (its nominal design infeasible)."""
 YIELD = "yield"
 """Name of the yield constraint column and of the yield estimate among the extras."""
+MARGIN = "yield_margin"
+"""Objective name of a robust run with ``objective = "margin"``: the yield column (the
+worst normalised constraint at the target's order statistic; <= 0 met, lower better)."""
 ROBUST_KEY = 0x524F42  # "ROB": the spawn-key word of every robust draw
 CHECK_KEY = 2**32 - 1  # the final check's key under ROBUST_KEY (never a repeat index)
 
@@ -205,11 +212,14 @@ class RobustProblem(Problem):
     """A case's Problem whose evaluation is robust (module docstring): same variables,
     constraints plus ``yield``, objective a statistic of the case's."""
 
+    redraws_each_generation = True
+
     def __init__(self, base: Problem, robust_plan: Plan) -> None:
         self.base, self.plan = base, robust_plan
         self.variables = base.variables
         self.constraint_names = (*base.constraint_names, YIELD)
-        self.objective_name = base.objective_name
+        self.objective_name = MARGIN if robust_plan.spec.objective == "margin" \
+            else base.objective_name
         self.rng = np.random.default_rng(0)
         self.unit: NDArray | None = None
         self.nominal_best: tuple[NDArray, float] | None = None
@@ -265,8 +275,10 @@ class RobustProblem(Problem):
             g[todo, :-1] = np.partition(s.g, k, axis=1)[:, k, :]
             g[todo, -1] = np.partition(s.worst, k, axis=1)[:, k]
             estimate[todo] = s.feasible.mean(axis=1)
-            if spec.objective != "nominal":
+            if spec.objective in ("mean", "quantile"):
                 f[todo] = statistic(s.f, spec.objective, spec.quantile)
+        if spec.objective == "margin":
+            f = g[:, -1].copy()
         return Evaluation(f, g, {**nominal.extras, YIELD: estimate})
 
     def _keep_finalists(self, X: NDArray, ev: Evaluation) -> None:
@@ -367,6 +379,8 @@ def check(problem: RobustProblem, designs: Sequence[NDArray], seed: int) -> list
         out.append({
             "samples": spec.check_samples, "yield": rate["rate"], "yield_low": rate["ci_low"],
             "yield_high": rate["ci_high"], "confidence": spec.confidence,
+            # the case's objective, also when the search minimised the margin
+            "case_objective": problem.base.objective_name,
             "objective_nominal": float(nominal.f[i]), "objective_mean": float(mean[i]),
             f"objective_q{round(spec.quantile * 100):02d}": float(quant[i]),
             "nominal_feasible": bool(nominal.feasible[i]),

@@ -5,6 +5,7 @@ The fast switch (configs/fast_switch_de.toml) keeps it fast: a closed-form model
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -87,6 +88,25 @@ def test_chunks_change_nothing():
     ea, eb = a.evaluate(X), b.evaluate(X)
     np.testing.assert_array_equal(ea.g, eb.g)
     np.testing.assert_array_equal(ea.f, eb.f)
+
+
+def test_margin_objective_is_the_yield_column():
+    """objective = "margin": the objective is the yield column itself (the worst sample's
+    worst normalised constraint at the target's order statistic), named yield_margin, so
+    that of two designs that both meet the target the one with more margin ranks first;
+    constraints and the yield estimate are those of the same draws under any objective."""
+    margin = _problem("robust.screen=false", "robust.objective=margin")
+    mean = _problem("robust.screen=false", "robust.objective=mean")
+    assert margin.objective_name == "yield_margin" != mean.objective_name
+    for p in (margin, mean):
+        p.reseed(np.random.SeedSequence(4))
+        p.new_generation()
+    X = _near_optimum(margin)
+    a, b = margin.evaluate(X), mean.evaluate(X)
+    np.testing.assert_array_equal(a.f, a.g[:, -1])
+    np.testing.assert_array_equal(a.g, b.g)
+    np.testing.assert_array_equal(a.extras["yield"], b.extras["yield"])
+    assert not np.array_equal(a.f, b.f)
 
 
 def test_objective_statistics():
@@ -180,3 +200,21 @@ def test_show_and_report_give_the_robust_check(tmp_path):
     html = CliRunner().invoke(app, ["report", str(out), "--out", str(tmp_path / "r.html")])
     assert html.exit_code == 0, html.output
     assert 'id="robust-check"' in (tmp_path / "r.html").read_text()
+
+
+def test_margin_run_names_the_case_objective_in_its_check():
+    """A run that minimised yield_margin still reports the case's objective (its nominal,
+    mean and quantile values) under the case's name in the check's table."""
+    from camopt import report
+
+    cfg = load(CONFIGS / "fast_switch_de.toml", *SMALL, "robust.samples=8",
+               "robust.check_samples=200", "robust.objective=margin")
+    result = execute(cfg)
+    assert result.problem.objective_name == "yield_margin"
+    check = result.robust_check["robust"]
+    assert check["case_objective"] == "closure_time_ms"
+    assert check["objective_nominal"] > 0  # a closure time, not a margin
+    view = SimpleNamespace(robust_check=result.robust_check, objective_name="yield_margin",
+                           robust={"yield_target": 0.95})
+    names = [row["name"] for row in report.robust_summary(view)["rows"]]
+    assert "closure_time_ms nominal" in names and not any("yield_margin" in n for n in names)

@@ -211,9 +211,11 @@ class RobustSection(Strict):
     search_yield: float | None = Field(
         None, gt=0, le=1, description="share of a generation's draws a candidate must pass "
         "during the search (unset: yield_target); above it, a margin against lucky draws")
-    objective: Literal["nominal", "mean", "quantile"] = Field(
+    objective: Literal["nominal", "mean", "quantile", "margin"] = Field(
         "nominal", description="what is minimised: the nominal design's objective, its mean "
-        "over the samples, or its quantile (below)")
+        "over the samples, or its quantile (below); margin: the yield column itself, the "
+        "worst normalised constraint at the yield target's order statistic (the most robust "
+        "design; the case's objective is reported, not optimised)")
     quantile: float = Field(0.9, gt=0, lt=1, description="the objective's quantile when "
                             "objective = \"quantile\"")
     distribution: Literal["uniform", "normal"] = Field(

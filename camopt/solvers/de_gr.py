@@ -90,6 +90,11 @@ class DEGR(Polishing, Solver):
         # reflect into bounds, midway between the parent and the violated bound
         trial = np.where(trial < self.lo, (self.lo + self.pop) / 2, trial)
         trial = np.where(trial > self.hi, (self.hi + self.pop) / 2, trial)
+        if self.problem.redraws_each_generation:
+            # the parents again, on this generation's draws: a parent kept for passing an
+            # earlier generation's draws by luck would otherwise lead best/1 (and every
+            # comparison) with an evaluation no trial is measured against
+            return np.vstack([snap(self.problem, trial), self.pop])
         return snap(self.problem, trial)
 
     def tell(self, X: NDArray, ev: Evaluation) -> None:
@@ -101,6 +106,9 @@ class DEGR(Polishing, Solver):
             self.pop, self.ev = X.copy(), ev
             return
         assert self.ev is not None
+        n = len(self.pop)
+        if len(X) == 2 * n and self.problem.redraws_each_generation:
+            X, ev, self.ev = X[:n], ev.take(slice(0, n)), ev.take(slice(n, 2 * n))
         win = ~better(self.ev.f, self.ev.violation, ev.f, ev.violation)  # trial ties win
         self.pop = np.where(win[:, None], X, self.pop)
         self.ev = ev.where(win, self.ev)

@@ -41,3 +41,34 @@ def test_crossover_takes_each_gene_with_probability_cr_and_one_gene_always():
         assert trial.mean() == pytest.approx(cr + (1 - cr) / d, abs=0.015)
     assert np.all(binomial_crossover(parent, mutant, 0.0, rng).sum(axis=1) == 1)
     assert np.all(binomial_crossover(parent, mutant, 1.0, rng) == 1)
+
+
+def test_parents_are_evaluated_again_on_each_generations_draws():
+    """On a problem that redraws its parts every generation (robust), each ask after the
+    first holds the trials and then the parents, and after tell the parents that stay
+    carry their evaluation on the current draws, not a stale one from an earlier
+    generation (the comparison with the trials is on the same parts)."""
+    from camopt import robust
+    from camopt.driver import prepare
+    from camopt.solvers.de_gr import DEGR, DEGROptions
+    from tests.conftest import CONFIGS
+    from tests.helpers import load
+
+    problem, _ = prepare(load(CONFIGS / "fast_switch_de.toml", "robust.samples=8",
+                              "robust.screen=false"))
+    assert isinstance(problem, robust.RobustProblem) and problem.redraws_each_generation
+    solver = DEGR(problem, DEGROptions(population=6, generations=3), np.random.default_rng(1))
+    problem.reseed(np.random.SeedSequence(2))
+    problem.new_generation()
+    first = solver.ask()
+    solver.tell(first, problem.evaluate(first))
+    problem.new_generation()
+    both = solver.ask()
+    assert len(both) == 12
+    np.testing.assert_array_equal(both[6:], first)
+    ev = problem.evaluate(both)
+    solver.tell(both, ev)
+    kept = np.all(solver.pop == first, axis=1)
+    assert kept.any()
+    np.testing.assert_array_equal(solver.ev.g[kept], ev.g[6:][kept])
+    np.testing.assert_array_equal(solver.ev.f[kept], ev.f[6:][kept])

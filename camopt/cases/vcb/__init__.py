@@ -29,6 +29,7 @@ TOLERANCES = {  # docs/assumptions.md, "Default tolerances"
     "kc1_n_per_mm": "±5%", "kc2_n_per_mm": "±5%",  # spring rates (EN 13906-1 grade 2)
     "l1_mm": "±0.05", "l3_mm": "±0.05", "l4_mm": "±0.05", "l5_mm": "±0.05",  # step 2
     "theta1_deg": "±0.05",
+    "release_offset_deg": "±0.25",  # the closing latch's seat, where it is a design variable
     "case.l1_mm": "±0.05", "case.l3_mm": "±0.05", "case.l4_mm": "±0.05",  # step 1
     "case.l5_mm": "±0.05", "case.theta1_deg": "±0.05",
 }
@@ -46,6 +47,7 @@ def resolve_cam_archive(config: CaseConfig, load: ArchiveLoader) -> CaseConfig:
                           "not a VCB step-1 (cam) run archive")
     design = CamDesign(a0=run.best.metrics["a0"], a1=x["a1"], a2=x["a2"], a3=x["a3"],
                        a4=x.get("a4", 0.0), a5=x.get("a5", 0.0),
+                       release_offset_deg=x.get("release_offset_deg"),
                        kc1_n_per_mm=x["kc1_n_per_mm"], kc2_n_per_mm=x["kc2_n_per_mm"])
     return config.model_copy(update={"cam_design": design})
 

@@ -42,6 +42,9 @@ class CamDesign(Strict):
     a3: float
     a4: float = Field(0.0, description="quartic term (beyond the paper; 0: its cubic)")
     a5: float = Field(0.0, description="quintic term (beyond the paper; 0: its cubic)")
+    release_offset_deg: float | None = Field(
+        None, gt=0, lt=90, description="the closing latch's release offset (beyond the paper; "
+        "None: the case's release_offset_deg)")
     kc1_n_per_mm: Positive
     kc2_n_per_mm: Positive
 
@@ -172,6 +175,10 @@ class VcbConfig(CaseConfig):
     a5_bounds: Bounds | None = Field(
         None, description="beyond the paper: the quintic term a5 (rad/rad^5), with a4; unset: "
         "no quintic term")
+    release_offset_bounds_deg: Bounds | None = Field(
+        None, description="beyond the paper: where the closing latch holds the charged spring "
+        "crank (past its dead centre) becomes a design variable, release_offset_deg; the "
+        "band's sets keep their spread about it; unset: the identified release_offset_deg")
     kc1_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),
                                         description="Eq 38 widened, docs/assumptions.md")
     kc2_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),
@@ -205,6 +212,10 @@ class VcbConfig(CaseConfig):
         if self.a5_bounds is not None and self.a4_bounds is None:
             raise ValueError("a5_bounds needs a4_bounds: the law's terms are taken in "
                              "order (a quintic has a quartic term)")
+        r = self.release_offset_bounds_deg
+        if self.kind == "vcb" and r is not None and not 0 < r.lower <= r.upper < 90:
+            raise ValueError("release_offset_bounds_deg: the latch holds the crank past its "
+                             "dead centre: 0 < lower <= upper < 90 deg")
         if (self.kind == "vcb" and self.step == "fourbar" and self.cam_design is None
                 and self.cam_archive is None):
             raise ValueError("step 'fourbar' needs the step-1 design: set cam_design or "

@@ -4,7 +4,7 @@ or step 2 (four-bar), Kang, Huang & Yang (2023), Eqs 37-43."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -57,12 +57,22 @@ class VcbProblem(Problem, VariesCase):
                          c.kc2_bounds_n_per_mm.upper * 1e3, 1e-3),
             ) + tuple(Variable(name, b.lower, b.upper)
                       for name, b in (("a4", c.a4_bounds), ("a5", c.a5_bounds)) if b is not None)
+            self.higher_terms = len(self.variables) - 5
+            r = c.release_offset_bounds_deg
+            if r is not None:  # beyond the paper: where the latch holds the charged crank
+                self.variables += (Variable("release_offset_deg", r.lower * DEG, r.upper * DEG,
+                                            1 / DEG),)
+            self.release_column = len(self.variables) - 1 if r is not None else None
+            self.case_release = c.release_offset_deg * DEG
             self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly",
                                      "rod_travel")
         else:
             if c.cam_design is None:  # cam_archive is read into cam_design before a build
                 raise ConfigError("case", "cam_archive", "the step-1 archive was not read")
             self.cam_a, self.cam_kc = self._cam(c.cam_design)
+            self.release_column = None
+            self.case_release = (c.release_offset_deg if c.cam_design.release_offset_deg is None
+                                 else c.cam_design.release_offset_deg) * DEG
             self.variables = tuple(
                 Variable(name, b.lower * f, b.upper * f, 1 / f)
                 for name, b, f in (("l1_mm", c.l1_bounds_mm, MM), ("l3_mm", c.l3_bounds_mm, MM),
@@ -104,7 +114,8 @@ class VcbProblem(Problem, VariesCase):
         n = len(X)
         if self.config.step == "cam":
             # a1..a3, kc1, kc2, then any higher terms (a4, a5): the paper's order first
-            A = np.column_stack([np.full(n, self.model.phi0()), X[:, :3], X[:, 5:]])
+            A = np.column_stack([np.full(n, self.model.phi0()), X[:, :3],
+                                 X[:, 5:5 + self.higher_terms]])
             return A, X[:, 3:5], np.tile(self.model.vendor_link, (n, 1)) if link is None \
                 else link
         return np.tile(self.cam_a, (n, 1)), np.tile(self.cam_kc, (n, 1)), X[:, :5]
@@ -119,9 +130,10 @@ class VcbProblem(Problem, VariesCase):
         """The vendor's design in this step's variables (initial design of Tables 6, 7)."""
         if self.config.step == "cam":
             c = self.config
-            higher = np.zeros(len(self.variables) - 5)  # the vendor's law is a cubic
+            higher = np.zeros(self.higher_terms)  # the vendor's law is a cubic
+            release = [] if self.release_column is None else [c.release_offset_deg * DEG]
             return np.r_[self.model.vendor_a[1:], c.kc1_n_per_mm * 1e3, c.kc2_n_per_mm * 1e3,
-                         higher]
+                         higher, release]
         return self.model.vendor_link.copy()
 
     def evaluate(self, X: NDArray) -> Evaluation:
@@ -158,8 +170,18 @@ class VcbProblem(Problem, VariesCase):
         """Closing dynamics of each row of ``X`` with the identified parameters
         (:mod:`camopt.cases.vcb.dynamics`)."""
         A, kc, link = self.designs(X, link)
+        params = replace(self.dynamics, release_offset_rad=self.release_offset(X))
         return closing_motion(self.model, A, kc, link, self.rod_offset, self.load,
-                              self.dynamics, self.config.dynamics_steps)
+                              params, self.config.dynamics_steps)
+
+    def release_offset(self, X: NDArray) -> NDArray | float:
+        """Where the closing latch holds the charged spring crank, past its dead centre,
+        for each row of ``X`` (rad, (n,) or one for all): the design variable
+        ``release_offset_deg`` when the run has it, else the step-1 design's (step 2) or
+        the identified ``release_offset_deg``."""
+        if self.release_column is None:
+            return self.case_release
+        return np.atleast_2d(np.asarray(X, dtype=float))[:, self.release_column]
 
     def motion_band(self, X: NDArray, nominal: ClosingMotion, link: NDArray | None = None
                     ) -> MotionBand:
@@ -170,8 +192,15 @@ class VcbProblem(Problem, VariesCase):
             return MotionBand.of(nominal)
         A, kc, link = self.designs(X, link)
         k, n = len(np.ravel(self.band.cam_kg_m2)), len(A)
+        sets = self.band.repeat(n)
+        # a design's latch moved from the identified offset moves every set's with it: the
+        # sets keep their spread (what the ADAMS data leave open) about the design's
+        moved = np.broadcast_to(self.release_offset(X) - self.config.release_offset_deg * DEG,
+                                (n,))
+        sets = replace(sets, release_offset_rad=np.asarray(sets.release_offset_rad)
+                       + np.tile(moved, k))
         members = closing_events(self.model, A, kc, link, self.rod_offset, self.load,
-                                 self.band.repeat(n), self.config.dynamics_steps, sets=k)
+                                 sets, self.config.dynamics_steps, sets=k)
         return MotionBand.of(nominal, members, k)
 
     def _evaluate(self, X: NDArray, detail: bool, link: NDArray | None = None) -> Evaluation:
