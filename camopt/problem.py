@@ -113,9 +113,9 @@ class Problem:
     objective_name: str = "objective"
     redraws_each_generation: bool = False
     """True when an evaluation depends on draws renewed every generation (a robust
-    problem's parts): a solver that keeps evaluations across generations to compare new
-    candidates with (DE's parents) evaluates the kept designs again on each generation's
-    draws, so that both sides of the comparison see the same parts."""
+    problem's parts). ``de_gr`` then evaluates its parents again on each generation's
+    draws, so that a trial and its parent are compared on the same parts; other solvers
+    keep what they kept (docs/tolerance.md, "Parents on the same parts")."""
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -24,12 +24,16 @@ and at ``S`` perturbed copies, population x samples in one vectorised call (in c
 - ``extras``: the nominal design's metrics and ``yield`` (the estimate, share of samples
   meeting every constraint with a finite objective).
 
-Per-generation draws let a design that passed one generation's draws by luck stay in a
-population (a DE parent, a swarm's personal best). So the ``finalists`` best designs that
-met the target on their own generation's draws, with the solver's best, are evaluated
-again on ``check_samples`` fresh draws when the repeat ends, and the best of them by
-Deb's rules on those draws is the repeat's result (:meth:`RobustProblem.select`): there a
-design is feasible when the Wilson lower bound of its yield reaches ``yield_target``.
+A solver that keeps evaluations across generations compares new candidates with designs
+judged on other draws; ``redraws_each_generation`` asks it to evaluate them again on each
+generation's draws (``de_gr`` does: its parents; ``pso``'s personal bests, ``nsga2``'s
+survivors and ``cmaes``'s best so far are not). Even so a design can pass one
+generation's draws by luck and be the solver's best when it stops. So the ``finalists``
+best designs that met the target on their own generation's draws, with the solver's
+best, are evaluated again on ``check_samples`` fresh draws when the repeat ends, and the
+best of them by Deb's rules on those draws is the repeat's result
+(:meth:`RobustProblem.select`): there a design is feasible when the Wilson lower bound
+of its yield reaches ``yield_target``.
 
 With ``screen`` a candidate whose nominal design breaks a constraint is not sampled: its
 columns are its nominal constraints, and its yield column its nominal worst constraint
@@ -58,7 +62,7 @@ from camopt import stats
 from camopt.capabilities import CAPABILITIES, VariesCase
 from camopt.config.models import CaseConfig, RobustSection
 from camopt.errors import ConfigError
-from camopt.problem import FEASIBILITY_TOL, Evaluation, Problem, deb_best
+from camopt.problem import FEASIBILITY_TOL, Evaluation, ObjectiveFloor, Problem, deb_best
 from camopt.variation import (
     Distribution,
     Vary,
@@ -283,12 +287,16 @@ class RobustProblem(Problem):
 
     def _keep_finalists(self, X: NDArray, ev: Evaluation) -> None:
         """Keep the ``finalists`` distinct designs with the lowest objective among those
-        that met the target on their generation's draws."""
+        that met the target on their generation's draws, each with its latest passing
+        score (a design that fails a later generation's draws keeps its place: it passed
+        once, and the selection judges it on fresh draws)."""
         ok = ev.feasible
         if not ok.any():
             return
-        Xs = np.vstack([self.finalists[0], X[ok]])
-        fs = np.concatenate([self.finalists[1], ev.f[ok]])
+        # this generation's rows first: np.unique keeps a design's first row, so a design
+        # evaluated again (a DE parent) keeps its score on the latest draws, not a lucky one
+        Xs = np.vstack([X[ok], self.finalists[0]])
+        fs = np.concatenate([ev.f[ok], self.finalists[1]])
         Xs, first = np.unique(Xs, axis=0, return_index=True)
         fs = fs[first]
         keep = np.argsort(fs, kind="stable")[:self.plan.spec.finalists]
@@ -325,6 +333,11 @@ class RobustProblem(Problem):
 
     def initial_x(self) -> NDArray | None:
         return self.base.initial_x()
+
+    def objective_floor(self) -> ObjectiveFloor | None:
+        """The case's floor for its objective and any statistic of it over the draws; the
+        margin has none (a more negative margin is always possible in principle)."""
+        return None if self.plan.spec.objective == "margin" else self.base.objective_floor()
 
 
 def _forward(name: str) -> Any:

@@ -5,7 +5,6 @@ The fast switch (configs/fast_switch_de.toml) keeps it fast: a closed-form model
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -202,19 +201,31 @@ def test_show_and_report_give_the_robust_check(tmp_path):
     assert 'id="robust-check"' in (tmp_path / "r.html").read_text()
 
 
-def test_margin_run_names_the_case_objective_in_its_check():
+def test_margin_run_names_the_case_objective_in_its_check(tmp_path):
     """A run that minimised yield_margin still reports the case's objective (its nominal,
-    mean and quantile values) under the case's name in the check's table."""
-    from camopt import report
+    mean and quantile values) under the case's name: in the check's table, and in the
+    summary beside the reference's objective, which is never set beside the margin."""
+    from typer.testing import CliRunner
 
-    cfg = load(CONFIGS / "fast_switch_de.toml", *SMALL, "robust.samples=8",
-               "robust.check_samples=200", "robust.objective=margin")
-    result = execute(cfg)
-    assert result.problem.objective_name == "yield_margin"
-    check = result.robust_check["robust"]
+    from camopt import archive, report
+    from camopt.cli import app
+
+    out = tmp_path / "m.h5"
+    r = CliRunner().invoke(app, ["run", str(CONFIGS / "fast_switch_robust.toml"), "--out",
+                                 str(out), "--quiet", "--set", "solver.generations=8",
+                                 "--set", "solver.population=12", "--set",
+                                 "robust.check_samples=200", "--set", "robust.samples=8",
+                                 "--set", "robust.objective=margin"])
+    assert r.exit_code == 0, r.output
+    view = archive.load_run(out)
+    assert view.objective_name == "yield_margin"
+    check = view.robust_check["robust"]
     assert check["case_objective"] == "closure_time_ms"
     assert check["objective_nominal"] > 0  # a closure time, not a margin
-    view = SimpleNamespace(robust_check=result.robust_check, objective_name="yield_margin",
-                           robust={"yield_target": 0.95})
     names = [row["name"] for row in report.robust_summary(view)["rows"]]
     assert "closure_time_ms nominal" in names and not any("yield_margin" in n for n in names)
+    rows = {row["name"]: row for row in report.summary(view)["rows"]}
+    assert rows["yield_margin"]["optimum"] == view.best.objective
+    assert rows["yield_margin"]["reference"] is None
+    assert rows["closure_time_ms"]["optimum"] == check["objective_nominal"]
+    assert rows["closure_time_ms"]["reference"] > 0  # the reference design's closure time

@@ -76,6 +76,26 @@ def test_the_band_moves_with_the_design_latch():
         min(times.min(), nominal[0]) * 1e3, rel=1e-12)
 
 
+def test_designs_with_different_latches_evaluate_together_as_alone():
+    """The band's sets are repeated set-major and each design's move tiled over them: a
+    batch of designs with different latches and springs gives each design's band exactly
+    as evaluated alone, to rounding (a design-major slip would give one design another's
+    latch)."""
+    p = latch_problem()
+    X = np.tile(p.vendor_x(), (3, 1))
+    X[:, -1] = np.array([15.0, 17.5, 18.9]) * DEG
+    X[:, 3:5] *= np.array([[1.0, 1.0], [1.04, 0.97], [0.96, 1.05]])
+    together = p.describe(X)
+    for i in range(3):
+        alone = p.describe(X[i:i + 1])
+        np.testing.assert_allclose(together.g[i], alone.g[0], rtol=1e-9, atol=1e-12)
+        for name in ("cam_contact_time_low_ms", "cam_contact_time_high_ms",
+                     "closing_velocity_low_m_s", "closing_velocity_high_m_s",
+                     "latch_kinetic_energy_low_j"):
+            assert together.extras[name][i] == pytest.approx(alone.extras[name][0],
+                                                             rel=1e-9), name
+
+
 def test_step_two_takes_the_step_one_design_latch():
     c = load(CONFIGS / "vcb_velocity.toml").case
     design = CamDesign(a1=0.24, a2=0.01, a3=-0.017, kc1_n_per_mm=7.72, kc2_n_per_mm=9.33,

@@ -203,12 +203,16 @@ def _at(a: NDArray, k: NDArray, w: NDArray) -> NDArray:
         return (1 - w) * a[rows, np.maximum(k - 1, 0)] + w * a[rows, k]
 
 
-def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps: int = 200
+def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps: int = 64
                   ) -> tuple[NDArray, NDArray]:
     """Cam speed (rad/s) and time (s) when the freely turning cam meets the roller, (n,):
     from rest, the crank ``release_offset`` past its dead centre, to the crank angle
     QOX + theta0 (theta_c = 0), under eps of the closing springs' work with J_cam alone.
-    A crank at or before its dead centre never turns (infinite time)."""
+    A crank at or before its dead centre never turns (infinite time). The speed is exact
+    (the energy at the contact); the time, on ``steps`` intervals graded toward the
+    release, is within 4e-5 of 12,800 intervals at the vendor's latch (14.07 deg) and
+    1e-5 at 18.8 deg: 64 rather than more, because with the latch a design variable
+    every sampled part has its own path and this geometry is a third of a band's cost."""
     p = params.columns(len(kc))
     # cam angle theta_c of the release: negative, measured back from the roller contact
     start = model.dead_centre + p.release_offset_rad - model.contact_crank_angle
