@@ -39,6 +39,12 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
     "vcb_event_closing_time": ("camopt/cases/vcb/dynamics.py",
                                "t_end = np.where(touched, t_k + np.cumsum(cells, axis=1)[:, -1]",
                                "t_end = np.where(touched, t_k"),
+    # the design's closing latch moves every band set (set-major order, issue #21)
+    "vcb_band_latch_order": ("camopt/cases/vcb/problem.py", "+ np.tile(moved, k))",
+                             "+ np.repeat(moved, k))"),
+    "vcb_band_latch_sign": ("camopt/cases/vcb/problem.py",
+                            "self.release_offset(X) - self.config.release_offset_deg * DEG",
+                            "self.config.release_offset_deg * DEG - self.release_offset(X)"),
     "cam_pitch_w": ("camopt/mechanics/cam.py", "w = l2 * (1 - f.dphi)", "w = l2 * (1 + f.dphi)"),
     "cam_base_angle": ("camopt/mechanics/cam.py", "/ (2 * l2 * l6))", "/ (l2 * l6))"),
     "cam_psi_eta_sign": ("camopt/mechanics/cam.py", "np.pi / 2 - eta - f.angle",
@@ -107,6 +113,9 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
                        " = True\n", "    rng.integers(0, d, n)\n"),
     "de_best1_base": ("camopt/solvers/de_gr.py", "return best + factor *",
                       "return pop + factor *"),
+    "de_parents_stale": ("camopt/solvers/de_gr.py",
+                         "X, ev, self.ev = X[:n], ev.take(slice(0, n)), ev.take(slice(n, 2 * n))",
+                         "X, ev = X[:n], ev.take(slice(0, n))"),
     "de_best1_self": ("camopt/solvers/de_gr.py", "idx = np.where(idx == np.arange(n)[:, None], "
                       "idx[:, -1:], idx)[:, :2]", "idx = idx[:, :2]"),
     # PSO inertia (Eq 40)
@@ -131,6 +140,7 @@ MIRROR = {
                                       "tests/cases/test_emb_cam.py"],
     "camopt/cases/emb_cam/problem.py": ["tests/cases/test_emb_cam.py"],
     "camopt/cases/fast_switch/problem.py": ["tests/cases/test_fast_switch.py"],
+    "camopt/cases/vcb/problem.py": ["tests/cases/test_vcb_release.py"],
     "camopt/sweep/run.py": ["tests/test_sweep.py"],
     "camopt/driver.py": ["tests/test_driver.py"],
     "camopt/record.py": ["tests/test_record.py"],
