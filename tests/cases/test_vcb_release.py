@@ -119,3 +119,12 @@ def test_the_default_tolerances_hold_the_latch_where_it_is_a_variable():
 def test_a_latch_not_past_its_dead_centre_is_refused(bounds):
     with pytest.raises(ConfigError, match="release_offset_bounds_deg"):
         load(CONFIGS / "vcb_velocity.toml", [f"case.release_offset_bounds_deg={bounds}"])
+
+
+@pytest.mark.parametrize("field, value", [("release_offset_bounds_deg", "[14.0,19.0]"),
+                                          ("a4_bounds", "[-0.01,0.01]")])
+def test_step_one_variables_in_a_step_two_case_are_refused(field, value):
+    """Step 2 takes the cam design (law and latch) from step 1; its own bounds for them
+    would be silently ignored, so they are refused."""
+    with pytest.raises(ConfigError, match=f"{field}: a step-1"):
+        load(CONFIGS / "vcb_fourbar.toml", [f"case.{field}={value}"])

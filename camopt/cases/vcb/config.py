@@ -212,6 +212,12 @@ class VcbConfig(CaseConfig):
         if self.a5_bounds is not None and self.a4_bounds is None:
             raise ValueError("a5_bounds needs a4_bounds: the law's terms are taken in "
                              "order (a quintic has a quartic term)")
+        if self.kind == "vcb" and self.step == "fourbar":
+            for name in ("a4_bounds", "a5_bounds", "release_offset_bounds_deg"):
+                if getattr(self, name) is not None:
+                    raise ValueError(f"{name}: a step-1 (cam) design variable; step "
+                                     "'fourbar' takes the cam design, its latch included, "
+                                     "from cam_design or cam_archive")
         r = self.release_offset_bounds_deg
         if self.kind == "vcb" and r is not None and not 0 < r.lower <= r.upper < 90:
             raise ValueError("release_offset_bounds_deg: the latch holds the crank past its "
