@@ -31,7 +31,7 @@ typecheck: install
 
 # docs/cases/<kind>.md from the case config models' field descriptions (a test checks them)
 docs: install
-	$(BIN)/python -m camopt.casedocs
+	$(BIN)/python -m camopt.reporting.casedocs
 
 bench: install
 	$(BIN)/python -m bench

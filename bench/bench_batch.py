@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from camopt import batch
 from camopt.cases import build_problem
-from camopt.driver import load
-from camopt.perf import tune_allocator
+from camopt.core import batch
+from camopt.core.perf import tune_allocator
+from camopt.engine.driver import load
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 

@@ -13,8 +13,8 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from camopt.cases.emb_cam import EmbCamProblem
-from camopt.driver import execute, load
-from camopt.perf import tune_allocator
+from camopt.core.perf import tune_allocator
+from camopt.engine.driver import execute, load
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize, rosen
 
-from camopt.driver import execute, load
+from camopt.engine.driver import execute, load
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "opening_spring_lse6.toml"
 

@@ -10,8 +10,8 @@ import dataclasses
 import time
 from pathlib import Path
 
-from camopt.driver import execute, load
-from camopt.perf import tune_allocator
+from camopt.core.perf import tune_allocator
+from camopt.engine.driver import execute, load
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 PAIRS = (("fast_switch_robust", "fast_switch_de"), ("vcb_velocity_robust", "vcb_velocity"),

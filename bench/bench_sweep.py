@@ -15,10 +15,11 @@ from pathlib import Path
 
 import numpy as np
 
-from camopt import sweep as sw
-from camopt.archive.sweeps import cell_row, load_sweep
-from camopt.driver import load
-from camopt.sweep.run import run_sweep, workers
+from camopt.archive.sweeps import SweepWriter, cell_row, load_sweep
+from camopt.config import sweep_spec as sw
+from camopt.core.stats import sweep_summary
+from camopt.engine.driver import load
+from camopt.engine.sweep import run_sweep, workers
 
 ROOT = Path(__file__).resolve().parents[1]
 VCB = ROOT / "configs" / "vcb.toml"
@@ -40,6 +41,13 @@ generations = 30
 '''
 
 
+
+def _sweep(spec: sw.SweepSpec, path: Path, jobs: int) -> dict:
+    """A whole sweep into an archive at ``path`` (results as :func:`run_sweep` returns)."""
+    results: dict = {}
+    return run_sweep(spec, results, lambda total: SweepWriter(path, spec, results, total),
+                     jobs=jobs)
+
 def _tiny_spec(n_seeds: int, folder: Path, text: str = TINY) -> tuple[sw.SweepSpec, Path]:
     case = folder / "tiny.toml"
     case.write_text(text)
@@ -56,7 +64,7 @@ def _same_cells(a: dict, b: dict) -> bool:
 def _timed_sweep(spec: sw.SweepSpec, path: Path, jobs: int) -> tuple[float, float, dict]:
     """Wall time (s), CPU time of this process and its finished workers (s), results."""
     t0, c0 = time.perf_counter(), os.times()
-    results = run_sweep(spec, path, {}, jobs=jobs)
+    results = _sweep(spec, path, jobs)
     wall, c1 = time.perf_counter() - t0, os.times()
     cpu = sum(c1[:4]) - sum(c0[:4])  # user + system, self + reaped children
     return wall, cpu, results
@@ -107,7 +115,7 @@ def small_and_tiny_workers(rounds: int = 5) -> None:
         folder = Path(tmp)
         for name, text, n in (("small", SMALL, 32), ("tiny", TINY, 400)):
             spec, _ = _tiny_spec(n, folder, text)
-            run_sweep(spec, folder / "warm.h5", {}, jobs=1)  # imports, caches
+            _sweep(spec, folder / "warm.h5", 1)  # imports, caches
             walls: dict[int, list[float]] = {1: [], 2: []}
             cpus: dict[int, list[float]] = {1: [], 2: []}
             host, cells = [], {}
@@ -146,7 +154,7 @@ def per_cell_scaling() -> None:
         for n in (25, 400):
             spec, _ = _tiny_spec(n, folder)
             t0 = time.perf_counter()
-            run_sweep(spec, folder / f"s{n}.h5", {}, jobs=1)
+            _sweep(spec, folder / f"s{n}.h5", 1)
             per_cell[n] = (time.perf_counter() - t0) / n
     print(f"tiny cells, one job: {per_cell[25] * 1e3:.2f} ms per cell for 25 cells, "
           f"{per_cell[400] * 1e3:.2f} ms for 400: ratio {per_cell[400] / per_cell[25]:.2f} "
@@ -177,7 +185,7 @@ def ten_thousand_cells(n: int = 10_000) -> None:
         full = folder / "full.h5"
         spec, _ = _tiny_spec(n, folder)
         t0 = time.perf_counter()
-        run_sweep(spec, full, {}, jobs=1)  # in this process: no interpreter start counted
+        _sweep(spec, full, 1)  # in this process: no interpreter start counted
         wall = time.perf_counter() - t0
         a, b = load_sweep(killed)[1], load_sweep(full)[1]
         same = _same_cells(a, b)
@@ -198,10 +206,10 @@ def vcb_workers() -> None:
         for jobs in (1, 2):
             path = Path(tmp) / f"jobs{jobs}.h5"
             t0 = time.perf_counter()
-            results = run_sweep(spec, path, {}, jobs=jobs)
+            results = _sweep(spec, path, jobs)
             times[jobs] = time.perf_counter() - t0
             host.append(host_parallelism())
-            rows = sw.summary(spec, results.values())
+            rows = sweep_summary(spec, results.values())
             tables[jobs] = json.dumps([{k: v for k, v in r.items() if not k.startswith("wall")}
                                        for r in rows], sort_keys=True)
     print(f"3 x 5 VCB sweep: jobs=1 {times[1]:.1f} s, jobs=2 {times[2]:.1f} s, "

@@ -1,5 +1,5 @@
 """Tolerance analysis: 10,000 VCB samples (spring rate +-5 %, fixed link l1 +-0.1 mm,
-closing dynamics included) evaluated in one pass of cache-sized chunks (camopt.batch, as
+closing dynamics included) evaluated in one pass of cache-sized chunks (camopt.core.batch, as
 ``camopt tolerance`` does; one call over 10^4 rows would need ~8 GiB), against a loop of
 one-row calls (timed on a subset and given per sample)."""
 
@@ -10,10 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
-from camopt import batch
 from camopt.cases import build_problem
-from camopt.driver import load
-from camopt.perf import tune_allocator
+from camopt.core import batch
+from camopt.core.perf import tune_allocator
+from camopt.engine.driver import load
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "vcb_velocity.toml"
 

@@ -10,8 +10,8 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from camopt.cases.vcb import VcbProblem
-from camopt.driver import execute, load
-from camopt.perf import tune_allocator
+from camopt.core.perf import tune_allocator
+from camopt.engine.driver import execute, load
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "vcb.toml"
 

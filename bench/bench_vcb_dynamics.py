@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from camopt.cases.vcb import VcbProblem
-from camopt.driver import load
+from camopt.engine.driver import load
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "vcb_velocity.toml"
 

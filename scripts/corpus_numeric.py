@@ -26,7 +26,7 @@ import tempfile
 out = Path(tempfile.mkdtemp(prefix="camopt-corpus-"))
 files = [f for f in sorted(ROOT.glob("*.toml")) if not f.name.startswith("vcb")]
 for f in files:
-    from camopt.driver import load as _load
+    from camopt.engine.driver import load as _load
     data = _load(f).data
     solver = data["solver"]["name"]
     keys = [f"case.{k}" for k, v in data["case"].items() if isinstance(v, (int, float)) and not isinstance(v, bool)]

@@ -19,8 +19,8 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-TESTS = ["tests/mechanics", "tests/cases", "tests/test_sweep.py", "tests/solvers",
-         "tests/test_stats.py", "tests/test_driver.py", "tests/test_record.py"]
+TESTS = ["tests/mechanics", "tests/cases", "tests/engine/test_sweep.py", "tests/solvers",
+         "tests/core/test_stats.py", "tests/engine/test_driver.py", "tests/core/test_record.py"]
 
 # name: (file, original text, mutated text); each original must occur exactly once
 MUTANTS: dict[str, tuple[str, str, str]] = {
@@ -94,16 +94,16 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
     "switch_mass_eq32": ("camopt/cases/fast_switch/problem.py", "+ 0.021 * self.M3  # Eq 32",
                          "+ 0.21 * self.M3  # Eq 32"),
     # seeds
-    "sweep_cell_spawn_key": ("camopt/sweep/run.py", "spawn_key=(cell.seed,)",
+    "sweep_cell_spawn_key": ("camopt/engine/sweep.py", "spawn_key=(cell.seed,)",
                              "spawn_key=(cell.seed + 1,)"),
-    "sweep_cell_entropy": ("camopt/sweep/run.py", "SeedSequence(cell.entropy,",
+    "sweep_cell_entropy": ("camopt/engine/sweep.py", "SeedSequence(cell.entropy,",
                            "SeedSequence(cell.entropy + 1,"),
-    "driver_seed": ("camopt/driver.py", "np.random.SeedSequence(seed).spawn(repeats)",
+    "driver_seed": ("camopt/engine/driver.py", "np.random.SeedSequence(seed).spawn(repeats)",
                     "np.random.SeedSequence(seed + 1).spawn(repeats)"),
     # the repeat record's success and evaluations to target (issue #25)
-    "driver_success_target": ("camopt/driver.py", "succeeded([fun], [feasible], target)",
+    "driver_success_target": ("camopt/engine/driver.py", "succeeded([fun], [feasible], target)",
                               "succeeded([fun], [feasible], None)"),
-    "record_nfev_to_target": ("camopt/record.py",
+    "record_nfev_to_target": ("camopt/core/record.py",
                               'ok &= np.asarray(history["best_objective"]) <= target',
                               'ok &= np.asarray(history["best_objective"]) >= target'),
     # DE-gr operators
@@ -124,10 +124,10 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
     "pso_inertia_constant": ("camopt/solvers/pso.py", "return w_max - iteration / iterations "
                              "* (w_max - w_min)", "return w_max"),
     # statistics
-    "stats_mw_direction": ("camopt/stats.py", "p_a_better = 1.0 - float(res.statistic)",
+    "stats_mw_direction": ("camopt/core/stats.py", "p_a_better = 1.0 - float(res.statistic)",
                            "p_a_better = float(res.statistic)"),
-    "stats_mw_one_sided": ("camopt/stats.py", 'alternative="two-sided"', 'alternative="less"'),
-    "stats_verdict": ("camopt/stats.py", 'if test["p_a_better"] > 0.5',
+    "stats_mw_one_sided": ("camopt/core/stats.py", 'alternative="two-sided"', 'alternative="less"'),
+    "stats_verdict": ("camopt/core/stats.py", 'if test["p_a_better"] > 0.5',
                       'if test["p_a_better"] < 0.5'),
 }
 
@@ -141,12 +141,12 @@ MIRROR = {
     "camopt/cases/emb_cam/problem.py": ["tests/cases/test_emb_cam.py"],
     "camopt/cases/fast_switch/problem.py": ["tests/cases/test_fast_switch.py"],
     "camopt/cases/vcb/problem.py": ["tests/cases/test_vcb_release.py"],
-    "camopt/sweep/run.py": ["tests/test_sweep.py"],
-    "camopt/driver.py": ["tests/test_driver.py"],
-    "camopt/record.py": ["tests/test_record.py"],
+    "camopt/engine/sweep.py": ["tests/engine/test_sweep.py"],
+    "camopt/engine/driver.py": ["tests/engine/test_driver.py"],
+    "camopt/core/record.py": ["tests/core/test_record.py"],
     "camopt/solvers/de_gr.py": ["tests/solvers/test_de_gr.py"],
     "camopt/solvers/pso.py": ["tests/solvers/test_pso.py"],
-    "camopt/stats.py": ["tests/test_stats.py"],
+    "camopt/core/stats.py": ["tests/core/test_stats.py"],
 }
 
 

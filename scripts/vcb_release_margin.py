@@ -20,7 +20,7 @@ import numpy as np
 
 from camopt.cases.vcb.dynamics import MotionParameters, free_rotation
 from camopt.cases.vcb.problem import VcbProblem
-from camopt.driver import load
+from camopt.engine.driver import load
 from camopt.units import DEG
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "vcb.toml"

@@ -11,7 +11,7 @@ import pytest
 
 from camopt.cases import CaseSpec, register_case
 from camopt.config import models
-from camopt.problem import Evaluation, Problem, Variable
+from camopt.core.problem import Evaluation, Problem, Variable
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from camopt.config import LoadedConfig
-from camopt.driver import load as load_case_file
+from camopt.engine.driver import load as load_case_file
 
 
 def load(path: str | Path, *overrides: str) -> LoadedConfig:

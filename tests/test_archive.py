@@ -10,7 +10,7 @@ import pytest
 
 from camopt import archive
 from camopt.archive import runs
-from camopt.driver import execute
+from camopt.engine.driver import execute
 from camopt.errors import ArchiveError
 from tests.conftest import CONFIGS
 from tests.helpers import load

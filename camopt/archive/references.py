@@ -12,8 +12,8 @@ from pathlib import Path
 from camopt.archive.runs import load_run
 from camopt.cases import get_case
 from camopt.config import LoadedConfig
+from camopt.core.runview import RunView
 from camopt.errors import ArchiveError, ConfigError
-from camopt.runview import RunView
 
 
 def resolve_references(config: LoadedConfig) -> LoadedConfig:

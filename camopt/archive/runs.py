@@ -22,12 +22,12 @@ import numpy as np
 
 from camopt.archive.files import atomic_write, claim, open_archive, versions
 from camopt.archive.tables import read_table, write_table
-from camopt.driver import RunRecord
+from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
+from camopt.core.record import Repeat, nfev_to_target
+from camopt.core.runview import BestView, RunView
+from camopt.core.stats import succeeded
+from camopt.engine.driver import RunRecord
 from camopt.errors import ArchiveError
-from camopt.problem import ACTIVE_TOL, FEASIBILITY_TOL
-from camopt.record import Repeat, nfev_to_target
-from camopt.runview import BestView, RunView
-from camopt.stats import succeeded
 
 SCHEMA_VERSION = 2
 READABLE_SCHEMAS = (1, 2)

@@ -6,7 +6,7 @@ Layout (schema 2), one HDF5 file:
   ``config_toml`` (the case file's text), ``config_path``, ``spec`` (JSON: the validated
   config data, the grid, the seed range), ``seed_entropy``, ``cells_total``,
   ``cells_done``, ``complete``, ``created``;
-- ``/cells``: one row per finished cell (a :class:`camopt.record.Repeat`), columns
+- ``/cells``: one row per finished cell (a :class:`camopt.core.record.Repeat`), columns
   ``point``, ``seed`` (the seed index k: the record's ``index``), ``objective`` (its
   ``fun``), ``feasible``, ``success``, ``nfev``, ``nit``, ``wall_s``, ``converged_nit``,
   ``nfev_to_target`` (1-D datasets), the best designs ``x`` as ragged rows
@@ -40,9 +40,10 @@ import numpy as np
 from camopt.archive.files import atomic_write, open_archive, read_regular, versions
 from camopt.archive.runs import check_schema, damaged
 from camopt.archive.tables import write_table
+from camopt.config.sweep_spec import SweepSpec
+from camopt.core.record import Repeat, seed_id
+from camopt.core.stats import sweep_summary
 from camopt.errors import ArchiveError
-from camopt.record import Repeat, seed_id
-from camopt.sweep.spec import SweepSpec, summary
 
 SCHEMA_VERSION = 2
 SNAPSHOT_SECONDS = 30.0
@@ -111,7 +112,7 @@ def write_sweep(path: Path, spec: SweepSpec, results: dict[tuple[int, int], Repe
         hist = g.create_group("history")
         for key in sorted({k for c in cells for k in c.history}):
             _ragged(hist, key, [np.asarray(c.history.get(key, [])).tolist() for c in cells])
-        write_table(f.create_group("summary"), summary(spec, results.values()))
+        write_table(f.create_group("summary"), sweep_summary(spec, results.values()))
 
     atomic_write(path, write, replace=replace)
 

@@ -10,9 +10,10 @@ from camopt.cases.registry import (
     cases,
     get_case,
     register_case,
+    run_requirements,
 )
 from camopt.config.models import CaseConfig
-from camopt.problem import Problem
+from camopt.core.problem import Problem
 
 
 def build_problem(config: CaseConfig) -> Problem:
@@ -21,4 +22,4 @@ def build_problem(config: CaseConfig) -> Problem:
 
 
 __all__ = ["CaseSpec", "ProfileCircle", "ProfileCurve", "build_problem", "case_configs",
-           "cases", "get_case", "register_case"]
+           "cases", "get_case", "register_case", "run_requirements"]

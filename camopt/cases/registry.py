@@ -18,14 +18,14 @@ from importlib.metadata import entry_points
 from typing import TYPE_CHECKING, Any, Protocol
 
 from camopt.config.models import CaseConfig
+from camopt.core.problem import Problem
+from camopt.core.requirements import Requirement
 from camopt.errors import ConfigError
-from camopt.problem import Problem
-from camopt.requirements import Requirement
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from camopt.runview import RunView
+    from camopt.core.runview import RunView
 
 ENTRY_POINT_GROUP = "camopt.cases"
 
@@ -71,7 +71,7 @@ class CaseSpec:
     """Everything camopt needs to know about one mechanism.
 
     ``figures`` is ``"module:function"``, imported only when figures are drawn (matplotlib
-    is slow to import); the function takes a :class:`~camopt.runview.RunView` and returns
+    is slow to import); the function takes a :class:`~camopt.core.runview.RunView` and returns
     ``{name: Figure}``. ``paper`` holds the paper's reported values, used to mark figures
     only, never by a model. ``resolve`` fills config values that come from other run
     archives (VCB step 2's cam) before a run.
@@ -94,7 +94,7 @@ class CaseSpec:
     that do not apply to a run (not its variables, not a field its case varies) are
     skipped."""
     requirements: RequirementsOf | None = None
-    """What a design must meet whatever the run optimised (:mod:`camopt.requirements`);
+    """What a design must meet whatever the run optimised (:mod:`camopt.core.requirements`);
     ``show``, ``report``, ``compare`` and ``tolerance`` evaluate them."""
     reference: str = ""
     """The one name of the design the optimum is shown beside: ``"vendor, Sec 2.3"``
@@ -168,3 +168,19 @@ def get_case(kind: str) -> CaseSpec:
 def case_configs() -> dict[str, type[CaseConfig]]:
     """Case kinds to their config models (what the loader validates ``[case]`` with)."""
     return {kind: spec.config for kind, spec in cases().items()}
+
+
+def run_requirements(run: RunView, violated: list[str] | None = None
+                     ) -> tuple[Requirement, ...]:
+    """The case's requirements of this run's designs, then every constraint of the run
+    (``violated``: the constraints a failing design breaks, named in the words)."""
+    from camopt.core.runview import design_values
+
+    spec = get_case(run.kind)
+    names = set(design_values(run))
+    reqs = tuple(spec.requirements(run.case, names)) if spec.requirements else ()
+    broken = ", ".join(violated or [])
+    return (*reqs, Requirement(
+        "every constraint of the run", "feasible", flag=True,
+        source="the run's config ([case] and solver)",
+        failing=f"violates the run's constraints{f' ({broken})' if broken else ''}"))

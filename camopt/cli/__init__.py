@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 import sys
 
-from camopt import interrupts
 from camopt.cli import (  # noqa: F401  (commands)
     catalog,
     compare,
@@ -17,6 +16,7 @@ from camopt.cli import (  # noqa: F401  (commands)
     tolerance,
 )
 from camopt.cli.app import app, internal_error
+from camopt.engine import interrupts
 
 
 def main() -> None:

@@ -13,14 +13,12 @@ import enum
 import sys
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import click
 import typer
-from rich.console import Console
-from rich.markup import escape
 
-from camopt import interrupts
+from camopt.engine import interrupts
 from camopt.errors import CamoptError
 
 if TYPE_CHECKING:
@@ -30,8 +28,6 @@ if TYPE_CHECKING:
 app = typer.Typer(rich_markup_mode="rich", no_args_is_help=True, add_completion=True,
                   context_settings={"help_option_names": ["-h", "--help"]},
                   help="Batch optimiser for spring-actuated mechanisms.")
-out = Console()
-err = Console(stderr=True)
 
 
 def _print_version(value: bool) -> None:
@@ -104,39 +100,8 @@ def load_case(case: Path, overrides: Sequence[str] | None = None) -> LoadedConfi
     """A case file validated against every registered case and solver, with archive
     references (e.g. VCB step 2's ``cam_archive``) read."""
     from camopt import archive
-    from camopt.driver import load
+    from camopt.engine.driver import load
 
     return archive.resolve_references(load(case, list(overrides or [])))
 
 
-def fmt(value: Any) -> str:
-    """A table cell: floats to 6 significant digits, lists comma-joined, None as '-'."""
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    if isinstance(value, list):
-        return ",".join(fmt(v) for v in value)
-    return "-" if value is None else escape(str(value))  # labels may hold [markup]
-
-
-def print_rows(title: str, rows: list[dict[str, Any]], columns: list[str],
-               limit: int | None) -> None:
-    """The given columns (those present) through the word-safe layout
-    (:func:`camopt.cli.layout.print_table`); every column is in the JSON."""
-    from camopt.cli.layout import print_table
-
-    columns = [c for c in columns if c in rows[0]]
-    note = "all columns: --format json"
-    if limit is not None and len(rows) > limit:
-        note = (f"first {limit} of {len(rows)} rows; camopt show for all, "
-                "--format json for all columns")
-    cells = [[_plain(row.get(c)) for c in columns] for row in rows[:limit]]
-    print_table(f"{title} ({note})", columns, cells, numeric=[True] * len(columns))
-
-
-def _plain(value: Any) -> str:
-    """:func:`fmt` without markup escaping (the layout escapes)."""
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    if isinstance(value, list):
-        return ",".join(_plain(v) for v in value)
-    return "-" if value is None else str(value)

@@ -9,7 +9,8 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
-from camopt.cli.app import app, errors, load_case, out
+from camopt.cli.app import app, errors, load_case
+from camopt.cli.console import out
 
 
 @app.command()
@@ -19,8 +20,8 @@ def validate(case: Annotated[Path, typer.Argument(help="case file (TOML)")],
     design can reach, or one inherited from a file whose case table differs."""
     import numpy as np
 
-    from camopt.driver import build_solver, prepare
-    from camopt.targets import target_warnings
+    from camopt.engine.driver import build_solver, prepare
+    from camopt.engine.targets import target_warnings
 
     with errors():
         config = load_case(case, set_)
@@ -63,8 +64,8 @@ def write_text(path: Path, text: str, force: bool) -> None:
 def list_solvers() -> None:
     """List solvers with their options (TOML lines for a solver table, each with its
     meaning) and the case kinds each runs on."""
-    from camopt.capabilities import capability_name
     from camopt.cases import cases
+    from camopt.core.capabilities import capability_name
     from camopt.solvers import solvers
 
     for name, cls in solvers().items():

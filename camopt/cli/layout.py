@@ -9,11 +9,15 @@ is drawn as columns when the longest word of each column, padded, fits the conso
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 from rich.markup import escape
 from rich.table import Table
 
-from camopt.cli.app import out
+from camopt.cli.console import fmt, out, plain
+
+if TYPE_CHECKING:
+    from camopt.core.runview import RunView
 
 BORDER = 3
 """Characters a column adds to its text: a rule and a space each side."""
@@ -61,3 +65,255 @@ def print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]
                   highlight=False, soft_wrap=True)
         pairs = "; ".join(f"{escape(c)}: {escape(v)}" for c, v in zip(columns[1:], row[1:]))
         out.print(f"  {pairs}", highlight=False)  # wraps at spaces, never inside a word
+
+
+def print_rows(title: str, rows: list[dict[str, Any]], columns: list[str],
+               limit: int | None) -> None:
+    """The given columns (those present) through the word-safe layout
+    (:func:`camopt.cli.layout.print_table`); every column is in the JSON."""
+    columns = [c for c in columns if c in rows[0]]
+    note = "all columns: --format json"
+    if limit is not None and len(rows) > limit:
+        note = (f"first {limit} of {len(rows)} rows; camopt show for all, "
+                "--format json for all columns")
+    cells = [[plain(row.get(c)) for c in columns] for row in rows[:limit]]
+    print_table(f"{title} ({note})", columns, cells, numeric=[True] * len(columns))
+
+
+
+def cell(value: Any) -> str:
+    """A table cell (:func:`camopt.reporting.report.format_value`), rich markup escaped."""
+    from camopt.reporting import report
+
+    return escape(report.format_value(value))
+
+
+def print_show(view: RunView, rows: int | None = None) -> None:
+    """The run summary: what ran, the best design beside the reference design (two
+    columns, units in the names), the repeats (the first ``rows``) and the solver's table.
+    Fits 80 columns: numbers are never wrapped, names fold when they must."""
+    from camopt.reporting import report
+
+    doc = report.show(view)
+    out.print(escape(view.path), soft_wrap=True, highlight=False)
+    reps = view.repeats
+    n_run = view.run.get("repeats", len(reps))
+    done = f"{len(reps)} of {n_run}" if view.interrupted else f"{len(reps)}"
+    out.print(f"case [cyan]{escape(view.kind)}[/], solver [cyan]{escape(view.solver_name)}[/], "
+              f"{done} repeats, seed {view.run.get('seed', '-')}", highlight=False)
+    if view.interrupted:
+        out.print("[bold red]interrupted[/]: the archive holds the finished repeats only")
+    print_verdict(doc)
+    if doc.get("pareto_summary"):
+        print_pareto(doc["pareto_summary"])
+    style = "green" if view.best.feasible else "bold red"
+    out.print(f"run's constraints: [{style}]{escape(report.status(view))}[/]", highlight=False)
+    print_best(report.summary(view))  # raw values: inf and NaN are shown
+    robust = report.robust_summary(view)
+    if robust is not None:
+        out.print(robust_table(robust))
+    print_repeats(doc, rows)
+    for r in doc["repeats"]:
+        for note in r["notes"]:
+            out.print(f"[bold]note[/] (repeat {r['spawn_key'][-1]}): {escape(note)}",
+                      highlight=False)
+    if doc["table"]:
+        best = doc["best"]
+        columns = ["label", *best["x"], view.objective_name, "feasible", "active", "violated"]
+        print_fitted("solver's table", doc["table"], columns, rows)
+
+
+def print_verdict(doc: dict[str, Any], title: str = "best design") -> None:
+    """The overall verdict in words, the requirement | limit | value | margin | pass table
+    of ``doc`` (``report.show``'s), and the reference design's verdict in one line."""
+    from camopt.reporting import report
+
+    style = "bold green" if doc["verdict"] == "pass" else "bold red"
+    out.print(f"[{style}]{escape(doc['verdict_sentence'])}[/]", highlight=False)
+    rows = report.verdict_rows(doc["requirements"])
+    styles = ["red" if r["pass"] is False else None for r in doc["requirements"]]
+    if rows:
+        print_table(f"requirements of the {title}", report.VERDICT_COLUMNS, rows,
+                    numeric=[False, True, True, True, True], styles=styles)
+    ref = doc.get("reference")
+    if ref:
+        judged = {"pass": "[green]PASS[/]", "fail": "[red]FAIL[/]"}.get(ref["verdict"] or "",
+                                                                      "not judged")
+        words = ref["verdict_sentence"].removeprefix("PASS: ").removeprefix("FAIL: ")
+        out.print(f"{escape(ref['label'])}: {judged}: {escape(words)}", highlight=False)
+
+
+def print_pareto(doc: dict[str, Any]) -> None:
+    """A Pareto run's front: objectives, extent and knee, and what the headline is."""
+    from camopt.reporting import report
+
+    print_table(f"Pareto front: {doc['front_size']} feasible of {doc['designs']} designs",
+                report.PARETO_COLUMNS, report.pareto_rows(doc),
+                numeric=[False, False, True, True, True])
+    if doc["knee"]:
+        knee = ", ".join(f"{k} {report.format_value(v)}" for k, v in doc["knee"].items())
+        out.print(f"knee (nearest the ideal, objectives normalised): {escape(knee)}",
+                  highlight=False)
+    out.print(f"headline design below: {escape(doc['headline'])}", highlight=False)
+
+
+def print_best(summary: dict[str, Any]) -> None:
+    """The best design beside the reference design (``report.summary``)."""
+    from camopt.reporting import report
+
+    label = summary["reference_label"]
+    columns = ["quantity", "optimum", *(["reference"] if label else [])]
+    rows, sections, section = [], [], None
+    for i, row in enumerate(summary["rows"]):
+        if row["section"] != section:
+            sections.append(i)
+        section = row["section"]
+        values = [row["optimum"], row["reference"]] if label else [row["optimum"]]
+        name = f"objective: {row['name']}" if i == 0 else row["name"]
+        rows.append([name, *(report.format_value(v) for v in values)])
+    print_table("best design" + (f" beside the {label}" if label else ""), columns, rows,
+                sections=sections)
+
+
+def robust_table(summary: dict[str, Any]) -> Table:
+    """A robust run's final check beside the best nominal design (``report.robust_summary``)."""
+    table = Table(title=f"robust check ({summary['samples']} fresh draws for both; "
+                  f"target {cell(summary['yield_target'])})", title_justify="left")
+    table.add_column("", overflow="fold")
+    for label in summary["labels"]:
+        table.add_column(label, justify="right", no_wrap=True)
+    for row in summary["rows"]:
+        table.add_row(escape(row["name"]), *(cell(v) for v in row["values"]))
+    return table
+
+
+def print_repeats(doc: dict[str, Any], rows: int | None) -> None:
+    reps = doc["repeats"]
+    stats = [r["objective"] for r in reps if r["feasible"] and r["objective"] is not None]
+    line = f"repeats: {sum(r['feasible'] for r in reps)} of {len(reps)} feasible"
+    if stats:
+        line += (f"; objective best {cell(min(stats))}, median "
+                 f"{cell(float(sorted(stats)[len(stats) // 2]))}, worst {cell(max(stats))}")
+    out.print(line, highlight=False)
+    if len(reps) <= 1:
+        return
+    shown = reps if rows is None else reps[:rows]
+    title = "repeats (repeat k: child k of SeedSequence(run.seed))"
+    if len(shown) < len(reps):
+        title += f"; first {len(shown)} of {len(reps)}, camopt show for all"
+    table = Table(title=title, title_justify="left")
+    columns = ("objective", "feasible", "nfev", "converged_nit")
+    for col in ("repeat", *columns, "wall_s"):
+        table.add_column(col, justify="right", no_wrap=True)
+    for r in shown:
+        table.add_row(cell(r["spawn_key"][-1]), *(cell(r[c]) for c in columns),
+                      f"{r['wall_s']:.2f}")
+    out.print(table)
+
+
+def print_fitted(title: str, rows: list[dict[str, Any]], columns: list[str],
+                 limit: int | None) -> None:
+    """A table of as many of ``columns`` as fit the console without wrapping a number
+    (the rest are in ``--format json``); the first ``limit`` rows."""
+    columns = [c for c in columns if c in rows[0]]
+    shown_rows = rows if limit is None else rows[:limit]
+    texts = {c: [cell(r.get(c)) for r in shown_rows] for c in columns}
+    width, kept = 1, list[str]()
+    for c in columns:
+        w = max(len(c), *(len(t) for t in texts[c])) + 3  # padding and a rule
+        if kept and width + w > out.width:
+            break
+        kept.append(c)
+        width += w
+    notes = []
+    if len(kept) < len(columns):
+        notes.append(f"{len(kept)} of {len(columns)} columns")
+    if len(shown_rows) < len(rows):
+        notes.append(f"first {len(shown_rows)} of {len(rows)} rows")
+    note = ("; ".join(notes) + "; all: camopt show --format json") if notes else ""
+    table = Table(title=escape(f"{title} ({note})" if note else title), title_justify="left")
+    for c in kept:
+        table.add_column(escape(c), justify="right", no_wrap=True)
+    for i in range(len(shown_rows)):
+        table.add_row(*(texts[c][i] for c in kept))
+    out.print(table)
+
+
+
+def print_verdicts(doc: dict[str, Any], names: list[str]) -> None:
+    """Each run's verdict in words, then requirement | limit | one value per run (with
+    pass or FAIL)."""
+    from camopt.reporting import report
+
+    for name, judged, words in zip(names, doc["verdict"], doc["verdict_sentence"]):
+        style = "green" if judged == "pass" else "bold red"
+        out.print(f"{escape(name)}: [{style}]{escape(words)}[/]", highlight=False)
+    rows: dict[str, list[str]] = {}
+    for k, reqs in enumerate(doc["requirements"]):
+        for cells in report.verdict_rows(reqs):
+            row = rows.setdefault(cells[0], [cells[0], cells[1], *("-" for _ in names)])
+            row[2 + k] = f"{cells[2]} {cells[4]}"
+    print_table("requirements", ["requirement", "limit", *names], list(rows.values()),
+                numeric=[False, True, *(True for _ in names)])
+
+
+def compare_rows(doc: dict[str, Any]) -> list[list[str]]:
+    """The compare table's rows: config differences, objective, feasibility, variables,
+    metrics (without those already shown: a variable repeated as a metric, ``feasible``
+    as 1, the reference design's ``initial_*`` when equal in every run) and repeat
+    statistics; values as :func:`camopt.reporting.report.format_value` prints them."""
+    from camopt.reporting import report
+
+    def row(name: str, values: list[Any]) -> list[str]:
+        return [name, *(report.format_value(v) for v in values)]
+
+    rows = [row(k, v) for k, v in doc["config_differences"].items()]
+    rows += [row("objective", doc["objective"]), row("feasible", doc["feasible"])]
+    rows += [row(k, v) for k, v in doc["x"].items()]
+    shown = {"feasible", "objective", *doc["x"]}
+    for key, values in doc["metrics"].items():
+        same = all(v == values[0] for v in values)
+        if key in shown or (key.startswith(report.REFERENCE_PREFIXES) and same):
+            continue
+        rows.append(row(key, values))
+    for stat in ("runs", "best", "median", "worst", "feasible_fraction", "success_rate"):
+        rows.append(row(f"repeats: {stat}", [s[stat] for s in doc["statistics"]]))
+    return rows
+
+
+def print_hypervolume(hv: dict[str, Any], names: list[str]) -> None:
+    ref = ", ".join(f"{n} {fmt(v)}" for n, v in zip(hv["objectives"], hv["reference_point"] or []))
+    out.print(f"hypervolume of the feasible fronts (normalised by their union; reference "
+              f"point {ref or '-'}; larger is better):")
+    for name, value, size in zip(names, hv["values"], hv["sizes"]):
+        out.print(f"  {name}: {value:.4f} ({size} designs)")
+
+
+def success_rate_text(s: dict[str, float]) -> str:
+    return f"{s['rate']:.0%} [{s['ci_low']:.0%}, {s['ci_high']:.0%}]"
+
+
+def print_ranking(doc: dict[str, Any]) -> None:
+    """A sweep's verdict (each grid point's success rate against run.min_success_rate)
+    and its grid points ranked (``report.rank_sweep``): a table, or ``name: value`` lines
+    when a word would not fit."""
+    from camopt.reporting import report
+
+    print_verdict(doc, "sweep (run.min_success_rate)")
+
+    rows = []
+    for r in doc["ranking"]:
+        vs = r.get("vs_best")
+        rows.append([str(r["rank"]), r["label"], f"{r['successes']}/{r['runs']}",
+                     *(report.format_value(r[k]) for k in ("best", "median",
+                                                            "median_nfev_to_target")),
+                     f"{vs['p_value']:.3g}" if vs else "-"])
+    print_table(f"sweep {doc['sweep']}: grid points ranked", ["rank", "grid point",
+                "success", "best", "median", "nfev", "p"], rows,
+                numeric=[True, False, True, True, True, True, True])
+    out.print("success: successful/runs; nfev: median evaluations to the target; p: "
+              "Mann-Whitney against rank 1; worst and more: --format json", highlight=False)
+    for r in doc["ranking"]:
+        if r.get("vs_best"):
+            out.print(escape(r["vs_best"]["verdict"]))
+

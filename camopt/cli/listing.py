@@ -11,7 +11,8 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from camopt.cli.app import Format, app, errors, out
+from camopt.cli.app import Format, app, errors
+from camopt.cli.console import out
 
 
 @app.command(name="runs")
@@ -24,7 +25,7 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
     from camopt import archive
     from camopt.archive.listing import list_archives
     from camopt.errors import CamoptError
-    from camopt.report import format_value, verdict
+    from camopt.reporting.report import format_value, verdict
 
     with errors():
         rows = list_archives(folder)

@@ -42,8 +42,9 @@ def plot(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="arch
          force: Annotated[bool, typer.Option(help="replace existing PNGs of these names")]
          = False) -> None:
     """Write PNG figures: convergence and the case's curves."""
-    from camopt import archive, plots
+    from camopt import archive
     from camopt.archive.sweeps import load_sweep
+    from camopt.reporting import plots
 
     with errors():
         folder = out_dir or path.parent / f"{path.stem}-plots"
@@ -68,7 +69,7 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
     circle and roller as a DXF drawing in mm (dxf); every format also writes the profiles'
     point files (x,y,z in mm)."""
     from camopt import archive
-    from camopt.export import export_run
+    from camopt.reporting.export import export_run
 
     with errors():
         view = archive.load_run(run_path)
@@ -91,7 +92,7 @@ def report(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="ar
     figures, repeat statistics, notes, versions and seeds; for a sweep, its ranking."""
     from camopt import archive
     from camopt.cli.catalog import write_text
-    from camopt.html_report import render
+    from camopt.reporting.html_report import render
 
     with errors():
         target = out or path.with_suffix(".html")

@@ -10,9 +10,10 @@ from typing import Annotated, Any
 
 import typer
 
-from camopt.cli.app import app, err, errors, load_case
+from camopt.cli.app import app, errors, load_case
+from camopt.cli.console import err
+from camopt.engine.interrupts import deferred
 from camopt.errors import ArchiveError
-from camopt.interrupts import deferred
 
 
 @app.command()
@@ -32,9 +33,9 @@ def run(
 ) -> None:
     """Run a case file and write an HDF5 run archive."""
     from camopt import archive
-    from camopt.cli.show import print_show
-    from camopt.driver import execute, prepare
-    from camopt.perf import tune_allocator
+    from camopt.cli.layout import print_show
+    from camopt.core.perf import tune_allocator
+    from camopt.engine.driver import execute, prepare
 
     overrides = list(set_ or [])
     if seed is not None:  # recorded in the archive's config like any override

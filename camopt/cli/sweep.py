@@ -11,7 +11,9 @@ from typing import Annotated, Any
 
 import typer
 
-from camopt.cli.app import app, err, errors, is_validation_error, load_case, out, print_rows
+from camopt.cli.app import app, errors, is_validation_error, load_case
+from camopt.cli.console import err, out
+from camopt.cli.layout import print_rows
 from camopt.cli.run import claim_out, default_out
 from camopt.errors import CamoptError
 
@@ -34,9 +36,10 @@ def sweep(
     quiet: Annotated[bool, typer.Option(help="no progress bar")] = False,
 ) -> None:
     """Run every grid point x seed; one sweep archive with a summary per grid point."""
-    from camopt import sweep as sweep_mod
-    from camopt.perf import tune_allocator
-    from camopt.sweep import run as sweep_run
+    from camopt.archive.sweeps import SweepWriter
+    from camopt.core.perf import tune_allocator
+    from camopt.core.stats import sweep_summary
+    from camopt.engine import sweep as sweep_run
 
     with errors():
         if executor not in ("local", "dask"):
@@ -61,14 +64,17 @@ def sweep(
             tune_allocator()
             try:
                 with _cell_progress(quiet) as progress:
-                    sweep_run.run_sweep(spec, path, results, jobs=jobs or os.cpu_count() or 1,
-                                        executor=executor, scheduler=scheduler,
-                                        progress=progress, replace=force or resume is not None)
+                    replace = force or resume is not None
+                    sweep_run.run_sweep(
+                        spec, results,
+                        lambda total: SweepWriter(path, spec, results, total, replace=replace),
+                        jobs=jobs or os.cpu_count() or 1, executor=executor,
+                        scheduler=scheduler, progress=progress)
             except sweep_run.SweepInterrupted as exc:
                 print(f"interrupted: {exc}; finish with: camopt sweep --resume {path}",
                       file=sys.stderr)
                 raise typer.Exit(130) from None
-    rows = sweep_mod.summary(spec, results.values())
+    rows = sweep_summary(spec, results.values())
     if not quiet:
         print_rows(f"sweep {path}", rows, list(rows[0]), None)
     else:
@@ -81,8 +87,9 @@ def _sweep_setup(case: Path | None, seeds: str, grid: list[str], overrides: list
                  resume: Path | None) -> Any:
     """The sweep's spec and the cells already done (none for a new sweep); called with the
     archive claimed, so a resumed archive cannot change under it."""
-    from camopt import sweep as sweep_mod
     from camopt.archive.sweeps import load_sweep
+    from camopt.config import sweep_spec as sweep_mod
+    from camopt.engine.sweep import validate_spec
 
     if resume is not None:
         spec, results = load_sweep(resume)
@@ -98,7 +105,7 @@ def _sweep_setup(case: Path | None, seeds: str, grid: list[str], overrides: list
     spec = sweep_mod.SweepSpec(config.effective(), str(case), config.text,
                                sweep_mod.parse_grid(grid), sweep_mod.parse_seeds(seeds))
     try:
-        spec.validate()
+        validate_spec(spec)
     except Exception as exc:
         if not is_validation_error(exc):
             raise

@@ -11,16 +11,17 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 from rich.markup import escape
 
-from camopt.cli.app import Format, app, errors, fmt, out
+from camopt.cli.app import Format, app, errors
+from camopt.cli.console import fmt, out
 from camopt.cli.layout import print_table
 from camopt.errors import CamoptError
 
 if TYPE_CHECKING:  # imported inside the command: the CLI starts without numpy
-    from camopt.tolerance import Tolerance
+    from camopt.engine.tolerance import Tolerance
 
 
 class Dist(str, enum.Enum):
-    """``--dist`` (the names of :class:`camopt.tolerance.Distribution`, which imports scipy:
+    """``--dist`` (the names of :class:`camopt.engine.tolerance.Distribution`, which imports scipy:
     the command line lists them without it)."""
 
     uniform = "uniform"
@@ -52,9 +53,9 @@ def tolerance(
 ) -> None:
     """Vary a run's optimum within tolerances: yield, percentiles, sensitivities."""
     from camopt import archive
-    from camopt.perf import tune_allocator
-    from camopt.report import jsonable
-    from camopt.tolerance import Distribution, analyse, default_varies, parse_vary
+    from camopt.core.perf import tune_allocator
+    from camopt.engine.tolerance import Distribution, analyse, default_varies, parse_vary
+    from camopt.reporting.report import jsonable
 
     with errors():
         tune_allocator()  # chunk temporaries stay mapped (docs/design.md, Performance)
@@ -94,8 +95,8 @@ def _write(result: Tolerance, path: Path, force: bool) -> None:
 
 def _figures(result: Tolerance, folder: Path, metric: str | None, stem: str,
              force: bool) -> list[Path]:
-    from camopt import plots
-    from camopt.tolerance_figures import figures
+    from camopt.reporting import plots
+    from camopt.reporting.tolerance_figures import figures
 
     return plots.save(figures(result, metric), folder, f"{stem}-tolerance", force,
                       key="--plot")
@@ -103,7 +104,7 @@ def _figures(result: Tolerance, folder: Path, metric: str | None, stem: str,
 
 def print_tolerance(doc: dict) -> None:
     """The analysis as rich tables: yield, then each metric's spread and its driver."""
-    from camopt import report
+    from camopt.reporting import report
 
     varied = ", ".join(f"{v['input']} ±{fmt(v['tolerance'])}{'%' if v['unit'] == '%' else ''}"
                        for v in doc["vary"])

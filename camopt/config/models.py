@@ -231,7 +231,7 @@ class RobustSection(Strict):
                               "Wilson interval")
     chunk_rows: int | None = Field(None, ge=1, le=10_000_000, description="rows "
                                    "(candidates x samples) per vectorised call (unset: "
-                                   "camopt.batch's default): memory and speed, never results")
+                                   "camopt.core.batch's default): memory and speed, never results")
 
 
 class SolverOptions(Strict):

@@ -9,11 +9,11 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt import batch
-from camopt.capabilities import capability_name
 from camopt.config.models import SolverOptions
+from camopt.core import batch
+from camopt.core.capabilities import capability_name
+from camopt.core.problem import Evaluation, Problem, deb_best
 from camopt.errors import SolverError
-from camopt.problem import Evaluation, Problem, deb_best
 
 
 class StopReason(str, enum.Enum):
@@ -30,7 +30,7 @@ class Solver(ABC):
     """Ask/tell solver (nevergrad style). No I/O, no console; the driver owns the loop.
 
     Subclasses set ``name``, ``Options`` (a pydantic model with ``name: Literal[...]``)
-    and ``requires``: the capability Protocols (:mod:`camopt.capabilities`) a case's
+    and ``requires``: the capability Protocols (:mod:`camopt.core.capabilities`) a case's
     Problem must declare for the solver to run on it.
     """
 

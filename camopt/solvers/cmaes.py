@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
-from camopt.problem import Evaluation, Problem
+from camopt.core.problem import Evaluation, Problem
 from camopt.solvers.base import BestSoFar, Solver, StopReason, snap
 from camopt.solvers.registry import register_solver
 

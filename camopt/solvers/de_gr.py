@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION
-from camopt.problem import Evaluation, Problem
+from camopt.core.problem import Evaluation, Problem
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
 from camopt.solvers.polish import PolishableOptions, Polishing
 from camopt.solvers.registry import register_solver

@@ -12,9 +12,9 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.capabilities import HasFamily
 from camopt.config.models import SolverOptions
-from camopt.problem import Evaluation, Problem
+from camopt.core.capabilities import HasFamily
+from camopt.core.problem import Evaluation, Problem
 from camopt.solvers.base import Solver, StopReason, best_index, design_rows
 from camopt.solvers.registry import register_solver
 

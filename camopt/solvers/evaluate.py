@@ -9,8 +9,8 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import SolverOptions
+from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
-from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import Solver, StopReason, best_index, design_rows
 from camopt.solvers.registry import register_solver
 

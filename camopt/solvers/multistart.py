@@ -24,8 +24,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from camopt.config.models import SolverOptions
-from camopt.perf import fork_pool, kill_pool
-from camopt.problem import Evaluation, Problem
+from camopt.core.perf import fork_pool, kill_pool
+from camopt.core.problem import Evaluation, Problem
 from camopt.solvers.base import Solver, StopReason, best_index
 
 _SOLVING: MultiStart | None = None  # the solver whose starts forked workers solve

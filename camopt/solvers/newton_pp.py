@@ -10,10 +10,10 @@ from numpy.typing import NDArray
 from pydantic import Field
 from scipy.optimize import root
 
-from camopt.capabilities import HasResiduals
 from camopt.config.models import MAX_STARTS
+from camopt.core.capabilities import HasResiduals
+from camopt.core.problem import Problem
 from camopt.errors import SolverError
-from camopt.problem import Problem
 from camopt.solvers.multistart import MultiStart, MultiStartOptions
 from camopt.solvers.registry import register_solver
 

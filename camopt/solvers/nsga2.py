@@ -31,10 +31,10 @@ from pymoo.operators.crossover.sbx import SBX
 from pymoo.operators.mutation.pm import PM
 from pymoo.problems.static import StaticProblem
 
-from camopt.capabilities import Repairable
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
+from camopt.core.capabilities import Repairable
+from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
-from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import BestSoFar, Solver, StopReason, design_rows, snap
 from camopt.solvers.registry import register_solver
 

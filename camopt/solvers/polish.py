@@ -17,8 +17,8 @@ from pydantic import BaseModel, ConfigDict, Field
 from scipy.optimize import minimize
 
 from camopt.config.models import MAX_LOCAL_ITERATIONS, SolverOptions
+from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
-from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import better
 
 _BAD = 1e6  # stands for a non-finite objective or constraint inside SLSQP

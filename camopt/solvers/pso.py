@@ -1,7 +1,7 @@
 """``pso``: particle swarm optimisation with linearly decreasing inertia (Yan et al. 2023,
 Eqs 38-41), personal and global bests, velocity limits and bound handling.
 
-Generic. When the case declares corrections (:class:`~camopt.capabilities.Repairable`),
+Generic. When the case declares corrections (:class:`~camopt.core.capabilities.Repairable`),
 the swarm is corrected after each move with probabilities that change linearly from
 the first to the last iteration (the paper's "improved PSO", Sec 3.3.4). ``repair``
 unset uses them when the case has them, ``true`` requires them (a case without is bad
@@ -16,10 +16,10 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
-from camopt.capabilities import Repairable
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
+from camopt.core.capabilities import Repairable
+from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
-from camopt.problem import Evaluation, Problem
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
 from camopt.solvers.polish import PolishableOptions, Polishing
 from camopt.solvers.registry import register_solver

@@ -8,7 +8,7 @@ import h5py
 import pytest
 
 from camopt import archive
-from camopt.driver import execute
+from camopt.engine.driver import execute
 from tests.conftest import CONFIGS, ROOT
 from tests.helpers import load
 

@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from camopt.driver import execute
+from camopt.engine.driver import execute
 from tests.conftest import CONFIGS
 from tests.helpers import load
 

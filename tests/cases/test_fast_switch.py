@@ -7,7 +7,7 @@ import pytest
 
 from camopt import archive
 from camopt.cases.fast_switch import FastSwitchConfig, FastSwitchProblem
-from camopt.driver import execute
+from camopt.engine.driver import execute
 from tests.conftest import CONFIGS, DATA
 from tests.helpers import load
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from camopt.cases.opening_spring import OpeningSpringConfig, OpeningSpringProblem
-from camopt.driver import execute
+from camopt.engine.driver import execute
 from tests.conftest import CONFIGS
 from tests.helpers import load
 

@@ -8,7 +8,7 @@ import pytest
 from camopt import archive
 from camopt.cases.vcb import VcbConfig, VcbProblem
 from camopt.cases.vcb.model import follower_dwell
-from camopt.driver import execute
+from camopt.engine.driver import execute
 from camopt.mechanics import cam
 from camopt.units import MM
 from tests.conftest import CONFIGS

@@ -11,7 +11,7 @@ from scipy.integrate import solve_ivp
 
 from camopt.cases.vcb import VcbProblem
 from camopt.cases.vcb.identify import DATA, PARAMETERS, VcbDynamicsIdentification
-from camopt.driver import execute
+from camopt.engine.driver import execute
 from camopt.units import MS
 from tests.conftest import CONFIGS
 from tests.helpers import load

@@ -11,7 +11,7 @@ import pytest
 
 from camopt.cases.vcb.model import phi_max, polynomial_value, rate_zeros
 from camopt.cases.vcb.problem import VcbProblem
-from camopt.driver import load
+from camopt.engine.driver import load
 from camopt.errors import ConfigError
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"

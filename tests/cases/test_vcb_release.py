@@ -15,10 +15,10 @@ from camopt.cases.registry import get_case
 from camopt.cases.vcb.config import CamDesign
 from camopt.cases.vcb.dynamics import free_rotation
 from camopt.cases.vcb.problem import VcbProblem
-from camopt.driver import load
+from camopt.core.variation import applicable_defaults
+from camopt.engine.driver import load
 from camopt.errors import ConfigError
 from camopt.units import DEG
-from camopt.variation import applicable_defaults
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 LATCH = "case.release_offset_bounds_deg=[14.0,19.0]"

@@ -46,7 +46,8 @@ VCB_SMALL = ["--set", "solver.generations=20", "--set", "solver.population=20",
 def test_compare_leads_with_verdicts_and_repeats_no_row(tmp_path):
     import dataclasses
 
-    from camopt import archive, report
+    from camopt import archive
+    from camopt.reporting import report
 
     a = run(tmp_path, "a.h5", str(CONFIGS / "vcb.toml"), "--seed", "1", *VCB_SMALL)
     b = run(tmp_path, "b.h5", str(CONFIGS / "vcb.toml"), "--seed", "2", *VCB_SMALL)

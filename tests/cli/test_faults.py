@@ -19,11 +19,12 @@ import h5py
 import pytest
 from typer.testing import CliRunner
 
-from camopt import archive, driver
+from camopt import archive
 from camopt.archive import files
 from camopt.archive.sweeps import cell_row, journal_path, load_sweep
 from camopt.cli import app
 from camopt.cli.app import INTERNAL
+from camopt.engine import driver
 from camopt.errors import ArchiveError
 from tests.conftest import CONFIGS
 
@@ -277,7 +278,7 @@ def test_export_with_enospc_mid_file_leaves_nothing(runs, tmp_path, monkeypatch)
 
 
 def test_an_unreachable_dask_scheduler_leaves_nothing_behind(tmp_path, monkeypatch):
-    from camopt.sweep import run as sweep_run
+    from camopt.engine import sweep as sweep_run
 
     monkeypatch.setattr(sweep_run, "CONNECT_TIMEOUT", "2s", raising=False)
     r = invoke("sweep", DE, "--out", tmp_path / "d.h5", "--executor", "dask", "--scheduler",
@@ -375,7 +376,7 @@ def test_a_dying_worker_of_run_jobs_keeps_the_finished_repeats(tmp_path, monkeyp
 
 
 def test_a_dying_sweep_worker_keeps_the_finished_cells(tmp_path, monkeypatch):
-    from camopt.sweep import run as sweep_run
+    from camopt.engine import sweep as sweep_run
 
     original = sweep_run.run_cell
 
@@ -440,7 +441,7 @@ def test_a_second_ctrl_c_while_exiting_after_the_first_changes_nothing(tmp_path)
     out = tmp_path / "a.h5"
     script = (
         "import atexit, os, signal, sys\n"
-        "from camopt import driver\n"
+        "from camopt.engine import driver\n"
         "original = driver.run_repeat\n"
         "def first_ctrl_c(*a, **k):\n"
         "    if a[4] == 1:\n"
@@ -456,7 +457,7 @@ def test_a_second_ctrl_c_while_exiting_after_the_first_changes_nothing(tmp_path)
 
 
 def test_sweep_jobs_never_starts_more_workers_than_cells(tmp_path, monkeypatch):
-    from camopt.sweep import run as sweep_run
+    from camopt.engine import sweep as sweep_run
 
     asked = []
     real = sweep_run.fork_pool
@@ -526,7 +527,7 @@ def test_the_dask_watchdog_asks_the_scheduler_not_a_stale_copy(dask_cluster, mon
     while two ran."""
     import distributed
 
-    from camopt.sweep.run import _cluster_trouble
+    from camopt.engine.sweep import _cluster_trouble
 
     address, _ = dask_cluster
     with distributed.Client(address, timeout="30s") as client:
@@ -551,7 +552,7 @@ def test_a_dask_sweep_survives_a_killed_worker_and_resumes_after_losing_all(
     import distributed
 
     from camopt.archive.sweeps import SweepWriter
-    from camopt.sweep import run as sweep_run
+    from camopt.engine import sweep as sweep_run
 
     address, workers = dask_cluster
     monkeypatch.setattr(sweep_run, "LOST_SECONDS", 2.0)
@@ -622,7 +623,7 @@ def test_a_dask_sweep_whose_scheduler_is_killed_ends_in_one_line_and_resumes(
     ``sweep --resume`` finishes them into the inline sweep's cells."""
     pytest.importorskip("distributed")
     from camopt.archive.sweeps import SweepWriter
-    from camopt.sweep import run as sweep_run
+    from camopt.engine import sweep as sweep_run
 
     monkeypatch.setattr(sweep_run, "LOST_SECONDS", 2.0)
     info = tmp_path / "scheduler.json"

@@ -12,7 +12,7 @@ import sys
 import pytest
 
 HEAVY = ("numpy", "scipy", "scipy.stats", "h5py", "pymoo", "matplotlib", "dask",
-         "jinja2", "ezdxf", "camopt.driver", "camopt.cases", "camopt.archive")
+         "jinja2", "ezdxf", "camopt.engine.driver", "camopt.cases", "camopt.archive")
 
 PROBE = """
 import json, sys

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from camopt.cli.app import out
+from camopt.cli.console import out
 from camopt.cli.layout import fits, print_table
 
 COLUMNS = ["metric", "nominal", "p05", "p50", "p95", "driver", "rho"]
@@ -46,7 +46,7 @@ def test_narrow_is_vertical_and_wide_is_a_table():
 
 def test_sweep_rows_keep_their_numbers_whole_at_80_columns():
     """``sweep``'s summary (print_rows) split 'successes' and '36.1001' at 80 columns."""
-    from camopt.cli.app import print_rows
+    from camopt.cli.layout import print_rows
 
     rows = [{"point": 0, "runs": 2, "successes": 2, "success_rate": 1.0, "best": 36.1001,
              "median": 36.1002, "worst": 36.1003, "median_nfev_to_target": 3850,

@@ -10,8 +10,9 @@ import re
 import pytest
 from typer.testing import CliRunner
 
-from camopt import archive, report
+from camopt import archive
 from camopt.cli import app
+from camopt.reporting import report
 from tests.conftest import CONFIGS
 
 runner = CliRunner()

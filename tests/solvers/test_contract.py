@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camopt.driver import build_solver, prepare, run_repeat, validate
+from camopt.engine.driver import build_solver, prepare, run_repeat, validate
 from camopt.errors import ConfigError, SolverError
 from camopt.solvers import StopReason, get_solver, solvers
 from camopt.solvers.registry import register_solver

@@ -48,8 +48,8 @@ def test_parents_are_evaluated_again_on_each_generations_draws():
     first holds the trials and then the parents, and after tell the parents that stay
     carry their evaluation on the current draws, not a stale one from an earlier
     generation (the comparison with the trials is on the same parts)."""
-    from camopt import robust
-    from camopt.driver import prepare
+    from camopt.engine import robust
+    from camopt.engine.driver import prepare
     from camopt.solvers.de_gr import DEGR, DEGROptions
     from tests.conftest import CONFIGS
     from tests.helpers import load

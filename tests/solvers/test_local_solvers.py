@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from camopt.config import RunSection
-from camopt.driver import run_repeat
-from camopt.problem import Evaluation, Problem, Variable
+from camopt.core.problem import Evaluation, Problem, Variable
+from camopt.engine.driver import run_repeat
 from camopt.solvers import get_solver
 
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from camopt.config import RunSection
-from camopt.driver import run_repeat
+from camopt.core.problem import Evaluation, Variable
+from camopt.engine.driver import run_repeat
 from camopt.errors import SolverError
-from camopt.problem import Evaluation, Variable
 from camopt.solvers import get_solver
 from camopt.solvers.polish import PolishOptions, polish
 from tests.conftest import SphereConfig, SphereProblem

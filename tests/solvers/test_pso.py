@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camopt.driver import build_solver, prepare, validate
+from camopt.engine.driver import build_solver, prepare, validate
 from camopt.solvers.pso import inertia
 
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 from matplotlib.figure import Figure
 
 from camopt.cases.emb_cam.paper import PAPER
-from camopt.plotting import PAPER_STYLE, new_figure
-from camopt.runview import RunView
+from camopt.core.plotting import PAPER_STYLE, new_figure
+from camopt.core.runview import RunView
 
 
 def figures(run: RunView) -> dict[str, Figure]:

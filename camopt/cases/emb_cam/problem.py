@@ -17,11 +17,11 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import erf
 
-from camopt.capabilities import Repairable
 from camopt.cases.emb_cam.config import EmbCamConfig
+from camopt.core.capabilities import Repairable
+from camopt.core.problem import Evaluation, Problem, Variable
 from camopt.mechanics import polar_cam as pc
 from camopt.mechanics.spline import ClampedNaturalSpline
-from camopt.problem import Evaluation, Problem, Variable
 from camopt.units import MM
 
 BIG_VIOLATION = 1e6  # normalised violation standing for a non-finite measure

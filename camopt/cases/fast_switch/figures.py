@@ -6,8 +6,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from camopt.cases.fast_switch.paper import PAPER
-from camopt.plotting import PAPER_STYLE, new_figure
-from camopt.runview import RunView
+from camopt.core.plotting import PAPER_STYLE, new_figure
+from camopt.core.runview import RunView
 
 
 def figures(run: RunView) -> dict[str, Figure]:

@@ -21,12 +21,12 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.capabilities import HasFamily, VariesCase
 from camopt.cases.fast_switch.config import FastSwitchConfig
+from camopt.core.capabilities import HasFamily, VariesCase
+from camopt.core.problem import Evaluation, Problem, Variable
 from camopt.errors import ConfigError
 from camopt.mechanics import dynamics, springs
 from camopt.mechanics.slider_crank import coupler_angle, coupler_derivatives, crank_angle_for_span
-from camopt.problem import Evaluation, Problem, Variable
 from camopt.units import DEG, GPA, MM, MPA
 
 TWO_PI = 2.0 * np.pi

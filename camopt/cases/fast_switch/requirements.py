@@ -8,7 +8,7 @@ from __future__ import annotations
 from collections.abc import Collection, Mapping
 from typing import Any
 
-from camopt.requirements import Requirement
+from camopt.core.requirements import Requirement
 
 
 def requirements(case: Mapping[str, Any], names: Collection[str]) -> tuple[Requirement, ...]:

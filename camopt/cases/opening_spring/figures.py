@@ -5,8 +5,8 @@ from __future__ import annotations
 from matplotlib.figure import Figure
 
 from camopt.cases.opening_spring.paper import THETA_RAD, THETADOT_T0_RAD_S
-from camopt.plotting import PAPER_STYLE, new_figure
-from camopt.runview import RunView
+from camopt.core.plotting import PAPER_STYLE, new_figure
+from camopt.core.runview import RunView
 
 STYLES = ("--", ":", "-.", (0, (3, 1, 1, 1)), (0, (5, 2)))
 

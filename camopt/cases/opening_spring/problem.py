@@ -22,9 +22,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
-from camopt.capabilities import HasResiduals
 from camopt.cases.opening_spring.config import OpeningSpringConfig
-from camopt.problem import Evaluation, Problem, Variable
+from camopt.core.capabilities import HasResiduals
+from camopt.core.problem import Evaluation, Problem, Variable
 from camopt.units import MM, MS
 
 # parameter -> (config bounds field, factor from the TOML unit to SI)

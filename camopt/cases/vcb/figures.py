@@ -7,8 +7,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from camopt.cases.vcb.paper import PAPER
-from camopt.plotting import PAPER_STYLE, log_scale_if_spread, new_figure
-from camopt.runview import RunView
+from camopt.core.plotting import PAPER_STYLE, log_scale_if_spread, new_figure
+from camopt.core.runview import RunView
 
 DESIGNS = (("", "optimum", "-"), ("initial_", "reference: vendor", ":"))
 

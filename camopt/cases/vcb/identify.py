@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from camopt.cases.vcb.config import VcbDynamicsIdentifyConfig, VcbIdentifyConfig
 from camopt.cases.vcb.dynamics import MotionParameters, closing_motion, opening_motion
 from camopt.cases.vcb.model import VcbModel
-from camopt.problem import Evaluation, Problem, Variable
+from camopt.core.problem import Evaluation, Problem, Variable
 from camopt.units import DEG, MM, MS
 
 

@@ -9,7 +9,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.capabilities import VariesCase
 from camopt.cases.vcb.config import CamDesign, VcbConfig
 from camopt.cases.vcb.dynamics import (
     ClosingEvents,
@@ -26,9 +25,10 @@ from camopt.cases.vcb.model import (
     row_max,
     unassembled,
 )
+from camopt.core.capabilities import VariesCase
+from camopt.core.problem import Evaluation, ObjectiveFloor, Problem, Variable
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, fourbar, hertz
-from camopt.problem import Evaluation, ObjectiveFloor, Problem, Variable
 from camopt.units import DEG, MM, MS
 
 LINK_FIELDS = ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")

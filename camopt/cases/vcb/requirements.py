@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Collection, Mapping
 from typing import Any
 
-from camopt.requirements import Requirement
+from camopt.core.requirements import Requirement
 
 CLOSING_VELOCITY_M_S = (0.7, 1.1)  # Sec 2.1: 0.9 +- 0.2 m/s
 PRESSURE_ANGLE_MAX_DEG = 45.0  # Sec 2.3: allowable pressure angle

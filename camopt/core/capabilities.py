@@ -1,0 +1,78 @@
+"""Optional capabilities a case's Problem declares and a solver may require.
+
+A case declares a capability by subclassing the Protocol beside :class:`~camopt.core.problem.
+Problem` (``class EmbCamProblem(Problem, Repairable)``); a solver lists the Protocols it
+needs in ``requires``. The check is made on the Problem *class* when a case file is
+validated (``issubclass``), so a solver that cannot run a case is bad input before any
+work, never a silent fallback in the middle of a run (nevergrad's class qualifiers).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from camopt.core.problem import Evaluation
+
+
+@runtime_checkable
+class HasFamily(Protocol):
+    """A discrete one-degree-of-freedom family of designs left by monotonicity analysis
+    (Clauss 1982, Eq 86); the ``enumeration`` solver walks it."""
+
+    def family(self) -> NDArray:
+        """Every member of the family, (n_members, n_var), SI."""
+        ...
+
+
+@runtime_checkable
+class Repairable(Protocol):
+    """Case-specific corrections of a swarm (Yan 2023's "improved PSO", Sec 3.3.4)."""
+
+    def repair(self, X: NDArray, rng: np.random.Generator,
+               probability: Mapping[str, float]) -> NDArray:
+        """Corrected copies of designs ``X`` (n, n_var); correction ``k`` is applied to a
+        design with ``probability[k]``."""
+        ...
+
+    def repair_schedule(self) -> Mapping[str, tuple[float, float]]:
+        """Each correction's trigger probability at the first and the last iteration."""
+        ...
+
+
+@runtime_checkable
+class HasResiduals(Protocol):
+    """Equations whose roots are the designs (precision points, Ahn et al. Sec 3)."""
+
+    def residuals(self, X: NDArray) -> NDArray:
+        """Residuals of designs ``X`` (n, n_var), shape (n, n_equations), dimensionless."""
+        ...
+
+
+@runtime_checkable
+class VariesCase(Protocol):
+    """Case fields the Problem can take per design instead of one value from its config
+    (tolerance analysis of fixed parts: a link of the VCB's linkage). Cases without it
+    still take tolerances on their design variables."""
+
+    def case_fields(self) -> tuple[str, ...]:
+        """The ``[case]`` fields that may vary per design (names as in the case file)."""
+        ...
+
+    def describe_with(self, X: NDArray, fields: Mapping[str, NDArray]) -> Evaluation:
+        """As ``describe(X)``, with each named case field taking its own value per row:
+        ``fields[name]`` (n,) in the field's unit (``l1_mm`` in mm)."""
+        ...
+
+
+CAPABILITIES = {"family": HasFamily, "repair": Repairable, "residuals": HasResiduals,
+                "case_fields": VariesCase}
+"""Capability names as a solver's error messages and ``camopt solvers`` spell them."""
+
+
+def capability_name(protocol: type) -> str:
+    """The short name of a capability Protocol (``Repairable`` -> ``repair``)."""
+    return next((k for k, v in CAPABILITIES.items() if v is protocol), protocol.__name__)

@@ -1,0 +1,51 @@
+"""Figure helpers shared by :mod:`camopt.reporting.plots` and the cases' ``figures`` modules
+(matplotlib with the Agg backend: no screen needed)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+PAPER_STYLE = {"color": "crimson", "linestyle": "--", "linewidth": 1.2}
+"""How a paper's reported value is drawn (a reference line or marker)."""
+
+UNITS = {"j": "J", "ms": "ms", "n": "N", "nm": "N m", "mm": "mm", "rad": "rad", "sq": "",
+         "deg": "deg", "mpa": "MPa", "s": "s", "pct": "%"}
+
+
+def new_figure(title: str, xlabel: str, ylabel: str) -> tuple[Figure, Any]:
+    """A figure with one labelled axes and a light grid."""
+    fig, ax = plt.subplots(figsize=(7, 4.5), layout="constrained")
+    ax.set_title(title)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    return fig, ax
+
+
+def readable(name: str) -> str:
+    """'closure_time_ms' -> 'closure time (ms)'."""
+    if name.endswith("_m_s"):  # a two-word unit
+        return f"{name[:-4].replace('_', ' ')} (m/s)"
+    stem, _, unit = name.rpartition("_")
+    if stem and unit in UNITS:
+        return f"{stem.replace('_', ' ')} ({UNITS[unit]})" if UNITS[unit] else stem
+    return name.replace("_", " ")
+
+
+def log_scale_if_spread(ax: Any, values: np.ndarray, factor: float = 20.0) -> None:
+    """Use a log y axis when the largest finite value exceeds ``factor`` times the median."""
+    finite = np.asarray(values, dtype=float)
+    finite = finite[np.isfinite(finite)]
+    if finite.size and finite.min() > 0 and finite.max() > factor * np.median(np.abs(finite)):
+        ax.set_yscale("log")
+
+
+def close(fig: Figure) -> None:
+    plt.close(fig)

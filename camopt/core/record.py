@@ -1,0 +1,98 @@
+"""One solver repeat as typed data: a run's repeat, a sweep's cell and a loaded archive's
+repeat are the same record, :class:`Repeat`. Pure data (numpy only).
+
+The first six fields carry ``scipy.optimize.OptimizeResult``'s names and meaning (``x``,
+``fun``, ``success``, ``message``, ``nfev``, ``nit``); the rest are camopt's own. The
+archives keep their documented names on disk (``objective`` for ``fun``, a sweep cell's
+``seed`` for ``index``: docs/archive.md), so archives of every schema still load.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+def _empty() -> NDArray[np.float64]:
+    return np.zeros(0)
+
+
+@dataclass(frozen=True, eq=False)
+class Repeat:
+    """One solver repeat: its result and its convergence history.
+
+    ``success`` is camopt's one definition of a successful run
+    (:func:`camopt.core.stats.succeeded`: a finite objective, feasible, at or below
+    ``run.target`` when set) for a repeat whose solver stopped without failing. No stop
+    reason of camopt's solvers is a failure (each is a budget, a convergence test or
+    exhausted starts); a solver that fails says so by reporting its best infeasible (a
+    multi-start solver without a converged start reports objective +inf), so such a
+    repeat is never a success.
+
+    Repeat ``index`` k drew every random number from child k of
+    ``SeedSequence(run.seed)`` (spawn key ``(k,)``) in a run and in a sweep alike.
+    Fields a source does not store load empty: a sweep archive stores no ``g``,
+    ``violation`` (NaN), ``message`` or ``notes``; no archive stores a repeat's
+    ``table`` (a run archive holds the best repeat's as the run's table)."""
+
+    x: NDArray[np.float64]
+    """(n_var,) the repeat's best design, SI."""
+    fun: float
+    """Its objective, in the unit of the problem's ``objective_name`` (+inf: none found)."""
+    success: bool
+    message: str
+    """Why the solver stopped (:class:`camopt.solvers.StopReason`'s text)."""
+    nfev: int
+    nit: int
+    index: int
+    """k: the repeat's place in the run, a sweep cell's seed index."""
+    spawn_key: tuple[int, ...]
+    seed: int
+    """A 63-bit integer drawn from the repeat's seed sequence (an identifier)."""
+    feasible: bool
+    violation: float
+    """Total constraint excess of ``x`` (``Evaluation.violation``; 0 when feasible)."""
+    converged_nit: int
+    """First iteration (1-based) from which the best objective stays within 1e-6 of its
+    final value (:func:`camopt.engine.driver.converged_iteration`)."""
+    nfev_to_target: int
+    """Evaluations until the best design was feasible and at or below ``run.target``
+    (feasible without a target); -1: never."""
+    wall_s: float
+    history: dict[str, NDArray] = field(default_factory=dict)
+    """Per iteration (n_iter,): ``nfev``, ``best_objective``, ``best_violation``,
+    ``mean_objective``."""
+    g: NDArray[np.float64] = field(default_factory=_empty)
+    """(n_constr,) normalised constraint values of ``x``, feasible where <= 0."""
+    notes: tuple[str, ...] = ()
+    table: list[dict[str, Any]] = field(default_factory=list)
+    """The solver's rows (every start, every coil count, the Pareto set)."""
+    nominal_x: NDArray[np.float64] | None = None
+    """Robust runs: the best design seen whose nominal evaluation is feasible."""
+    point: int = 0
+    """A sweep cell's grid point (0 in a run)."""
+
+    @property
+    def key(self) -> tuple[int, int]:
+        """A sweep cell's place: (grid point, seed index)."""
+        return (self.point, self.index)
+
+
+def seed_id(seq: np.random.SeedSequence) -> int:
+    """A repeat's ``seed``: a 63-bit integer drawn from its seed sequence (fits int64)."""
+    return int(seq.generate_state(1, np.uint64)[0] >> np.uint64(1))
+
+
+def nfev_to_target(history: dict[str, NDArray], target: float | None) -> int:
+    """Evaluations after the first iteration whose best design was feasible and, with a
+    ``target``, at or below it, from a repeat's ``history``; -1: none was (or the history
+    lacks ``nfev``, ``best_objective`` or ``best_violation``)."""
+    if not {"nfev", "best_objective", "best_violation"} <= set(history):
+        return -1
+    ok = np.asarray(history["best_violation"]) == 0
+    if target is not None:
+        ok &= np.asarray(history["best_objective"]) <= target
+    return int(history["nfev"][np.argmax(ok)]) if ok.any() else -1

@@ -1,0 +1,84 @@
+"""A run archive as typed data: what ``show``, ``compare``, plots, export and the cases'
+figures read. Pure data (numpy only); :mod:`camopt.archive` builds it from HDF5."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from camopt.core.record import Repeat
+
+
+@dataclass(frozen=True)
+class BestView:
+    """The run's best design: variables in display units, metrics, and the constraints
+    it meets with equality (``active``) or breaks (``violated``)."""
+
+    objective: float
+    feasible: bool
+    x: dict[str, float]
+    metrics: dict[str, Any]
+    active: list[str]
+    violated: list[str]
+    repeat: int
+
+
+@dataclass(frozen=True)
+class RunView:
+    """A loaded run archive.
+
+    ``case``, ``solver`` and ``run`` are the config as run (``--set`` overrides, ``--seed``
+    and ``--repeats`` included); ``analysis`` maps curve names (unit in the name) to 1-D
+    arrays; ``table`` holds the solver's rows (e.g. every coil count, every start)."""
+
+    path: str
+    kind: str
+    case: dict[str, Any]
+    solver: dict[str, Any]
+    run: dict[str, Any]
+    objective_name: str
+    variables: tuple[str, ...]
+    constraints: tuple[str, ...]
+    best: BestView
+    repeats: list[Repeat]
+    """Every repeat stored, in index order (``x`` in SI, as the run had it)."""
+    table: list[dict[str, Any]]
+    analysis: dict[str, NDArray] = field(repr=False, default_factory=dict)
+    config_toml: str = ""
+    created: str = ""
+    camopt_version: str = ""
+    seed_entropy: str = ""
+    interrupted: bool = False
+    """Ctrl-C stopped the run: ``repeats`` holds the finished ones (``repeats_done`` of
+    ``run["repeats"]``)."""
+    repeats_done: int = 0
+    config_as_run: str = ""
+    """The config as run as TOML (overrides applied; empty for schema-1 archives)."""
+    versions: dict[str, str] = field(default_factory=dict)
+    """Library versions the run was made with (``numpy_version``, ...)."""
+    robust: dict[str, Any] = field(default_factory=dict)
+    """The ``[robust]`` table as run (empty: a nominal run)."""
+    robust_check: dict[str, Any] = field(default_factory=dict)
+    """Robust runs: the final check of the best design (``robust``) and of the best
+    nominally feasible design seen (``nominal``) on fresh draws (docs/tolerance.md)."""
+
+    @property
+    def solver_name(self) -> str:
+        return str(self.solver.get("name", ""))
+
+    def histories(self, key: str = "best_objective") -> list[NDArray]:
+        """One history array per repeat (``best_objective``, ``nfev``, ...)."""
+        return [np.asarray(r.history[key]) for r in self.repeats if key in r.history]
+
+
+def design_values(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any]:
+    """A design's quantities by name for requirements: the best design's metrics,
+    variables, objective and feasibility, or the reference design's ``values``."""
+    if values is not None:
+        return dict(values)
+    best = run.best
+    return {**best.metrics, **best.x, run.objective_name: best.objective,
+            "feasible": float(best.feasible)}

@@ -1,0 +1,121 @@
+"""Statistics for comparing runs and sweep points (scipy.stats)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Sequence
+from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy import stats
+
+if TYPE_CHECKING:
+    from camopt.config.sweep_spec import SweepSpec
+    from camopt.core.record import Repeat
+
+ALPHA = 0.05
+
+
+def ranked(objectives: ArrayLike, feasible: ArrayLike) -> NDArray:
+    """Final objectives as they rank across runs: an infeasible (or NaN) run counts +inf."""
+    f = np.asarray(objectives, dtype=float)
+    return np.where(np.asarray(feasible, dtype=bool) & ~np.isnan(f), f, np.inf)
+
+
+def succeeded(objectives: ArrayLike, feasible: ArrayLike, target: float | None) -> NDArray:
+    """camopt's one definition of a successful run: feasible, and at or below ``target``
+    when the case file sets ``run.target``."""
+    f = ranked(objectives, feasible)
+    return np.isfinite(f) & (f <= target if target is not None else True)
+
+
+@dataclass(frozen=True)
+class RunStatistics:
+    """Statistics of final objectives over runs (repeats of a run, seeds of a sweep
+    point); infeasible runs count +inf in best/median/worst."""
+
+    runs: int
+    best: float
+    median: float
+    worst: float
+    feasible_fraction: float
+    successes: int
+    success_rate: float
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def run_statistics(objectives: Sequence[float], feasible: Sequence[bool],
+                   target: float | None) -> RunStatistics:
+    """:class:`RunStatistics` of a set of runs (NaN statistics when there are none)."""
+    n = len(objectives)
+    if n == 0:
+        nan = float("nan")
+        return RunStatistics(0, nan, nan, nan, nan, 0, nan)
+    f = ranked(objectives, feasible)
+    ok = int(np.sum(succeeded(objectives, feasible, target)))
+    return RunStatistics(n, float(np.min(f)), float(np.median(f)), float(np.max(f)),
+                         float(np.mean(np.asarray(feasible, dtype=bool))), ok, ok / n)
+
+
+def success_rate(successes: int, runs: int, confidence: float = 0.95) -> dict[str, float]:
+    """Success rate with its Wilson score interval."""
+    if runs == 0:
+        return {"rate": float("nan"), "ci_low": float("nan"), "ci_high": float("nan")}
+    ci = stats.binomtest(successes, runs).proportion_ci(confidence, method="wilson")
+    return {"rate": successes / runs, "ci_low": float(ci.low), "ci_high": float(ci.high)}
+
+
+def compare_objectives(a: ArrayLike, b: ArrayLike) -> dict[str, float]:
+    """Two-sided Mann-Whitney U on final objectives (lower is better) and effect sizes.
+
+    ``p_a_better`` is P(A < B) + P(A = B)/2 (the common-language effect size); the
+    rank-biserial correlation 2 p_a_better - 1 is positive when A tends to be lower.
+    Infeasible or failed runs should be passed as +inf (they rank last).
+    """
+    a = np.where(np.isnan(a), np.inf, np.asarray(a, dtype=float))
+    b = np.where(np.isnan(b), np.inf, np.asarray(b, dtype=float))
+    if a.size < 2 or b.size < 2 or np.all(np.concatenate([a, b]) == a[0]):
+        return {"p_value": 1.0, "p_a_better": 0.5, "rank_biserial": 0.0,
+                "median_a": float(np.median(a)), "median_b": float(np.median(b))}
+    res = stats.mannwhitneyu(a, b, alternative="two-sided")
+    p_a_better = 1.0 - float(res.statistic) / (a.size * b.size)
+    return {"p_value": float(res.pvalue), "p_a_better": p_a_better,
+            "rank_biserial": 2 * p_a_better - 1,
+            "median_a": float(np.median(a)), "median_b": float(np.median(b))}
+
+
+def verdict(name_a: str, name_b: str, test: dict[str, Any], alpha: float = ALPHA) -> str:
+    """A plain-language line for a comparison."""
+    p = test["p_value"]
+    if p >= alpha:
+        return f"no significant difference between {name_a} and {name_b} (p = {p:.3g})"
+    better, worse = (name_a, name_b) if test["p_a_better"] > 0.5 else (name_b, name_a)
+    return f"{better} is better than {worse} at p = {p:.3g}"
+
+
+def sweep_summary(spec: SweepSpec, results: Iterable[Repeat]) -> list[dict[str, Any]]:
+    """One row per grid point: success rate, objective statistics, evaluations to target."""
+    target = spec.data["run"].get("target")
+    by_point: dict[int, list[Repeat]] = {}
+    for r in results:
+        by_point.setdefault(r.point, []).append(r)
+    rows = []
+    for i, point in enumerate(spec.points()):
+        cells = sorted(by_point.get(i, []), key=lambda r: r.index)
+        stats = run_statistics([c.fun for c in cells], [c.feasible for c in cells],
+                               target)
+        reach = [c.nfev_to_target for c in cells if c.nfev_to_target >= 0]
+        row: dict[str, Any] = {"point": i, **{k: json.dumps(v) for k, v in point.items()},
+                               "runs": stats.runs, "successes": stats.successes,
+                               "success_rate": stats.success_rate, "best": stats.best,
+                               "median": stats.median, "worst": stats.worst}
+        row.update({
+            "median_nfev_to_target": float(np.median(reach)) if reach else float("nan"),
+            "wall_s_median": float(np.median([c.wall_s for c in cells])) if cells else 0.0,
+        })
+        rows.append(row)
+    return rows

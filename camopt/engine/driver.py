@@ -1,0 +1,317 @@
+"""The one loop every run goes through: ask -> evaluate -> tell -> record -> stop?
+
+Repeats get independent generators from ``SeedSequence(seed).spawn(repeats)``, so
+any repeat can be re-run alone from the archived entropy and spawn key.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import as_completed
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from camopt.cases import build_problem, case_configs, get_case
+from camopt.config import LoadedConfig, load_config, validate_data
+from camopt.core import batch
+from camopt.core.perf import fork_pool, kill_pool, pin_blas_threads
+from camopt.core.problem import Problem, deb_best
+from camopt.core.record import Repeat, nfev_to_target, seed_id
+from camopt.core.stats import succeeded
+from camopt.engine import interrupts, robust
+from camopt.engine.interrupts import deferred
+from camopt.errors import ConfigError, SolverError
+from camopt.solvers import Solver, StopReason, get_solver, solvers
+
+
+@dataclass(frozen=True)
+class Progress:
+    """What a progress callback sees after every iteration."""
+
+    repeat: int
+    repeats: int
+    iteration: int
+    max_iterations: int | None
+    best_objective: float
+
+
+@dataclass
+class RunRecord:
+    """Everything a run archive holds."""
+
+    config: LoadedConfig
+    problem: Problem
+    seed: int
+    repeats: list[Repeat]
+    best: Repeat
+    metrics: dict[str, object]
+    analysis: dict[str, NDArray]
+    interrupted: bool = False
+    """True when Ctrl-C (or SIGTERM) or a failure stopped the run: ``repeats`` holds the
+    finished ones."""
+    robust_check: dict[str, Any] | None = None
+    """Robust runs: the final check of the best design (``robust``) and of the best design
+    seen whose nominal evaluation is feasible (``nominal``), :func:`camopt.engine.robust.check`."""
+    failure: str | None = None
+    """What stopped the run when it was not a signal (a worker process died)."""
+
+
+def solver_options() -> dict[str, Any]:
+    """Solver names to their Options models (what the loader validates ``[solver]`` with)."""
+    return {name: cls.Options for name, cls in solvers().items()}
+
+
+def load(path: str | Path, overrides: Sequence[str] = ()) -> LoadedConfig:
+    """Load and validate a case file against every registered case and solver."""
+    return load_config(path, solver_options(), case_configs(), overrides)
+
+
+def validate(data: dict[str, Any], source: str = "<data>") -> LoadedConfig:
+    """Validate parsed case-file data (a sweep cell's) against the registries."""
+    return validate_data(data, solver_options(), case_configs(), source)
+
+
+def prepare(config: LoadedConfig) -> tuple[Problem, type[Solver]]:
+    """Build the case's problem and check the solver can run on it with these options
+    (a capability the case lacks is bad input against ``solver``). With ``[robust]`` the
+    problem is the case's wrapped for yield (:mod:`camopt.engine.robust`). BLAS runs on one
+    thread from here on (``perf.pin_blas_threads``), so results do not depend on the
+    thread count of the process or machine that evaluates them."""
+    pin_blas_threads()
+    with np.errstate(all="ignore"):  # a non-assembling mechanism is reported below
+        problem = build_problem(config.case)
+    _check_bounds(problem, config)
+    if config.robust is not None:
+        problem = robust.wrap(problem, robust.plan(
+            problem, config.case, config.robust, dict(get_case(config.case.kind).tolerances),
+            config.path))
+    solver_cls = get_solver(config.solver.name)
+    try:
+        solver_cls.check(type(problem), config.solver)
+    except SolverError as exc:
+        # a capability every run of the solver needs is the solver's name's fault; one
+        # that only some options need is the options' fault
+        key = "solver.name" if not solver_cls.supports(type(problem)) else "solver"
+        raise ConfigError(config.path, key, f"cannot run case '{config.case.kind}': "
+                          f"{exc}") from None
+    return problem, solver_cls
+
+
+def _check_bounds(problem: Problem, config: LoadedConfig) -> None:
+    """Every design variable has finite bounds, lower below upper: bounds a case derives
+    from its parameters (an angle from an arccos, a radius range from two radii) say
+    whether the mechanism can be assembled at all."""
+    for v in problem.variables:
+        if not (np.isfinite(v.lower) and np.isfinite(v.upper) and v.lower < v.upper):
+            raise ConfigError(config.path, "case", f"the mechanism cannot be assembled with "
+                              f"these values: variable {v.name} gets bounds "
+                              f"[{v.lower * v.scale:g}, {v.upper * v.scale:g}]")
+
+
+def build_solver(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
+                 rng: np.random.Generator) -> Solver:
+    """The solver for one repeat; what it refuses (options the case cannot meet) is
+    reported as bad input against the case file."""
+    try:
+        return solver_cls(problem, config.solver, rng)
+    except SolverError as exc:
+        raise ConfigError(config.path, "solver", str(exc)) from None
+
+
+def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
+               child: np.random.SeedSequence, index: int, repeats: int,
+               callback: Callable[[Progress], None] | None = None, jobs: int = 1
+               ) -> Repeat:
+    """Run one repeat of the solver to its stop reason, or to the run's own limits
+    (``run.max_evaluations``, ``run.max_seconds``), whichever comes first; ``jobs``
+    worker processes are lent to the solver (multi-start solvers spread their starts)."""
+    start = time.perf_counter()
+    robust_problem = problem if isinstance(problem, robust.RobustProblem) else None
+    if robust_problem is not None:
+        robust_problem.reseed(robust.repeat_seed(child, 0))
+    solver = build_solver(problem, solver_cls, config, np.random.default_rng(child))
+    solver.jobs = jobs
+    max_nfev, max_s = config.run.max_evaluations, config.run.max_seconds
+    nfev, best_f, mean_f, best_v = [], [], [], []
+    while (reason := _stop(solver, start, max_nfev, max_s)) is None:
+        if robust_problem is not None:
+            robust_problem.new_generation()  # common random numbers: one set per generation
+        interrupts.check()
+        X = solver.ask()
+        ev = batch.evaluate(problem, X)  # a population is one chunk; given designs, many
+        solver.tell(X, ev)
+        _, bev = solver.best()
+        pop_f = solver.population_objectives()
+        pop_f = ev.f if pop_f is None else pop_f
+        finite = pop_f[np.isfinite(pop_f)]
+        nfev.append(solver.nfev)
+        best_f.append(float(bev.f[0]))
+        best_v.append(float(bev.violation[0]))
+        mean_f.append(float(finite.mean()) if finite.size else np.inf)
+        if callback:
+            callback(Progress(index, repeats, solver.nit, solver.max_iterations(), best_f[-1]))
+    x, bev = solver.best()
+    if robust_problem is not None:  # the solver's best and the finalists on fresh draws
+        x, bev = robust_problem.select(x, robust.repeat_seed(child, 1))
+    history = {"nfev": np.array(nfev, dtype=np.int64), "best_objective": np.array(best_f),
+               "mean_objective": np.array(mean_f), "best_violation": np.array(best_v)}
+    fun, feasible, target = float(bev.f[0]), bool(bev.feasible[0]), config.run.target
+    return Repeat(
+        x=x, fun=fun, success=bool(succeeded([fun], [feasible], target)[0]),
+        message=reason.value, nfev=solver.nfev, nit=solver.nit,
+        index=index, spawn_key=tuple(child.spawn_key),
+        seed=seed_id(child),
+        feasible=feasible, violation=float(bev.violation[0]),
+        converged_nit=converged_iteration(np.array(best_f), np.array(best_v)),
+        nfev_to_target=nfev_to_target(history, target),
+        wall_s=time.perf_counter() - start, history=history, g=bev.g[0],
+        notes=tuple(solver.notes()), table=solver.table(),
+        nominal_x=(robust_problem.nominal_best[0]
+                   if robust_problem is not None and robust_problem.nominal_best else None),
+    )
+
+
+def _stop(solver: Solver, start: float, max_nfev: int | None, max_s: float | None
+          ) -> StopReason | None:
+    """The solver's own stop reason, else the run's limits (checked between iterations)."""
+    reason = solver.stop_reason()
+    if reason is None and solver.nit > 0:
+        if max_nfev is not None and solver.nfev >= max_nfev:
+            return StopReason.MAX_EVALUATIONS
+        if max_s is not None and time.perf_counter() - start >= max_s:
+            return StopReason.MAX_SECONDS
+    return reason
+
+
+CONVERGENCE_TOL = 1e-6
+
+
+def converged_iteration(best_f: NDArray, best_v: NDArray, tol: float = CONVERGENCE_TOL) -> int:
+    """First iteration (1-based) from which the best objective stays within ``tol`` of its
+    final value with the final violation."""
+    if best_f.size == 0:
+        return 0
+    with np.errstate(invalid="ignore"):  # inf - inf: equal infinities count as close
+        near = (best_f == best_f[-1]) | (np.abs(best_f - best_f[-1]) <= tol)
+    close = near & (best_v <= best_v[-1])
+    far = np.flatnonzero(~close)
+    return int(far[-1] + 2) if far.size else 1
+
+
+def best_repeat(records: list[Repeat]) -> Repeat:
+    """The best repeat by Deb's rules (least violation, then lowest objective; the first
+    of equals)."""
+    return records[deb_best([r.fun for r in records], [r.violation for r in records])]
+
+
+_REPEATS: tuple | None = None  # what forked workers of execute(jobs > 1) run
+
+
+def _repeat_in_worker(i: int) -> Repeat:
+    assert _REPEATS is not None
+    problem, solver_cls, config, children = _REPEATS
+    return run_repeat(problem, solver_cls, config, children[i], i, len(children))
+
+
+def _parallel_repeats(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
+                      children: list[np.random.SeedSequence], jobs: int,
+                      callback: Callable[[Progress], None] | None,
+                      finished: list[Repeat]) -> None:
+    """Repeats in ``jobs`` forked workers, appended to ``finished`` as they end (so an
+    interruption keeps those); each repeat is independent (its own child seed), so the
+    records equal a sequential run's but for wall times and order."""
+    global _REPEATS
+    _REPEATS = (problem, solver_cls, config, children)
+    pool = fork_pool(min(jobs, len(children)))
+    futures: list[Any] = []
+    try:
+        futures = [pool.submit(_repeat_in_worker, i) for i in range(len(children))]
+        for fut in as_completed(futures):
+            rec = fut.result()
+            finished.append(rec)
+            if callback:
+                callback(Progress(len(finished) - 1, len(children), rec.nit, rec.nit, rec.fun))
+    except BrokenProcessPool:  # a worker was killed (OOM killer, kill): keep what finished
+        kept = {r.index for r in finished}
+        for fut in futures:
+            if fut.done() and not fut.cancelled() and fut.exception() is None \
+                    and fut.result().index not in kept:
+                finished.append(fut.result())
+        kill_pool(pool)
+        raise
+    except BaseException:
+        kill_pool(pool)
+        raise
+    finally:
+        _REPEATS = None
+    pool.shutdown(wait=True)
+
+
+def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None = None,
+            callback: Callable[[Progress], None] | None = None, jobs: int = 1) -> RunRecord:
+    """Run a validated config: every repeat, then the best design's metrics and analysis.
+    ``seed`` and ``repeats`` override the config's (prefer setting ``run.seed`` and
+    ``run.repeats`` in the config, so the archive records the config as run). ``jobs``
+    worker processes run the repeats side by side, or a single repeat's independent
+    starts (multi-start solvers); results do not depend on it.
+
+    A KeyboardInterrupt (Ctrl-C, or SIGTERM turned into one by the CLI) after at least one
+    finished repeat ends the run early: the record holds the finished repeats and
+    ``interrupted`` is set, so the caller can keep them. Before any repeat finished it
+    propagates."""
+    problem, solver_cls = prepare(config)
+    seed = config.run.seed if seed is None else seed
+    repeats = config.run.repeats if repeats is None else repeats
+    children = np.random.SeedSequence(seed).spawn(repeats)
+    records: list[Repeat] = []
+    interrupted, failure = False, None
+    try:
+        if jobs > 1 and repeats > 1:
+            _parallel_repeats(problem, solver_cls, config, children, jobs, callback, records)
+        else:
+            for i, child in enumerate(children):
+                records.append(run_repeat(problem, solver_cls, config, child, i, repeats,
+                                          callback, jobs))
+    except KeyboardInterrupt:
+        if not records:
+            raise
+        interrupts.handled()
+        interrupted = True
+    except BrokenProcessPool:
+        failure = "a worker process died (killed, or out of memory)"
+        if not records:
+            raise SolverError(f"{config.path}: --jobs: {failure} before any repeat "
+                              "finished; nothing written") from None
+        interrupted = True
+    with deferred() as signals:  # finished repeats are kept whatever Ctrl-C comes now
+        records.sort(key=lambda r: r.index)
+        best = best_repeat(records)
+        record = RunRecord(config, problem, seed, records, best, dict(problem.metrics(best.x)),
+                           dict(problem.analysis(best.x)), interrupted,
+                           _robust_check(problem, records, best, seed), failure)
+    record.interrupted |= bool(signals)
+    return record
+
+
+def _robust_check(problem: Problem, records: list[Repeat], best: Repeat,
+                  seed: int) -> dict[str, Any] | None:
+    """Robust runs: the best design and the best nominally feasible design seen (lowest
+    nominal objective over the repeats) checked on the same fresh draws."""
+    if not isinstance(problem, robust.RobustProblem):
+        return None
+    seen = [r.nominal_x for r in records if r.nominal_x is not None]
+    designs = [best.x]
+    if seen:
+        f = problem.base.evaluate(np.array(seen)).f
+        designs.append(seen[int(np.argmin(f))])
+    checked = robust.check(problem, designs, seed)
+    result: dict[str, Any] = {"robust": checked[0]}
+    if len(checked) > 1:
+        result["nominal"] = {**checked[1], "x": problem.base.to_display(designs[1])}
+    return result

@@ -1,0 +1,403 @@
+"""Robust design: every solver searches for yield under manufacturing tolerances.
+
+:class:`RobustProblem` wraps a case's Problem so that any solver runs on it unchanged.
+Per generation (``new_generation``, called by the driver before every ask) it draws one
+set of ``S`` perturbations in units of each input's half-width, the same for every
+candidate (common random numbers: candidates are compared on the same parts, so their
+differences are not sampling noise). A candidate ``x`` is evaluated at its nominal design
+and at ``S`` perturbed copies, population x samples in one vectorised call (in chunks,
+:mod:`camopt.core.batch`). Its evaluation is:
+
+- ``g``: for each case constraint the ``k``-th smallest of its ``S`` sampled values,
+  ``k = ceil(search_yield S)`` (``search_yield`` defaults to ``yield_target``), and a
+  last column ``yield``, the ``k``-th smallest of each sample's worst constraint.
+  ``yield <= 0`` exactly when at least ``k`` samples meet every constraint, i.e. when the
+  estimated yield reaches the target; the order statistic
+  is continuous in ``x``, so an infeasible candidate still tells the search how far off it
+  is (a yield count is flat at 0 far from the feasible set).
+- ``f``: the nominal objective, its mean over the samples with a finite objective, or its
+  ``quantile``; or (``objective = "margin"``, objective name ``yield_margin``) the yield
+  column itself: among designs that meet the target the search then prefers the one
+  whose worst part at the target's order statistic keeps the most margin to every limit
+  (a max-min margin design, for cases whose own objective pulls against the margins, as
+  the VCB's least surplus work pulls against its latch energy).
+- ``extras``: the nominal design's metrics and ``yield`` (the estimate, share of samples
+  meeting every constraint with a finite objective).
+
+A solver that keeps evaluations across generations compares new candidates with designs
+judged on other draws; ``redraws_each_generation`` asks it to evaluate them again on each
+generation's draws (``de_gr`` does: its parents; ``pso``'s personal bests, ``nsga2``'s
+survivors and ``cmaes``'s best so far are not). Even so a design can pass one
+generation's draws by luck and be the solver's best when it stops. So the ``finalists``
+best designs that met the target on their own generation's draws, with the solver's
+best, are evaluated again on ``check_samples`` fresh draws when the repeat ends, and the
+best of them by Deb's rules on those draws is the repeat's result
+(:meth:`RobustProblem.select`): there a design is feasible when the Wilson lower bound
+of its yield reaches ``yield_target``.
+
+With ``screen`` a candidate whose nominal design breaks a constraint is not sampled: its
+columns are its nominal constraints, and its yield column its nominal worst constraint
+plus ``SCREENED`` (1e6), so that it ranks behind every sampled candidate while Deb's rules
+still lead the unsampled ones towards nominal feasibility. The best design is checked at the end
+with ``check_samples`` fresh draws (:func:`check`), and the Wilson interval of its yield
+is reported. Seeds: repeat ``i``'s draws come from ``SeedSequence(run.seed,
+spawn_key=(i, ROBUST_KEY, 0))``, its selection's from ``(i, ROBUST_KEY, 1)``, the final
+check's from ``SeedSequence(run.seed, spawn_key=(ROBUST_KEY, CHECK_KEY))``; never the
+solver's generator, so the search itself is unchanged by the draws and results do not
+depend on the worker count.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import special
+
+from camopt.config.models import CaseConfig, RobustSection
+from camopt.core import stats
+from camopt.core.capabilities import CAPABILITIES, VariesCase
+from camopt.core.problem import FEASIBILITY_TOL, Evaluation, ObjectiveFloor, Problem, deb_best
+from camopt.core.variation import (
+    Distribution,
+    Vary,
+    applicable_defaults,
+    apply,
+    check_varies,
+    mark,
+    outside,
+    parse_vary,
+    physical_range,
+    unit_draws,
+)
+from camopt.errors import ConfigError
+
+SCREENED = 1e6
+"""Added to the yield column of a candidate not sampled (its nominal design infeasible)."""
+YIELD = "yield"
+"""Name of the yield constraint column and of the yield estimate among the extras."""
+MARGIN = "yield_margin"
+"""Objective name of a robust run with ``objective = "margin"``: the yield column (the
+worst normalised constraint at the target's order statistic; <= 0 met, lower better)."""
+ROBUST_KEY = 0x524F42  # "ROB": the spawn-key word of every robust draw
+CHECK_KEY = 2**32 - 1  # the final check's key under ROBUST_KEY (never a repeat index)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What varies and how: the inputs, their physical ranges (input units) and the case
+    fields' nominal values (fields' units)."""
+
+    spec: RobustSection
+    varies: tuple[Vary, ...]
+    ranges: tuple[tuple[float, bool, float], ...]
+    field_nominal: dict[str, float]
+
+    @property
+    def distribution(self) -> Distribution:
+        return Distribution(self.spec.distribution)
+
+
+def plan(problem: Problem, case: CaseConfig, spec: RobustSection, tolerances: dict[str, str],
+         source: str) -> Plan:
+    """The plan of a ``[robust]`` table for a Problem: its ``vary`` (or the case's default
+    tolerances that apply), checked; bad input is a ConfigError against ``robust.vary``."""
+    key = "robust.vary"
+    try:
+        if spec.vary:
+            varies = [parse_vary(source, f"{name}={tol}", key) for name, tol in spec.vary.items()]
+        else:
+            varies = applicable_defaults(problem, tolerances, source, key)
+        check_varies(problem, varies, source, case.kind, key)
+    except ConfigError:
+        raise
+    except Exception as exc:  # CamoptError with "source: key: what"
+        raise ConfigError(source, key, str(exc).split(f"{key}: ", 1)[-1]) from None
+    if not varies:
+        raise ConfigError(source, key, f"case '{case.kind}' documents no tolerance for these "
+                          "inputs; give robust.vary")
+    ranges = tuple(physical_range(problem, type(case), v) for v in varies)
+    fields = {v.field: float(getattr(case, v.field)) for v in varies if v.is_case_field}
+    return Plan(spec, tuple(varies), ranges, fields)
+
+
+def _values(problem: Problem, plan: Plan, X: NDArray, unit: NDArray) -> NDArray:
+    """Input values of every candidate at every draw, (n * S, k) in input units, candidate-
+    major: candidate ``i``'s samples are rows ``i S .. i S + S - 1``."""
+    n, (S, k) = len(X), unit.shape
+    nominal = np.empty((n, k))
+    for j, v in enumerate(plan.varies):
+        if v.is_case_field:
+            nominal[:, j] = plan.field_nominal[v.field]
+        else:
+            i = problem.names.index(v.name)
+            nominal[:, j] = X[:, i] * problem.variables[i].scale
+    half = np.abs(nominal) * np.array([v.tolerance / 100 if v.relative else 0.0
+                                       for v in plan.varies])
+    half += np.array([0.0 if v.relative else v.tolerance for v in plan.varies])
+    return (nominal[:, None, :] + unit[None, :, :] * half[:, None, :]).reshape(n * S, k)
+
+
+@dataclass(frozen=True)
+class Sampled:
+    """Candidates evaluated at their samples: constraints (n, S, n_constr), objectives
+    (n, S), each sample's worst constraint (n, S; +inf for a non-finite objective)."""
+
+    g: NDArray
+    f: NDArray
+    worst: NDArray
+
+    @property
+    def feasible(self) -> NDArray:
+        """(n, S) bool: the sample meets every constraint with a finite objective."""
+        return self.worst <= FEASIBILITY_TOL
+
+
+def sample(problem: Problem, plan: Plan, X: NDArray, unit: NDArray) -> Sampled:
+    """Evaluate designs ``X`` (n, n_var) at draws ``unit`` (S, k): n x S rows in chunks of
+    ``plan.spec.chunk_rows`` (:mod:`camopt.core.batch`); draws outside an input's physical
+    range count as failed."""
+    n, S = len(X), len(unit)
+    values = _values(problem, plan, X, unit)
+    ev = apply(problem, np.repeat(X, S, axis=0), plan.varies, values,
+               size=plan.spec.chunk_rows)
+    ev = mark(ev, outside(values, plan.ranges))
+    g = np.where(np.isnan(ev.g), np.inf, ev.g).reshape(n, S, -1)
+    f = np.asarray(ev.f, dtype=float).reshape(n, S)
+    worst = g.max(axis=2) if g.shape[2] else np.full((n, S), -np.inf)
+    worst = np.where(np.isfinite(f), worst, np.inf)
+    return Sampled(g, f, worst)
+
+
+def order_index(target: float, samples: int) -> int:
+    """0-based index of the order statistic that decides a yield target:
+    ``ceil(target S) - 1`` (at least ``ceil(target S)`` of ``S`` samples must pass)."""
+    return max(int(math.ceil(target * samples - 1e-9)) - 1, 0)
+
+
+def wilson_low(passed: NDArray, n: int, confidence: float) -> NDArray:
+    """Lower end of the Wilson score interval of ``passed`` successes in ``n`` trials
+    (Wilson 1927; the interval :func:`camopt.core.stats.success_rate` reports), vectorised."""
+    z = float(special.ndtri(0.5 + confidence / 2))
+    p = np.asarray(passed, dtype=float) / n
+    centre = p + z * z / (2 * n)
+    spread = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return (centre - spread) / (1 + z * z / n)
+
+
+def confident_index(target: float, samples: int, confidence: float) -> int:
+    """0-based order statistic that decides "yield >= target" with confidence: at least
+    ``c`` samples must pass, ``c`` the least count whose Wilson lower bound reaches the
+    target (all samples when none does)."""
+    low = wilson_low(np.arange(samples + 1), samples, confidence)
+    enough = np.flatnonzero(low >= target - 1e-12)
+    need = int(enough[0]) if enough.size else samples
+    return max(need, 1) - 1
+
+
+def statistic(f: NDArray, objective: str, quantile: float) -> NDArray:
+    """The objective's mean over samples with a finite value, or its quantile (the next
+    order statistic above, non-finite values counted as +inf), per row of ``f`` (n, S)."""
+    if objective == "mean":
+        finite = np.isfinite(f)
+        total = np.where(finite, f, 0.0).sum(axis=1)
+        count = finite.sum(axis=1)
+        return np.divide(total, count, out=np.full(len(f), np.inf), where=count > 0)
+    # "higher": an order statistic (never interpolated towards a better value, and no
+    # inf - inf when failed samples are among the neighbours)
+    return np.quantile(np.where(np.isnan(f), np.inf, f), quantile, axis=1, method="higher")
+
+
+class RobustProblem(Problem):
+    """A case's Problem whose evaluation is robust (module docstring): same variables,
+    constraints plus ``yield``, objective a statistic of the case's."""
+
+    redraws_each_generation = True
+
+    def __init__(self, base: Problem, robust_plan: Plan) -> None:
+        self.base, self.plan = base, robust_plan
+        self.variables = base.variables
+        self.constraint_names = (*base.constraint_names, YIELD)
+        self.objective_name = MARGIN if robust_plan.spec.objective == "margin" \
+            else base.objective_name
+        self.rng = np.random.default_rng(0)
+        self.unit: NDArray | None = None
+        self.nominal_best: tuple[NDArray, float] | None = None
+        """The best design seen whose nominal evaluation is feasible, and its objective."""
+        self.finalists: tuple[NDArray, NDArray] = (np.empty((0, self.n_var)), np.empty(0))
+        """Designs (m, n_var) that met the target on their generation's draws, lowest
+        objective (m,) first: checked again at the end of the repeat (:meth:`select`)."""
+
+    def reseed(self, seed: np.random.SeedSequence) -> None:
+        """Start a repeat: its own draws, nothing carried over from another repeat."""
+        self.rng = np.random.default_rng(seed)
+        self.unit = None
+        self.nominal_best = None
+        self.finalists = (np.empty((0, self.n_var)), np.empty(0))
+
+    def new_generation(self) -> None:
+        """Draw the generation's perturbations (S, k), shared by every candidate."""
+        spec = self.plan.spec
+        self.unit = unit_draws(self.rng, spec.samples, len(self.plan.varies),
+                               self.plan.distribution)
+
+    def evaluate(self, X: NDArray) -> Evaluation:
+        """Robust objective and constraints of designs ``X`` (n, n_var), SI (module
+        docstring); the draws are the current generation's."""
+        if self.unit is None:
+            self.new_generation()
+        assert self.unit is not None
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        spec = self.plan.spec
+        target = spec.yield_target if spec.search_yield is None else spec.search_yield
+        ev = self.evaluate_at(X, self.unit, order_index(target, len(self.unit)))
+        self._keep_finalists(X, ev)
+        return ev
+
+    def evaluate_at(self, X: NDArray, unit: NDArray, k: int) -> Evaluation:
+        """As :meth:`evaluate` with the draws ``unit`` (S, k) given (any S), ``k`` the
+        0-based order statistic that decides the yield column."""
+        spec = self.plan.spec
+        nominal = self.base.evaluate(X)
+        self._remember(X, nominal)
+        nom_g = np.where(np.isnan(nominal.g), np.inf, nominal.g)
+        nom_worst = nom_g.max(axis=1) if nom_g.shape[1] else np.full(len(X), -np.inf)
+        nom_worst = np.where(np.isfinite(nominal.f), nom_worst, np.inf)
+        # an unsampled candidate ranks behind every sampled one: without the offset a
+        # nominal design just outside a limit (violation 1e-3) beats a nominally feasible
+        # one whose draws fail (violation ~1), and the search never leaves the limit
+        g = np.column_stack([nom_g, SCREENED + np.maximum(nom_worst, 0.0)])
+        f = np.array(nominal.f, dtype=float)
+        estimate = np.full(len(X), np.nan)
+        todo = np.flatnonzero(nominal.feasible) if spec.screen else np.arange(len(X))
+        if todo.size:
+            s = sample(self.base, self.plan, X[todo], unit)
+            g[todo, :-1] = np.partition(s.g, k, axis=1)[:, k, :]
+            g[todo, -1] = np.partition(s.worst, k, axis=1)[:, k]
+            estimate[todo] = s.feasible.mean(axis=1)
+            if spec.objective in ("mean", "quantile"):
+                f[todo] = statistic(s.f, spec.objective, spec.quantile)
+        if spec.objective == "margin":
+            f = g[:, -1].copy()
+        return Evaluation(f, g, {**nominal.extras, YIELD: estimate})
+
+    def _keep_finalists(self, X: NDArray, ev: Evaluation) -> None:
+        """Keep the ``finalists`` distinct designs with the lowest objective among those
+        that met the target on their generation's draws, each with its latest passing
+        score (a design that fails a later generation's draws keeps its place: it passed
+        once, and the selection judges it on fresh draws)."""
+        ok = ev.feasible
+        if not ok.any():
+            return
+        # this generation's rows first: np.unique keeps a design's first row, so a design
+        # evaluated again (a DE parent) keeps its score on the latest draws, not a lucky one
+        Xs = np.vstack([X[ok], self.finalists[0]])
+        fs = np.concatenate([ev.f[ok], self.finalists[1]])
+        Xs, first = np.unique(Xs, axis=0, return_index=True)
+        fs = fs[first]
+        keep = np.argsort(fs, kind="stable")[:self.plan.spec.finalists]
+        self.finalists = (Xs[keep], fs[keep])
+
+    def select(self, x: NDArray, seed: np.random.SeedSequence) -> tuple[NDArray, Evaluation]:
+        """The repeat's result: the solver's best ``x`` and the finalists evaluated on
+        ``check_samples`` fresh draws (the same for all), the best of them by Deb's rules,
+        a design counting as feasible when the Wilson lower bound of its yield (at
+        ``confidence``) reaches ``yield_target``. A design kept for passing one
+        generation's draws by luck fails here."""
+        spec = self.plan.spec
+        unit = unit_draws(np.random.default_rng(seed), spec.check_samples,
+                          len(self.plan.varies), self.plan.distribution)
+        X = np.vstack([x[None, :], self.finalists[0]])
+        ev = self.evaluate_at(X, unit, confident_index(spec.yield_target, len(unit),
+                                                       spec.confidence))
+        i = deb_best(ev.f, ev.violation)
+        return X[i].copy(), ev.take(i)
+
+    def _remember(self, X: NDArray, nominal: Evaluation) -> None:
+        ok = np.flatnonzero(nominal.feasible)
+        if ok.size:
+            i = ok[np.argmin(nominal.f[ok])]
+            if self.nominal_best is None or nominal.f[i] < self.nominal_best[1]:
+                self.nominal_best = (X[i].copy(), float(nominal.f[i]))
+
+    # the case's single-design outputs describe the nominal design
+    def metrics(self, x: NDArray) -> Mapping[str, object]:
+        return self.base.metrics(x)
+
+    def analysis(self, x: NDArray) -> dict[str, NDArray]:
+        return self.base.analysis(x)
+
+    def initial_x(self) -> NDArray | None:
+        return self.base.initial_x()
+
+    def objective_floor(self) -> ObjectiveFloor | None:
+        """The case's floor for its objective and any statistic of it over the draws; the
+        margin has none (a more negative margin is always possible in principle)."""
+        return None if self.plan.spec.objective == "margin" else self.base.objective_floor()
+
+
+def _forward(name: str) -> Any:
+    def method(self: RobustProblem, *args: Any, **kwargs: Any) -> Any:
+        return getattr(self.base, name)(*args, **kwargs)
+    method.__name__ = name
+    return method
+
+
+def wrap(base: Problem, robust_plan: Plan) -> RobustProblem:
+    """A RobustProblem offering the capabilities its case declares (repair, family ...:
+    forwarded to the case), so every solver that runs the case runs it robustly.
+    Per-design case fields (VariesCase) stay the case's: they are what varies."""
+    caps = tuple(c for c in CAPABILITIES.values()
+                 if c is not VariesCase and isinstance(base, c))
+    if not caps:
+        return RobustProblem(base, robust_plan)
+    members = {n: _forward(n) for c in caps for n, v in vars(c).items()
+               if callable(v) and not n.startswith("_")}
+    cls = type(f"Robust{type(base).__name__}", (RobustProblem, *caps), members)
+    return cls(base, robust_plan)
+
+
+def repeat_seed(child: np.random.SeedSequence, stage: int = 0) -> np.random.SeedSequence:
+    """The draws of the repeat whose solver is seeded by ``child`` (the run's
+    ``SeedSequence(seed).spawn(repeats)[i]``): spawn key ``(i, ROBUST_KEY, stage)``, stage
+    0 the generations', 1 the selection's (:meth:`RobustProblem.select`)."""
+    return np.random.SeedSequence(child.entropy,
+                                  spawn_key=(*child.spawn_key, ROBUST_KEY, stage))
+
+
+def check(problem: RobustProblem, designs: Sequence[NDArray], seed: int) -> list[dict[str, Any]]:
+    """The final check: designs (SI) evaluated at ``check_samples`` fresh draws, the same
+    draws for every design. Per design: nominal objective, mean and quantile objective,
+    yield with its Wilson interval, and per constraint its nominal value and its value at
+    the yield target's order statistic (normalised, <= 0 met: the margin)."""
+    spec = problem.plan.spec
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(ROBUST_KEY, CHECK_KEY)))
+    unit = unit_draws(rng, spec.check_samples, len(problem.plan.varies),
+                      problem.plan.distribution)
+    X = np.array(designs, dtype=float)
+    nominal = problem.base.evaluate(X)
+    s = sample(problem.base, problem.plan, X, unit)
+    k = order_index(spec.yield_target, spec.check_samples)
+    at_target = np.partition(s.g, k, axis=1)[:, k, :]
+    mean = statistic(s.f, "mean", spec.quantile)
+    quant = statistic(s.f, "quantile", spec.quantile)
+    out = []
+    for i in range(len(X)):
+        passed = int(s.feasible[i].sum())
+        rate = stats.success_rate(passed, spec.check_samples, spec.confidence)
+        out.append({
+            "samples": spec.check_samples, "yield": rate["rate"], "yield_low": rate["ci_low"],
+            "yield_high": rate["ci_high"], "confidence": spec.confidence,
+            # the case's objective, also when the search minimised the margin
+            "case_objective": problem.base.objective_name,
+            "objective_nominal": float(nominal.f[i]), "objective_mean": float(mean[i]),
+            f"objective_q{round(spec.quantile * 100):02d}": float(quant[i]),
+            "nominal_feasible": bool(nominal.feasible[i]),
+            "margins": {c: {"nominal": float(nominal.g[i, j]), "at_target": float(at_target[i, j])}
+                        for j, c in enumerate(problem.base.constraint_names)},
+        })
+    return out

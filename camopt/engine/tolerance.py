@@ -1,0 +1,207 @@
+"""Tolerance analysis of a run's optimum: what survives parts made to tolerance.
+
+Each varied input (a design variable of the run, or a ``case.`` field the case can take
+per design, capability :class:`~camopt.core.capabilities.VariesCase`) is drawn around its
+nominal value, uniformly within +-X or normally with sigma = X / 3, X relative (``%``) or
+in the input's own unit. The nominal design, one row per input at each end of its
+tolerance (the tornado chart's one-at-a-time swings) and every sample are evaluated
+together in cache-sized row chunks (``Problem.describe`` through :mod:`camopt.core.batch`):
+memory is the per-sample columns (objective, metrics, constraints: a few hundred MiB at
+10^6 VCB samples) plus one chunk's temporaries, whatever the sample count. Reported: the
+share of feasible samples (yield), the yield of each requirement of the case
+(:mod:`camopt.core.requirements`) and the one that limits it, the 5th/50th/95th percentiles
+of every raw metric (the objective over feasible samples only: elsewhere it holds the
+search's penalty), and the Spearman rank correlation of every metric with every input
+(scipy.stats), strongest first.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import stats
+
+from camopt.cases import build_problem, get_case, run_requirements
+from camopt.core.problem import FEASIBILITY_TOL, Evaluation, Problem
+from camopt.core.runview import RunView
+from camopt.core.variation import (  # noqa: F401 - Distribution, parse_vary: the CLI's names
+    Distribution,
+    Vary,
+    applicable_defaults,
+    apply,
+    check_varies,
+    draw,
+    mark,
+    outside,
+    parse_vary,
+    physical_range,
+)
+from camopt.engine.driver import validate
+from camopt.errors import CamoptError
+
+
+@dataclass
+class Tolerance:
+    """The result of :func:`analyse`: the inputs' nominal values and samples (input units),
+    the evaluation of nominal, one-at-a-time ends and samples, and the summaries."""
+
+    run_path: str
+    varies: list[Vary]
+    distribution: Distribution
+    seed: int
+    nominal_inputs: NDArray  # (k,)
+    inputs: NDArray  # (n, k)
+    nominal: Evaluation  # one row
+    swings: Evaluation  # 2k rows: input j at -X (row 2j) and +X (row 2j + 1)
+    samples: Evaluation  # n rows
+    objective_name: str
+    constraint_names: tuple[str, ...]
+    summary: dict[str, Any] = field(default_factory=dict)
+    outside: NDArray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    """(n,) samples with an input outside its physical range (counted as failed)."""
+    run: RunView | None = None
+    """The analysed run (its case's requirements give the yield per requirement)."""
+
+    def metric_columns(self, ev: Evaluation) -> dict[str, NDArray]:
+        """The objective and every metric of an evaluation, (rows,) each. The objective is
+        NaN where a row is infeasible: there it holds the search's penalty, not a value of
+        the design (a penalised 23,517 against a nominal 1.56 J); metrics are raw."""
+        f = np.where(ev.feasible, ev.f, np.nan)
+        return {self.objective_name: f, **{k: np.asarray(v, dtype=float)
+                                           for k, v in ev.extras.items()}}
+
+
+def _problem_of(run: RunView) -> Problem:
+    config = validate({"case": run.case, "solver": run.solver, "run": run.run}, run.path)
+    return build_problem(config.case)
+
+
+def default_varies(run: RunView) -> list[Vary]:
+    """The case's documented tolerances (``CaseSpec.tolerances``) that apply to this run:
+    its design variables, and the case fields its Problem can vary per design."""
+    chosen = applicable_defaults(_problem_of(run), get_case(run.kind).tolerances, run.path)
+    if not chosen:
+        raise CamoptError(f"{run.path}: --vary: case '{run.kind}' documents no tolerance for "
+                          "this run's inputs; give --vary")
+    return chosen
+
+
+def _inputs(run: RunView, problem: Problem, varies: Sequence[Vary]) -> NDArray:
+    """Nominal value of each varied input in its own unit (display units for variables)."""
+    check_varies(problem, varies, run.path, run.kind)
+    return np.array([float(run.case[v.field]) if v.is_case_field else float(run.best.x[v.name])
+                     for v in varies], dtype=float)
+
+
+def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
+            distribution: Distribution = Distribution.uniform) -> Tolerance:
+    """Draw ``samples`` sets of the varied inputs from ``SeedSequence(seed)`` and evaluate
+    them, the nominal design and the one-at-a-time ends together (row chunks)."""
+    if not varies:
+        raise CamoptError(f"{run.path}: --vary: give at least one input to vary")
+    if samples < 2:
+        raise CamoptError(f"{run.path}: --samples: {samples}: at least 2")
+    problem = _problem_of(run)
+    nominal = _inputs(run, problem, varies)
+    half = np.array([v.half_width(x) for v, x in zip(varies, nominal)])
+    rng = np.random.default_rng(np.random.SeedSequence(seed))
+    drawn = draw(rng, samples, nominal, half, distribution)
+    k = len(varies)
+    ends = np.tile(nominal, (2 * k, 1))
+    ends[np.arange(0, 2 * k, 2), np.arange(k)] -= half
+    ends[np.arange(1, 2 * k, 2), np.arange(k)] += half
+    values = np.vstack([nominal, ends, drawn])
+    x0 = problem.from_display(run.best.x)
+    ev = apply(problem, np.tile(x0, (len(values), 1)), varies, values, describe=True)
+    # draws outside an input's physical range count as failed (docs/tolerance.md)
+    ranges = [physical_range(problem, get_case(run.kind).config, v) for v in varies]
+    bad = outside(values, ranges)
+    ev = mark(ev, bad)
+    result = Tolerance(run.path, list(varies), distribution, seed, nominal, drawn,
+                       ev.take(0), ev.take(slice(1, 1 + 2 * k)),
+                       ev.take(slice(1 + 2 * k, None)), problem.objective_name,
+                       problem.constraint_names, outside=bad[1 + 2 * k:], run=run)
+    result.summary = summarise(result)
+    return result
+
+
+def _finite_or_none(x: float) -> float | None:
+    return float(x) if np.isfinite(x) else None
+
+
+def summarise(t: Tolerance) -> dict[str, Any]:
+    """The ``tolerance --format json`` document."""
+    nominal = {k: float(v[0]) for k, v in t.metric_columns(t.nominal).items()}
+    columns = t.metric_columns(t.samples)
+    swings = t.metric_columns(t.swings)
+    metrics, sensitivity, tornado = {}, {}, {}
+    for name, values in columns.items():
+        with np.errstate(invalid="ignore"):
+            finite = values[~np.isnan(values)]
+            p = np.percentile(finite, [5, 50, 95]) if finite.size else [np.nan] * 3
+        metrics[name] = {"p05": float(p[0]), "p50": float(p[1]), "p95": float(p[2])}
+        rows: list[dict[str, Any]] = []  # one JSON row per varied input
+        for j, v in enumerate(t.varies):
+            rows.append({"input": v.name, "spearman": _spearman(t.inputs[:, j], values),
+                         "low": float(swings[name][2 * j]),
+                         "high": float(swings[name][2 * j + 1])})
+        rows.sort(key=lambda r: -abs(r["spearman"]) if r["spearman"] is not None else 1.0)
+        sensitivity[name] = [{"input": r["input"], "spearman": r["spearman"]} for r in rows]
+        tornado[name] = [{"input": r["input"], "low": r["low"], "high": r["high"]}
+                         for r in rows]
+    yields = requirement_yields(t, columns)
+    return {
+        "run": t.run_path, "samples": int(len(t.inputs)), "seed": t.seed,
+        "distribution": t.distribution.value,
+        "vary": [{"input": v.name, "nominal": float(x), "tolerance": v.tolerance,
+                  "unit": "%" if v.relative else "own", "half_width": v.half_width(x)}
+                 for v, x in zip(t.varies, t.nominal_inputs)],
+        "yield": float(np.mean(t.samples.feasible)),
+        "nominal_feasible": bool(t.nominal.feasible[0]),
+        "nominal": nominal, "metrics": metrics, "sensitivity": sensitivity,
+        "one_at_a_time": tornado,
+        "outside_share": float(np.mean(t.outside)) if t.outside.size else 0.0,
+        "violated_share": {c: float(np.mean(~(t.samples.g[:, i] <= FEASIBILITY_TOL)))
+                           for i, c in enumerate(t.constraint_names)},
+        "objective_over": "feasible samples (infeasible ones carry the search's penalty)",
+        "requirements": yields,
+        "limiting": _limiting(yields, columns),
+    }
+
+
+def _limiting(yields: list[dict[str, Any]], columns: dict[str, NDArray]) -> str | None:
+    """The quantity of the requirement with the least yield (first declared on a tie)
+    among those the samples report as a metric: the tornado's default."""
+    rows = [r for r in yields if r["quantity"] in columns]
+    return min(rows, key=lambda r: r["yield"])["quantity"] if rows else None
+
+
+def requirement_yields(t: Tolerance, columns: dict[str, NDArray]) -> list[dict[str, Any]]:
+    """Yield per requirement of the case (:mod:`camopt.core.requirements`) over the samples,
+    with its margin's 5th and 50th percentiles and whether the nominal design passes;
+    requirements whose quantity the samples do not report are left out."""
+    from camopt.core.requirements import yields
+
+    requirements = run_requirements(t.run) if t.run is not None else ()
+    samples = {**columns, "feasible": t.samples.feasible.astype(float)}
+    nominal = {**t.metric_columns(t.nominal), "feasible": t.nominal.feasible.astype(float)}
+    out = yields(requirements, samples)
+    by_name = {r.name: r for r in requirements}
+    for row in out:
+        row["nominal_pass"] = bool(by_name[row["name"]].passes(nominal[row["quantity"]])[0])
+    return out
+
+
+def _spearman(a: NDArray, b: NDArray) -> float | None:
+    """Spearman's rank correlation of two columns (NaN rows dropped); None where either
+    is constant (an input at +-0, a metric the inputs do not move)."""
+    ok = ~(np.isnan(a) | np.isnan(b))
+    a, b = a[ok], b[ok]
+    if a.size < 3 or np.all(a == a[0]) or np.all(b == b[0]):
+        return None
+    rho = stats.spearmanr(a, b).statistic
+    return _finite_or_none(rho)

@@ -1,0 +1,128 @@
+"""``camopt report``: one self-contained HTML page per archive (Jinja2 template
+``templates/report.html.j2``). Every figure is an inline SVG data URI and the style sheet is
+in the page, so it opens without network access and can be handed over as one file."""
+
+from __future__ import annotations
+
+import base64
+import io
+import platform
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from typing import Any
+
+from camopt import archive
+from camopt.archive.sweeps import load_sweep
+from camopt.core.runview import RunView
+from camopt.reporting import report
+
+LIBRARIES = ("camopt", "numpy", "scipy", "h5py", "matplotlib", "pymoo", "pydantic", "Jinja2",
+             "ezdxf")
+
+
+def number(value: Any) -> str:
+    """A value as the report prints it (:func:`camopt.reporting.report.format_value`)."""
+    return report.format_value(value)
+
+
+def svg_uri(fig: Any) -> str:
+    """A matplotlib figure as an ``data:image/svg+xml;base64,...`` URI (text as paths, so
+    no font is needed to view it); the figure is closed."""
+    from camopt.core.plotting import close
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="svg")
+    close(fig)
+    return "data:image/svg+xml;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _figures(figures: dict[str, Any]) -> list[dict[str, str]]:
+    out = []
+    for name, fig in figures.items():
+        title = fig.axes[0].get_title() if fig.axes else name
+        out.append({"name": name, "title": title or name, "uri": svg_uri(fig)})
+    return out
+
+
+def _environment() -> dict[str, str]:
+    found = {"python": platform.python_version()}
+    for lib in LIBRARIES:
+        try:
+            found[lib] = version(lib)
+        except PackageNotFoundError:
+            found[lib] = "not installed"
+    return found
+
+
+def run_context(view: RunView) -> dict[str, Any]:
+    """What the template shows of a run archive."""
+    from camopt.cases import get_case
+    from camopt.reporting import plots
+
+    spec = get_case(view.kind)
+    summary = report.summary(view)
+    stats = report.repeat_statistics(view).as_dict()
+    doc = report.show(view)
+    return {
+        **verdict_context(doc), "reference": doc.get("reference"),
+        "pareto": doc.get("pareto_summary"),
+        "pareto_rows": report.pareto_rows(doc["pareto_summary"])
+        if doc.get("pareto_summary") else [], "pareto_columns": report.PARETO_COLUMNS,
+        "kind": "run", "title": f"{view.kind} / {view.solver_name}: {Path(view.path).name}",
+        "path": view.path, "case_kind": view.kind, "case_summary": spec.summary,
+        "paper_source": spec.paper_source, "solver": view.solver_name,
+        "created": view.created, "seed": view.run.get("seed"),
+        "seed_entropy": view.seed_entropy, "repeats_planned": view.run.get("repeats"),
+        "interrupted": view.interrupted, "status": report.status(view),
+        "feasible": view.best.feasible, "active": view.best.active,
+        "violated": view.best.violated, "objective_name": view.objective_name,
+        "reference_label": summary["reference_label"], "rows": summary["rows"],
+        "robust": report.robust_summary(view),
+        "statistics": stats, "target": view.run.get("target"),
+        "repeats": view.repeats, "table": view.table[:50], "table_rows": len(view.table),
+        "table_columns": ["label", *view.best.x, view.objective_name, "feasible"],
+        "notes": [(r.index, n) for r in view.repeats for n in r.notes],
+        "figures": _figures(plots.run_figures(view)),
+        "config_toml": view.config_as_run or view.config_toml,
+        "versions": view.versions, "environment": _environment(),
+    }
+
+
+def verdict_context(doc: dict[str, Any]) -> dict[str, Any]:
+    """The verdict the page leads with: sentence, pass/fail, the table's cells and which
+    rows fail (``doc``: ``report.show``'s or ``report.rank_sweep``'s)."""
+    return {"verdict": doc["verdict"], "verdict_sentence": doc["verdict_sentence"],
+            "verdict_columns": report.VERDICT_COLUMNS,
+            "verdict_rows": list(zip(report.verdict_rows(doc["requirements"]),
+                                     [r["pass"] is False for r in doc["requirements"]]))}
+
+
+def sweep_context(path: Path) -> dict[str, Any]:
+    """What the template shows of a sweep archive (read through ``load_sweep`` only)."""
+    from camopt.reporting import plots
+
+    spec, results = load_sweep(path)
+    ranking = report.rank_sweep(spec, results)
+    return {
+        **verdict_context(ranking), "reference": None,
+        "kind": "sweep", "title": f"sweep: {path.name}", "path": str(path),
+        "source": spec.source, "grid": spec.grid, "seeds": list(spec.seeds),
+        "cells": len(results), "ranking": ranking["ranking"],
+        "figures": _figures(plots.sweep_figures(spec, results)),
+        "config_toml": spec.text, "environment": _environment(),
+    }
+
+
+def render(path: Path) -> str:
+    """The HTML page of a run or sweep archive."""
+    import jinja2
+
+    env = jinja2.Environment(loader=jinja2.PackageLoader("camopt.reporting", "templates"),
+                             autoescape=True, undefined=jinja2.StrictUndefined,
+                             trim_blocks=True, lstrip_blocks=True)
+    env.filters["num"] = number
+    if archive.archive_kind(path) == "sweep":
+        context = sweep_context(path)
+    else:
+        context = run_context(archive.load_run(path))
+    return env.get_template("report.html.j2").render(**context)

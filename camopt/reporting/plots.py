@@ -1,0 +1,180 @@
+"""Figures of runs and sweeps: convergence, plus each case's own figures (its spec's
+``figures``). Every function returns ``{name: Figure}`` so tests can read axes and
+labels; :func:`save` writes them as PNGs."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from camopt.cases import get_case
+from camopt.core import pareto
+from camopt.core.plotting import PAPER_STYLE, close, new_figure, readable
+from camopt.core.runview import RunView
+
+
+def _band(histories: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Median and inter-quartile band of best-so-far curves (shorter ones hold their end)."""
+    n = max(len(h) for h in histories)
+    stack = np.array([np.r_[h, np.full(n - len(h), h[-1])] for h in histories], dtype=float)
+    stack = np.where(np.isfinite(stack), stack, np.nan)
+    with np.errstate(all="ignore"):
+        mid, low, high = (np.nanpercentile(stack, q, axis=0) for q in (50, 25, 75))
+    return mid, low, high
+
+
+SPREAD = 20.0
+"""Positive values spanning more than this factor are drawn on a log axis."""
+
+
+def _scale(ax: Any, values: np.ndarray) -> None:
+    """Fit the y axis to what the data reach: a log axis from the least to the greatest
+    positive value when they span more than :data:`SPREAD` (zeros, a violation reaching 0,
+    fall below it and are not drawn), else the linear axis matplotlib fits. Never a
+    symlog axis, whose linear band near 0 left half the height to decades never reached."""
+    finite = values[np.isfinite(values)]
+    positive = finite[finite > 0]
+    if not positive.size or finite.min() < 0:
+        return
+    lo, hi = float(positive.min()), float(positive.max())
+    if hi > SPREAD * lo:
+        ax.set_yscale("log")
+        ax.set_ylim(lo / 1.5, hi * 1.5)
+
+
+def convergence(curves: dict[str, list[np.ndarray]], objective: str,
+                target: float | None = None,
+                evaluations: dict[str, list[np.ndarray]] | None = None,
+                violations: dict[str, list[np.ndarray]] | None = None) -> Figure:
+    """Median and inter-quartile band of the best objective, against iterations or, given
+    ``evaluations`` (the ``nfev`` histories, one per curve), against function evaluations
+    (so grid points of different population sizes compare fairly). ``target`` is drawn
+    as a line. When no curve has a finite objective (no feasible design was found) the best
+    constraint violation is drawn instead (``violations``), never an empty axes."""
+    finite = any(np.isfinite(np.asarray(h, dtype=float)).any()
+                 for hist in curves.values() for h in hist)
+    if not finite and violations:
+        curves, what = violations, "best constraint violation (no feasible design found)"
+        ylabel, target = "best constraint violation", None
+    else:
+        what, ylabel = "best objective", f"best {readable(objective)}"
+    xlabel = "function evaluations" if evaluations else "iteration (generation)"
+    fig, ax = new_figure(f"Convergence: {what}\n(median and inter-quartile band over runs)",
+                         xlabel, ylabel)
+    allv = []
+    for label, hist in curves.items():
+        med, lo, hi = _band(hist)
+        x = np.arange(1, med.size + 1, dtype=float)
+        if evaluations and evaluations.get(label):
+            x = _band([np.asarray(e, dtype=float) for e in evaluations[label]])[0][:med.size]
+        # a one-pass solver (enumeration) has one point per run: a marker, not a line
+        ax.plot(x, med, marker="o" if med.size <= 2 else None,
+                label=f"{label} (n = {len(hist)})")
+        ax.fill_between(x, lo, hi, alpha=0.25)
+        if med.size == 1:
+            ax.set_xlim(x[0] - 0.5, x[0] + 0.5)
+            ax.set_xticks([x[0]])
+        allv.append(med)
+    if target is not None and np.isfinite(target):
+        ax.axhline(target, color="black", linestyle=":", linewidth=1.2,
+                   label=f"target {target:.6g}")
+        allv.append(np.array([float(target)]))
+    values = np.concatenate(allv) if allv else np.array([])
+    if not np.isfinite(values).any():
+        ax.text(0.5, 0.5, "no finite value to draw", transform=ax.transAxes, ha="center")
+    _scale(ax, values)
+    ax.legend()
+    return fig
+
+
+def run_figures(run: RunView) -> dict[str, Figure]:
+    """Convergence and the case's figures for one run archive."""
+    figs = {"convergence": convergence(
+        {"repeats": run.histories()}, run.objective_name, run.run.get("target"),
+        violations={"repeats": run.histories("best_violation")})}
+    if len(pareto.objectives(run)[0]) >= 2:
+        figs["pareto"] = pareto_front(run)
+    figs.update(get_case(run.kind).draw(run))
+    return figs
+
+
+def pareto_front(run: RunView) -> Figure:
+    """The Pareto set in its first two objectives, infeasible members hollow, and the
+    reference design (:func:`camopt.reporting.report.reference`) marked when both its values are
+    known."""
+    names, _ = pareto.objectives(run)
+    a, b = names[:2]
+    fig, ax = new_figure(f"Pareto front ({len(run.table)} designs)", readable(a), readable(b))
+    rows = pareto.rows(run) or []
+    for feasible, style in ((True, {"color": "tab:blue"}),
+                            (False, {"facecolors": "none", "edgecolors": "grey"})):
+        pts = np.array([[r[a], r[b]] for r in rows if r["feasible"] is feasible], dtype=float)
+        if len(pts):
+            ax.scatter(pts[:, 0], pts[:, 1], s=18, label="feasible" if feasible
+                       else "infeasible", **style)
+    from camopt.reporting.report import reference
+
+    label, ref = reference(run)  # one name everywhere: "reference: vendor, Sec 2.3 ..."
+    point = [ref.get(n) for n in (a, b)]
+    if label and all(isinstance(v, (int, float)) and np.isfinite(v) for v in point):
+        ax.scatter([point[0]], [point[1]], marker="*", s=160, color=PAPER_STYLE["color"],
+                   label=label, zorder=3)
+    ax.legend()
+    return fig
+
+
+def sweep_figures(spec: Any, results: dict) -> dict[str, Figure]:
+    """Convergence against function evaluations, one line per grid point (grid points of
+    different population sizes spend different evaluations per generation)."""
+    curves: dict[str, list[np.ndarray]] = {}
+    nfev: dict[str, list[np.ndarray]] = {}
+    violations: dict[str, list[np.ndarray]] = {}
+    for (point, _), r in sorted(results.items()):
+        label = ", ".join(f"{k}={v}" for k, v in spec.points()[point].items()) or "base"
+        curves.setdefault(label, []).append(np.asarray(r.history["best_objective"]))
+        if "nfev" in r.history:
+            nfev.setdefault(label, []).append(np.asarray(r.history["nfev"]))
+        if "best_violation" in r.history:
+            violations.setdefault(label, []).append(np.asarray(r.history["best_violation"]))
+    by_evaluations = nfev if set(nfev) == set(curves) else None
+    return {"convergence": convergence(curves, _objective_name(spec),
+                                       spec.data["run"].get("target"), by_evaluations,
+                                       violations or None)}
+
+
+def _objective_name(spec: Any) -> str:
+    """The objective's name (its unit in the name) of a sweep's case, from its config;
+    plain 'objective' when the case cannot be built here (e.g. it names another archive)."""
+    from pydantic import ValidationError
+
+    from camopt.engine.driver import prepare, validate
+    from camopt.errors import CamoptError
+
+    try:
+        return str(prepare(validate(spec.data, spec.source))[0].objective_name)
+    except (CamoptError, ValidationError, OSError):
+        return "objective"
+
+
+def save(figures: dict[str, Figure], out_dir: Path, stem: str, force: bool = False,
+         inputs: tuple[Path, ...] = (), key: str = "--out") -> list[Path]:
+    """Write each figure as ``<stem>-<name>.png`` and close them: rendered in memory, then
+    written all or nothing (:func:`camopt.archive.files.write_files`: never over an
+    existing file without ``force``, never through a link, never over one of ``inputs``)."""
+    from camopt.archive.files import ensure_folder, write_files
+
+    ensure_folder(out_dir, key)
+    files = {}
+    try:
+        for name, fig in figures.items():
+            png = io.BytesIO()
+            fig.savefig(png, dpi=110, format="png")
+            files[out_dir / f"{stem}-{name}.png"] = png.getvalue()
+    finally:
+        for fig in figures.values():
+            close(fig)
+    return write_files(files, force, inputs)

@@ -1,0 +1,415 @@
+"""Plain-data views of archives for ``show`` and ``compare`` (no printing here)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict
+from typing import Any
+
+import numpy as np
+
+from camopt.cases import run_requirements
+from camopt.core import pareto, stats
+from camopt.core.requirements import Requirement, check, sentence
+from camopt.core.requirements import verdict as verdict_of
+from camopt.core.runview import RunView, design_values
+from camopt.errors import ConfigError
+
+SHOW_KEYS = ("case", "solver", "best", "repeats", "table")
+
+
+NOISE = 1e-12
+"""Values below this in magnitude are round-off (a margin of 2.2e-14 %, a residual of
+5e-16) and print as 0; the archive and JSON keep them."""
+
+
+def format_value(value: Any) -> str:
+    """A value as tables and the HTML report print it: 6 significant digits; infinities as
+    'inf' (a stress with no bound, a design that never closes), NaN as 'n/a' (a quantity
+    that does not exist for this design), booleans as yes/no, None as '-', round-off
+    (below :data:`NOISE`) as 0."""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "n/a"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        if abs(value) < NOISE:
+            return "0"
+        return f"{value:.6g}"
+    if isinstance(value, (list, tuple)):
+        return ", ".join(format_value(v) for v in value)
+    return "-" if value is None else str(value)
+
+
+def jsonable(value: Any) -> Any:
+    """Replace non-finite floats by None and numpy scalars by Python ones, recursively."""
+    if isinstance(value, dict):
+        return {k: jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+REPEAT_KEYS = {"seed": "seed", "objective": "fun", "feasible": "feasible", "nfev": "nfev",
+               "wall_s": "wall_s", "converged_nit": "converged_nit", "spawn_key": "spawn_key",
+               "notes": "notes"}
+"""``show --format json``'s key for each repeat field it reports (``objective``: ``fun``)."""
+
+
+def show(run: RunView) -> dict[str, Any]:
+    """The ``show --format json`` document: verdict ("pass"/"fail") with its sentence and
+    requirements (each with name, limit, value, margin, pass), case, solver, best,
+    repeats, table, the reference design with its own verdict, and for a multi-objective
+    run (a solver with ``objectives``) ``pareto``. These keys are a contract scripts rely
+    on; the two-column view is :func:`summary`."""
+    repeats = [{k: getattr(r, attr) for k, attr in REPEAT_KEYS.items()} for r in run.repeats]
+    best = {k: v for k, v in asdict(run.best).items() if k != "repeat"}
+    judged = verdict(run)
+    label, ref = reference(run)
+    doc = {"verdict": judged["verdict"], "verdict_sentence": judged["sentence"],
+           "requirements": judged["requirements"], "case": run.case, "solver": run.solver,
+           "best": best, "repeats": repeats, "table": run.table}
+    if label:
+        ref_judged = verdict(run, ref)
+        doc["reference"] = {"label": label, "values": ref, "verdict": ref_judged["verdict"],
+                            "verdict_sentence": ref_judged["sentence"],
+                            "requirements": ref_judged["requirements"]}
+    rows = pareto.rows(run)
+    if rows is not None:
+        doc["pareto"] = rows
+        doc["pareto_summary"] = pareto.summary(run)
+    if run.robust:
+        doc["robust"] = {"settings": run.robust, "check": run.robust_check}
+    return jsonable(doc)
+
+
+NEAR_LIMIT = -0.05
+"""Robust summaries list a constraint's margin when either design comes within 5 % of its
+limit (normalised g above this) at its nominal design or at the yield target."""
+
+
+def robust_summary(run: RunView) -> dict[str, Any] | None:
+    """A robust run's final check, the robust optimum beside the best nominally feasible
+    design the search saw, on the same fresh draws: objective (nominal, mean, quantile),
+    yield with its Wilson interval, and the margins (normalised g, <= 0 met) of the
+    constraints near their limits at the nominal design and at the yield target's order
+    statistic. None for a nominal run."""
+    check = run.robust_check
+    if not check:
+        return None
+    designs = [d for d in (check.get("robust"), check.get("nominal")) if d]
+    scalars = [k for k in designs[0] if k.startswith("objective_") or k.startswith("yield")]
+    objective = designs[0].get("case_objective", run.objective_name)  # older archives
+    rows = [{"name": k.replace("objective_", f"{objective} "),
+             "values": [d.get(k) for d in designs]} for k in scalars]
+    for c in designs[0]["margins"]:
+        pairs = [d["margins"][c] for d in designs]
+        if any(max(p["nominal"], p["at_target"]) > NEAR_LIMIT for p in pairs):
+            rows.append({"name": f"{c} nominal", "values": [p["nominal"] for p in pairs]})
+            rows.append({"name": f"{c} at target", "values": [p["at_target"] for p in pairs]})
+    labels = ["robust optimum", "nominal best seen"][:len(designs)]
+    return {"labels": labels, "samples": designs[0]["samples"],
+            "yield_target": run.robust.get("yield_target"), "rows": rows}
+
+
+REFERENCE_PREFIXES = ("initial_", "original_")
+"""Metric prefixes under which cases report their reference (vendor's, original) design."""
+
+
+def reference(run: RunView) -> tuple[str, dict[str, Any]]:
+    """The reference design the optimum is shown beside, under one name everywhere
+    (``reference: vendor, Sec 2.3 and Table 2``: the case's ``CaseSpec.reference``):
+    the metrics a case reports with a prefix of :data:`REFERENCE_PREFIXES`, completed by
+    the ``[case]`` fields named as the design variables (the vendor's spring rates are
+    the config's), else the case's ``reference_values`` (a paper's optimum), else the
+    paper's reported values under the optimum's own names. Returns its label ('' when
+    there is none) and ``{name: value}`` keyed by the optimum's names (``objective``
+    included)."""
+    from camopt.cases import get_case
+
+    spec = get_case(run.kind)
+    metrics = run.best.metrics
+    for prefix in REFERENCE_PREFIXES:
+        values = {k[len(prefix):]: v for k, v in metrics.items() if k.startswith(prefix)}
+        if values:
+            for name in run.best.x:
+                if name not in values and isinstance(run.case.get(name), (int, float)):
+                    values[name] = run.case[name]
+            label = spec.reference or prefix.rstrip("_") + " design"
+            return f"reference: {label}", values
+    names = {run.objective_name, *run.best.x, *metrics}
+    source = spec.reference_values or spec.paper
+    values = {k: v for k, v in source.items() if k in names and not isinstance(v, list)}
+    if run.objective_name in values:
+        values["objective"] = values[run.objective_name]
+    if not values:
+        return "", {}
+    return f"reference: {spec.reference or 'paper'}", values
+
+
+def verdict(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Requirements evaluated on the best design (or on ``values``, the reference's):
+    ``{"requirements": [...], "verdict": "pass"/"fail", "sentence": words}``."""
+    reqs = run_requirements(run, run.best.violated if values is None else None)
+    checks = check(reqs, design_values(run, values))
+    if values is None:
+        return {"requirements": [c.as_dict() for c in checks], "verdict": verdict_of(checks),
+                "sentence": sentence(checks)}
+    # a reference known by a few reported values: judged on those, incomplete when some
+    # requirement's quantity is not among them (verdict None unless it already fails)
+    known = [c for c in checks if c.passed is not None]
+    judged = verdict_of(known) if known else None
+    if judged == "pass" and len(known) < len(checks):
+        judged = None
+    words = sentence(known) if known else "no requirement can be checked on its values"
+    if len(known) < len(checks):
+        words += f" (checked {len(known)} of {len(checks)}: its other values are unknown)"
+    return {"requirements": [c.as_dict() for c in known], "verdict": judged,
+            "sentence": words}
+
+
+VERDICT_COLUMNS = ("requirement", "limit", "value", "margin", "pass")
+
+
+def verdict_rows(requirements: list[dict[str, Any]]) -> list[list[str]]:
+    """The verdict table's cells (:data:`VERDICT_COLUMNS`) of requirements as
+    :func:`verdict` gives them: values and margins with their unit, flags as yes/no."""
+    rows = []
+    for r in requirements:
+        flag = r["limit"] == "yes"
+        unit = f" {r['unit']}" if r["unit"] and r["value"] is not None else ""
+        value = (None if r["value"] is None else bool(r["value"]) if flag else r["value"])
+        margin = "-" if r["margin"] is None or flag else format_value(r["margin"]) + unit
+        shown = format_value(value) + ("" if flag else unit)
+        if value is None and r["pass"] is False:
+            shown = "n/a"  # NaN: a quantity the design does not reach (a stroke unfinished)
+        rows.append([r["name"], r["limit"], shown,
+                     margin, {True: "pass", False: "FAIL", None: "-"}[r["pass"]]])
+    return rows
+
+
+PARETO_COLUMNS = ("objective", "sense", "least", "greatest", "knee")
+
+
+def pareto_rows(doc: dict[str, Any]) -> list[list[str]]:
+    """The Pareto summary's table (:data:`PARETO_COLUMNS`): each objective's extent over
+    the feasible front and its value at the knee (``doc``: ``pareto.summary``'s)."""
+    rows = []
+    for o in doc["objectives"]:
+        lo, hi = (doc["extent"] or {}).get(o["name"], (None, None))
+        rows.append([o["name"], o["sense"], format_value(lo), format_value(hi),
+                     format_value((doc["knee"] or {}).get(o["name"]))])
+    return rows
+
+
+def summary(run: RunView) -> dict[str, Any]:
+    """The run summary: the best design beside the reference design, row by row.
+
+    ``rows`` are ``{"section", "name", "optimum", "reference"}`` with sections
+    ``objective``, ``variables`` and ``metrics``; the objective's name carries its unit
+    (``objective_j``); reference-design metrics (``initial_*``) are folded into the
+    ``reference`` column instead of being rows of their own. Values are raw (inf, NaN
+    kept): :func:`jsonable` turns them into null for JSON."""
+    label, ref = reference(run)
+    best = run.best
+    prefixes = tuple(REFERENCE_PREFIXES)
+    rows = [{"section": "objective", "name": run.objective_name, "optimum": best.objective,
+             "reference": ref.get("objective", ref.get(run.objective_name))}]
+    checked = (run.robust_check or {}).get("robust") or {}
+    case_objective = checked.get("case_objective", run.objective_name)
+    if case_objective != run.objective_name:
+        # a robust run that minimised its margin: the reference's objective is the case's,
+        # shown beside the optimum's own case objective, never beside the margin
+        rows[0]["reference"] = None
+        rows.append({"section": "objective", "name": case_objective,
+                     "optimum": checked.get("objective_nominal"),
+                     "reference": ref.get("objective", ref.get(case_objective))})
+    rows.append({"section": "objective", "name": "feasible", "optimum": best.feasible,
+                 "reference": _bool_or_none(ref.get("feasible"))})
+    rows += [{"section": "variables", "name": k, "optimum": v, "reference": ref.get(k)}
+             for k, v in best.x.items()]
+    shown = {run.objective_name, case_objective, "feasible", "objective", *best.x}
+    rows += [{"section": "metrics", "name": k, "optimum": v, "reference": ref.get(k)}
+             for k, v in best.metrics.items() if k not in shown and not k.startswith(prefixes)]
+    return {"reference_label": label, "rows": rows}
+
+
+def _bool_or_none(value: Any) -> bool | None:
+    return None if value is None else bool(value)
+
+
+def status(run: RunView) -> str:
+    """One line on the best design: feasible with its active constraints, or infeasible
+    naming what it violates (or, when no constraint is, why: the repeat's first note)."""
+    best = run.best
+    if best.feasible:
+        active = ", ".join(best.active) or "none"
+        return f"feasible; active constraints: {active}"
+    if best.violated:
+        return f"INFEASIBLE: violates {', '.join(best.violated)}"
+    notes = next((r.notes for r in run.repeats if r.index == best.repeat), ())
+    why = notes[0] if notes else "the solver returned no feasible design"
+    return f"INFEASIBLE: {why}"
+
+
+def _flatten(prefix: str, value: Any, out: dict[str, Any]) -> None:
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _flatten(f"{prefix}.{k}" if prefix else k, v, out)
+    else:
+        out[prefix] = value
+
+
+def repeat_statistics(run: RunView) -> stats.RunStatistics:
+    """Statistics of the final objectives over a run's repeats (infeasible as +inf)."""
+    return stats.run_statistics([r.fun for r in run.repeats],
+                                [r.feasible for r in run.repeats], run.run.get("target"))
+
+
+def _finals(run: RunView) -> tuple[np.ndarray, int]:
+    """Final objectives as ranked (infeasible as +inf) and the number of successes."""
+    f = stats.ranked([r.fun for r in run.repeats], [r.feasible for r in run.repeats])
+    return f, repeat_statistics(run).successes
+
+
+def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarray,
+                 k_b: int) -> dict[str, Any]:
+    """Mann-Whitney test, effect size, success rates with CIs and the verdict line."""
+    test = stats.compare_objectives(a, b)
+    return {"a": name_a, "b": name_b, **test,
+            "success_a": stats.success_rate(k_a, len(a)),
+            "success_b": stats.success_rate(k_b, len(b)),
+            "verdict": stats.verdict(name_a, name_b, test)}
+
+
+def compare(runs: list[RunView], raw: bool = False) -> dict[str, Any]:
+    """Config differences, best objectives, variables, metrics and repeat statistics;
+    for two runs with repeats, a significance test of their final objectives. Runs of
+    different case kinds or objectives are not comparable (ConfigError against the second
+    run's ``case_kind`` or ``objective_name``). ``raw`` keeps inf and NaN (for tables);
+    else they are null (JSON)."""
+    for run in runs[1:]:
+        for key, mine, first in (("case_kind", run.kind, runs[0].kind),
+                                 ("objective_name", run.objective_name,
+                                  runs[0].objective_name)):
+            if mine != first:
+                raise ConfigError(run.path, key, f"{mine!r}, but {runs[0].path} has "
+                                  f"{first!r}: runs of different kinds are not comparable")
+    flat = []
+    for run in runs:
+        cfg: dict[str, Any] = {}
+        _flatten("", {"case": run.case, "solver": run.solver, "run": run.run}, cfg)
+        flat.append(cfg)
+    keys = sorted(set().union(*flat))
+    differences = {k: [c.get(k) for c in flat] for k in keys
+                   if any(c.get(k) != flat[0].get(k) for c in flat)}
+
+    def side_by_side(section: str) -> dict[str, list[Any]]:
+        names: list[str] = []
+        for run in runs:
+            names += [n for n in getattr(run.best, section) if n not in names]
+        return {n: [getattr(run.best, section).get(n) for run in runs] for n in names}
+
+    judged = [verdict(run) for run in runs]
+    doc = {
+        "runs": [run.path for run in runs],
+        "verdict": [j["verdict"] for j in judged],
+        "verdict_sentence": [j["sentence"] for j in judged],
+        "requirements": [j["requirements"] for j in judged],
+        "config_differences": differences,
+        "objective": [run.best.objective for run in runs],
+        "feasible": [run.best.feasible for run in runs],
+        "x": side_by_side("x"),
+        "metrics": side_by_side("metrics"),
+        "same_objective_different_designs": same_objective_different_designs(runs),
+        "statistics": [repeat_statistics(run).as_dict() for run in runs],
+        "tests": _pairwise(runs),
+        **({"hypervolume": hv} if (hv := pareto.compare_fronts(runs)) else {}),
+    }
+    return doc if raw else jsonable(doc)
+
+
+SAME_OBJECTIVE_RTOL = 1e-6
+"""Objectives this close (relative), or both at or below the run's target, are one
+objective reached ..."""
+DIFFERENT_DESIGN_RTOL = 1e-3
+"""... by different designs when a variable differs by more than this share of its
+magnitude."""
+
+
+def same_objective_different_designs(runs: list[RunView]) -> list[dict[str, Any]]:
+    """Pairs of feasible runs whose best objectives agree (:data:`SAME_OBJECTIVE_RTOL`, or
+    both reach the first run's target) while their designs differ
+    (:data:`DIFFERENT_DESIGN_RTOL`): a flat objective or several optima, which the
+    objective alone hides. Each: ``{"runs": [i, j], "objective", "differ": [names]}``."""
+    found = []
+    for i, a in enumerate(runs):
+        for j in range(i + 1, len(runs)):
+            b = runs[j]
+            fa, fb = a.best.objective, b.best.objective
+            target = runs[0].run.get("target")
+            if not (a.best.feasible and b.best.feasible and math.isfinite(fa)
+                    and math.isfinite(fb)):
+                continue
+            at_target = target is not None and max(fa, fb) <= target
+            if not at_target and abs(fa - fb) > SAME_OBJECTIVE_RTOL * max(abs(fa), abs(fb)):
+                continue
+            differ = [n for n, va in a.best.x.items() if n in b.best.x and abs(
+                va - b.best.x[n]) > DIFFERENT_DESIGN_RTOL * max(abs(va), abs(b.best.x[n]), 1e-12)]
+            if differ:
+                found.append({"runs": [i, j], "objective": fa, "differ": differ})
+    return found
+
+
+def _pairwise(runs: list[RunView]) -> list[dict[str, Any]]:
+    if len(runs) != 2 or min(len(r.repeats) for r in runs) < 2:
+        return []
+    (fa, ka), (fb, kb) = _finals(runs[0]), _finals(runs[1])
+    return [significance("A", fa, ka, "B", fb, kb)]
+
+
+def rank_sweep(spec: Any, results: dict) -> dict[str, Any]:
+    """Grid points ranked by success rate, then median objective; each tested against
+    the best point."""
+    from camopt.core.stats import sweep_summary as summary
+
+    rows = summary(spec, results.values())
+    order = sorted(rows, key=lambda r: (-r["success_rate"], r["median"]))
+    finals: dict[int, list[float]] = {}
+    for r in results.values():
+        finals.setdefault(r.point, []).append(float(stats.ranked([r.fun], [r.feasible])[0]))
+    best = order[0]
+    ranking = []
+    for rank, row in enumerate(order, 1):
+        label = _point_label(spec, row["point"])
+        entry = {"rank": rank, "label": label, **row}
+        if row is not best:
+            b = np.array(finals.get(best["point"], []))
+            a = np.array(finals.get(row["point"], []))
+            entry["vs_best"] = significance(label, a, row["successes"],
+                                            _point_label(spec, best["point"]), b,
+                                            best["successes"])
+        ranking.append(entry)
+    floor = spec.data["run"].get("min_success_rate")
+    reqs = [Requirement(f"success rate, {r['label']}", "success_rate", lower=float(floor),
+                        source="run.min_success_rate (sweep --check)")
+            for r in ranking] if floor is not None else []
+    checks = [check([q], {"success_rate": r["success_rate"]})[0]
+              for q, r in zip(reqs, ranking)]
+    judged = {"verdict": verdict_of(checks), "verdict_sentence": sentence(checks)} if checks \
+        else {"verdict": None, "verdict_sentence": "not judged: run.min_success_rate is not "
+              "set (the sweep's --check needs it)"}
+    return jsonable({**judged, "requirements": [c.as_dict() for c in checks],
+                     "sweep": spec.source, "grid": spec.grid, "seeds": list(spec.seeds),
+                     "ranking": ranking})
+
+
+def _point_label(spec: Any, index: int) -> str:
+    point = spec.points()[index]
+    return ", ".join(f"{k}={v}" for k, v in point.items()) or "base"

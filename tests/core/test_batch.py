@@ -1,0 +1,74 @@
+"""The batched evaluation path: chunked calls give the same Evaluation as one call, bit for
+bit, for every case (no case shares a quantity across rows) - except where a case's
+matrix product goes through BLAS (the EMB spline, ``r @ M``), whose kernels sum in an
+order that depends on the block's row count: there equal to 1e-12 relative."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from camopt.cases import build_problem
+from camopt.core import batch
+from camopt.core.problem import Evaluation
+from camopt.engine.driver import load
+from tests.conftest import CONFIGS
+
+CASES = ["vcb_velocity.toml", "vcb_fourbar.toml", "vcb_identify.toml", "emb.toml",
+         "fast_switch.toml", "opening_spring_lse6.toml", "opening_spring_identify.toml"]
+"""One config per Problem class and mode (VCB with its closing dynamics)."""
+
+
+BLAS_ROUNDING = {"emb.toml"}
+"""Cases whose rows go through a BLAS matrix product (compared to 1e-12 relative)."""
+
+
+def _same(a: Evaluation, b: Evaluation, exact: bool = True) -> None:
+    def check(x, y, msg=""):
+        if exact:
+            np.testing.assert_array_equal(x, y, err_msg=msg)
+        else:
+            np.testing.assert_allclose(x, y, rtol=1e-12, atol=0, err_msg=msg)
+    check(a.f, b.f)
+    check(a.g, b.g)
+    assert a.f.dtype == b.f.dtype and a.g.shape == b.g.shape
+    assert list(a.extras) == list(b.extras)
+    for k in a.extras:
+        check(a.extras[k], b.extras[k], k)
+
+
+@pytest.mark.parametrize("config", CASES)
+def test_chunks_are_bit_identical_to_one_call(config):
+    problem = build_problem(load(CONFIGS / config).case)
+    X = problem.sample(np.random.default_rng(np.random.SeedSequence(7)), 150)
+    exact = config not in BLAS_ROUNDING
+    _same(batch.evaluate(problem, X, size=48), problem.evaluate(X), exact)
+    few = X[:11]  # describe simulates each opening-spring design: a few rows
+    _same(batch.describe(problem, few, size=4), problem.describe(few), exact)
+
+
+def test_case_fields_are_chunked_with_their_rows():
+    problem = build_problem(load(CONFIGS / "vcb_velocity.toml").case)
+    rng = np.random.default_rng(np.random.SeedSequence(8))
+    X = np.tile(problem.vendor_x(), (150, 1))
+    l1 = problem.config.l1_mm + rng.uniform(-0.1, 0.1, 150)
+    _same(batch.describe(problem, X, {"l1_mm": l1}, size=40),
+          problem.describe_with(X, {"l1_mm": l1}))
+
+
+def test_chunks_cover_every_row_once():
+    assert [(s.start, s.stop) for s in batch.chunks(5, 2)] == [(0, 2), (2, 4), (4, 5)]
+    assert list(batch.chunks(0, 3)) == []
+    with pytest.raises(ValueError):
+        list(batch.chunks(3, 0))
+
+
+def test_metrics_that_change_between_chunks_are_refused(sphere_case):
+    from tests.conftest import SphereConfig
+
+    problem = sphere_case(SphereConfig())
+    calls = iter([{"a": np.zeros(2)}, {"b": np.zeros(1)}])
+    real = problem.evaluate
+    problem.evaluate = lambda X: Evaluation(real(X).f, real(X).g, next(calls))
+    with pytest.raises(ValueError, match="differ from the first chunk"):
+        batch.evaluate(problem, np.zeros((3, 4)), size=2)

@@ -1,0 +1,233 @@
+"""Robust design (camopt/engine/robust.py): the yield column against an independent count of the
+samples, chunking, reproducibility, draws outside the physical range, bad [robust] input.
+The fast switch (configs/fast_switch_de.toml) keeps it fast: a closed-form model."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from camopt.core.problem import FEASIBILITY_TOL
+from camopt.engine import robust
+from camopt.engine.driver import execute, prepare
+from camopt.errors import ConfigError
+from tests.conftest import CONFIGS
+from tests.helpers import load
+
+SMALL = ("solver.population=12", "solver.generations=6", "run.repeats=1")
+
+
+def _problem(*overrides):
+    cfg = load(CONFIGS / "fast_switch_de.toml", "robust.samples=8", *overrides)
+    problem, _ = prepare(cfg)
+    assert isinstance(problem, robust.RobustProblem)
+    return problem
+
+
+def _near_optimum(problem, n=6, seed=3):
+    """Designs around fast_switch_robust.toml's optimum (18.3 ms, near its limits R4 and
+    R14), 0.3 % apart."""
+    x = problem.from_display({"coils": 17, "sf_mm": 98.78, "sud_mm": 170.41, "s0_mm": 46.48,
+                              "r3_mm": 256.32, "r2_mm": 54.98})
+    rng = np.random.default_rng(seed)
+    X = x * (1 + 0.003 * rng.standard_normal((n, len(x))))
+    X[:, 0] = 17
+    return X
+
+
+def test_yield_column_counts_the_samples():
+    """g[:, -1] <= 0 exactly when at least ceil(target S) samples pass, and the estimate is
+    the share of passing samples, both against a loop of one-design evaluations of the
+    same draws (an independent count)."""
+    problem = _problem("robust.screen=false", "robust.yield_target=0.75",
+                       'robust.vary={sud_mm="±1", s0_mm="±0.1", r2_mm="±0.05"}')
+    problem.new_generation()
+    X = _near_optimum(problem)
+    ev = problem.evaluate(X)
+    base, plan = problem.base, problem.plan
+    need = math.ceil(0.75 * 8)
+    for i, x in enumerate(X):
+        passed = 0
+        for u in problem.unit:
+            xs = x.copy()
+            for j, v in enumerate(plan.varies):
+                k = base.names.index(v.name)
+                xs[k] = x[k] + u[j] * v.tolerance / base.variables[k].scale
+            one = base.evaluate(xs[None, :])
+            passed += bool(one.feasible[0])
+        assert ev.extras["yield"][i] == pytest.approx(passed / 8, abs=1e-12)
+        assert (ev.g[i, -1] <= FEASIBILITY_TOL) == (passed >= need)
+    assert np.isfinite(ev.extras["yield"]).all()
+    assert ((ev.extras["yield"] > 0) & (ev.extras["yield"] < 1)).any()  # not all-or-nothing
+
+
+def test_fast_switch_spring_fields_per_row():
+    """describe_with of the wire diameter: row by row the same as a config with that
+    diameter (the rate of R13 scales with d^4, Eq 21)."""
+    from camopt.cases import build_problem
+
+    base = load(CONFIGS / "fast_switch_de.toml")
+    problem = build_problem(base.case)
+    X = np.tile(_near_optimum(problem, n=1), (2, 1))
+    ev = problem.describe_with(X, {"wire_diameter_mm": np.array([2.0, 2.02])})
+    thick = build_problem(load(CONFIGS / "fast_switch_de.toml",
+                               "case.wire_diameter_mm=2.02").case).describe(X[:1])
+    np.testing.assert_array_equal(ev.g[1], thick.g[0])
+    assert ev.extras["k_n_per_m"][1] / ev.extras["k_n_per_m"][0] == pytest.approx(1.01**4)
+
+
+def test_chunks_change_nothing():
+    a, b = _problem("robust.chunk_rows=5"), _problem()
+    for p in (a, b):
+        p.reseed(np.random.SeedSequence(1))
+        p.new_generation()
+    X = _near_optimum(a)
+    ea, eb = a.evaluate(X), b.evaluate(X)
+    np.testing.assert_array_equal(ea.g, eb.g)
+    np.testing.assert_array_equal(ea.f, eb.f)
+
+
+def test_margin_objective_is_the_yield_column():
+    """objective = "margin": the objective is the yield column itself (the worst sample's
+    worst normalised constraint at the target's order statistic), named yield_margin, so
+    that of two designs that both meet the target the one with more margin ranks first;
+    constraints and the yield estimate are those of the same draws under any objective."""
+    margin = _problem("robust.screen=false", "robust.objective=margin")
+    mean = _problem("robust.screen=false", "robust.objective=mean")
+    assert margin.objective_name == "yield_margin" != mean.objective_name
+    for p in (margin, mean):
+        p.reseed(np.random.SeedSequence(4))
+        p.new_generation()
+    X = _near_optimum(margin)
+    a, b = margin.evaluate(X), mean.evaluate(X)
+    np.testing.assert_array_equal(a.f, a.g[:, -1])
+    np.testing.assert_array_equal(a.g, b.g)
+    np.testing.assert_array_equal(a.extras["yield"], b.extras["yield"])
+    assert not np.array_equal(a.f, b.f)
+
+
+def test_objective_statistics():
+    f = np.array([[1.0, 3.0, np.inf, 2.0], [np.nan, np.nan, np.nan, np.nan]])
+    np.testing.assert_allclose(robust.statistic(f, "mean", 0.5), [2.0, np.inf])
+    q = robust.statistic(f, "quantile", 0.5)
+    assert q[0] == 3.0 and q[1] == np.inf  # the higher middle of 1, 2, 3, inf
+    assert robust.order_index(0.95, 20) == 18 and robust.order_index(0.95, 16) == 15
+    assert robust.order_index(1.0, 8) == 7
+
+
+def test_run_is_reproducible_and_checked():
+    cfg = load(CONFIGS / "fast_switch_de.toml", *SMALL, "robust.samples=8",
+               "robust.check_samples=200")
+    a, b = execute(cfg), execute(cfg)
+    np.testing.assert_array_equal(a.best.x, b.best.x)
+    assert a.robust_check == b.robust_check
+    check = a.robust_check["robust"]
+    assert check["samples"] == 200 and 0 <= check["yield_low"] <= check["yield"] <= 1
+    assert a.problem.constraint_names[-1] == "yield" and len(a.best.g) == a.problem.n_constr
+
+
+def test_draws_outside_the_physical_range_fail():
+    """r2 ±200 mm from ~55 mm: about a third of the draws give a negative crank; each such
+    sample counts as failed, so the yield never exceeds the share of draws inside."""
+    problem = _problem("robust.screen=false", 'robust.vary={r2_mm="±200"}')
+    problem.new_generation()
+    X = _near_optimum(problem, n=3)
+    s = robust.sample(problem.base, problem.plan, X, problem.unit)
+    r2 = X[:, 5, None] * 1e3 + problem.unit[None, :, 0] * 200
+    inside = r2 > 0
+    assert (~inside).any()
+    assert not s.feasible[~inside].any()
+    assert np.isnan(s.f[~inside]).all()
+
+
+@pytest.mark.parametrize("override, what", [
+    ('robust.vary={speed="±1"}', "speed: not a design variable of the case"),
+    ('robust.vary={coils="±1"}', "coils: an integer variable"),
+    ('robust.vary={"case.m2_kg"="±1%"}', "cannot vary it per design"),
+    ('robust.vary={sf_mm="1mm"}', "expected NAME=±X%"),
+])
+def test_bad_vary_names_robust_vary(override, what):
+    cfg = load(CONFIGS / "fast_switch_de.toml", override)
+    with pytest.raises(ConfigError) as err:
+        prepare(cfg)
+    assert err.value.where == "robust.vary" and what in err.value.what
+
+
+def test_wilson_bound_matches_scipy():
+    """The vectorised Wilson lower bound against scipy's binomtest (stats.success_rate)."""
+    from camopt.core.stats import success_rate
+
+    for passed, n in ((3900, 4000), (32, 32), (0, 50), (17, 20)):
+        assert robust.wilson_low(passed, n, 0.95) == pytest.approx(
+            success_rate(passed, n, 0.95)["ci_low"], rel=1e-9, abs=1e-12)
+    i = robust.confident_index(0.95, 4000, 0.95)  # the least passing count that is enough
+    assert robust.wilson_low(i + 1, 4000, 0.95) >= 0.95 > robust.wilson_low(i, 4000, 0.95)
+    assert robust.confident_index(0.95, 32, 0.95) == 31  # 32 of 32 is not enough: all
+
+
+@pytest.mark.parametrize("name", ["vcb_velocity_robust", "emb_robust", "fast_switch_robust"])
+def test_shipped_robust_configs_validate(name):
+    problem, _ = prepare(load(CONFIGS / f"{name}.toml"))
+    assert isinstance(problem, robust.RobustProblem) and problem.plan.varies
+
+
+def test_show_and_report_give_the_robust_check(tmp_path):
+    """A robust archive: show prints the check beside the nominal best seen, its JSON adds
+    ``robust`` (settings and check), the HTML report has the table."""
+    from typer.testing import CliRunner
+
+    from camopt import archive
+    from camopt.cli import app
+    from camopt.reporting import report
+
+    out = tmp_path / "r.h5"
+    r = CliRunner().invoke(app, ["run", str(CONFIGS / "fast_switch_robust.toml"), "--out",
+                                 str(out), "--quiet", "--set", "solver.generations=8",
+                                 "--set", "solver.population=12", "--set",
+                                 "robust.check_samples=200", "--set", "robust.samples=8"])
+    assert r.exit_code == 0, r.output
+    view = archive.load_run(out)
+    doc = report.show(view)
+    check = doc["robust"]["check"]["robust"]
+    assert doc["robust"]["settings"]["samples"] == 8 and check["samples"] == 200
+    assert 0 <= check["yield_low"] <= check["yield"] <= check["yield_high"] <= 1
+    shown = CliRunner().invoke(app, ["show", str(out)])
+    assert shown.exit_code == 0 and "robust check (200 fresh draws" in shown.output
+    summary = report.robust_summary(view)
+    assert summary is not None and summary["rows"][0]["name"] == "yield"
+    html = CliRunner().invoke(app, ["report", str(out), "--out", str(tmp_path / "r.html")])
+    assert html.exit_code == 0, html.output
+    assert 'id="robust-check"' in (tmp_path / "r.html").read_text()
+
+
+def test_margin_run_names_the_case_objective_in_its_check(tmp_path):
+    """A run that minimised yield_margin still reports the case's objective (its nominal,
+    mean and quantile values) under the case's name: in the check's table, and in the
+    summary beside the reference's objective, which is never set beside the margin."""
+    from typer.testing import CliRunner
+
+    from camopt import archive
+    from camopt.cli import app
+    from camopt.reporting import report
+
+    out = tmp_path / "m.h5"
+    r = CliRunner().invoke(app, ["run", str(CONFIGS / "fast_switch_robust.toml"), "--out",
+                                 str(out), "--quiet", "--set", "solver.generations=8",
+                                 "--set", "solver.population=12", "--set",
+                                 "robust.check_samples=200", "--set", "robust.samples=8",
+                                 "--set", "robust.objective=margin"])
+    assert r.exit_code == 0, r.output
+    view = archive.load_run(out)
+    assert view.objective_name == "yield_margin"
+    check = view.robust_check["robust"]
+    assert check["case_objective"] == "closure_time_ms"
+    assert check["objective_nominal"] > 0  # a closure time, not a margin
+    names = [row["name"] for row in report.robust_summary(view)["rows"]]
+    assert "closure_time_ms nominal" in names and not any("yield_margin" in n for n in names)
+    rows = {row["name"]: row for row in report.summary(view)["rows"]}
+    assert rows["yield_margin"]["optimum"] == view.best.objective
+    assert rows["yield_margin"]["reference"] is None
+    assert rows["closure_time_ms"]["optimum"] == check["objective_nominal"]
+    assert rows["closure_time_ms"]["reference"] > 0  # the reference design's closure time

@@ -1,0 +1,202 @@
+"""Tolerance analysis (camopt/engine/tolerance.py) and ``camopt tolerance`` on a VCB run with
+its closing dynamics (configs/vcb_velocity.toml, small budget)."""
+
+from __future__ import annotations
+
+import json
+
+import h5py
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from camopt import archive
+from camopt.cases import build_problem
+from camopt.cli import app
+from camopt.core.plotting import readable
+from camopt.engine.driver import validate
+from camopt.engine.tolerance import Distribution, analyse, parse_vary
+from camopt.reporting.tolerance_figures import figures
+from tests.conftest import CONFIGS
+
+runner = CliRunner()
+VARY = ["--vary", "kc1_n_per_mm=±5%", "--vary", "case.l1_mm=±0.1"]
+
+
+def invoke(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+@pytest.fixture(scope="module")
+def vcb_run(tmp_path_factory):
+    path = tmp_path_factory.mktemp("tol") / "vcb.h5"
+    r = invoke("run", CONFIGS / "vcb_velocity.toml", "--out", path, "--quiet", "--repeats", 1,
+               "--set", "solver.generations=120", "--set", "solver.population=40")
+    assert r.exit_code == 0, r.output
+    return path
+
+
+def _json(run, *extra):
+    r = invoke("tolerance", run, "--samples", 2000, "--seed", 0, *extra, "--format", "json")
+    assert r.exit_code == 0, r.output
+    return r.stdout
+
+
+def test_yield_percentiles_sensitivity_and_same_seed_same_json(vcb_run):
+    text = _json(vcb_run, *VARY)
+    doc = json.loads(text)
+    assert doc["samples"] == 2000 and 0.0 <= doc["yield"] <= 1.0
+    spread = [m for m, p in doc["metrics"].items()
+              if None not in p.values() and p["p05"] < p["p95"]]
+    assert len(spread) >= 3
+    assert all(p["p05"] <= p["p50"] <= p["p95"] for p in doc["metrics"].values()
+               if None not in p.values())
+    for name in ("closing_velocity_avg_m_s", "tau_max_mpa", "rod_travel_mm"):
+        assert name in spread
+        assert {s["input"] for s in doc["sensitivity"][name]} == {"kc1_n_per_mm",
+                                                                   "case.l1_mm"}
+    # the spring rate drives the speed and the stress; the fixed link the rod travel
+    assert doc["sensitivity"]["closing_velocity_avg_m_s"][0]["input"] == "kc1_n_per_mm"
+    assert doc["sensitivity"]["tau_max_mpa"][0]["spearman"] > 0.99
+    assert doc["sensitivity"]["rod_travel_mm"][0]["input"] == "case.l1_mm"
+    assert _json(vcb_run, *VARY) == text
+    assert _json(vcb_run, *VARY, "--seed", 1) != text
+
+
+def test_zero_tolerance_collapses_every_metric_to_nominal(vcb_run):
+    doc = json.loads(_json(vcb_run, "--vary", "kc1_n_per_mm=±0%"))
+    assert doc["metrics"]
+    for name, p in doc["metrics"].items():
+        assert p["p05"] == p["p50"] == p["p95"] == doc["nominal"][name], name
+    assert doc["yield"] in (0.0, 1.0)
+    assert doc["yield"] == float(doc["nominal_feasible"])
+
+
+def test_nominal_is_the_run_optimum(vcb_run):
+    """The analysis' nominal row reproduces the archived optimum's metrics (1e-12)."""
+    run = archive.load_run(vcb_run)
+    t = analyse(run, [parse_vary("r", "kc1_n_per_mm=±1%")], 10, 0)
+    for name in ("closing_velocity_avg_m_s", "tau_max_mpa", "rod_travel_mm"):
+        assert t.summary["nominal"][name] == pytest.approx(run.best.metrics[name], rel=1e-12)
+
+
+def test_draws_uniform_within_and_normal_with_sigma_a_third(vcb_run):
+    run = archive.load_run(vcb_run)
+    varies = [parse_vary("r", "kc1_n_per_mm=±5%"), parse_vary("r", "case.l1_mm=±0.1")]
+    nominal = np.array([run.best.x["kc1_n_per_mm"], run.case["l1_mm"]])
+    half = np.array([0.05 * nominal[0], 0.1])
+    u = analyse(run, varies, 4000, 7).inputs
+    assert np.all(np.abs(u - nominal) <= half)
+    np.testing.assert_allclose(np.ptp(u, axis=0), 2 * half, rtol=2e-3)
+    n = analyse(run, varies, 4000, 7, Distribution.normal).inputs
+    # sigma = X / 3; standard error of a sample std from 4000 draws ~1.1 %: 5 % is 4.5 se
+    np.testing.assert_allclose(n.std(axis=0), half / 3, rtol=0.05)
+
+
+def test_case_field_per_sample_matches_a_problem_built_with_that_field(vcb_run):
+    """The rod travel (kinematics only) with l1 varied per row equals that of Problems
+    built from configs with those l1 values, to 1e-12; varying nothing changes nothing."""
+    run = archive.load_run(vcb_run)
+    data = {"case": dict(run.case), "solver": run.solver, "run": run.run}
+    problem = build_problem(validate(data, "r").case)
+    x = problem.from_display(run.best.x)
+    l1 = run.case["l1_mm"] + np.array([-0.3, 0.0, 0.2])
+    X = np.tile(x, (3, 1))
+    ev = problem.describe_with(X, {"l1_mm": l1})
+    for i, value in enumerate(l1):
+        alone = build_problem(validate({**data, "case": {**data["case"], "l1_mm": value}},
+                                       "r").case)
+        ref = alone.describe(x[None, :]).extras["rod_travel_mm"][0]
+        assert ev.extras["rod_travel_mm"][i] == pytest.approx(ref, rel=1e-12, abs=0)
+    same = problem.describe(X)
+    for k in same.extras:
+        np.testing.assert_array_equal(problem.describe_with(X, {}).extras[k], same.extras[k])
+
+
+@pytest.mark.parametrize(("vary", "message"), [
+    ("speed=±5%", "--vary: speed: not a design variable of the run"),
+    ("case.rf_mm=±0.1", "--vary: case.rf_mm: case 'vcb' cannot vary it per design"),
+    ("kc1_n_per_mm=5%", "--vary: 'kc1_n_per_mm=5%': expected NAME=±X%"),
+    ("kc1_n_per_mm=±-5%", "--vary: 'kc1_n_per_mm=±-5%': expected"),
+])
+def test_bad_vary_is_one_line_exit_2(vcb_run, vary, message):
+    r = invoke("tolerance", vcb_run, "--vary", vary)
+    assert r.exit_code == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {vcb_run}: ") and message in lines[0]
+
+
+def test_out_writes_samples_and_show_refuses_it(vcb_run, tmp_path):
+    out = tmp_path / "tol.h5"
+    r = invoke("tolerance", vcb_run, "--samples", 300, *VARY, "--out", out)
+    assert r.exit_code == 0, r.output
+    with h5py.File(out, "r") as f:
+        assert f.attrs["archive_kind"] == "tolerance"
+        assert f["inputs/case.l1_mm"].shape == (300,) and f["feasible"].shape == (300,)
+        assert json.loads(f.attrs["summary"])["samples"] == 300
+        assert float(np.mean(f["feasible"][()])) == json.loads(f.attrs["summary"])["yield"]
+    r = invoke("show", out)
+    assert r.exit_code == 2 and "a tolerance archive, not a run archive" in r.stderr
+    assert invoke("tolerance", vcb_run, *VARY, "--out", out).exit_code == 2  # exists
+
+
+def test_figures_mark_limits_and_swings(vcb_run, tmp_path):
+    run = archive.load_run(vcb_run)
+    t = analyse(run, [parse_vary("r", "kc1_n_per_mm=±5%"),
+                      parse_vary("r", "case.l1_mm=±0.1")], 500, 0)
+    figs = figures(t, "closing_velocity_avg_m_s")
+    assert set(figs) == {"constraints", "metrics", "tornado"}
+    first = figs["constraints"].axes[0]
+    assert first.get_xlabel().endswith("(normalised g)") and first.lines[0].get_xdata()[0] == 0
+    ax = figs["tornado"].axes[0]
+    # both inputs drawn (which swings the closing velocity most depends on the design)
+    assert {t.get_text() for t in ax.get_yticklabels()} == {"kc1_n_per_mm", "case.l1_mm"}
+    assert ax.get_xlabel() == readable("closing_velocity_avg_m_s")
+    r = invoke("tolerance", vcb_run, "--samples", 200, *VARY, "--plot", tmp_path / "p",
+               "--tornado", "tau_max_mpa")
+    assert r.exit_code == 0 and len(list((tmp_path / "p").glob("*.png"))) == 3
+
+
+def test_default_tolerances_are_the_cases_documented_ones(vcb_run):
+    """Without --vary the case's CaseSpec.tolerances apply (those for this run's inputs);
+    every built-in case's defaults parse."""
+    doc = json.loads(invoke("tolerance", vcb_run, "--samples", 100, "--format", "json").stdout)
+    assert [v["input"] for v in doc["vary"]] == [
+        "kc1_n_per_mm", "kc2_n_per_mm", "case.l1_mm", "case.l3_mm", "case.l4_mm",
+        "case.l5_mm", "case.theta1_deg"]
+    assert doc["vary"][0]["tolerance"] == 5.0 and doc["vary"][0]["unit"] == "%"
+    from camopt.cases import cases
+
+    for spec in cases().values():
+        for name, tol in spec.tolerances.items():
+            v = parse_vary("spec", f"{name}={tol}")
+            assert v.tolerance > 0 and v.name == name
+
+
+def test_yield_per_requirement_raw_metrics_and_json_only_on_stdout(vcb_run, tmp_path):
+    """Each requirement's yield is the share of samples within its limit (counted here
+    from the samples); the objective's percentiles are over feasible samples (never the
+    penalty); the tornado defaults to the quantity that limits the yield; with --format
+    json stdout parses and the figures' paths are on stderr."""
+    run = archive.load_run(vcb_run)
+    t = analyse(run, [parse_vary("r", "kc1_n_per_mm=±5%"),
+                      parse_vary("r", "case.l1_mm=±0.1")], 400, 0)
+    by = {q["quantity"]: q for q in t.summary["requirements"]}
+    travel = t.samples.extras["rod_travel_mm"]
+    tol = run.case["rod_travel_tolerance_mm"]
+    assert by["rod_travel_mm"]["yield"] == np.mean(np.abs(travel - 18.0) <= tol + 1e-9)
+    assert by["feasible"]["yield"] == t.summary["yield"]
+    limiting = min((q for q in t.summary["requirements"] if q["quantity"] != "feasible"),
+                   key=lambda q: q["yield"])
+    assert t.summary["limiting"] == limiting["quantity"]
+    f = t.samples.f[t.samples.feasible]
+    p95 = t.summary["metrics"][t.objective_name]["p95"]
+    if f.size:
+        assert p95 == pytest.approx(np.percentile(f, 95)) and p95 <= f.max()
+    ax = figures(t)["tornado"].axes[0]
+    assert ax.get_xlabel() == readable(t.summary["limiting"])
+    r = runner.invoke(app, ["tolerance", str(vcb_run), "--samples", "100", *VARY, "--format",
+                            "json", "--plot", str(tmp_path / "p")])
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["requirements"]
+    assert r.stderr.count(".png") == 3

@@ -1,0 +1,180 @@
+"""Plots (figure objects: axes, labels) and exports, for every case."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from camopt import archive
+from camopt.cli import app
+from camopt.core.plotting import close
+from camopt.engine.driver import execute
+from camopt.reporting import plots
+from tests.conftest import CONFIGS, DATA
+from tests.helpers import load
+
+runner = CliRunner()
+CASES = {
+    "vcb": ("vcb.toml", ["run.repeats=3", "solver.generations=30"],
+            {"cam_profile": ("x (mm)", "y (mm)"),
+             "pressure_angle": ("cam angle theta_c (deg)", "pressure angle (deg)"),
+             "curvature": ("cam angle theta_c (deg)", "radius of curvature (mm)"),
+             "tau_max": ("cam angle theta_c (deg)", "tau_max (MPa)"),
+             "forces": ("rod travel s1 (mm)", "force (N)")}),
+    "emb_cam": ("emb.toml", ["solver.iterations=40", "solver.particles=30"],
+                {"torque_force": ("cam rotation angle phi (rad)", "drive torque (N m)"),
+                 "profile": ("x (mm)", "y (mm)")}),
+    "opening_spring": ("opening_spring_pp3.toml", [],
+                       {"theta_thetadot": ("follower angle theta (rad)",
+                                           "angular velocity theta' (rad/s)")}),
+    "fast_switch": ("fast_switch.toml", [],
+                    {"closure_time": ("number of coils", "closure time (ms)")}),
+}
+
+
+@pytest.fixture(scope="module", params=sorted(CASES))
+def case_run(request, tmp_path_factory):
+    name = request.param
+    file, overrides, _ = CASES[name]
+    path = tmp_path_factory.mktemp(name) / f"{name}.h5"
+    archive.write_run(execute(load(CONFIGS / file, *overrides)), path)
+    return name, path
+
+
+def test_case_figures_have_labelled_axes(case_run):
+    name, path = case_run
+    figs = plots.run_figures(archive.load_run(path))
+    assert "convergence" in figs
+    conv = figs["convergence"].axes[0]
+    assert conv.get_xlabel().startswith("iteration") and conv.get_ylabel().startswith("best")
+    for fig_name, (xlabel, ylabel) in CASES[name][2].items():
+        ax = figs[fig_name].axes[0]
+        assert ax.get_xlabel() == xlabel and ax.get_ylabel() == ylabel, fig_name
+        assert ax.get_title() and ax.lines, fig_name
+    for fig in figs.values():
+        close(fig)
+
+
+def test_paper_values_are_marked(tmp_path, reported):
+    """The paper's values appear on the figures where the paper gives them (Table 1 of
+    Clauss & Papalambros, from the test data, not from the plotting code)."""
+    fs = CASES["fast_switch"]
+    run = archive.load_run(archive.write_run(execute(load(CONFIGS / fs[0])),
+                                             tmp_path / "fs.h5"))
+    ax = plots.run_figures(run)["closure_time"].axes[0]
+    labels = [line.get_label() for line in ax.lines]
+    assert "paper, Table 1" in labels
+    paper = next(line for line in ax.lines if line.get_label() == "paper, Table 1")
+    table1 = np.loadtxt(DATA / "fast_switch_table1.csv", delimiter=",", skiprows=2)
+    assert np.allclose(paper.get_ydata(), table1[:, -1] * 1e3, atol=0.006)
+
+
+def test_plot_cli_writes_pngs(case_run, tmp_path):
+    name, path = case_run
+    r = runner.invoke(app, ["plot", str(path), "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    pngs = sorted(tmp_path.glob("*.png"))
+    assert len(pngs) >= 1 + len(CASES[name][2])
+    for png in pngs:
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 5000
+
+
+def test_export_csv_and_json(case_run, tmp_path):
+    name, path = case_run
+    assert runner.invoke(app, ["export", str(path), "--out", str(tmp_path)]).exit_code == 0
+    rows = list(csv.reader((tmp_path / f"{path.stem}-summary.csv").open()))
+    assert rows[0] == ["section", "name", "value"] and len(rows) > 3
+    # the profiles' point files exist now: a second export replaces them only with --force
+    again = ["export", str(path), "--format", "json", "--out", str(tmp_path)]
+    if name in ("vcb", "emb_cam"):  # cases with cam profiles
+        refused = runner.invoke(app, again)
+        assert refused.exit_code == 2 and "pass --force" in refused.output
+        assert not (tmp_path / f"{path.stem}.json").exists()  # all or nothing
+    assert runner.invoke(app, [*again, "--force"]).exit_code == 0
+    doc = json.loads((tmp_path / f"{path.stem}.json").read_text())
+    assert {"case", "best", "analysis"} <= set(doc)
+    if name in ("vcb", "emb_cam"):
+        pts = np.loadtxt(tmp_path / f"{path.stem}-cam-profile.txt", delimiter=",")
+        assert pts.shape[1] == 3 and len(pts) > 100 and np.all(pts[:, 2] == 0)
+
+
+def test_sweep_convergence_has_one_line_per_point(tmp_path):
+    out = tmp_path / "s.h5"
+    r = runner.invoke(app, ["sweep", str(CONFIGS / "vcb.toml"), "--out", str(out), "--quiet",
+                            "--seeds", "0:2", "--grid", "solver.population=10,20",
+                            "--set", "solver.generations=10", "--jobs", "1"])
+    assert r.exit_code == 0, r.output
+    from camopt.archive.sweeps import load_sweep
+
+    spec, results = load_sweep(out)
+    fig = plots.sweep_figures(spec, results)["convergence"]
+    ax = fig.axes[0]
+    lines = [ln for ln in ax.lines if not ln.get_label().startswith("target")]
+    assert len(lines) == 2
+    # by function evaluations: population 20 spends twice the evaluations per generation
+    assert ax.get_xlabel() == "function evaluations" and ax.get_ylabel() == "best objective (J)"
+    ends = {ln.get_label().split(" ")[0]: ln.get_xdata()[-1] for ln in lines}
+    for label, end in ends.items():
+        cells = [r for (p, _), r in results.items()
+                 if spec.points()[p] and label.endswith(str(spec.points()[p]["solver.population"]))]
+        assert end == pytest.approx(np.median([c.history["nfev"][-1] for c in cells]))
+    assert ends["solver.population=20"] > 1.5 * ends["solver.population=10"]
+
+
+def test_every_figure_is_labelled_with_ticks_and_legends(case_run):
+    """No empty figure; both axes labelled; ticks; a legend wherever two labelled series
+    share an axes."""
+    _, path = case_run
+    figs = plots.run_figures(archive.load_run(path))
+    for name, fig in figs.items():
+        assert fig.axes[0].get_xlabel(), name  # a twin axes shares the first one's x
+        for ax in fig.axes:
+            if not ax.get_visible():
+                continue
+            assert ax.get_ylabel(), name
+            assert len(ax.get_xticks()) and len(ax.get_yticks()), name
+            drawn = ax.lines + ax.collections
+            assert drawn, f"{name}: empty axes"
+            labelled = [a for a in drawn if not a.get_label().startswith("_")]
+            if len(labelled) >= 2 and ax is fig.axes[0]:
+                assert fig.axes[0].get_legend() is not None, name
+        close(fig)
+
+
+def test_convergence_draws_the_target_and_never_an_empty_axes(tmp_path):
+    run = tmp_path / "t.h5"
+    archive.write_run(execute(load(CONFIGS / "fast_switch_de.toml", "run.repeats=2",
+                                   "solver.generations=20", "run.target=18.5")), run)
+    ax = plots.run_figures(archive.load_run(run))["convergence"].axes[0]
+    (target,) = [ln for ln in ax.lines if ln.get_label().startswith("target")]
+    assert target.get_ydata()[0] == pytest.approx(18.5)
+    infeasible = tmp_path / "pp4.h5"  # no start converges: objective inf in every iteration
+    archive.write_run(execute(load(CONFIGS / "opening_spring_pp4.toml")), infeasible)
+    view = archive.load_run(infeasible)
+    assert not np.isfinite(view.histories()[0]).any()
+    ax = plots.run_figures(view)["convergence"].axes[0]
+    assert ax.get_ylabel() == "best constraint violation"
+    assert np.isfinite(ax.lines[0].get_ydata()).all()
+
+
+def test_convergence_axis_fits_what_the_data_reach():
+    """Best-so-far curves from 1e6 down to 1e-5 on a log axis bounded by them (no symlog
+    band of decades never reached); a one-pass solver's single point is drawn as a marker
+    inside the axes (the fast switch's figure was empty)."""
+    fig = plots.convergence({"runs": [np.array([1e6, 1e2, 1e-3, 1e-5])]}, "objective_j")
+    ax = fig.axes[0]
+    assert ax.get_yscale() == "log"
+    lo, hi = ax.get_ylim()
+    assert 1e-5 / 2 <= lo < 1e-5 and 1e6 < hi <= 2e6
+    close(fig)
+    fig = plots.convergence({"runs": [np.array([18.9039])]}, "closure_time_ms")
+    ax = fig.axes[0]
+    (line,) = ax.get_lines()
+    assert line.get_marker() == "o" and list(line.get_ydata()) == [18.9039]
+    x0, x1 = ax.get_xlim()
+    assert x0 < 1 < x1 and ax.get_yscale() == "linear"
+    close(fig)
