@@ -67,6 +67,20 @@ class ProfileCircle:
 
 
 @dataclass(frozen=True)
+class ToleranceClass:
+    """A named set of manufacturing tolerances a case's parts can be ordered to
+    (docs/tolerance.md, "Tolerance classes"): ``{design variable or "case.FIELD": "±X%"
+    or "±X"}``, the standard or practice it follows, and its cost relative to the case's
+    default class (1: the default; a spring maker's grading of springs by force, a ground
+    instead of a machined profile cost more). The cost is documented, not computed: it
+    ranks classes for ``camopt tolerance --allocate``."""
+
+    tolerances: Mapping[str, str]
+    source: str
+    relative_cost: float = 1.0
+
+
+@dataclass(frozen=True)
 class CaseSpec:
     """Everything camopt needs to know about one mechanism.
 
@@ -89,10 +103,16 @@ class CaseSpec:
     paper: Mapping[str, Any] = field(default_factory=dict)
     resolve: Callable[[CaseConfig, ArchiveLoader], CaseConfig] | None = None
     tolerances: Mapping[str, str] = field(default_factory=dict)
-    """Realistic manufacturing tolerances, ``camopt tolerance``'s default ``--vary``:
-    ``{design variable or "case.FIELD": "±X%" or "±X"}`` (docs/assumptions.md); those
+    """Realistic manufacturing tolerances of the case's default class
+    (``default_tolerance_class``), ``camopt tolerance``'s default ``--vary``:
+    ``{design variable or "case.FIELD": "±X%" or "±X"}`` (docs/tolerance.md); those
     that do not apply to a run (not its variables, not a field its case varies) are
     skipped."""
+    default_tolerance_class: str = "standard"
+    """The name of the class ``tolerances`` describes (``case.tolerance_class`` unset)."""
+    tolerance_classes: Mapping[str, ToleranceClass] = field(default_factory=dict)
+    """Other classes the parts can be ordered to, by name (``case.tolerance_class`` or
+    ``camopt tolerance --class``); each lists every input it tolerances."""
     requirements: RequirementsOf | None = None
     """What a design must meet whatever the run optimised (:mod:`camopt.core.requirements`);
     ``show``, ``report``, ``compare`` and ``tolerance`` evaluate them."""
@@ -102,6 +122,29 @@ class CaseSpec:
     reference_values: Mapping[str, Any] = field(default_factory=dict)
     """The reference design's values by the run's names when the case does not report
     them as ``initial_``/``original_`` metrics (a paper's optimum)."""
+
+    def class_names(self) -> tuple[str, ...]:
+        """Every tolerance class of the case, cheapest (loosest) first; the default class
+        costs 1."""
+        cost = {self.default_tolerance_class: 1.0,
+                **{n: c.relative_cost for n, c in self.tolerance_classes.items()}}
+        return tuple(sorted(cost, key=lambda n: cost[n]))
+
+    def class_cost(self, name: str) -> float:
+        """A class's documented cost relative to the default class."""
+        return 1.0 if name == self.default_tolerance_class else \
+            self.tolerance_classes[name].relative_cost
+
+    def tolerances_of(self, name: str | None, source: str = "<case>",
+                      key: str = "case.tolerance_class") -> Mapping[str, str]:
+        """The tolerances of class ``name`` (None: the default class); an unknown name is
+        a ConfigError against ``key`` listing the case's classes."""
+        if name is None or name == self.default_tolerance_class:
+            return self.tolerances
+        if name not in self.tolerance_classes:
+            raise ConfigError(source, key, f"{name!r}: not a tolerance class of case "
+                              f"'{self.kind}' (classes: {', '.join(self.class_names())})")
+        return self.tolerance_classes[name].tolerances
 
     def build(self, config: CaseConfig) -> Problem:
         """The case's Problem for a validated config of this kind."""

@@ -17,7 +17,8 @@ from camopt.cli.layout import print_table
 from camopt.errors import CamoptError
 
 if TYPE_CHECKING:  # imported inside the command: the CLI starts without numpy
-    from camopt.engine.tolerance import Tolerance
+    from camopt.core.runview import RunView
+    from camopt.engine.tolerance import Distribution, Tolerance
 
 
 class Dist(str, enum.Enum):
@@ -50,9 +51,19 @@ def tolerance(
         "limits the yield)")] = None,
     force: Annotated[bool, typer.Option(
         help="overwrite an existing --out and --plot's PNGs")] = False,
+    tolerance_class: Annotated[str | None, typer.Option(
+        "--class", help="the case's tolerance class (docs/tolerance.md; default the run's "
+        "case.tolerance_class, else the case's default class)")] = None,
+    allocate: Annotated[bool, typer.Option(
+        "--allocate", help="the yield in every tolerance class of the case, the cheapest "
+        "that reaches --target, and what tightening each input buys")] = False,
+    target: Annotated[float | None, typer.Option(
+        help="yield target of --allocate (default the run's robust.yield_target, else "
+        "0.95)")] = None,
 ) -> None:
     """Vary a run's optimum within tolerances: yield, percentiles, sensitivities."""
     from camopt import archive
+    from camopt.cases import get_case
     from camopt.core.perf import tune_allocator
     from camopt.engine.tolerance import Distribution, analyse, default_varies, parse_vary
     from camopt.reporting.report import jsonable
@@ -60,14 +71,24 @@ def tolerance(
     with errors():
         tune_allocator()  # chunk temporaries stay mapped (docs/design.md, Performance)
         run = archive.load_run(run_path)
+        if allocate:
+            if vary or out_path is not None or plot is not None or tolerance_class:
+                raise CamoptError(f"{run_path}: --allocate: takes the case's classes; "
+                                  "--vary, --class, --out and --plot are for one analysis")
+            _allocate(run, target, samples, seed, Distribution(dist.value), format)
+            return
+        if vary and tolerance_class:
+            raise CamoptError(f"{run_path}: --class: give --class or --vary, not both")
         varies = ([parse_vary(str(run_path), v) for v in vary] if vary
-                  else default_varies(run))
+                  else default_varies(run, tolerance_class))
+        used_class = None if vary else (tolerance_class or run.case.get("tolerance_class")
+                                        or get_case(run.kind).default_tolerance_class)
         if out_path is not None:
             archive.check_writable(out_path, force)
             archive.check_not_input(out_path, [run_path])
         if plot is not None:  # a file, FIFO or unwritable folder: one line, before any work
             archive.ensure_folder(plot, "--plot")
-        result = analyse(run, varies, samples, seed, Distribution(dist.value))
+        result = analyse(run, varies, samples, seed, Distribution(dist.value), used_class)
         doc = jsonable(result.summary)
         if tornado is not None and tornado not in doc["metrics"]:
             raise CamoptError(f"{run_path}: --tornado: no metric '{tornado}'; the case "
@@ -83,6 +104,39 @@ def tolerance(
     print_tolerance(doc)
     for p in written:
         print(p)
+
+
+def _allocate(run: RunView, target: float | None, samples: int, seed: int,
+              distribution: Distribution, format: Format) -> None:
+    """``--allocate``: the classes' yields on common draws, the cheapest that reaches the
+    target, and the gain of tightening each input alone."""
+    from camopt.engine.allocation import allocate
+
+    if target is None:
+        target = float(run.robust.get("yield_target", 0.95))
+    result = allocate(run, target, samples, seed, distribution)
+    if format is Format.json:
+        sys.stdout.write(json.dumps(result.to_json(), indent=2) + "\n")
+        return
+    out.print(f"[bold]{escape(result.run)}[/]: {result.samples} samples (seed "
+              f"{result.seed}, the same draws in every class); target {result.target:.1%}, "
+              "reached where the lower end of the yield's 95 % interval is at or above it",
+              highlight=False)
+    rows = [[c.name, f"{c.relative_cost:g}", f"{c.yield_:.1%}",
+             f"[{c.low:.1%}, {c.high:.1%}]", "yes" if c.reaches_target else "no"]
+            for c in result.classes]
+    print_table("tolerance classes, cheapest first (cost relative to the case's default; "
+                "docs/tolerance.md)", ["class", "cost", "yield", "95 % interval", "reaches"],
+                rows, numeric=[False, True, True, True, False])
+    chosen = result.chosen or "none of the case's classes"
+    out.print(f"cheapest class that reaches the target: [bold]{escape(chosen)}[/]",
+              highlight=False)
+    if result.tightenings:
+        rows = [[t.input, f"{t.tolerance_from} -> {t.tolerance_to}", f"{t.yield_:.1%}",
+                 f"{t.gain:+.1%}"] for t in result.tightenings]
+        print_table(f"tightening one input of class {result.classes[0].name} alone",
+                    ["input", "tolerance", "yield", "gain"], rows,
+                    numeric=[False, False, True, True])
 
 
 def _write(result: Tolerance, path: Path, force: bool) -> None:
@@ -111,7 +165,9 @@ def print_tolerance(doc: dict) -> None:
     run = escape(str(doc["run"]))
     out.print(f"[bold]{run}[/]: {doc['samples']} samples ({doc['distribution']}, "
               f"seed {doc['seed']}) of {varied}")
-    out.print(f"yield (feasible share): [bold]{doc['yield']:.1%}[/]"
+    cls = f", tolerance class {doc['tolerance_class']}" if doc.get("tolerance_class") else ""
+    out.print(f"yield (feasible share): [bold]{doc['yield']:.1%}[/] [{doc['yield_low']:.1%}, "
+              f"{doc['yield_high']:.1%}] (95 % interval{cls})"
               f"{'' if doc['nominal_feasible'] else ' (the nominal design is infeasible)'}")
     if doc["requirements"]:
         rows = [[r["name"], r["limit"], f"{r['yield']:.1%}", report.format_value(

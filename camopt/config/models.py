@@ -201,13 +201,13 @@ class RobustSection(Strict):
     vary: dict[str, str] = Field(
         default_factory=dict, description="tolerances { NAME = \"±X%\" or \"±X\" }, NAME a "
         "design variable or case.FIELD as camopt tolerance's --vary (empty: the case's "
-        "default tolerances)")
+        "tolerance class, case.tolerance_class)")
     samples: int = Field(16, ge=2, le=MAX_ROBUST_SAMPLES, description="perturbed copies per "
                          f"candidate and generation (at most {MAX_ROBUST_SAMPLES}: memory)")
     yield_target: float = Field(0.95, gt=0, le=1, description="required share of parts "
                                 "meeting every constraint: a repeat's result is feasible when "
-                                "the Wilson lower bound of its yield on check_samples fresh "
-                                "draws reaches it")
+                                "the lower bound of its yield's Clopper-Pearson interval on "
+                                "check_samples fresh draws reaches it")
     search_yield: float | None = Field(
         None, gt=0, le=1, description="share of a generation's draws a candidate must pass "
         "during the search (unset: yield_target); above it, a margin against lucky draws")
@@ -228,7 +228,7 @@ class RobustSection(Strict):
     check_samples: int = Field(4000, ge=100, le=MAX_CHECK_SAMPLES, description="fresh "
                                "draws of that selection and of the final check of the best")
     confidence: float = Field(0.95, gt=0, lt=1, description="level of the final yield's "
-                              "Wilson interval")
+                              "Clopper-Pearson interval")
     chunk_rows: int | None = Field(None, ge=1, le=10_000_000, description="rows "
                                    "(candidates x samples) per vectorised call (unset: "
                                    "camopt.core.batch's default): memory and speed, never results")
@@ -244,6 +244,10 @@ class CaseConfig(Strict):
     """Base of every case's parameters; ``kind`` selects the case."""
 
     kind: str
+    tolerance_class: str | None = Field(
+        None, description="manufacturing tolerance class the parts are made to, used by "
+        "camopt tolerance and robust design (the case's classes and their sources: "
+        "docs/tolerance.md; unset: the case's default class)")
 
 
 def _toml_value(value: object) -> str:

@@ -61,12 +61,31 @@ def run_statistics(objectives: Sequence[float], feasible: Sequence[bool],
                          float(np.mean(np.asarray(feasible, dtype=bool))), ok, ok / n)
 
 
+def share_interval(successes: ArrayLike, trials: int, confidence: float = 0.95
+                   ) -> tuple[NDArray, NDArray]:
+    """Two-sided Clopper-Pearson ("exact") interval of a share (a yield, a success rate)
+    from ``successes`` of ``trials``, vectorised over ``successes``: the beta quantiles
+    ``B((1 - c)/2; k, n - k + 1)`` and ``B((1 + c)/2; k + 1, n - k)``.
+
+    Why not Wilson's (camopt's interval before issue #33): its coverage dips below the
+    stated level for yields near 1 at a few hundred draws (0.933 at n = 200, p = 0.98;
+    0.920 at p = 0.995; computed exactly in tests/core/test_stats.py), which is where
+    quick yield estimates and robust designs live; Clopper-Pearson covers at least the
+    stated level for every n and p, at the price of a slightly wider interval."""
+    k = np.asarray(successes, dtype=float)
+    alpha = 1.0 - confidence
+    with np.errstate(invalid="ignore"):
+        low = np.where(k > 0, stats.beta.ppf(alpha / 2, k, trials - k + 1), 0.0)
+        high = np.where(k < trials, stats.beta.ppf(1 - alpha / 2, k + 1, trials - k), 1.0)
+    return low, high
+
+
 def success_rate(successes: int, runs: int, confidence: float = 0.95) -> dict[str, float]:
-    """Success rate with its Wilson score interval."""
+    """Success rate (or yield) with its Clopper-Pearson interval (:func:`share_interval`)."""
     if runs == 0:
         return {"rate": float("nan"), "ci_low": float("nan"), "ci_high": float("nan")}
-    ci = stats.binomtest(successes, runs).proportion_ci(confidence, method="wilson")
-    return {"rate": successes / runs, "ci_low": float(ci.low), "ci_high": float(ci.high)}
+    low, high = share_interval(successes, runs, confidence)
+    return {"rate": successes / runs, "ci_low": float(low), "ci_high": float(high)}
 
 
 def compare_objectives(a: ArrayLike, b: ArrayLike) -> dict[str, float]:

@@ -87,10 +87,11 @@ def prepare(config: LoadedConfig) -> tuple[Problem, type[Solver]]:
     with np.errstate(all="ignore"):  # a non-assembling mechanism is reported below
         problem = build_problem(config.case)
     _check_bounds(problem, config)
+    tolerances = get_case(config.case.kind).tolerances_of(config.case.tolerance_class,
+                                                          config.path)
     if config.robust is not None:
         problem = robust.wrap(problem, robust.plan(
-            problem, config.case, config.robust, dict(get_case(config.case.kind).tolerances),
-            config.path))
+            problem, config.case, config.robust, dict(tolerances), config.path))
     solver_cls = get_solver(config.solver.name)
     try:
         solver_cls.check(type(problem), config.solver)

@@ -32,14 +32,14 @@ generation's draws by luck and be the solver's best when it stops. So the ``fina
 best designs that met the target on their own generation's draws, with the solver's
 best, are evaluated again on ``check_samples`` fresh draws when the repeat ends, and the
 best of them by Deb's rules on those draws is the repeat's result
-(:meth:`RobustProblem.select`): there a design is feasible when the Wilson lower bound
-of its yield reaches ``yield_target``.
+(:meth:`RobustProblem.select`): there a design is feasible when the lower bound of its
+yield's Clopper-Pearson interval reaches ``yield_target``.
 
 With ``screen`` a candidate whose nominal design breaks a constraint is not sampled: its
 columns are its nominal constraints, and its yield column its nominal worst constraint
 plus ``SCREENED`` (1e6), so that it ranks behind every sampled candidate while Deb's rules
 still lead the unsampled ones towards nominal feasibility. The best design is checked at the end
-with ``check_samples`` fresh draws (:func:`check`), and the Wilson interval of its yield
+with ``check_samples`` fresh draws (:func:`check`), and the Clopper-Pearson interval of its yield
 is reported. Seeds: repeat ``i``'s draws come from ``SeedSequence(run.seed,
 spawn_key=(i, ROBUST_KEY, 0))``, its selection's from ``(i, ROBUST_KEY, 1)``, the final
 check's from ``SeedSequence(run.seed, spawn_key=(ROBUST_KEY, CHECK_KEY))``; never the
@@ -56,7 +56,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import special
 
 from camopt.config.models import CaseConfig, RobustSection
 from camopt.core import stats
@@ -179,21 +178,12 @@ def order_index(target: float, samples: int) -> int:
     return max(int(math.ceil(target * samples - 1e-9)) - 1, 0)
 
 
-def wilson_low(passed: NDArray, n: int, confidence: float) -> NDArray:
-    """Lower end of the Wilson score interval of ``passed`` successes in ``n`` trials
-    (Wilson 1927; the interval :func:`camopt.core.stats.success_rate` reports), vectorised."""
-    z = float(special.ndtri(0.5 + confidence / 2))
-    p = np.asarray(passed, dtype=float) / n
-    centre = p + z * z / (2 * n)
-    spread = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
-    return (centre - spread) / (1 + z * z / n)
-
-
 def confident_index(target: float, samples: int, confidence: float) -> int:
     """0-based order statistic that decides "yield >= target" with confidence: at least
-    ``c`` samples must pass, ``c`` the least count whose Wilson lower bound reaches the
-    target (all samples when none does)."""
-    low = wilson_low(np.arange(samples + 1), samples, confidence)
+    ``c`` samples must pass, ``c`` the least count whose lower bound
+    (:func:`camopt.core.stats.share_interval`, the interval every yield is reported
+    with) reaches the target (all samples when none does)."""
+    low, _ = stats.share_interval(np.arange(samples + 1), samples, confidence)
     enough = np.flatnonzero(low >= target - 1e-12)
     need = int(enough[0]) if enough.size else samples
     return max(need, 1) - 1
@@ -305,7 +295,7 @@ class RobustProblem(Problem):
     def select(self, x: NDArray, seed: np.random.SeedSequence) -> tuple[NDArray, Evaluation]:
         """The repeat's result: the solver's best ``x`` and the finalists evaluated on
         ``check_samples`` fresh draws (the same for all), the best of them by Deb's rules,
-        a design counting as feasible when the Wilson lower bound of its yield (at
+        a design counting as feasible when the lower bound of its yield's interval (at
         ``confidence``) reaches ``yield_target``. A design kept for passing one
         generation's draws by luck fails here."""
         spec = self.plan.spec
@@ -372,7 +362,7 @@ def repeat_seed(child: np.random.SeedSequence, stage: int = 0) -> np.random.Seed
 def check(problem: RobustProblem, designs: Sequence[NDArray], seed: int) -> list[dict[str, Any]]:
     """The final check: designs (SI) evaluated at ``check_samples`` fresh draws, the same
     draws for every design. Per design: nominal objective, mean and quantile objective,
-    yield with its Wilson interval, and per constraint its nominal value and its value at
+    yield with its Clopper-Pearson interval, and per constraint its nominal value and its value at
     the yield target's order statistic (normalised, <= 0 met: the margin)."""
     spec = problem.plan.spec
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(ROBUST_KEY, CHECK_KEY)))

@@ -28,6 +28,7 @@ from scipy import stats
 from camopt.cases import build_problem, get_case, run_requirements
 from camopt.core.problem import FEASIBILITY_TOL, Evaluation, Problem
 from camopt.core.runview import RunView
+from camopt.core.stats import share_interval
 from camopt.core.variation import (  # noqa: F401 - Distribution, parse_vary: the CLI's names
     Distribution,
     Vary,
@@ -42,6 +43,9 @@ from camopt.core.variation import (  # noqa: F401 - Distribution, parse_vary: th
 )
 from camopt.engine.driver import validate
 from camopt.errors import CamoptError
+
+YIELD_CONFIDENCE = 0.95
+"""Level of the yield's interval ``camopt tolerance`` reports."""
 
 
 @dataclass
@@ -65,6 +69,8 @@ class Tolerance:
     """(n,) samples with an input outside its physical range (counted as failed)."""
     run: RunView | None = None
     """The analysed run (its case's requirements give the yield per requirement)."""
+    tolerance_class: str | None = None
+    """The case's tolerance class the inputs were drawn from (None: ``--vary`` given)."""
 
     def metric_columns(self, ev: Evaluation) -> dict[str, NDArray]:
         """The objective and every metric of an evaluation, (rows,) each. The objective is
@@ -75,22 +81,33 @@ class Tolerance:
                                            for k, v in ev.extras.items()}}
 
 
-def _problem_of(run: RunView) -> Problem:
+def problem_of(run: RunView) -> Problem:
     config = validate({"case": run.case, "solver": run.solver, "run": run.run}, run.path)
     return build_problem(config.case)
 
 
-def default_varies(run: RunView) -> list[Vary]:
-    """The case's documented tolerances (``CaseSpec.tolerances``) that apply to this run:
-    its design variables, and the case fields its Problem can vary per design."""
-    chosen = applicable_defaults(_problem_of(run), get_case(run.kind).tolerances, run.path)
+def default_varies(run: RunView, tolerance_class: str | None = None) -> list[Vary]:
+    """The tolerances of the case's class ``tolerance_class`` (None: the run's
+    ``case.tolerance_class``, else the case's default class; docs/tolerance.md) that apply
+    to this run: its design variables, and the case fields its Problem can vary per
+    design."""
+    return class_varies(run, problem_of(run), tolerance_class)
+
+
+def class_varies(run: RunView, problem: Problem, tolerance_class: str | None,
+                 key: str = "--class") -> list[Vary]:
+    """:func:`default_varies` for a Problem already built."""
+    name = tolerance_class if tolerance_class is not None else run.case.get("tolerance_class")
+    tolerances = get_case(run.kind).tolerances_of(
+        name, run.path, key if tolerance_class is not None else "case.tolerance_class")
+    chosen = applicable_defaults(problem, tolerances, run.path)
     if not chosen:
         raise CamoptError(f"{run.path}: --vary: case '{run.kind}' documents no tolerance for "
                           "this run's inputs; give --vary")
     return chosen
 
 
-def _inputs(run: RunView, problem: Problem, varies: Sequence[Vary]) -> NDArray:
+def nominal_inputs(run: RunView, problem: Problem, varies: Sequence[Vary]) -> NDArray:
     """Nominal value of each varied input in its own unit (display units for variables)."""
     check_varies(problem, varies, run.path, run.kind)
     return np.array([float(run.case[v.field]) if v.is_case_field else float(run.best.x[v.name])
@@ -98,35 +115,51 @@ def _inputs(run: RunView, problem: Problem, varies: Sequence[Vary]) -> NDArray:
 
 
 def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
-            distribution: Distribution = Distribution.uniform) -> Tolerance:
+            distribution: Distribution = Distribution.uniform,
+            tolerance_class: str | None = None) -> Tolerance:
     """Draw ``samples`` sets of the varied inputs from ``SeedSequence(seed)`` and evaluate
     them, the nominal design and the one-at-a-time ends together (row chunks)."""
     if not varies:
         raise CamoptError(f"{run.path}: --vary: give at least one input to vary")
     if samples < 2:
         raise CamoptError(f"{run.path}: --samples: {samples}: at least 2")
-    problem = _problem_of(run)
-    nominal = _inputs(run, problem, varies)
+    problem = problem_of(run)
+    nominal = nominal_inputs(run, problem, varies)
     half = np.array([v.half_width(x) for v, x in zip(varies, nominal)])
-    rng = np.random.default_rng(np.random.SeedSequence(seed))
-    drawn = draw(rng, samples, nominal, half, distribution)
+    drawn = draw_inputs(seed, samples, nominal, half, distribution)
     k = len(varies)
     ends = np.tile(nominal, (2 * k, 1))
     ends[np.arange(0, 2 * k, 2), np.arange(k)] -= half
     ends[np.arange(1, 2 * k, 2), np.arange(k)] += half
     values = np.vstack([nominal, ends, drawn])
-    x0 = problem.from_display(run.best.x)
-    ev = apply(problem, np.tile(x0, (len(values), 1)), varies, values, describe=True)
-    # draws outside an input's physical range count as failed (docs/tolerance.md)
-    ranges = [physical_range(problem, get_case(run.kind).config, v) for v in varies]
-    bad = outside(values, ranges)
-    ev = mark(ev, bad)
+    ev, bad = evaluate_inputs(run, problem, varies, values, describe=True)
     result = Tolerance(run.path, list(varies), distribution, seed, nominal, drawn,
                        ev.take(0), ev.take(slice(1, 1 + 2 * k)),
                        ev.take(slice(1 + 2 * k, None)), problem.objective_name,
-                       problem.constraint_names, outside=bad[1 + 2 * k:], run=run)
+                       problem.constraint_names, outside=bad[1 + 2 * k:], run=run,
+                       tolerance_class=tolerance_class)
     result.summary = summarise(result)
     return result
+
+
+def draw_inputs(seed: int, samples: int, nominal: NDArray, half: NDArray,
+           distribution: Distribution) -> NDArray:
+    """(samples, k) inputs drawn from ``SeedSequence(seed)``: the same unit draws for every
+    tolerance class of the same inputs (common random numbers across classes)."""
+    rng = np.random.default_rng(np.random.SeedSequence(seed))
+    return draw(rng, samples, nominal, half, distribution)
+
+
+def evaluate_inputs(run: RunView, problem: Problem, varies: Sequence[Vary], values: NDArray,
+              describe: bool) -> tuple[Evaluation, NDArray]:
+    """The run's best design with its varied inputs set to ``values`` (rows, k), rows
+    whose inputs leave their physical range counted as failed (docs/tolerance.md), and
+    those rows (rows,) bool."""
+    x0 = problem.from_display(run.best.x)
+    ev = apply(problem, np.tile(x0, (len(values), 1)), varies, values, describe=describe)
+    ranges = [physical_range(problem, get_case(run.kind).config, v) for v in varies]
+    bad = outside(values, ranges)
+    return mark(ev, bad), bad
 
 
 def _finite_or_none(x: float) -> float | None:
@@ -161,6 +194,8 @@ def summarise(t: Tolerance) -> dict[str, Any]:
                   "unit": "%" if v.relative else "own", "half_width": v.half_width(x)}
                  for v, x in zip(t.varies, t.nominal_inputs)],
         "yield": float(np.mean(t.samples.feasible)),
+        **_interval(int(np.count_nonzero(t.samples.feasible)), len(t.inputs)),
+        "tolerance_class": t.tolerance_class,
         "nominal_feasible": bool(t.nominal.feasible[0]),
         "nominal": nominal, "metrics": metrics, "sensitivity": sensitivity,
         "one_at_a_time": tornado,
@@ -171,6 +206,14 @@ def summarise(t: Tolerance) -> dict[str, Any]:
         "requirements": yields,
         "limiting": _limiting(yields, columns),
     }
+
+
+def _interval(passed: int, samples: int) -> dict[str, float]:
+    """The yield's 95 % interval (Clopper-Pearson, :func:`camopt.core.stats.share_interval`:
+    the interval every yield camopt states comes with)."""
+    low, high = share_interval(passed, samples, YIELD_CONFIDENCE)
+    return {"yield_low": float(low), "yield_high": float(high),
+            "yield_confidence": YIELD_CONFIDENCE}
 
 
 def _limiting(yields: list[dict[str, Any]], columns: dict[str, NDArray]) -> str | None:

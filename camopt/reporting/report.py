@@ -97,7 +97,7 @@ limit (normalised g above this) at its nominal design or at the yield target."""
 def robust_summary(run: RunView) -> dict[str, Any] | None:
     """A robust run's final check, the robust optimum beside the best nominally feasible
     design the search saw, on the same fresh draws: objective (nominal, mean, quantile),
-    yield with its Wilson interval, and the margins (normalised g, <= 0 met) of the
+    yield with its Clopper-Pearson interval, and the margins (normalised g, <= 0 met) of the
     constraints near their limits at the nominal design and at the yield target's order
     statistic. None for a nominal run."""
     check = run.robust_check

@@ -155,15 +155,14 @@ def test_bad_vary_names_robust_vary(override, what):
     assert err.value.where == "robust.vary" and what in err.value.what
 
 
-def test_wilson_bound_matches_scipy():
-    """The vectorised Wilson lower bound against scipy's binomtest (stats.success_rate)."""
-    from camopt.core.stats import success_rate
+def test_the_confident_index_is_the_least_count_whose_lower_bound_reaches_the_target():
+    """The order statistic that decides "yield >= target" is the least passing count whose
+    interval's lower bound (:func:`camopt.core.stats.share_interval`) reaches the target."""
+    from camopt.core.stats import share_interval
 
-    for passed, n in ((3900, 4000), (32, 32), (0, 50), (17, 20)):
-        assert robust.wilson_low(passed, n, 0.95) == pytest.approx(
-            success_rate(passed, n, 0.95)["ci_low"], rel=1e-9, abs=1e-12)
-    i = robust.confident_index(0.95, 4000, 0.95)  # the least passing count that is enough
-    assert robust.wilson_low(i + 1, 4000, 0.95) >= 0.95 > robust.wilson_low(i, 4000, 0.95)
+    i = robust.confident_index(0.95, 4000, 0.95)
+    low, _ = share_interval([i, i + 1], 4000, 0.95)
+    assert low[1] >= 0.95 > low[0]
     assert robust.confident_index(0.95, 32, 0.95) == 31  # 32 of 32 is not enough: all
 
 

@@ -164,13 +164,20 @@ def test_default_tolerances_are_the_cases_documented_ones(vcb_run):
     assert [v["input"] for v in doc["vary"]] == [
         "kc1_n_per_mm", "kc2_n_per_mm", "case.l1_mm", "case.l3_mm", "case.l4_mm",
         "case.l5_mm", "case.theta1_deg"]
-    assert doc["vary"][0]["tolerance"] == 5.0 and doc["vary"][0]["unit"] == "%"
+    # the default class "standard": ungraded closing springs, ±10 % on rate (issue #33)
+    assert doc["vary"][0]["tolerance"] == 10.0 and doc["vary"][0]["unit"] == "%"
+    assert doc["tolerance_class"] == "standard"
+    assert doc["yield_low"] <= doc["yield"] <= doc["yield_high"]
+    graded = json.loads(invoke("tolerance", vcb_run, "--samples", 100, "--class", "graded",
+                               "--format", "json").stdout)
+    assert graded["vary"][0]["tolerance"] == 5.0 and graded["tolerance_class"] == "graded"
     from camopt.cases import cases
 
     for spec in cases().values():
-        for name, tol in spec.tolerances.items():
-            v = parse_vary("spec", f"{name}={tol}")
-            assert v.tolerance > 0 and v.name == name
+        for cls in spec.class_names():
+            for name, tol in spec.tolerances_of(cls).items():
+                v = parse_vary("spec", f"{name}={tol}")
+                assert v.tolerance > 0 and v.name == name
 
 
 def test_yield_per_requirement_raw_metrics_and_json_only_on_stdout(vcb_run, tmp_path):

@@ -6,11 +6,23 @@ from camopt.cases.emb_cam.config import EmbCamConfig
 from camopt.cases.emb_cam.paper import PAPER
 from camopt.cases.emb_cam.problem import EmbCamProblem
 from camopt.cases.emb_cam.requirements import requirements
-from camopt.cases.registry import CaseSpec, ProfileCircle, ProfileCurve, register_case
+from camopt.cases.registry import (
+    CaseSpec,
+    ProfileCircle,
+    ProfileCurve,
+    ToleranceClass,
+    register_case,
+)
 
 TOLERANCES = {  # docs/assumptions.md, "Default tolerances": a ground cam profile
     **{f"r{j}_mm": "±0.01" for j in range(1, 40)},  # key radii (those of the run apply)
     "e_mm": "±0.05",  # follower offset, a machined bore
+}
+TOLERANCE_CLASSES = {
+    "milled": ToleranceClass(
+        {**TOLERANCES, **{f"r{j}_mm": "±0.03" for j in range(1, 40)}},
+        source="a CNC-milled profile, not ground: profile tolerance ~0.06 mm (±0.03 mm on "
+        "a radius)", relative_cost=0.6),
 }
 
 SPEC = register_case(CaseSpec(
@@ -21,6 +33,7 @@ SPEC = register_case(CaseSpec(
     profiles=(ProfileCurve("cam-profile", ("profile_x_mm", "nonworking_x_mm"),
                            ("profile_y_mm", "nonworking_y_mm")),),
     circles=(ProfileCircle("base-circle", "r_st_mm"),),
-    tolerances=TOLERANCES, requirements=requirements, reference="paper, Sec 4.4",
+    tolerances=TOLERANCES, tolerance_classes=TOLERANCE_CLASSES, requirements=requirements,
+    reference="paper, Sec 4.4",
     reference_values={k: PAPER[k] for k in ("peak_torque_nm", "clearance_angle_rad")},
 ))

@@ -6,7 +6,7 @@ from camopt.cases.fast_switch.config import FastSwitchConfig
 from camopt.cases.fast_switch.paper import OPTIMUM, PAPER
 from camopt.cases.fast_switch.problem import FastSwitchProblem
 from camopt.cases.fast_switch.requirements import requirements
-from camopt.cases.registry import CaseSpec, register_case
+from camopt.cases.registry import CaseSpec, ToleranceClass, register_case
 
 TOLERANCES = {  # docs/assumptions.md, "Default tolerances"
     "sud_mm": "±1",  # undeformed (free) spring length
@@ -16,6 +16,14 @@ TOLERANCES = {  # docs/assumptions.md, "Default tolerances"
     # move its rate by about ±4 % and ±3 % (R13) and its stress (R14/R15)
     "case.wire_diameter_mm": "±0.02", "case.spring_diameter_mm": "±1%",
 }
+TOLERANCE_CLASSES = {
+    "graded": ToleranceClass(
+        {**TOLERANCES, "sud_mm": "±0.5", "case.wire_diameter_mm": "±0.01",
+         "case.spring_diameter_mm": "±0.5%"},
+        source="springs coiled from selected wire and graded by force at a test length: "
+        "half the standard class's free length, wire and coil diameter tolerances",
+        relative_cost=1.3),
+}
 
 SPEC = register_case(CaseSpec(
     kind="fast_switch", config=FastSwitchConfig, problem=FastSwitchProblem,
@@ -23,5 +31,6 @@ SPEC = register_case(CaseSpec(
     summary="minimum closure time of a spring-driven slider-crank switch",
     paper_source="Clauss & Papalambros (1982), UM-MEAM-81-3",
     figures="camopt.cases.fast_switch.figures:figures", paper=PAPER, tolerances=TOLERANCES,
+    tolerance_classes=TOLERANCE_CLASSES,
     requirements=requirements, reference="paper's optimum, Eq 92", reference_values=OPTIMUM,
 ))

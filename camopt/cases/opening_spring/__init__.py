@@ -6,11 +6,17 @@ from camopt.cases.opening_spring.config import OpeningSpringConfig
 from camopt.cases.opening_spring.paper import PAPER
 from camopt.cases.opening_spring.problem import OpeningSpringProblem
 from camopt.cases.opening_spring.requirements import requirements
-from camopt.cases.registry import CaseSpec, register_case
+from camopt.cases.registry import CaseSpec, ToleranceClass, register_case
 
-TOLERANCES = {  # docs/assumptions.md, "Default tolerances"
-    "k_n_per_mm": "±5%", "l0_mm": "±1",  # spring rate, free length
+TOLERANCES = {  # class "standard", docs/tolerance.md, "Tolerance classes"
+    "k_n_per_mm": "±10%", "l0_mm": "±1",  # ungraded spring: rate, free length
     "u_mm": "±0.05", "v_mm": "±0.05", "s_mm": "±0.05",  # pivot positions
+}
+TOLERANCE_CLASSES = {
+    "graded": ToleranceClass(
+        {**TOLERANCES, "k_n_per_mm": "±5%", "l0_mm": "±0.5"},
+        source="spring graded by force at a test length, free length held to half",
+        relative_cost=1.3),
 }
 
 SPEC = register_case(CaseSpec(
@@ -19,5 +25,6 @@ SPEC = register_case(CaseSpec(
     summary="opening spring of a 40 kA VCB for a specified opening motion (energy method)",
     paper_source="Ahn, Cho, Park & Kim, design of a spring-actuated linkage",
     figures="camopt.cases.opening_spring.figures:figures", paper=PAPER,
-    tolerances=TOLERANCES, requirements=requirements, reference="original design, Table 1",
+    tolerances=TOLERANCES, tolerance_classes=TOLERANCE_CLASSES, requirements=requirements,
+    reference="original design, Table 1",
 ))
