@@ -13,20 +13,21 @@ from __future__ import annotations
 import contextlib
 import json
 from collections.abc import Iterator
+from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
 import h5py
 import numpy as np
+from numpy.typing import NDArray
 
 from camopt.archive.files import atomic_write, claim, open_archive, versions
 from camopt.archive.tables import read_table, write_table
 from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
-from camopt.core.record import Repeat, nfev_to_target
+from camopt.core.record import Repeat, RunRecord, nfev_to_target
 from camopt.core.runview import BestView, RunView
 from camopt.core.stats import succeeded
-from camopt.engine.driver import RunRecord
 from camopt.errors import ArchiveError
 
 SCHEMA_VERSION = 2
@@ -34,7 +35,7 @@ READABLE_SCHEMAS = (1, 2)
 
 
 def _write(f: h5py.File, rec: RunRecord) -> None:
-    cfg, problem = rec.config, rec.problem
+    cfg = rec.config
     attrs = {
         **versions(), "schema_version": SCHEMA_VERSION, "config_toml": cfg.text,
         "config_path": cfg.path, "overrides": json.dumps(list(cfg.overrides)),
@@ -42,13 +43,13 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
         "case_kind": cfg.case.kind,
         "solver": cfg.solver.name, "run_name": cfg.run.name, "seed_entropy": str(rec.seed),
         "created": datetime.now(timezone.utc).isoformat(),
-        "variables": json.dumps(list(problem.names)),
-        "variable_scale": problem.scale, "constraints": json.dumps(list(problem.constraint_names)),
-        "objective_name": problem.objective_name, "x_units": "display",
+        "variables": json.dumps(list(rec.names)),
+        "variable_scale": rec.scale, "constraints": json.dumps(list(rec.constraint_names)),
+        "objective_name": rec.objective_name, "x_units": "display",
         "interrupted": rec.interrupted, "repeats_done": len(rec.repeats),
         **({"robust_check": json.dumps(rec.robust_check)} if rec.robust_check else {}),
     }
-    scale = problem.scale  # x in the units the variable names say
+    scale = rec.scale  # x in the units the variable names say
     f.attrs.update(attrs)
     reps = f.create_group("repeats")
     for r in rec.repeats:
@@ -177,77 +178,123 @@ def _json_list(text: object, what: str) -> list[Any]:
     return value
 
 
-def _load(f: h5py.File, path: str | Path) -> RunView:
+@dataclass(frozen=True)
+class _Layout:
+    """What every reader of a run archive needs from its root: the variables and
+    constraints, the config as run, and the factors from stored ``x`` to display units
+    (``to_display``) and to SI (``to_si``), both (n_var,)."""
+
+    names: tuple[str, ...]
+    constraints: tuple[str, ...]
+    config: dict[str, Any]
+    to_display: NDArray
+    to_si: NDArray
+
+    @property
+    def target(self) -> float | None:
+        return self.config["run"].get("target")
+
+
+def _migrate(schema: int, variable_scale: NDArray) -> tuple[NDArray, NDArray]:
+    """The one place archives of older schemas are told apart: the factors from the stored
+    ``x`` to display units and to SI. Schema 2 stores display units (SI * scale); schema 1
+    stored SI. (Repeats of archives before issue #25 also lack ``success``:
+    :func:`_success` derives it.)"""
+    ones = np.ones_like(variable_scale)
+    if schema >= 2:
+        return ones, 1 / variable_scale
+    return variable_scale, ones
+
+
+def _success(attrs: Any, fun: float, feasible: bool, target: float | None) -> bool:
+    """A repeat's ``success``: stored since issue #25; before, the same definition
+    (:func:`camopt.core.stats.succeeded`) from what the archive holds."""
+    if "success" in attrs:
+        return bool(attrs["success"])
+    return bool(succeeded([fun], [feasible], target)[0])
+
+
+def _read_layout(f: h5py.File) -> _Layout:
     names = tuple(str(n) for n in _json_list(f.attrs["variables"], "variables"))
     constraints = tuple(str(c) for c in _json_list(f.attrs["constraints"], "constraints"))
     variable_scale = np.asarray(f.attrs["variable_scale"], dtype=float)
     if variable_scale.shape not in ((), (len(names),)):
         raise ArchiveError("variable_scale: one value per variable expected")
-    # stored x -> display units, and -> SI (the record's): schema 1 stored SI
-    display = int(f.attrs["schema_version"]) >= 2
-    scale = np.ones_like(variable_scale) if display else variable_scale
-    to_si = 1 / variable_scale if display else np.ones_like(variable_scale)
     config = json.loads(f.attrs["config_effective"])
     if not isinstance(config, dict) or not all(
             isinstance(config.get(k), dict) for k in ("case", "solver", "run")):
         raise ArchiveError("config_effective: expected case, solver and run tables")
-    target = config["run"].get("target")
-    repeats = []
+    to_display, to_si = _migrate(int(f.attrs["schema_version"]), variable_scale)
+    return _Layout(names, constraints, config, to_display, to_si)
+
+
+def _read_repeat(grp: h5py.Group, key: str, layout: _Layout) -> Repeat:
+    """Repeat ``/repeats/<key>`` (``x`` to SI, ``nfev_to_target`` from its history)."""
+    a = grp.attrs
+    missing = [k for k in REPEAT_ATTRS if k not in a]
+    if missing or "x" not in grp or "history" not in grp:
+        raise ArchiveError(f"/repeats/{key}: missing "
+                           f"{missing[0] if missing else 'x or history'}")
+    if grp["x"].shape != (len(layout.names),):
+        raise ArchiveError(f"/repeats/{key}/x: {grp['x'].shape}, expected "
+                           f"({len(layout.names)},)")
+    history = {k: v[()] for k, v in grp["history"].items()}
+    fun, feasible = float(a["objective"]), bool(a["feasible"])
+    return Repeat(
+        x=grp["x"][()] * layout.to_si, fun=fun,
+        success=_success(a, fun, feasible, layout.target),
+        message=str(a["message"]), nfev=int(a["nfev"]), nit=int(a["nit"]),
+        index=int(key[1:]), spawn_key=tuple(json.loads(a["spawn_key"])),
+        seed=int(a["seed"]), feasible=feasible, violation=float(a["violation"]),
+        converged_nit=int(a["converged_nit"]),
+        nfev_to_target=nfev_to_target(history, layout.target),
+        wall_s=float(a["wall_s"]), history=history,
+        g=grp["g"][()] if "g" in grp else np.zeros(0),
+        notes=tuple(json.loads(a["notes"])))
+
+
+def _read_repeats(f: h5py.File, layout: _Layout) -> list[Repeat]:
+    """Every repeat, in index order (``r999`` before ``r1000``)."""
     if len(f["repeats"]) == 0:
         raise ArchiveError("/repeats: no repeat")
-    for key in sorted(f["repeats"], key=lambda k: int(k[1:])):  # r999 < r1000
-        grp = f["repeats"][key]
-        a = grp.attrs
-        missing = [k for k in REPEAT_ATTRS if k not in a]
-        if missing or "x" not in grp or "history" not in grp:
-            raise ArchiveError(f"/repeats/{key}: missing "
-                               f"{missing[0] if missing else 'x or history'}")
-        if grp["x"].shape != (len(names),):
-            raise ArchiveError(f"/repeats/{key}/x: {grp['x'].shape}, expected "
-                               f"({len(names)},)")
-        history = {k: v[()] for k, v in grp["history"].items()}
-        fun, feasible = float(a["objective"]), bool(a["feasible"])
-        repeats.append(Repeat(
-            x=grp["x"][()] * to_si, fun=fun,
-            # archives before issue #25 lack it: the same definition, from what they hold
-            success=bool(a["success"]) if "success" in a
-            else bool(succeeded([fun], [feasible], target)[0]),
-            message=str(a["message"]), nfev=int(a["nfev"]), nit=int(a["nit"]),
-            index=int(key[1:]), spawn_key=tuple(json.loads(a["spawn_key"])),
-            seed=int(a["seed"]), feasible=feasible, violation=float(a["violation"]),
-            converged_nit=int(a["converged_nit"]),
-            nfev_to_target=nfev_to_target(history, target),
-            wall_s=float(a["wall_s"]), history=history,
-            g=grp["g"][()] if "g" in grp else np.zeros(0),
-            notes=tuple(json.loads(a["notes"]))))
-    best = f["best"]
+    return [_read_repeat(f["repeats"][key], key, layout)
+            for key in sorted(f["repeats"], key=lambda k: int(k[1:]))]
+
+
+def _read_best(best: h5py.Group, layout: _Layout) -> BestView:
     g = best["g"][()]
+    names, constraints = layout.names, layout.constraints
     if best["x"].shape != (len(names),) or g.shape != (len(constraints),):
         raise ArchiveError("/best: x or g does not match the variables and constraints")
+    return BestView(
+        objective=float(best.attrs["objective"]),
+        feasible=bool(best.attrs["feasible"]),
+        x=dict(zip(names, (best["x"][()] * layout.to_display).tolist())),
+        metrics={k: _plain(v) for k, v in best["metrics"].attrs.items()},
+        active=[c for c, gi in zip(constraints, g) if abs(gi) <= ACTIVE_TOL],
+        violated=[c for c, gi in zip(constraints, g) if not gi <= FEASIBILITY_TOL],
+        repeat=int(best.attrs["repeat"]))
+
+
+def _load(f: h5py.File, path: str | Path) -> RunView:
+    layout = _read_layout(f)
+    repeats = _read_repeats(f, layout)
+    config, attrs = layout.config, f.attrs
     return RunView(
-        path=str(path), kind=str(f.attrs["case_kind"]),
-        case={"kind": str(f.attrs["case_kind"]), **config["case"]},
+        path=str(path), kind=str(attrs["case_kind"]),
+        case={"kind": str(attrs["case_kind"]), **config["case"]},
         solver=config["solver"], run=config["run"],
-        objective_name=str(f.attrs["objective_name"]), variables=names,
-        constraints=constraints,
-        best=BestView(
-            objective=float(best.attrs["objective"]),
-            feasible=bool(best.attrs["feasible"]),
-            x=dict(zip(names, (best["x"][()] * scale).tolist())),
-            metrics={k: _plain(v) for k, v in best["metrics"].attrs.items()},
-            active=[c for c, gi in zip(constraints, g) if abs(gi) <= ACTIVE_TOL],
-            violated=[c for c, gi in zip(constraints, g) if not gi <= FEASIBILITY_TOL],
-            repeat=int(best.attrs["repeat"])),
+        objective_name=str(attrs["objective_name"]), variables=layout.names,
+        constraints=layout.constraints, best=_read_best(f["best"], layout),
         repeats=repeats, table=read_table(f["table"]),
         analysis={k: v[()] for k, v in f["analysis"].items()},
-        config_toml=str(f.attrs["config_toml"]), created=str(f.attrs["created"]),
-        camopt_version=str(f.attrs["camopt_version"]),
-        seed_entropy=str(f.attrs["seed_entropy"]),
-        interrupted=bool(f.attrs.get("interrupted", False)),
-        repeats_done=len(repeats), config_as_run=str(f.attrs.get("config_as_run", "")),
+        config_toml=str(attrs["config_toml"]), created=str(attrs["created"]),
+        camopt_version=str(attrs["camopt_version"]),
+        seed_entropy=str(attrs["seed_entropy"]),
+        interrupted=bool(attrs.get("interrupted", False)),
+        repeats_done=len(repeats), config_as_run=str(attrs.get("config_as_run", "")),
         robust=config.get("robust") or {},
-        robust_check=json.loads(f.attrs["robust_check"]) if "robust_check" in f.attrs else {},
-        versions={k: str(v) for k, v in f.attrs.items()
+        robust_check=json.loads(attrs["robust_check"]) if "robust_check" in attrs else {},
+        versions={k: str(v) for k, v in attrs.items()
                   if k.endswith("_version") and k != "schema_version"},
     )
-

@@ -5,15 +5,23 @@ The first six fields carry ``scipy.optimize.OptimizeResult``'s names and meaning
 ``fun``, ``success``, ``message``, ``nfev``, ``nit``); the rest are camopt's own. The
 archives keep their documented names on disk (``objective`` for ``fun``, a sweep cell's
 ``seed`` for ``index``: docs/archive.md), so archives of every schema still load.
+
+:class:`RunRecord` is a whole run as the archive writes it: the repeats, the best one,
+and the names, scales and constraint names of the design space, so that the archive reads
+plain data and never a driver or a live Problem.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+if TYPE_CHECKING:  # annotations only: the record stays pure data (numpy only)
+    from camopt.config import LoadedConfig
+    from camopt.core.problem import Problem
 
 
 def _empty() -> NDArray[np.float64]:
@@ -79,6 +87,38 @@ class Repeat:
     def key(self) -> tuple[int, int]:
         """A sweep cell's place: (grid point, seed index)."""
         return (self.point, self.index)
+
+
+@dataclass
+class RunRecord:
+    """Everything a run archive holds: the config as run, every finished repeat, the best
+    one with its metrics and analysis curves, and the design space in plain data.
+
+    ``names`` (n_var,) are the variables' display names (unit in the name), ``scale``
+    (n_var,) the SI-to-display factors (``display = SI * scale``), ``constraint_names``
+    (n_constr,) name the columns of each repeat's ``g``; ``objective_name`` names ``fun``.
+    ``problem`` is the live Problem the run used, for in-process callers (tests, benches);
+    the archive never reads it."""
+
+    config: LoadedConfig
+    seed: int
+    repeats: list[Repeat]
+    best: Repeat
+    metrics: dict[str, object]
+    analysis: dict[str, NDArray]
+    names: tuple[str, ...]
+    scale: NDArray[np.float64]
+    constraint_names: tuple[str, ...]
+    objective_name: str
+    interrupted: bool = False
+    """True when Ctrl-C (or SIGTERM) or a failure stopped the run: ``repeats`` holds the
+    finished ones."""
+    robust_check: dict[str, Any] | None = None
+    """Robust runs: the final check of the best design (``robust``) and of the best design
+    seen whose nominal evaluation is feasible (``nominal``), :func:`camopt.engine.robust.check`."""
+    failure: str | None = None
+    """What stopped the run when it was not a signal (a worker process died)."""
+    problem: Problem | None = field(default=None, repr=False, compare=False)
 
 
 def seed_id(seq: np.random.SeedSequence) -> int:

@@ -22,7 +22,7 @@ from camopt.config import LoadedConfig, load_config, validate_data
 from camopt.core import batch
 from camopt.core.perf import fork_pool, kill_pool, pin_blas_threads
 from camopt.core.problem import Problem, deb_best
-from camopt.core.record import Repeat, nfev_to_target, seed_id
+from camopt.core.record import Repeat, RunRecord, nfev_to_target, seed_id
 from camopt.core.stats import succeeded
 from camopt.engine import interrupts, robust
 from camopt.engine.interrupts import deferred
@@ -39,27 +39,6 @@ class Progress:
     iteration: int
     max_iterations: int | None
     best_objective: float
-
-
-@dataclass
-class RunRecord:
-    """Everything a run archive holds."""
-
-    config: LoadedConfig
-    problem: Problem
-    seed: int
-    repeats: list[Repeat]
-    best: Repeat
-    metrics: dict[str, object]
-    analysis: dict[str, NDArray]
-    interrupted: bool = False
-    """True when Ctrl-C (or SIGTERM) or a failure stopped the run: ``repeats`` holds the
-    finished ones."""
-    robust_check: dict[str, Any] | None = None
-    """Robust runs: the final check of the best design (``robust``) and of the best design
-    seen whose nominal evaluation is feasible (``nominal``), :func:`camopt.engine.robust.check`."""
-    failure: str | None = None
-    """What stopped the run when it was not a signal (a worker process died)."""
 
 
 def solver_options() -> dict[str, Any]:
@@ -293,9 +272,11 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
     with deferred() as signals:  # finished repeats are kept whatever Ctrl-C comes now
         records.sort(key=lambda r: r.index)
         best = best_repeat(records)
-        record = RunRecord(config, problem, seed, records, best, dict(problem.metrics(best.x)),
-                           dict(problem.analysis(best.x)), interrupted,
-                           _robust_check(problem, records, best, seed), failure)
+        record = RunRecord(
+            config, seed, records, best, dict(problem.metrics(best.x)),
+            dict(problem.analysis(best.x)), problem.names, problem.scale,
+            problem.constraint_names, problem.objective_name, interrupted,
+            _robust_check(problem, records, best, seed), failure, problem)
     record.interrupted |= bool(signals)
     return record
 
