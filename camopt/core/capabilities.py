@@ -9,8 +9,8 @@ work, never a silent fallback in the middle of a run (nevergrad's class qualifie
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Protocol, runtime_checkable
+from collections.abc import Mapping, Sequence
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -65,6 +65,44 @@ class VariesCase(Protocol):
     def describe_with(self, X: NDArray, fields: Mapping[str, NDArray]) -> Evaluation:
         """As ``describe(X)``, with each named case field taking its own value per row:
         ``fields[name]`` (n,) in the field's unit (``l1_mm`` in mm)."""
+        ...
+
+
+@runtime_checkable
+class Stochastic(Protocol):
+    """An evaluation on random draws renewed every generation (robust design,
+    :mod:`camopt.engine.robust`): the candidates of one generation share one set of draws
+    (common random numbers), so they are compared on the same parts.
+
+    The driver asks for it (no solver requires it): ``reseed`` starts a repeat,
+    ``new_generation`` renews the draws before every ask, ``select`` picks the repeat's
+    result on fresh draws, and ``final_check`` checks the run's best design. A solver that
+    keeps evaluations across generations may ask for it too: ``de_gr`` then evaluates its
+    parents again on each generation's draws, so that a trial and its parent are compared
+    on the same parts (docs/tolerance.md, "Parents on the same parts")."""
+
+    def reseed(self, seed: np.random.SeedSequence) -> None:
+        """Start a repeat: its own draws from ``seed``, nothing carried over."""
+        ...
+
+    def new_generation(self) -> None:
+        """Draw the next generation's perturbations, shared by every candidate."""
+        ...
+
+    def select(self, x: NDArray, seed: np.random.SeedSequence
+               ) -> tuple[NDArray, Evaluation]:
+        """The repeat's result from the solver's best ``x`` (n_var,), SI: a design and its
+        evaluation (one row) judged on fresh draws from ``seed``."""
+        ...
+
+    def nominal_design(self) -> NDArray | None:
+        """The best design this repeat saw whose nominal evaluation is feasible, or None."""
+        ...
+
+    def final_check(self, best: NDArray, seen: Sequence[NDArray], seed: int
+                    ) -> dict[str, Any]:
+        """The run's check of its best design and of the best of the repeats' ``seen``
+        nominal designs, for the archive's ``robust_check`` (plain JSON data)."""
         ...
 
 

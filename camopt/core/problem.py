@@ -111,11 +111,6 @@ class Problem:
     variables: tuple[Variable, ...] = ()
     constraint_names: tuple[str, ...] = ()
     objective_name: str = "objective"
-    redraws_each_generation: bool = False
-    """True when an evaluation depends on draws renewed every generation (a robust
-    problem's parts). ``de_gr`` then evaluates its parents again on each generation's
-    draws, so that a trial and its parent are compared on the same parts; other solvers
-    keep what they kept (docs/tolerance.md, "Parents on the same parts")."""
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from camopt.cases import build_problem, case_configs, get_case
 from camopt.config import LoadedConfig, load_config, validate_data
 from camopt.core import batch
+from camopt.core.capabilities import Stochastic
 from camopt.core.perf import fork_pool, kill_pool, pin_blas_threads
 from camopt.core.problem import Problem, deb_best
 from camopt.core.record import Repeat, RunRecord, nfev_to_target, seed_id
@@ -70,7 +71,8 @@ def prepare(config: LoadedConfig) -> tuple[Problem, type[Solver]]:
                                                           config.path)
     if config.robust is not None:
         problem = robust.wrap(problem, robust.plan(
-            problem, config.case, config.robust, dict(tolerances), config.path))
+            problem, config.case, config.robust, dict(tolerances), config.path),
+            config.path)
     solver_cls = get_solver(config.solver.name)
     try:
         solver_cls.check(type(problem), config.solver)
@@ -112,16 +114,16 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
     (``run.max_evaluations``, ``run.max_seconds``), whichever comes first; ``jobs``
     worker processes are lent to the solver (multi-start solvers spread their starts)."""
     start = time.perf_counter()
-    robust_problem = problem if isinstance(problem, robust.RobustProblem) else None
-    if robust_problem is not None:
-        robust_problem.reseed(robust.repeat_seed(child, 0))
+    stochastic = problem if isinstance(problem, Stochastic) else None
+    if stochastic is not None:
+        stochastic.reseed(robust.repeat_seed(child, 0))
     solver = build_solver(problem, solver_cls, config, np.random.default_rng(child))
     solver.jobs = jobs
     max_nfev, max_s = config.run.max_evaluations, config.run.max_seconds
     nfev, best_f, mean_f, best_v = [], [], [], []
     while (reason := _stop(solver, start, max_nfev, max_s)) is None:
-        if robust_problem is not None:
-            robust_problem.new_generation()  # common random numbers: one set per generation
+        if stochastic is not None:
+            stochastic.new_generation()  # common random numbers: one set per generation
         interrupts.check()
         X = solver.ask()
         ev = batch.evaluate(problem, X)  # a population is one chunk; given designs, many
@@ -137,8 +139,8 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
         if callback:
             callback(Progress(index, repeats, solver.nit, solver.max_iterations(), best_f[-1]))
     x, bev = solver.best()
-    if robust_problem is not None:  # the solver's best and the finalists on fresh draws
-        x, bev = robust_problem.select(x, robust.repeat_seed(child, 1))
+    if stochastic is not None:  # the solver's best and the finalists on fresh draws
+        x, bev = stochastic.select(x, robust.repeat_seed(child, 1))
     history = {"nfev": np.array(nfev, dtype=np.int64), "best_objective": np.array(best_f),
                "mean_objective": np.array(mean_f), "best_violation": np.array(best_v)}
     fun, feasible, target = float(bev.f[0]), bool(bev.feasible[0]), config.run.target
@@ -152,8 +154,7 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
         nfev_to_target=nfev_to_target(history, target),
         wall_s=time.perf_counter() - start, history=history, g=bev.g[0],
         notes=tuple(solver.notes()), table=solver.table(),
-        nominal_x=(robust_problem.nominal_best[0]
-                   if robust_problem is not None and robust_problem.nominal_best else None),
+        nominal_x=None if stochastic is None else stochastic.nominal_design(),
     )
 
 
@@ -283,17 +284,9 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
 
 def _robust_check(problem: Problem, records: list[Repeat], best: Repeat,
                   seed: int) -> dict[str, Any] | None:
-    """Robust runs: the best design and the best nominally feasible design seen (lowest
-    nominal objective over the repeats) checked on the same fresh draws."""
-    if not isinstance(problem, robust.RobustProblem):
+    """Stochastic (robust) runs: the problem's final check of the best design and of the
+    best nominally feasible design the repeats saw; None otherwise."""
+    if not isinstance(problem, Stochastic):
         return None
-    seen = [r.nominal_x for r in records if r.nominal_x is not None]
-    designs = [best.x]
-    if seen:
-        f = problem.base.evaluate(np.array(seen)).f
-        designs.append(seen[int(np.argmin(f))])
-    checked = robust.check(problem, designs, seed)
-    result: dict[str, Any] = {"robust": checked[0]}
-    if len(checked) > 1:
-        result["nominal"] = {**checked[1], "x": problem.base.to_display(designs[1])}
-    return result
+    return problem.final_check(best.x, [r.nominal_x for r in records
+                                        if r.nominal_x is not None], seed)

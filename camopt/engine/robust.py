@@ -25,9 +25,10 @@ and at ``S`` perturbed copies, population x samples in one vectorised call (in c
   meeting every constraint with a finite objective).
 
 A solver that keeps evaluations across generations compares new candidates with designs
-judged on other draws; ``redraws_each_generation`` asks it to evaluate them again on each
-generation's draws (``de_gr`` does: its parents; ``pso``'s personal bests, ``nsga2``'s
-survivors and ``cmaes``'s best so far are not). Even so a design can pass one
+judged on other draws; the :class:`~camopt.core.capabilities.Stochastic` capability
+asks it to evaluate them again on each generation's draws (``de_gr`` does: its
+parents; ``pso``'s personal bests, ``nsga2``'s survivors and ``cmaes``'s best so far
+are not). Even so a design can pass one
 generation's draws by luck and be the solver's best when it stops. So the ``finalists``
 best designs that met the target on their own generation's draws, with the solver's
 best, are evaluated again on ``check_samples`` fresh draws when the repeat ends, and the
@@ -52,14 +53,20 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
 
 from camopt.config.models import CaseConfig, RobustSection
 from camopt.core import stats
-from camopt.core.capabilities import CAPABILITIES, VariesCase
+from camopt.core.capabilities import (
+    HasFamily,
+    HasResiduals,
+    Repairable,
+    Stochastic,
+    capability_name,
+)
 from camopt.core.problem import FEASIBILITY_TOL, Evaluation, ObjectiveFloor, Problem, deb_best
 from camopt.core.variation import (
     Distribution,
@@ -202,11 +209,11 @@ def statistic(f: NDArray, objective: str, quantile: float) -> NDArray:
     return np.quantile(np.where(np.isnan(f), np.inf, f), quantile, axis=1, method="higher")
 
 
-class RobustProblem(Problem):
+class RobustProblem(Problem, Stochastic):
     """A case's Problem whose evaluation is robust (module docstring): same variables,
-    constraints plus ``yield``, objective a statistic of the case's."""
-
-    redraws_each_generation = True
+    constraints plus ``yield``, objective a statistic of the case's. It declares
+    :class:`~camopt.core.capabilities.Stochastic`, which the driver (and ``de_gr``) ask
+    for; :func:`wrap` adds the case's own capabilities."""
 
     def __init__(self, base: Problem, robust_plan: Plan) -> None:
         self.base, self.plan = base, robust_plan
@@ -307,6 +314,23 @@ class RobustProblem(Problem):
         i = deb_best(ev.f, ev.violation)
         return X[i].copy(), ev.take(i)
 
+    def nominal_design(self) -> NDArray | None:
+        return None if self.nominal_best is None else self.nominal_best[0]
+
+    def final_check(self, best: NDArray, seen: Sequence[NDArray], seed: int
+                    ) -> dict[str, Any]:
+        """The best design and the best nominally feasible design ``seen`` (lowest nominal
+        objective over the repeats) checked on the same fresh draws (:func:`check`)."""
+        designs = [best]
+        if seen:
+            f = self.base.evaluate(np.array(seen)).f
+            designs.append(seen[int(np.argmin(f))])
+        checked = check(self, designs, seed)
+        result: dict[str, Any] = {"robust": checked[0]}
+        if len(checked) > 1:
+            result["nominal"] = {**checked[1], "x": self.base.to_display(designs[1])}
+        return result
+
     def _remember(self, X: NDArray, nominal: Evaluation) -> None:
         ok = np.flatnonzero(nominal.feasible)
         if ok.size:
@@ -330,24 +354,50 @@ class RobustProblem(Problem):
         return None if self.plan.spec.objective == "margin" else self.base.objective_floor()
 
 
-def _forward(name: str) -> Any:
-    def method(self: RobustProblem, *args: Any, **kwargs: Any) -> Any:
-        return getattr(self.base, name)(*args, **kwargs)
-    method.__name__ = name
-    return method
+# The case's capabilities, forwarded to it: one declared class per capability a case
+# may offer (a solver checks a Problem *class*), none built at run time. Per-design case
+# fields (VariesCase) stay the case's: they are what varies.
+class RobustRepairable(RobustProblem, Repairable):
+    """A robust problem whose swarm corrections are its case's."""
+
+    def repair(self, X: NDArray, rng: np.random.Generator,
+               probability: Mapping[str, float]) -> NDArray:
+        return cast(Repairable, self.base).repair(X, rng, probability)
+
+    def repair_schedule(self) -> Mapping[str, tuple[float, float]]:
+        return cast(Repairable, self.base).repair_schedule()
 
 
-def wrap(base: Problem, robust_plan: Plan) -> RobustProblem:
-    """A RobustProblem offering the capabilities its case declares (repair, family ...:
-    forwarded to the case), so every solver that runs the case runs it robustly.
-    Per-design case fields (VariesCase) stay the case's: they are what varies."""
-    caps = tuple(c for c in CAPABILITIES.values()
-                 if c is not VariesCase and isinstance(base, c))
-    if not caps:
-        return RobustProblem(base, robust_plan)
-    members = {n: _forward(n) for c in caps for n, v in vars(c).items()
-               if callable(v) and not n.startswith("_")}
-    cls = type(f"Robust{type(base).__name__}", (RobustProblem, *caps), members)
+class RobustFamily(RobustProblem, HasFamily):
+    """A robust problem searching its case's one-degree-of-freedom family."""
+
+    def family(self) -> NDArray:
+        return cast(HasFamily, self.base).family()
+
+
+class RobustResiduals(RobustProblem, HasResiduals):
+    """A robust problem with its case's residual equations."""
+
+    def residuals(self, X: NDArray) -> NDArray:
+        return cast(HasResiduals, self.base).residuals(X)
+
+
+FORWARDED: dict[type, type[RobustProblem]] = {
+    Repairable: RobustRepairable, HasFamily: RobustFamily, HasResiduals: RobustResiduals}
+"""The robust class that offers each capability a case may declare."""
+
+
+def wrap(base: Problem, robust_plan: Plan, source: str = "<case>") -> RobustProblem:
+    """A RobustProblem offering the capability its case declares (repair, family or
+    residuals: forwarded to the case), so every solver that runs the case runs it
+    robustly. A case declaring more than one of them is refused (no class offers the
+    combination; add one to :data:`FORWARDED` when a case needs it)."""
+    caps = [c for c in FORWARDED if isinstance(base, c)]
+    if len(caps) > 1:
+        names = ", ".join(capability_name(c) for c in caps)
+        raise ConfigError(source, "robust", f"a case offering {names} together cannot "
+                          "be run robustly yet")
+    cls = FORWARDED[caps[0]] if caps else RobustProblem
     return cls(base, robust_plan)
 
 

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION
+from camopt.core.capabilities import Stochastic
 from camopt.core.problem import Evaluation, Problem
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
 from camopt.solvers.polish import PolishableOptions, Polishing
@@ -74,6 +75,8 @@ class DEGR(Polishing, Solver):
         self.pop: NDArray | None = None
         self.ev: Evaluation | None = None
         self._trial = False
+        # parents are evaluated again on each generation's draws (Stochastic's docstring)
+        self.redraws = isinstance(problem, Stochastic)
 
     def max_iterations(self) -> int:
         return self.options.generations + (self.options.polish is not None)
@@ -90,7 +93,7 @@ class DEGR(Polishing, Solver):
         # reflect into bounds, midway between the parent and the violated bound
         trial = np.where(trial < self.lo, (self.lo + self.pop) / 2, trial)
         trial = np.where(trial > self.hi, (self.hi + self.pop) / 2, trial)
-        if self.problem.redraws_each_generation:
+        if self.redraws:
             # the parents again, on this generation's draws: a parent kept for passing an
             # earlier generation's draws by luck would otherwise lead best/1 (and every
             # comparison) with an evaluation no trial is measured against
@@ -107,7 +110,7 @@ class DEGR(Polishing, Solver):
             return
         assert self.ev is not None
         n = len(self.pop)
-        if len(X) == 2 * n and self.problem.redraws_each_generation:
+        if len(X) == 2 * n and self.redraws:
             X, ev, self.ev = X[:n], ev.take(slice(0, n)), ev.take(slice(n, 2 * n))
         win = ~better(self.ev.f, self.ev.violation, ev.f, ev.violation)  # trial ties win
         self.pop = np.where(win[:, None], X, self.pop)

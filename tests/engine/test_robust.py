@@ -9,6 +9,8 @@ import math
 import numpy as np
 import pytest
 
+from camopt.config.models import RobustSection
+from camopt.core.capabilities import HasFamily, HasResiduals, Repairable, Stochastic
 from camopt.core.problem import FEASIBILITY_TOL
 from camopt.engine import robust
 from camopt.engine.driver import execute, prepare
@@ -230,3 +232,31 @@ def test_margin_run_names_the_case_objective_in_its_check(tmp_path):
     assert rows["yield_margin"]["reference"] is None
     assert rows["closure_time_ms"]["optimum"] == check["objective_nominal"]
     assert rows["closure_time_ms"]["reference"] > 0  # the reference design's closure time
+
+
+@pytest.mark.parametrize("config, capability", [
+    ("emb.toml", Repairable), ("fast_switch_de.toml", HasFamily),
+    ("opening_spring_pp3.toml", HasResiduals), ("vcb.toml", None)])
+def test_a_robust_problem_offers_its_cases_capability_by_a_declared_class(config, capability):
+    """wrap picks a class written in robust.py (none built at run time with type()): it is
+    Stochastic, offers the case's capability and forwards it to the case."""
+    from camopt.cases import build_problem
+
+    cfg = load(CONFIGS / config)
+    base = build_problem(cfg.case)
+    plan = robust.Plan(RobustSection(), (), (), {})
+    problem = robust.wrap(base, plan)
+    assert isinstance(problem, Stochastic)
+    assert type(problem).__module__ == "camopt.engine.robust"
+    assert type(problem) in (robust.RobustProblem, *robust.FORWARDED.values())
+    if capability is None:
+        assert type(problem) is robust.RobustProblem
+        return
+    assert isinstance(problem, capability)
+    if capability is HasFamily:
+        np.testing.assert_array_equal(problem.family(), base.family())
+    elif capability is Repairable:
+        assert problem.repair_schedule() == base.repair_schedule()
+    else:
+        X = (base.lower + base.upper)[None, :] / 2
+        np.testing.assert_array_equal(problem.residuals(X), base.residuals(X))

@@ -48,7 +48,7 @@ def test_parents_are_evaluated_again_on_each_generations_draws():
     first holds the trials and then the parents, and after tell the parents that stay
     carry their evaluation on the current draws, not a stale one from an earlier
     generation (the comparison with the trials is on the same parts)."""
-    from camopt.engine import robust
+    from camopt.core.capabilities import Stochastic
     from camopt.engine.driver import prepare
     from camopt.solvers.de_gr import DEGR, DEGROptions
     from tests.conftest import CONFIGS
@@ -56,8 +56,9 @@ def test_parents_are_evaluated_again_on_each_generations_draws():
 
     problem, _ = prepare(load(CONFIGS / "fast_switch_de.toml", "robust.samples=8",
                               "robust.screen=false"))
-    assert isinstance(problem, robust.RobustProblem) and problem.redraws_each_generation
+    assert isinstance(problem, Stochastic)
     solver = DEGR(problem, DEGROptions(population=6, generations=3), np.random.default_rng(1))
+    assert solver.redraws
     problem.reseed(np.random.SeedSequence(2))
     problem.new_generation()
     first = solver.ask()
