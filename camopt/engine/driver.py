@@ -29,6 +29,7 @@ from camopt.engine import interrupts, robust
 from camopt.engine.interrupts import deferred
 from camopt.errors import ConfigError, SolverError
 from camopt.solvers import Solver, StopReason, get_solver, solvers
+from camopt.solvers.base import Budget
 
 
 @dataclass(frozen=True)
@@ -120,6 +121,8 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
     solver = build_solver(problem, solver_cls, config, np.random.default_rng(child))
     solver.jobs = jobs
     max_nfev, max_s = config.run.max_evaluations, config.run.max_seconds
+    # the same limits for a stage that runs many evaluations in one iteration (a polish)
+    solver.budget = Budget(max_nfev, None if max_s is None else start + max_s)
     nfev, best_f, mean_f, best_v = [], [], [], []
     while (reason := _stop(solver, start, max_nfev, max_s)) is None:
         if stochastic is not None:

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import enum
+import time
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -26,6 +28,26 @@ class StopReason(str, enum.Enum):
     MAX_SECONDS = "run.max_seconds reached"
 
 
+@dataclass(frozen=True)
+class Budget:
+    """The run's limits as the driver hands them to its solver (``run.max_evaluations``,
+    and ``run.max_seconds`` as a ``time.perf_counter()`` deadline), for a stage that
+    evaluates many times inside one iteration (a polish's scipy solve): between
+    iterations the driver checks them itself."""
+
+    max_nfev: int | None = None
+    deadline: float | None = None
+
+    def spent(self, nfev: int) -> StopReason | None:
+        """Why ``nfev`` more evaluations (the run's count so far with a stage's next
+        batch) may not run, or None while both limits hold."""
+        if self.max_nfev is not None and nfev > self.max_nfev:
+            return StopReason.MAX_EVALUATIONS
+        if self.deadline is not None and time.perf_counter() >= self.deadline:
+            return StopReason.MAX_SECONDS
+        return None
+
+
 class Solver(ABC):
     """Ask/tell solver (nevergrad style). No I/O, no console; the driver owns the loop.
 
@@ -45,6 +67,8 @@ class Solver(ABC):
     jobs: int = 1
     """Worker processes the driver lends the solver (``camopt run --jobs``): an execution
     detail only, never a source of different results."""
+    budget: Budget = Budget()
+    """The run's limits, set by the driver (none by default)."""
 
     def __init__(self, problem: Problem, options: SolverOptions, rng: np.random.Generator):
         self.check(type(problem), options)

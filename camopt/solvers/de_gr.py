@@ -140,6 +140,8 @@ class DEGR(Polishing, Solver):
     def stop_reason(self) -> StopReason | None:
         if not self.budget_spent() or self.polish_pending():
             return None
+        if self.polish_stopped is not None:
+            return self.polish_stopped
         if self.nit >= self.options.generations + (self._polished is not None):
             return StopReason.BUDGET
         return StopReason.CONVERGED

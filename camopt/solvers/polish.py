@@ -5,10 +5,18 @@ the basin, a local constrained solver walks to its bottom. Two options make it a
 epsilon-constraint method as well: ``minimise`` picks one of the case's reported
 metrics as the objective, and ``limits`` caps other metrics; every case constraint
 is kept, ``margin`` inside its bound so the end point is strictly feasible.
+
+The polish is one iteration of its solver but many evaluations, so it runs under the
+run's :class:`~camopt.solvers.base.Budget` (``run.max_evaluations``, ``run.max_seconds``),
+which the driver hands the solver: every evaluation of every stage goes through a meter
+that counts them and stops the scipy solve (an exception out of its objective) before a
+batch would pass the budget or once the time is spent; the polish then ends on the best
+design it evaluated. Without a limit reached the meter changes nothing.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, Literal
 
 import numpy as np
@@ -19,7 +27,7 @@ from scipy.optimize import minimize
 from camopt.config.models import MAX_LOCAL_ITERATIONS, SolverOptions
 from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
-from camopt.solvers.base import better
+from camopt.solvers.base import Budget, StopReason, better
 
 _BAD = 1e6  # stands for a non-finite objective or constraint inside SLSQP
 
@@ -69,13 +77,70 @@ class PolishableOptions(SolverOptions):
         "SLSQP from the best design once the budget is spent")
 
 
+class _BudgetSpent(Exception):
+    """Raised by :class:`_Metered` out of a scipy solve when the run's budget is spent
+    (control flow inside :func:`polish`, never seen outside it)."""
+
+    def __init__(self, reason: StopReason) -> None:
+        super().__init__(reason.value)
+        self.reason = reason
+
+
+class _Metered(Problem):
+    """``base`` with every evaluation counted against ``budget`` (``used`` evaluations
+    already spent by the run) and the best row seen kept by Deb's rules on ``rank``'s
+    (objective, violation): a batch that would pass the budget, or any once the time is
+    spent, raises :class:`_BudgetSpent` instead of being evaluated."""
+
+    def __init__(self, base: Problem, budget: Budget, used: int,
+                 rank: Callable[[Evaluation], tuple[NDArray, NDArray]]) -> None:
+        self.base, self.budget, self.used, self.rank = base, budget, used, rank
+        self.variables = base.variables
+        self.constraint_names = base.constraint_names
+        self.objective_name = base.objective_name
+        self.count = 0
+        self.best: tuple[NDArray, NDArray, NDArray] | None = None
+
+    def evaluate(self, X: NDArray) -> Evaluation:
+        X = np.atleast_2d(X)
+        reason = self.budget.spent(self.used + self.count + len(X))
+        if reason is not None:
+            raise _BudgetSpent(reason)
+        ev = self.base.evaluate(X)
+        self.count += len(X)
+        f, v = self.rank(ev)
+        i = int(np.lexsort((f, v))[0])
+        if self.best is None or better(f[i:i + 1], v[i:i + 1], *self.best[1:])[0]:
+            self.best = (X[i].copy(), f[i:i + 1], v[i:i + 1])
+        return ev
+
+
 def polish(problem: Problem, x0: NDArray, options: PolishOptions,
            rng: np.random.Generator | None = None) -> tuple[NDArray, int, str]:
     """Polish ``x0``: SLSQP on the continuous variables; with integer variables, the
     integer-aware search of :func:`polish_mixed`. End point, evaluations, message."""
-    if problem.integer.any():
-        return polish_mixed(problem, x0, options, rng)
-    return polish_continuous(problem, x0, options, rng)
+    end, nfev, message, _ = polish_within(problem, x0, options, rng, Budget(), 0)
+    return end, nfev, message
+
+
+def polish_within(problem: Problem, x0: NDArray, options: PolishOptions,
+                  rng: np.random.Generator | None, budget: Budget, used: int
+                  ) -> tuple[NDArray, int, str, StopReason | None]:
+    """:func:`polish` under the run's ``budget``, of which ``used`` evaluations are
+    spent; one more is kept for the end point's own evaluation by the driver. End point,
+    evaluations, message, and the limit that stopped the polish (None: it ran to its
+    end, and then end point, evaluations and message are :func:`polish`'s)."""
+    metered = _Metered(problem, Budget(None if budget.max_nfev is None
+                                       else budget.max_nfev - 1, budget.deadline),
+                       used, lambda ev: _score(problem, ev, options))
+    try:
+        if problem.integer.any():
+            return (*polish_mixed(metered, x0, options, rng), None)
+        return (*polish_continuous(metered, x0, options, rng), None)
+    except _BudgetSpent as stop:
+        end = np.asarray(x0, dtype=float) if metered.best is None else metered.best[0]
+        return (end, metered.count, f"stopped: {stop.reason.value} after "
+                f"{metered.count} evaluations; the best design it evaluated", stop.reason)
 
 
 def polish_mixed(problem: Problem, x0: NDArray, options: PolishOptions,
@@ -310,9 +375,12 @@ class Polishing:
     nfev: int
     nit: int
     rng: np.random.Generator
+    budget: Budget
     _polished: tuple[NDArray, Evaluation] | None = None
     _polishing = False
     polish_message = ""
+    polish_stopped: StopReason | None = None
+    """The run's limit that stopped the polish (the solver's stop reason then)."""
 
     def __init__(self, problem: Problem, options: Any, rng: np.random.Generator) -> None:
         super().__init__(problem, options, rng)  # type: ignore[call-arg]
@@ -344,8 +412,8 @@ class Polishing:
     def polish_ask(self) -> NDArray:
         """Run the polish from the population's best; its end point, (1, n_var)."""
         x, _ = self.population_best()
-        end, nfev, self.polish_message = polish(self.problem, x, self.options.polish,
-                                                self.rng)
+        end, nfev, self.polish_message, self.polish_stopped = polish_within(
+            self.problem, x, self.options.polish, self.rng, self.budget, self.nfev)
         self.nfev += nfev
         self._polishing = True
         return end[None, :]

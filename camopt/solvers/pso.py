@@ -154,4 +154,6 @@ class PSO(Polishing, Solver):
         return self.cur_f
 
     def stop_reason(self) -> StopReason | None:
-        return StopReason.BUDGET if self.budget_spent() and not self.polish_pending() else None
+        if not self.budget_spent() or self.polish_pending():
+            return None
+        return self.polish_stopped or StopReason.BUDGET

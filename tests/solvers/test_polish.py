@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 
@@ -10,7 +12,8 @@ from camopt.core.problem import Evaluation, Variable
 from camopt.engine.driver import run_repeat
 from camopt.errors import SolverError
 from camopt.solvers import get_solver
-from camopt.solvers.polish import PolishOptions, polish
+from camopt.solvers.base import Budget, StopReason
+from camopt.solvers.polish import PolishOptions, polish, polish_within
 from tests.conftest import SphereConfig, SphereProblem
 
 
@@ -125,3 +128,49 @@ def test_polish_restores_feasibility_when_slsqp_stops_outside():
     ev = problem.evaluate(x[None, :])
     assert ev.feasible[0], message
     assert x.sum() == pytest.approx(1.0, abs=2e-4)
+
+
+class _Budgeted(_Cfg):
+    def __init__(self, name: str, max_evaluations: int, **opts):
+        super().__init__(name, **opts)
+        self.run = RunSection(max_evaluations=max_evaluations)
+
+
+@pytest.mark.parametrize("name", ["pso", "de_gr"])
+def test_run_max_evaluations_stops_a_polish(name):
+    """Five iterations of 10 spend 50 evaluations; the polish alone would spend more than
+    60. Under run.max_evaluations = 60 the scipy solve is stopped from inside: the repeat
+    spends at most 60 (the polished point's own evaluation included), says why it
+    stopped, and keeps the best design the polish evaluated (better than the search's)."""
+    problem = SphereProblem(SphereConfig())
+    args = (problem, get_solver(name))
+    seed = (np.random.SeedSequence(0), 0, 1)
+    plain = run_repeat(*args, _Cfg(name, **SHORT[name]), *seed)
+    free = run_repeat(*args, _Cfg(name, **SHORT[name], polish={}), *seed)
+    cut = run_repeat(*args, _Budgeted(name, 60, **SHORT[name], polish={}), *seed)
+    assert plain.nfev == 50 and free.nfev > 60
+    assert plain.nfev < cut.nfev <= 60
+    assert cut.message == StopReason.MAX_EVALUATIONS.value
+    assert any("stopped: run.max_evaluations reached after" in n for n in cut.notes)
+    assert cut.fun < plain.fun
+
+
+def test_a_spent_time_stops_a_polish_before_its_first_evaluation():
+    """A deadline already past: nothing is evaluated and the start comes back."""
+    problem = SphereProblem(SphereConfig(n_var=2))
+    x0 = np.array([0.1, 0.2])
+    x, nfev, message, reason = polish_within(problem, x0, PolishOptions(), None,
+                                             Budget(deadline=time.perf_counter()), 0)
+    np.testing.assert_array_equal(x, x0)
+    assert (nfev, reason) == (0, StopReason.MAX_SECONDS) and "stopped" in message
+
+
+def test_a_budget_not_reached_changes_nothing():
+    """The meter is transparent: the same end point, count and message as without it."""
+    problem = SphereProblem(SphereConfig(n_var=2))
+    x0 = np.array([0.1, 0.2])
+    free = polish(problem, x0, PolishOptions())
+    x, nfev, message, reason = polish_within(problem, x0, PolishOptions(), None,
+                                             Budget(max_nfev=10**6), 0)
+    np.testing.assert_array_equal(x, free[0])
+    assert (nfev, message, reason) == (free[1], free[2], None)
