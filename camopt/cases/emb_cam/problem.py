@@ -22,7 +22,7 @@ from camopt.core.capabilities import Repairable
 from camopt.core.problem import Evaluation, Problem, Variable
 from camopt.mechanics import polar_cam as pc
 from camopt.mechanics.spline import ClampedNaturalSpline
-from camopt.units import MM
+from camopt.units import KN, MM, MPA, SQRT_MPA
 
 BIG_VIOLATION = 1e6  # normalised violation standing for a non-finite measure
 CONSTRAINTS = ("valid", "contact_stress", "lift", "distortion", "monotonic")
@@ -134,7 +134,7 @@ class EmbCamProblem(Problem, Repairable):
         self.rg, self.r_st = c.r_g_mm * MM, c.r_st_mm * MM
         self.x1, self.x2 = c.clearance_mm * MM, c.deformation_mm * MM
         self.s_max = self.x1 + self.x2
-        self.K = c.k_kn_per_mm3 * 1e3 / MM**3  # N/m^3
+        self.K = c.k_kn_per_mm3 * KN / MM**3  # N/m^3
         self.n = n = c.key_points
         self.u = np.linspace(0, n - 1, (n - 1) * c.samples_per_segment + 1)
         self.knots = np.arange(0, self.u.size, c.samples_per_segment)
@@ -231,7 +231,7 @@ class EmbCamProblem(Problem, Repairable):
             torque = f_b * l  # Eq 14
             rho = pc.curvature_radius(r, dr, ddr)  # Eq 16
             sigma = pc.contact_stress(f_b, rho, self.rg, self.config.contact_length_mm * MM,
-                                      self.config.z_e_sqrt_mpa * 1e3)  # Eq 15
+                                      self.config.z_e_sqrt_mpa * SQRT_MPA)  # Eq 15
         return CamProfile(r, dr, theta, l, oa, s, alpha, rotation, force, torque, rho, sigma,
                           oa0, theta0, dtheta, e, kappa, r_keys)
 
@@ -291,7 +291,7 @@ class EmbCamProblem(Problem, Repairable):
         finite = np.isfinite(p.s).all(axis=1) & np.isfinite(p.rotation).all(axis=1)
         g = {
             "valid": np.where(finite & np.isfinite(f), -1.0, 1.0),  # never "active"
-            "contact_stress": m.sigma_max / (c.allowable_stress_mpa * 1e6) - 1,
+            "contact_stress": m.sigma_max / (c.allowable_stress_mpa * MPA) - 1,
             "lift": np.abs(m.lift - self.s_max) / (c.lift_tolerance_mm * MM) - 1,
             "distortion": m.rho_max / self.rg - 1,
             "monotonic": np.max(-np.diff(p.s, axis=1), axis=1) / MM,
@@ -423,7 +423,7 @@ class EmbCamProblem(Problem, Repairable):
         out = {
             "peak_torque_nm": m["peak_torque"], "clearance_angle_rad": m["clearance_angle"],
             "max_rotation_rad": m["max_rotation"], "lift_mm": m["lift"] / MM,
-            "contact_stress_max_mpa": m["sigma_max"] / 1e6,
+            "contact_stress_max_mpa": m["sigma_max"] / MPA,
             "curvature_max_mm": m["rho_max"] / MM,
             "torque_ramp_rms_pct": m["ramp_rms_pct"],
             "consistency_error_pct": float(consistency),
@@ -459,7 +459,7 @@ class EmbCamProblem(Problem, Repairable):
             "nonworking_y_mm": (a0[1] + self.rg * np.sin(sweep)) / MM,
             "rotation_rad": rot, "lift_mm": p.s / MM,
             "pressure_angle_deg": np.degrees(p.alpha), "torque_nm": p.torque,
-            "clamping_force_kn": p.force / 1e3, "curvature_mm": p.rho / MM,
-            "contact_stress_mpa": p.sigma / 1e6, "profile_angle_rad": th,
+            "clamping_force_kn": p.force / KN, "curvature_mm": p.rho / MM,
+            "contact_stress_mpa": p.sigma / MPA, "profile_angle_rad": th,
             "screw_torque_nm": screw_torque,
         }

@@ -27,7 +27,7 @@ from camopt.core.problem import Evaluation, Problem, Variable
 from camopt.errors import ConfigError
 from camopt.mechanics import dynamics, springs
 from camopt.mechanics.slider_crank import coupler_angle, coupler_derivatives, crank_angle_for_span
-from camopt.units import DEG, GPA, MM, MPA
+from camopt.units import DEG, GPA, MM, MPA, TO_DEG, TO_MM, TO_MS
 
 TWO_PI = 2.0 * np.pi
 EXACT_MAX_CALLS = 6000
@@ -44,11 +44,11 @@ PRINTED_CONSTRAINTS = ("R1", "R2", "R3", "R4", "R6", "R7", "R8a", "R9a", "R10a",
                        "R16", "R19", "R20", "R21")
 
 DESIGN_NAMES = {  # x_i -> archive name with its display unit and factor from SI
-    "x1": ("xi", 1.0), "x2": ("omega_n_rad_s", 1.0), "x3": ("sf_mm", 1e3),
-    "x4": ("sud_mm", 1e3), "x5": ("s0_mm", 1e3), "x6": ("r3_mm", 1e3), "x7": ("r2_mm", 1e3),
-    "x8": ("k_n_per_m", 1.0), "x9": ("coils", 1.0), "x10": ("g_mm", 1e3),
-    "x11": ("theta3f_deg", 180 / np.pi), "x12": ("theta30_deg", 180 / np.pi),
-    "x13": ("theta20_deg", 180 / np.pi),
+    "x1": ("xi", 1.0), "x2": ("omega_n_rad_s", 1.0), "x3": ("sf_mm", TO_MM),
+    "x4": ("sud_mm", TO_MM), "x5": ("s0_mm", TO_MM), "x6": ("r3_mm", TO_MM),
+    "x7": ("r2_mm", TO_MM), "x8": ("k_n_per_m", 1.0), "x9": ("coils", 1.0),
+    "x10": ("g_mm", TO_MM), "x11": ("theta3f_deg", TO_DEG), "x12": ("theta30_deg", TO_DEG),
+    "x13": ("theta20_deg", TO_DEG),
 }
 
 
@@ -163,15 +163,15 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         self.variables = (
             Variable("coils", config.min_coils, config.max_coils, 1.0, True, "x9"),
             Variable("sf_mm", config.sf_bounds_mm.lower * MM, config.sf_bounds_mm.upper * MM,
-                     1e3, symbol="x3"),
+                     TO_MM, symbol="x3"),
             Variable("sud_mm", config.sud_bounds_mm.lower * MM, config.sud_bounds_mm.upper * MM,
-                     1e3, symbol="x4"),
+                     TO_MM, symbol="x4"),
             Variable("s0_mm", config.s0_bounds_mm.lower * MM, config.s0_bounds_mm.upper * MM,
-                     1e3, symbol="x5"),
+                     TO_MM, symbol="x5"),
             Variable("r3_mm", config.r3_bounds_mm.lower * MM, config.r3_bounds_mm.upper * MM,
-                     1e3, symbol="x6"),
+                     TO_MM, symbol="x6"),
             Variable("r2_mm", config.r2_bounds_mm.lower * MM, config.r2_bounds_mm.upper * MM,
-                     1e3, symbol="x7"),
+                     TO_MM, symbol="x7"),
         )
         printed = config.reduced_form == "printed"
         self.constraint_names = PRINTED_CONSTRAINTS if printed else CORRECTED_CONSTRAINTS
@@ -295,7 +295,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
             f, g = self._printed(x)
         else:
             f, g = self._corrected(x, full)
-        f = np.where(np.isfinite(f), f, np.inf) * 1e3
+        f = np.where(np.isfinite(f), f, np.inf) * TO_MS
         extras = {"closure_time_ms": f,
                   "spring_stress_margin_pct": -100.0 * np.maximum(full["R14"], full["R15"])}
         return Evaluation(f=f, g=g, extras=extras), x
@@ -381,7 +381,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
             exact = self.exact_closure(x)
             out["exact_dynamics"] = ("computed" if not exact.capped else
                                      f"capped: not closed within {EXACT_MAX_CALLS} ODE calls")
-            out["closure_time_exact_ms"] = exact.time * 1e3
+            out["closure_time_exact_ms"] = exact.time * TO_MS
             out["closure_speed_rad_s"] = exact.speed
         g_full, _ = self.full_model(self.complete(np.atleast_2d(x)))
         out["full_model_feasible"] = float(all(v[0] <= 1e-9 for v in g_full.values()))
@@ -433,5 +433,5 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         r2, r3, g = v["x7"], v["x6"], v["x10"]
         th3 = coupler_derivatives(r2, r3, travel.q)[0]
         s = g - self.p.p4 - r2 * np.cos(travel.q) - r3 * np.cos(th3)
-        return {"time_ms": travel.t * 1e3, "theta2_deg": np.degrees(travel.q),
-                "theta2_rate_rad_s": travel.qdot, "spring_length_mm": s * 1e3}
+        return {"time_ms": travel.t * TO_MS, "theta2_deg": np.degrees(travel.q),
+                "theta2_rate_rad_s": travel.qdot, "spring_length_mm": s * TO_MM}

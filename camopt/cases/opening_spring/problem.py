@@ -25,11 +25,11 @@ from scipy.integrate import solve_ivp
 from camopt.cases.opening_spring.config import OpeningSpringConfig
 from camopt.core.capabilities import HasResiduals
 from camopt.core.problem import Evaluation, Problem, Variable
-from camopt.units import MM, MS
+from camopt.units import MM, MS, N_PER_MM
 
 # parameter -> (config bounds field, factor from the TOML unit to SI)
 PARAMETERS = {
-    "k_n_per_mm": ("k_bounds_n_per_mm", 1e3),
+    "k_n_per_mm": ("k_bounds_n_per_mm", N_PER_MM),
     "l0_mm": ("l0_bounds_mm", MM),
     "u_mm": ("u_bounds_mm", MM),
     "v_mm": ("v_bounds_mm", MM),
