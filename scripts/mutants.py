@@ -20,7 +20,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 TESTS = ["tests/mechanics", "tests/cases", "tests/engine/test_sweep.py", "tests/solvers",
-         "tests/core/test_stats.py", "tests/engine/test_driver.py", "tests/core/test_record.py"]
+         "tests/core/test_stats.py", "tests/engine/test_driver.py", "tests/core/test_record.py",
+         "tests/engine/test_robust.py", "tests/reporting/test_tolerance_figures.py"]
 
 # name: (file, original text, mutated text); each original must occur exactly once
 MUTANTS: dict[str, tuple[str, str, str]] = {
@@ -123,6 +124,23 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
                              "return w_min + iteration / iterations"),
     "pso_inertia_constant": ("camopt/solvers/pso.py", "return w_max - iteration / iterations "
                              "* (w_max - w_min)", "return w_max"),
+    # robust design: a candidate not sampled (nominally infeasible) ranks behind every
+    # sampled one (issue #37: survived every test)
+    "robust_screened_offset": ("camopt/engine/robust.py",
+                               "np.column_stack([nom_g, SCREENED + np.maximum(nom_worst, 0.0)])",
+                               "np.column_stack([nom_g, np.maximum(nom_worst, 0.0)])"),
+    # the tolerance tornado's +X bar at the input's +X value (issue #37: survived every test)
+    "tornado_plus_at_minus": ("camopt/reporting/tolerance_figures.py",
+                              '(("low", "tab:blue"), ("high", "tab:orange"))',
+                              '(("low", "tab:blue"), ("low", "tab:orange"))'),
+    "tornado_ends_swapped": ("camopt/reporting/tolerance_figures.py",
+                             "{'-' if end == 'low' else '+'}X", "{'+' if end == 'low' else '-'}X"),
+    # the polish under the run's budget (issue #37)
+    "polish_unmetered": ("camopt/solvers/polish.py",
+                         "reason = self.budget.spent(self.used + self.count + len(X))",
+                         "reason = None"),
+    "polish_no_reserve": ("camopt/solvers/polish.py", "else budget.max_nfev - 1, budget.deadline)",
+                          "else budget.max_nfev, budget.deadline)"),
     # statistics
     "stats_mw_direction": ("camopt/core/stats.py", "p_a_better = 1.0 - float(res.statistic)",
                            "p_a_better = float(res.statistic)"),
@@ -147,6 +165,9 @@ MIRROR = {
     "camopt/solvers/de_gr.py": ["tests/solvers/test_de_gr.py"],
     "camopt/solvers/pso.py": ["tests/solvers/test_pso.py"],
     "camopt/core/stats.py": ["tests/core/test_stats.py"],
+    "camopt/engine/robust.py": ["tests/engine/test_robust.py"],
+    "camopt/reporting/tolerance_figures.py": ["tests/reporting/test_tolerance_figures.py"],
+    "camopt/solvers/polish.py": ["tests/solvers/test_polish.py"],
 }
 
 

@@ -11,7 +11,7 @@ import pytest
 
 from camopt.config.models import RobustSection
 from camopt.core.capabilities import HasFamily, HasResiduals, Repairable, Stochastic
-from camopt.core.problem import FEASIBILITY_TOL
+from camopt.core.problem import FEASIBILITY_TOL, deb_best
 from camopt.engine import robust
 from camopt.engine.driver import execute, prepare
 from camopt.errors import ConfigError
@@ -260,3 +260,28 @@ def test_a_robust_problem_offers_its_cases_capability_by_a_declared_class(config
     else:
         X = (base.lower + base.upper)[None, :] / 2
         np.testing.assert_array_equal(problem.residuals(X), base.residuals(X))
+
+
+def test_a_screened_candidate_ranks_behind_every_sampled_one():
+    """With screen, a candidate whose nominal design breaks a constraint is not sampled:
+    its columns are its nominal constraints and its yield column its nominal worst
+    constraint plus SCREENED (1e6, engine/robust.py's docstring), so by Deb's rules it
+    ranks behind a nominally feasible candidate however badly that one's draws fail."""
+    problem = _problem("robust.screen=true")
+    problem.new_generation()
+    X = np.vstack([_near_optimum(problem, n=4), problem.sample(np.random.default_rng(5), 40)])
+    X[:, 0] = np.rint(X[:, 0])
+    nominal = problem.base.evaluate(X)
+    out = np.flatnonzero(~nominal.feasible)
+    sampled = np.flatnonzero(nominal.feasible)
+    assert out.size and sampled.size
+    ev = problem.evaluate(X)
+    g = np.where(np.isnan(nominal.g), np.inf, nominal.g)  # NaN: infinitely violated
+    worst = np.where(np.isfinite(nominal.f), g.max(axis=1), np.inf)  # no objective: worst
+    np.testing.assert_array_equal(ev.g[out, -1],
+                                  robust.SCREENED + np.maximum(worst[out], 0.0))
+    np.testing.assert_array_equal(ev.g[out, :-1], g[out])
+    assert np.isnan(ev.extras["yield"][out]).all()
+    assert ev.violation[out].min() > ev.violation[sampled][
+        np.isfinite(ev.violation[sampled])].max()
+    assert deb_best(ev.f, ev.violation) in sampled
