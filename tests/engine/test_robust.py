@@ -285,3 +285,23 @@ def test_a_screened_candidate_ranks_behind_every_sampled_one():
     assert ev.violation[out].min() > ev.violation[sampled][
         np.isfinite(ev.violation[sampled])].max()
     assert deb_best(ev.f, ev.violation) in sampled
+
+
+def test_a_case_with_two_forwarded_capabilities_is_refused_as_bad_input():
+    """No declared class offers repair and a family together: bad input naming both,
+    never a class made up at run time."""
+    from camopt.core.problem import Problem
+
+    class Both(Problem, Repairable, HasFamily):
+        def repair(self, X, rng, probability):
+            return X
+
+        def repair_schedule(self):
+            return {}
+
+        def family(self):
+            return np.zeros((0, 0))
+
+    with pytest.raises(ConfigError, match=r"case\.toml: robust: a case offering repair, "
+                       "family together"):
+        robust.wrap(Both(), robust.Plan(RobustSection(), (), (), {}), "case.toml")
