@@ -82,3 +82,21 @@ def test_a_run_record_survives_its_archive(tmp_path):
         assert (a.fun, a.success, a.message, a.nfev, a.nit, a.seed, a.nfev_to_target) == \
             (b.fun, b.success, b.message, b.nfev, b.nit, b.seed, b.nfev_to_target)
         assert a.nfev_to_target == _first_hit(a.history, 18.2)
+
+
+def test_a_run_record_is_archived_from_its_plain_fields_alone(tmp_path):
+    """The archive reads the record's names, scales and constraint names, never the live
+    Problem: without it the archive is the same, and it holds the record's fields."""
+    import dataclasses
+
+    rec = execute(load(CONFIGS / "fast_switch_de.toml", "solver.generations=2",
+                       "solver.population=6", "run.repeats=1"))
+    assert rec.problem is not None
+    assert rec.names == rec.problem.names and rec.objective_name == "closure_time_ms"
+    np.testing.assert_array_equal(rec.scale, rec.problem.scale)
+    view = load_run(write_run(dataclasses.replace(rec, problem=None), tmp_path / "a.h5"))
+    assert view.variables == rec.names and view.constraints == rec.constraint_names
+    assert view.objective_name == rec.objective_name
+    with h5py.File(tmp_path / "a.h5", "r") as f:
+        np.testing.assert_array_equal(f.attrs["variable_scale"], rec.scale)
+        np.testing.assert_array_equal(f["best/x"][()], rec.best.x * rec.scale)
