@@ -39,8 +39,8 @@ class Budget:
     deadline: float | None = None
 
     def spent(self, nfev: int) -> StopReason | None:
-        """Why ``nfev`` more evaluations (the run's count so far with a stage's next
-        batch) may not run, or None while both limits hold."""
+        """Why a stage may not go on to ``nfev`` evaluations in all (the run's count so
+        far plus the stage's next batch), or None while both limits hold."""
         if self.max_nfev is not None and nfev > self.max_nfev:
             return StopReason.MAX_EVALUATIONS
         if self.deadline is not None and time.perf_counter() >= self.deadline:
