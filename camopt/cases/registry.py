@@ -25,6 +25,7 @@ from camopt.errors import ConfigError
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+    from camopt.core.calibration import CalibrationReport, CalibrationRequest
     from camopt.core.runview import RunView
 
 ENTRY_POINT_GROUP = "camopt.cases"
@@ -122,6 +123,9 @@ class CaseSpec:
     reference_values: Mapping[str, Any] = field(default_factory=dict)
     """The reference design's values by the run's names when the case does not report
     them as ``initial_``/``original_`` metrics (a paper's optimum)."""
+    calibration: str | None = None
+    """``"module:function"`` that calibrates the case on measured curves (``camopt
+    calibrate``, :mod:`camopt.core.calibration`); None: the case has none."""
 
     def class_names(self) -> tuple[str, ...]:
         """Every tolerance class of the case, cheapest (loosest) first; the default class
@@ -149,6 +153,16 @@ class CaseSpec:
     def build(self, config: CaseConfig) -> Problem:
         """The case's Problem for a validated config of this kind."""
         return self.problem(config)  # type: ignore[call-arg]
+
+    def calibrate(self, config: CaseConfig, request: CalibrationRequest
+                  ) -> CalibrationReport:
+        """Calibrate the case on measured curves; a case without a calibration is a
+        ConfigError naming its kind."""
+        if self.calibration is None:
+            raise ConfigError("case", "kind", f"{self.kind!r} has no calibration on "
+                              "measured curves")
+        module, _, name = self.calibration.partition(":")
+        return getattr(importlib.import_module(module), name)(config, request)
 
     def draw(self, run: RunView) -> dict[str, Figure]:
         """The case's figures of a loaded run (empty when the case draws none)."""

@@ -6,6 +6,7 @@ import os
 import sys
 
 from camopt.cli import (  # noqa: F401  (commands)
+    calibrate,
     catalog,
     compare,
     listing,

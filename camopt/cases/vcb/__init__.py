@@ -72,6 +72,7 @@ VCB = register_case(CaseSpec(
     resolve=resolve_cam_archive, tolerances=TOLERANCES,
     tolerance_classes=TOLERANCE_CLASSES, requirements=requirements,
     reference="vendor, Sec 2.3 and Table 2",
+    calibration="camopt.cases.vcb.calibration_report:run",
 ))
 VCB_IDENTIFY = register_case(CaseSpec(
     kind="vcb_identify", config=VcbIdentifyConfig, problem=VcbIdentification,

@@ -1,0 +1,257 @@
+"""``camopt calibrate`` for the VCB case: the request read into curves and designs, the
+calibration run (:mod:`camopt.cases.vcb.calibrate`) and its report (JSON, text lines and
+the case fragment ``--out`` writes).
+
+Per-curve settings (``--set KEY=VALUE`` after a ``--curve``) name the curve's design where
+it is not the case's reference design: ``kc1_n_per_mm``, ``kc2_n_per_mm`` (the closing
+springs), ``a1``, ``a2``, ``a3`` (the follower law's coefficients; a0 stays the case's
+Eq 8 value), and ``latch_delay_ms`` (measured: the delay is then not fitted for this
+curve) and ``label``. A design to predict (``--predict``) takes the same keys, joined by
+commas.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from camopt.cases.vcb.calibrate import (
+    FORMS,
+    CurveCase,
+    Design,
+    FormFit,
+    calibrate,
+)
+from camopt.cases.vcb.config import VcbConfig
+from camopt.cases.vcb.curves import AnalyserQuantities, VelocityPoints, read_curve
+from camopt.cases.vcb.model import VcbModel
+from camopt.config.models import CaseConfig
+from camopt.core.calibration import CalibrationRequest
+from camopt.errors import ConfigError
+from camopt.units import MM, MS
+
+DESIGN_KEYS = ("kc1_n_per_mm", "kc2_n_per_mm", "a1", "a2", "a3", "label")
+CURVE_KEYS = (*DESIGN_KEYS, "latch_delay_ms")
+REFERENCE_LABEL = "reference"
+INTERVALS = ("profile likelihood, 95 % (chi2(1) / 2 = 1.92 times the reduced chi-square "
+             "rise of the robust cost)")
+
+
+def _settings(items: Sequence[str], keys: Sequence[str], where: str
+              ) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        key = key.strip()
+        if not sep or not value.strip():
+            raise ConfigError(where, item, "expected KEY=VALUE")
+        if key not in keys:
+            raise ConfigError(where, key, f"unknown; expected one of {', '.join(keys)}")
+        out[key] = value.strip()
+    return out
+
+
+def _number(value: str, key: str, where: str, positive: bool = True) -> float:
+    try:
+        v = float(value)
+    except ValueError:
+        raise ConfigError(where, key, f"not a number: {value!r}") from None
+    if not np.isfinite(v) or (positive and v <= 0):
+        raise ConfigError(where, key, f"{value}: must be a finite positive number")
+    return v
+
+
+def design_of(config: VcbConfig, model: VcbModel, settings: dict[str, str], where: str
+              ) -> Design:
+    """The case's reference design with ``settings`` replacing its springs or follower
+    law (SI rates)."""
+    kc = np.array([config.kc1_n_per_mm, config.kc2_n_per_mm])
+    a = model.vendor_a.copy()
+    changed = []
+    for i, key in enumerate(("kc1_n_per_mm", "kc2_n_per_mm")):
+        if key in settings:
+            kc[i] = _number(settings[key], key, where)
+            changed.append(f"{key.split('_')[0]}={kc[i]:g}")
+    for i, key in enumerate(("a1", "a2", "a3"), start=1):
+        if key in settings:
+            a[i] = _number(settings[key], key, where, positive=False)
+            changed.append(f"{key}={a[i]:g}")
+    label = settings.get("label") or (" ".join(changed) if changed else REFERENCE_LABEL)
+    return Design(label, a, kc / MM)  # N/mm -> N/m
+
+
+def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport:
+    """Read the curves, calibrate every requested form, predict the designs."""
+    assert isinstance(config, VcbConfig)
+    if not request.curves:
+        raise ConfigError("--curve", "--curve", "give at least one curve file")
+    unknown = [f for f in request.forms if f not in FORMS]
+    if unknown:
+        raise ConfigError("--form", unknown[0], f"unknown model form; known: "
+                          f"{', '.join(FORMS)}")
+    model = VcbModel(config)
+    curves = []
+    for c in request.curves:
+        where = str(c.path)
+        settings = _settings(c.settings, CURVE_KEYS, where)
+        delay = settings.pop("latch_delay_ms", None)
+        curves.append(CurveCase(read_curve(c.path), design_of(config, model, settings, where),
+                                None if delay is None
+                                else _number(delay, "latch_delay_ms", where, False) * MS))
+    designs = [design_of(config, model, {}, "case")] + [c.design for c in curves] + [
+        design_of(config, model, _settings(p.split(","), DESIGN_KEYS, "--predict"),
+                  "--predict") for p in request.predict]
+    unique: dict[str, Design] = {}
+    for d in designs:
+        unique.setdefault(d.label, d)
+    points = None
+    if request.velocity_points_mm is not None:
+        low, high = request.velocity_points_mm
+        if not 0 < low < high:
+            raise ConfigError("--velocity-points", f"{low:g},{high:g}",
+                              "need 0 < low < high (travel in mm)")
+        points = VelocityPoints(low * MM, high * MM)
+    forms = [FORMS[f] for f in request.forms] or list(FORMS.values())
+    fits = calibrate(config, curves, forms, list(unique.values()), points)
+    used = points or VelocityPoints.last_third(config.contact_gap_mm * MM)
+    return VcbCalibrationReport(fits, used, config.follower_inertia_kg_m2)
+
+
+def _quantities(q: AnalyserQuantities) -> dict[str, Any]:
+    def mm(v: float | None) -> float | None:
+        return None if v is None else v / MM
+    return {"closing_time_ms": None if q.closing_time is None else q.closing_time / MS,
+            "contact_velocity_m_s": q.contact_velocity, "total_travel_mm": mm(q.total_travel),
+            "contact_wipe_mm": mm(q.contact_wipe), "over_travel_mm": mm(q.over_travel),
+            "rebound_mm": mm(q.rebound), "notes": list(q.notes)}
+
+
+@dataclass(frozen=True)
+class VcbCalibrationReport:
+    """The fits of every form (:class:`~camopt.core.calibration.CalibrationReport`)."""
+
+    fits: tuple[FormFit, ...]
+    points: VelocityPoints
+    follower_kg_m2: float
+
+    def to_json(self) -> dict[str, Any]:
+        forms = []
+        for f in self.fits:
+            names = [p.name for p in f.parameters]
+            forms.append({
+                "form": f.form, "description": f.description, "rms_mm": f.rms / MM,
+                "intervals": INTERVALS,
+                "parameters": [{"name": p.name, "unit": p.unit, "value": p.value,
+                                "low": p.low, "high": p.high, "identified": p.identified}
+                               for p in f.parameters],
+                "correlation": {"names": names, "matrix": np.round(f.correlation, 4).tolist()},
+                "curves": [{"file": c.source, "design": c.design,
+                            "latch_delay_ms": c.latch_delay / MS, "rms_mm": c.rms / MM,
+                            "residual_max_mm": float(np.max(np.abs(c.fitted - c.measured)))
+                            / MM, "samples": len(c.time),
+                            "measured": _quantities(c.measured_quantities),
+                            "fitted": _quantities(c.fitted_quantities)} for c in f.curves],
+                "predictions": [{"design": p.design,
+                                 "closing_velocity_m_s": {"value": p.closing_velocity,
+                                                          "low": p.closing_velocity_low,
+                                                          "high": p.closing_velocity_high},
+                                 "touch_time_from_release_ms": {
+                                     "value": p.touch_time / MS, "low": p.touch_time_low / MS,
+                                     "high": p.touch_time_high / MS}}
+                                for p in f.predictions],
+            })
+        return {"velocity_points_mm": [self.points.low / MM, self.points.high / MM],
+                "forms": forms}
+
+    def lines(self) -> list[str]:
+        out = [f"contact velocity between {self.points.low / MM:.3g} and "
+               f"{self.points.high / MM:.3g} mm of travel; intervals: {INTERVALS}"]
+        for f in self.fits:
+            out += ["", f"form {f.form}: {f.description}",
+                    f"  RMS misfit {f.rms / MM:.4f} mm over {len(f.curves)} curve(s)",
+                    f"  {'parameter':<22}{'value':>12}{'low':>12}{'high':>12}  identified"]
+            for p in f.parameters:
+                out.append(f"  {p.name:<22}{p.value:>12.5g}{p.low:>12.5g}{p.high:>12.5g}  "
+                           f"{'yes' if p.identified else 'NO (the curves do not fix it)'}")
+            names = [p.name for p in f.parameters]
+            k = len(names)
+            pairs = sorted(((abs(f.correlation[i, j]), names[i], names[j], f.correlation[i, j])
+                            for i in range(k) for j in range(i + 1, k)), reverse=True)[:3]
+            out.append("  strongest correlations: " + "; ".join(
+                f"{a} / {b} {c:+.3f}" for _, a, b, c in pairs))
+            for c in f.curves:
+                out.append(f"  curve {c.source} ({c.design}): RMS {c.rms / MM:.4f} mm, largest "
+                           f"residual {np.max(np.abs(c.fitted - c.measured)) / MM:.4f} mm, "
+                           f"latch delay {c.latch_delay / MS:.3f} ms")
+                out += _side_by_side(c.measured_quantities, c.fitted_quantities)
+            out.append(f"  {'prediction':<22}{'v_close m/s':>12}{'low':>8}{'high':>8}"
+                       f"{'t_touch ms':>12}{'low':>8}{'high':>8}  (touch: from the release)")
+            for p in f.predictions:
+                out.append(f"  {p.design:<22}{p.closing_velocity:>12.4f}"
+                           f"{p.closing_velocity_low:>8.4f}{p.closing_velocity_high:>8.4f}"
+                           f"{p.touch_time / MS:>12.3f}{p.touch_time_low / MS:>8.3f}"
+                           f"{p.touch_time_high / MS:>8.3f}")
+        return out
+
+    def fragment(self, extends: str) -> str:
+        best = min(self.fits, key=lambda f: f.rms)
+        values = {p.name: p for p in best.parameters}
+        lines = [f"# camopt calibrate: form {best.form} ({best.description}),",
+                 f"# RMS misfit {best.rms / MM:.4f} mm on "
+                 + ", ".join(c.source for c in best.curves) + ".",
+                 f"# intervals: {INTERVALS}.",
+                 f"extends = {_toml_string(extends)}", "", "[case]"]
+        for p in best.parameters:
+            mark = "" if p.identified else "  NOT identified by the curves"
+            if p.name in VcbConfig.model_fields:
+                lines.append(f"{p.name} = {p.value:.6g}    # 95 %: {p.low:.4g} .. "
+                             f"{p.high:.4g} {p.unit}{mark}")
+            else:
+                lines.append(f"# {p.name} = {p.value:.6g} (95 %: {p.low:.4g} .. "
+                             f"{p.high:.4g} {p.unit}; not a case field){mark}")
+        rows = _band_rows(best, self.follower_kg_m2, values)
+        lines.append("# parameter sets inside the intervals (profiles' extremes):")
+        lines.append("# (J_cam kg m^2, J_f kg m^2, m_rod kg, m_c kg, release offset deg, "
+                     "friction N m)")
+        lines.append("dynamics_band = [")
+        lines += [f"  [{', '.join(f'{v:.6g}' for v in r)}]," for r in rows]
+        lines.append("]")
+        return "\n".join(lines) + "\n"
+
+
+def _toml_string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _band_rows(fit: FormFit, follower: float, values: dict) -> list[list[float]]:
+    """The band's extremes per parameter (at most 2 P rows, the fit's first) as
+    ``dynamics_band`` rows; the form's parameters are today's five."""
+    band = fit.band
+    pick = np.unique(np.r_[0, np.argmin(band, axis=0), np.argmax(band, axis=0)])
+    order = ("cam_inertia_kg_m2", "rod_mass_kg", "contacts_mass_kg", "release_offset_deg",
+             "cam_friction_nm")
+    names = [p.name for p in fit.parameters][: band.shape[1]]
+    cols = [names.index(n) for n in order]
+    rows = []
+    for i in pick[:64]:
+        r = band[i, cols]
+        rows.append([r[0], follower, r[1], r[2], r[3], r[4]])
+    return rows
+
+
+def _side_by_side(m: AnalyserQuantities, s: AnalyserQuantities) -> list[str]:
+    a, b = _quantities(m), _quantities(s)
+    out = [f"    {'analyser quantity':<24}{'measured':>12}{'model':>12}"]
+    for key in ("closing_time_ms", "contact_velocity_m_s", "total_travel_mm",
+                "contact_wipe_mm", "over_travel_mm", "rebound_mm"):
+        out.append(f"    {key:<24}{_cell(a[key]):>12}{_cell(b[key]):>12}")
+    out += [f"    note (model): {n}" for n in s.notes]
+    out += [f"    note (measured): {n}" for n in m.notes]
+    return out
+
+
+def _cell(v: float | None) -> str:
+    return "n/a" if v is None else f"{v:.4g}"

@@ -1,0 +1,231 @@
+"""Measured travel curves (a breaker analyser's export) and the analyser's quantities.
+
+A curve file is CSV with a header naming a time column (``time_ms`` or ``time_s``) and a
+travel column (``travel_mm`` or ``travel_m``); other columns (an analyser's further
+channels) are ignored. Time runs from the close command; travel from the opened rest.
+:func:`read_curve` refuses, as one :class:`~camopt.errors.ConfigError` naming the file,
+what a fit could not trust: no header, a malformed row, NaN, times that do not increase,
+travel in metres typed into a ``_mm`` column, a curve that never moves, and a curve longer
+than :data:`MAX_SAMPLES` samples or :data:`MAX_DURATION_S`.
+
+:func:`analyse` computes the analyser's quantities (``shared/reference/breaker-analyser.md``)
+from any sampled curve, measured or simulated, the same way: closing time (command to the
+touch), the average contact velocity between two calculation points on the travel, total
+travel, contact wipe, over-travel and rebound. Without a contact channel the touch is
+where the travel reaches the case's contact gap (``contact_gap_mm``), as the model has it.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from camopt.errors import ConfigError
+from camopt.units import MM, MS
+
+MAX_SAMPLES = 200_000
+"""Samples a curve may have (an analyser records a closing at 10-20 kHz for ~0.1 s)."""
+MAX_DURATION_S = 1.0
+"""Longest curve (s): a VCB closes in ~50 ms; seconds typed into ``time_ms`` exceed it."""
+MIN_STROKE_MM = 1.0
+"""A curve that moves (well above its noise) by less than this many mm is taken as metres
+in a ``_mm`` column: no breaker's drive travels less than a millimetre."""
+TIME_COLUMNS = {"time_ms": MS, "time_s": 1.0}
+TRAVEL_COLUMNS = {"travel_mm": MM, "travel_m": 1.0}
+
+
+@dataclass(frozen=True)
+class TravelCurve:
+    """One measured closing: ``time`` from the close command (s, (m,), increasing) and
+    ``travel`` from the opened rest (m, (m,)): the file's travel less the median of the
+    samples before the motion starts (the transducer's zero). ``noise`` is the sample
+    noise (m, standard deviation) estimated from second differences (robust: MAD), and
+    ``source`` the file it came from."""
+
+    source: str
+    time: NDArray
+    travel: NDArray
+    noise: float
+
+
+def noise_level(y: NDArray) -> float:
+    """Standard deviation of white noise on a smooth sampled signal, from its second
+    differences (var(d2) = 6 sigma^2) by the median absolute deviation (robust to the
+    few large steps where the motion starts and stops)."""
+    d2 = np.diff(y, 2)
+    if d2.size == 0:
+        return 0.0
+    mad = float(np.median(np.abs(d2 - np.median(d2))))
+    return 1.4826 * mad / math.sqrt(6.0)
+
+
+def motion_start(travel: NDArray, noise: float) -> int:
+    """Index of the first sample where the curve has left its rest for good: above the
+    first sample by 5 noise levels and 2 % of its stroke (0 if it starts moving)."""
+    span = float(np.max(travel) - travel[0])
+    above = travel - travel[0] > max(5 * noise, 0.02 * span)
+    return int(np.argmax(above)) if above.any() else len(travel)
+
+
+def read_curve(path: str | Path) -> TravelCurve:
+    """The travel curve in a CSV file (module docstring), in SI; bad input is a
+    ConfigError ``<file>: <where>: <what>``."""
+    path = Path(path)
+    name = str(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise ConfigError(name, "--curve", "no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(name, "--curve", f"cannot read ({getattr(exc, 'strerror', None) or exc})"
+                          ) from None
+    rows = [r for r in csv.reader(text.splitlines()) if r and any(f.strip() for f in r)]
+    if not rows:
+        raise ConfigError(name, "line 1", "empty file; expected a header time_ms,travel_mm")
+    header = [h.strip().lower() for h in rows[0]]
+    wanted = "a header naming time_ms or time_s and travel_mm or travel_m"
+    if all(_is_number(h) for h in header):
+        raise ConfigError(name, "line 1", f"no header: {wanted}")
+    time_col = [h for h in header if h in TIME_COLUMNS]
+    travel_col = [h for h in header if h in TRAVEL_COLUMNS]
+    if len(time_col) != 1 or len(travel_col) != 1:
+        raise ConfigError(name, "line 1", f"columns {', '.join(header)}: need {wanted} "
+                          "(one of each)")
+    it, ix = header.index(time_col[0]), header.index(travel_col[0])
+    if len(rows) - 1 > MAX_SAMPLES:
+        raise ConfigError(name, "--curve", f"{len(rows) - 1} samples, more than "
+                          f"{MAX_SAMPLES}: too long a curve (crop it to the closing)")
+    data = np.empty((len(rows) - 1, 2))
+    for k, row in enumerate(rows[1:]):
+        line = k + 2
+        if len(row) != len(header):
+            raise ConfigError(name, f"line {line}", f"{len(row)} fields, the header has "
+                              f"{len(header)}")
+        for j, col in enumerate((it, ix)):
+            try:
+                v = float(row[col])
+            except ValueError:
+                raise ConfigError(name, f"line {line}", f"{header[col]}: not a number: "
+                                  f"{row[col].strip()!r}") from None
+            if not math.isfinite(v):
+                raise ConfigError(name, f"line {line}", f"{header[col]}: {v} (every sample "
+                                  "must be a finite number)")
+            data[k, j] = v
+    if len(data) < 10:
+        raise ConfigError(name, "--curve", f"{len(data)} samples: too few for a travel curve")
+    time = data[:, 0] * TIME_COLUMNS[time_col[0]]
+    travel = data[:, 1] * TRAVEL_COLUMNS[travel_col[0]]
+    step = np.diff(time)
+    if np.any(step <= 0):
+        k = int(np.argmax(step <= 0))
+        what = "repeats" if step[k] == 0 else "goes back from"
+        raise ConfigError(name, f"line {k + 3}", f"{time_col[0]} {data[k + 1, 0]:g} {what} "
+                          f"{data[k, 0]:g} on the line before: times must increase")
+    if time[-1] - time[0] > MAX_DURATION_S:
+        raise ConfigError(name, time_col[0], f"the curve lasts {time[-1] - time[0]:g} s, more "
+                          f"than {MAX_DURATION_S:g} s: too long a curve (seconds in a _ms "
+                          "column?)")
+    noise = noise_level(travel)
+    start = motion_start(travel, noise)
+    span = float(np.max(travel) - np.min(travel))
+    if start >= len(travel) or span <= 10 * noise or np.max(travel) - travel[0] <= 10 * noise:
+        raise ConfigError(name, travel_col[0], f"the curve never moves (it spans "
+                          f"{span / TRAVEL_COLUMNS[travel_col[0]]:g} within its noise)")
+    if span < MIN_STROKE_MM * MM:
+        unit = travel_col[0].split("_")[-1]
+        raise ConfigError(name, travel_col[0], f"the travel spans {span / TRAVEL_COLUMNS[travel_col[0]]:g} "
+                          f"{unit}, under {MIN_STROKE_MM:g} mm: "
+                          + ("metres in a _mm column? name it travel_m" if unit == "mm"
+                             else "not a breaker's stroke"))
+    rest = float(np.median(travel[: max(start, 1)]))
+    return TravelCurve(name, time, travel - rest, noise)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+@dataclass(frozen=True)
+class VelocityPoints:
+    """The two calculation points of the contact velocity, as travel (m) from the opened
+    rest: the average velocity is (high - low) / (time at high - time at low), each time
+    where the curve first reaches its point. Kang 2023 Sec 2.1's is the last third of the
+    contact stroke: from 2/3 of the gap to the touch (:meth:`last_third`)."""
+
+    low: float
+    high: float
+
+    @classmethod
+    def last_third(cls, gap: float) -> VelocityPoints:
+        """From 2/3 of the contact gap to the touch (Sec 2.1's closing velocity)."""
+        return cls(2 * gap / 3, gap)
+
+
+@dataclass(frozen=True)
+class AnalyserQuantities:
+    """A breaker analyser's quantities of one closing (SI; ``None``: not computable from
+    this curve, with the reason in ``notes``). ``closing_time`` command to touch (s);
+    ``contact_velocity`` between the calculation points (m/s); ``total_travel`` rest to
+    the furthest point (m); ``contact_wipe`` travel beyond the touch (m, total travel
+    less the gap); ``over_travel`` furthest point less the final rest (m); ``rebound``
+    furthest point less the lowest point after it (m)."""
+
+    closing_time: float | None
+    contact_velocity: float | None
+    total_travel: float
+    contact_wipe: float | None
+    over_travel: float | None
+    rebound: float | None
+    notes: tuple[str, ...] = ()
+
+
+def first_time_at(time: NDArray, travel: NDArray, level: float) -> float | None:
+    """Time (s) the curve first reaches ``level`` (m), linearly between samples; None if
+    it never does."""
+    above = travel >= level
+    if not above.any():
+        return None
+    k = int(np.argmax(above))
+    if k == 0:
+        return float(time[0])
+    t0, t1, s0, s1 = time[k - 1], time[k], travel[k - 1], travel[k]
+    return float(t0 + (level - s0) / (s1 - s0) * (t1 - t0))
+
+
+def analyse(time: NDArray, travel: NDArray, gap: float, points: VelocityPoints,
+            rebounds: bool = True) -> AnalyserQuantities:
+    """The analyser's quantities of one sampled closing, ``time`` (s) from the command
+    and ``travel`` (m) from rest, (m,) each. ``rebounds`` False: the curve comes from a
+    model whose closing ends at rest on the latch (no elastic stop), so over-travel and
+    rebound are not computed (None, said in ``notes``). The final rest is the median of
+    the last 5 % of the samples."""
+    notes: list[str] = []
+    t_touch = first_time_at(time, travel, gap)
+    t_low, t_high = (first_time_at(time, travel, p) for p in (points.low, points.high))
+    velocity = None
+    if t_low is not None and t_high is not None and t_high > t_low:
+        velocity = (points.high - points.low) / (t_high - t_low)
+    else:
+        notes.append("the curve does not pass both velocity calculation points")
+    if t_touch is None:
+        notes.append("the curve never reaches the contact gap: no touch")
+    top = int(np.argmax(travel))
+    total = float(travel[top])
+    wipe = total - gap if t_touch is not None else None
+    if not rebounds:
+        notes.append("over-travel and rebound: not computed by the model (its closing ends "
+                     "at rest on the latch, with no elastic stop)")
+        return AnalyserQuantities(t_touch, velocity, total, wipe, None, None, tuple(notes))
+    tail = travel[-max(len(travel) // 20, 1):]
+    over = total - float(np.median(tail))
+    rebound = total - float(np.min(travel[top:]))
+    return AnalyserQuantities(t_touch, velocity, total, wipe, over, rebound, tuple(notes))

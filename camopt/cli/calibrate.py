@@ -1,0 +1,129 @@
+"""``camopt calibrate``: fit a case's dynamics to measured travel curves (issue #32).
+
+``--set KEY=VALUE`` belongs to the ``--curve`` before it (that curve's design or latch
+delay); a ``--set`` before the first ``--curve`` overrides the case file as in ``camopt
+run`` (``case.FIELD=VALUE``). click gives each option's values without their order, so the
+command keeps the raw arguments (:class:`OrderedCommand`) to pair them."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Annotated, Any
+
+import click
+import typer
+from typer.core import TyperCommand
+
+from camopt.cli.app import Format, app, errors, load_case
+from camopt.errors import ConfigError
+
+RAW = "camopt.raw_args"
+
+
+class OrderedCommand(TyperCommand):
+    """A typer command that keeps its raw arguments in ``ctx.meta`` (for the order of
+    repeated options)."""
+
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        ctx.meta[RAW] = list(args)
+        return super().parse_args(ctx, args)
+
+
+def pair_sets(raw: list[str]) -> tuple[list[str], list[tuple[str, list[str]]]]:
+    """The case overrides (``--set`` before any ``--curve``) and each curve with the
+    ``--set`` values after it, from the raw arguments (``--opt value`` or
+    ``--opt=value``)."""
+    case: list[str] = []
+    curves: list[tuple[str, list[str]]] = []
+    i = 0
+    while i < len(raw):
+        arg = raw[i]
+        name, eq, inline = arg.partition("=")
+        if name in ("--curve", "--set"):
+            if eq:
+                value = inline
+            elif i + 1 < len(raw):
+                value, i = raw[i + 1], i + 1
+            else:
+                break  # click reports the missing value
+            if name == "--curve":
+                curves.append((value, []))
+            elif curves:
+                curves[-1][1].append(value)
+            else:
+                case.append(value)
+        i += 1
+    return case, curves
+
+
+def velocity_points(text: str | None) -> tuple[float, float] | None:
+    """``LOW,HIGH`` travel in mm, or None."""
+    if text is None:
+        return None
+    try:
+        low, high = (float(v) for v in text.split(","))
+    except ValueError:
+        raise ConfigError("--velocity-points", text, "expected LOW,HIGH travel in mm "
+                          "(e.g. 7.333,11)") from None
+    return low, high
+
+
+@app.command(cls=OrderedCommand)
+def calibrate(
+    ctx: typer.Context,
+    case: Annotated[Path, typer.Argument(help="case file (TOML)")],
+    curve: Annotated[list[Path], typer.Option(
+        "--curve", help="travel curve CSV (time_ms,travel_mm or time_s,travel_m; time from "
+        "the close command); repeatable")],
+    set_: Annotated[list[str] | None, typer.Option(
+        "--set", help="after a --curve: that curve's design or latch delay (kc1_n_per_mm, "
+        "kc2_n_per_mm, a1, a2, a3, latch_delay_ms, label); before any: case.FIELD=VALUE")]
+    = None,
+    predict: Annotated[list[str] | None, typer.Option(
+        "--predict", help="another design to predict: KEY=VALUE[,KEY=VALUE] (the --set "
+        "keys of a design); repeatable")] = None,
+    points: Annotated[str | None, typer.Option(
+        "--velocity-points", help="contact velocity between these travels, LOW,HIGH mm "
+        "(default the case's: 2/3 of the contact gap to the touch)")] = None,
+    form: Annotated[list[str] | None, typer.Option(
+        "--form", help="model form to fit (default every form of the case); repeatable")]
+    = None,
+    out_path: Annotated[Path | None, typer.Option(
+        "--out", help="write the calibrated values as a case fragment (TOML that extends "
+        "CASE)")] = None,
+    force: Annotated[bool, typer.Option(help="overwrite an existing --out")] = False,
+    format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
+) -> None:
+    """Calibrate a case's dynamics on measured travel curves (breaker analyser CSV)."""
+    from camopt.archive.files import write_files
+    from camopt.cases.registry import get_case
+    from camopt.core.calibration import CalibrationRequest, CurveRequest
+    from camopt.reporting.report import jsonable
+
+    overrides, pairs = pair_sets(ctx.meta.get(RAW, []))
+    del set_  # read in order from the raw arguments
+    with errors():
+        config = load_case(case, overrides)
+        request = CalibrationRequest(
+            curves=tuple(CurveRequest(Path(p), tuple(s)) for p, s in pairs),
+            predict=tuple(predict or ()), velocity_points_mm=velocity_points(points),
+            forms=tuple(form or ()))
+        if out_path is not None:  # refuse an existing --out before the work
+            from camopt.archive.files import check_not_input, check_writable
+
+            check_writable(out_path, force)
+            check_not_input(out_path, (case, *curve))
+        report = get_case(config.case.kind).calibrate(config.case, request)
+        if out_path is not None:
+            extends = os.path.relpath(case.resolve(), out_path.resolve().parent)
+            write_files({out_path: report.fragment(Path(extends).as_posix()).encode()},
+                        force, inputs=(case, *curve))
+    data: Any = report.to_json()
+    if format == Format.json:
+        print(json.dumps(jsonable(data), indent=2))
+    else:
+        print("\n".join(report.lines()))
+    if out_path is not None and format != Format.json:
+        print(f"\ncalibrated values written to {out_path} (a case can extend it)")

@@ -1,0 +1,48 @@
+"""What ``camopt calibrate`` hands a case and gets back: typed, kind-free (issue #32).
+
+A case that can be calibrated on measured curves names its function in
+``CaseSpec.calibration`` (``"module:function"``, imported only when asked); the function
+takes the validated ``[case]`` config and a :class:`CalibrationRequest` and returns a
+:class:`CalibrationReport`. The command line knows no case kind (``docs/design.md``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+
+@dataclass(frozen=True)
+class CurveRequest:
+    """One measured curve file and the ``KEY=VALUE`` settings given after it on the
+    command line (its design, its latch delay), in order."""
+
+    path: Path
+    settings: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class CalibrationRequest:
+    """The curves, the further designs to predict (each ``KEY=VALUE[,KEY=VALUE]``), the
+    contact velocity's two calculation points as travel in mm (None: the case's window)
+    and the model forms to fit (empty: every form the case has)."""
+
+    curves: tuple[CurveRequest, ...]
+    predict: tuple[str, ...] = ()
+    velocity_points_mm: tuple[float, float] | None = None
+    forms: tuple[str, ...] = ()
+
+
+class CalibrationReport(Protocol):
+    """A finished calibration: JSON-ready data, the lines of its human report and the
+    case fragment with the calibrated values (``extends`` the case file)."""
+
+    def to_json(self) -> dict[str, Any]:
+        """Plain data (per form ``rms_mm``, parameters with ``value``/``low``/``high``,
+        predictions with ``low``/``high``)."""
+
+    def lines(self) -> list[str]:
+        """The human report, line by line (plain text)."""
+
+    def fragment(self, extends: str) -> str:
+        """TOML text: ``extends = <extends>`` and a ``[case]`` of the calibrated values."""

@@ -1,0 +1,157 @@
+"""An independent simulation of a VCB closing for the calibration tests: Lagrange's equation
+integrated in time by scipy (solve_ivp, DOP853), phase by phase, with the plastic impacts
+between them, from the model's kinematics and loads at single angles only (nothing of
+camopt's work-energy quadrature or its time grid).
+
+    J(theta) theta'' + J'(theta) theta'^2 / 2 = eps T(theta) - T_f - Fr(s1) ds1/dtheta
+
+free rotation (J = J_cam) from the release to the roller, the cam meeting the roller at
+rest (J_cam omega- = J(0) omega+), the contacts' touch at s1 = gap (their kinetic energy
+lost, omega continuous), the latch at the cam's last angle (held at rest after it).
+
+``python -m tests.cases.vcb_ode`` writes the synthetic "vendor" curves of
+``tests/data/curves/`` (10 kHz, 0.02 mm noise, a 3.4 ms latch delay): synthetic, made by
+this file, not measured."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from camopt.cases.vcb.model import VcbModel
+from camopt.cases.vcb.problem import VcbProblem
+from camopt.units import DEG
+
+CURVES = Path(__file__).resolve().parents[1] / "data" / "curves"
+
+
+@dataclass(frozen=True)
+class Truth:
+    """The parameters the synthetic curves are made with (SI but the offset, deg)."""
+
+    cam_kg_m2: float = 6.3e-4
+    rod_kg: float = 3.2
+    contacts_kg: float = 1.8
+    release_offset_deg: float = 12.5
+    friction_nm: float = 8.0
+    follower_kg_m2: float = 0.0
+
+
+TRUTH = Truth()
+SPRING_SETS = {"vendor": (7.72, 9.33), "stiff": (9.6, 9.9)}  # kc1, kc2 N/mm
+LATCH_DELAY_S = 3.4e-3
+NOISE_M = 0.02e-3
+
+
+def closing(problem: VcbProblem, kc_n_per_mm: tuple[float, float], truth: Truth = TRUTH,
+            a: np.ndarray | None = None):
+    """Rod travel (m) as a function of the time from the release (s), and the touch time
+    and the average velocity over the last third of the contact stroke (m/s), of the
+    problem's reference cam (or follower law ``a``) with spring rates ``kc_n_per_mm``."""
+    m: VcbModel = problem.model
+    c, loads = problem.config, problem.load
+    A = (m.vendor_a if a is None else np.asarray(a))[None, :]
+    link = m.vendor_link[None, :]
+    kc = np.array([kc_n_per_mm]) * 1e3
+    eps, tf = c.efficiency, truth.friction_nm
+    end = m.theta_c[-1]
+
+    def state(theta):
+        kin = m.kinematics(A, link, problem.rod_offset, np.array([0.0, theta]))
+        return kin.s1[0, 1], kin.ds1[0, 1], kin.dphi[0, 1]
+
+    def inertia(theta, mass):
+        _, ds1, dphi = state(theta)
+        return truth.cam_kg_m2 + truth.follower_kg_m2 * dphi**2 + mass * ds1**2
+
+    def torque(theta):
+        return m.closing_torque(kc, m.closing_spring_geometry(np.array([theta])))[0, 0]
+
+    def driven(mass):
+        def rhs(_t, y):
+            theta, omega = y
+            s1, ds1, _ = state(theta)
+            h = 1e-6
+            dj = (inertia(theta + h, mass) - inertia(theta - h, mass)) / (2 * h)
+            force = loads.resistant_force(np.array([s1]))[0]
+            return [omega, (eps * torque(theta) - tf - force * ds1 - 0.5 * dj * omega**2)
+                    / inertia(theta, mass)]
+        return rhs
+
+    tol = dict(method="DOP853", rtol=1e-10, atol=1e-12, dense_output=True)
+    # 1. free rotation from rest at the release
+    start = m.dead_centre + truth.release_offset_deg * DEG - m.contact_crank_angle
+
+    def free(_t, y):
+        return [y[1], (eps * torque(y[0]) - tf) / truth.cam_kg_m2]
+
+    def roller(_t, y):
+        return y[0]
+
+    roller.terminal = True
+    s0 = solve_ivp(free, (0.0, 0.2), [start, 0.0], events=roller, **tol)
+    t0, (_, w_free) = s0.t_events[0][0], s0.y_events[0][0]
+    # 2. the cam meets the roller: generalised momentum kept
+    both = truth.rod_kg + truth.contacts_kg
+    w0 = truth.cam_kg_m2 * w_free / inertia(0.0, both)
+
+    def touch(_t, y):
+        return state(y[0])[0] - loads.gap
+
+    def two_thirds(_t, y):
+        return state(y[0])[0] - 2 * loads.gap / 3
+
+    touch.terminal = True
+    s1 = solve_ivp(driven(both), (t0, t0 + 0.2), [0.0, w0], events=[touch, two_thirds], **tol)
+    t1, (th1, w1) = s1.t_events[0][0], s1.y_events[0][0]
+    v_avg = (loads.gap / 3) / (t1 - s1.t_events[1][0])
+
+    # 3. after the touch, without the contacts, to the latch
+    def latch(_t, y):
+        return y[0] - end
+
+    latch.terminal = True
+    s2 = solve_ivp(driven(truth.rod_kg), (t1, t1 + 0.2), [th1, w1], events=latch, **tol)
+    t2 = s2.t_events[0][0]
+
+    def rod(t):
+        t = np.asarray(t, dtype=float)
+        theta = np.where(t < t1, s1.sol(np.clip(t, t0, t1))[0], s2.sol(np.clip(t, t1, t2))[0])
+        theta = np.where(t < t0, 0.0, np.where(t > t2, end, theta))
+        kin = m.kinematics(A, link, problem.rod_offset, np.r_[0.0, theta.ravel()])
+        return kin.s1[0, 1:].reshape(t.shape)
+
+    return rod, t1, v_avg
+
+
+def sample(rod, delay: float = LATCH_DELAY_S, noise: float = NOISE_M, seed: int = 0,
+           duration: float = 0.045, rate_hz: float = 10_000.0):
+    """(time from the command (s), noisy travel (m)) at ``rate_hz``."""
+    t = np.arange(0.0, duration, 1.0 / rate_hz)
+    rng = np.random.default_rng(seed)
+    return t, rod(t - delay) + noise * rng.standard_normal(t.size)
+
+
+def write_csv(path: Path, t: np.ndarray, s: np.ndarray) -> None:
+    """A CSV as an analyser exports it: time_ms,travel_mm."""
+    lines = ["time_ms,travel_mm"] + [f"{a * 1e3:.2f},{b * 1e3:.4f}" for a, b in zip(t, s)]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def main() -> None:  # pragma: no cover - writes tests/data/curves
+    from tests.conftest import CONFIGS
+    from tests.helpers import load
+
+    problem = VcbProblem(load(CONFIGS / "vcb.toml").case)
+    CURVES.mkdir(parents=True, exist_ok=True)
+    for seed, (name, kc) in enumerate(SPRING_SETS.items()):
+        rod, t_touch, v = closing(problem, kc)
+        write_csv(CURVES / f"{name}.csv", *sample(rod, seed=seed))
+        print(name, kc, f"touch {(t_touch + LATCH_DELAY_S) * 1e3:.3f} ms, v {v:.4f} m/s")
+
+
+if __name__ == "__main__":
+    main()
