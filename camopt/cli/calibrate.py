@@ -12,7 +12,6 @@ import os
 from pathlib import Path
 from typing import Annotated, Any
 
-import click
 import typer
 from typer.core import TyperCommand
 
@@ -26,7 +25,7 @@ class OrderedCommand(TyperCommand):
     """A typer command that keeps its raw arguments in ``ctx.meta`` (for the order of
     repeated options)."""
 
-    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+    def parse_args(self, ctx: Any, args: list[str]) -> list[str]:
         ctx.meta[RAW] = list(args)
         return super().parse_args(ctx, args)
 

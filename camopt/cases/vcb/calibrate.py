@@ -90,9 +90,17 @@ class ModelForm(Protocol):
     """A model form of the VCB closing: the seam where the forms of
     ``camopt/cases/vcb`` plug into the calibration."""
 
-    name: str
-    description: str
-    parameters: tuple[FitParameter, ...]
+    @property
+    def name(self) -> str:
+        """The form's name (``--form``)."""
+
+    @property
+    def description(self) -> str:
+        """One line: what the form's friction and losses are."""
+
+    @property
+    def parameters(self) -> tuple[FitParameter, ...]:
+        """The parameters it fits, in the order of a parameter row."""
 
     def start(self, config: VcbConfig) -> NDArray:
         """The case's values of the parameters (their units), (P,)."""

@@ -189,11 +189,11 @@ class VcbCalibrationReport:
                 out += _side_by_side(c.measured_quantities, c.fitted_quantities)
             out.append(f"  {'prediction':<22}{'v_close m/s':>12}{'low':>8}{'high':>8}"
                        f"{'t_touch ms':>12}{'low':>8}{'high':>8}  (touch: from the release)")
-            for p in f.predictions:
-                out.append(f"  {p.design:<22}{p.closing_velocity:>12.4f}"
-                           f"{p.closing_velocity_low:>8.4f}{p.closing_velocity_high:>8.4f}"
-                           f"{p.touch_time / MS:>12.3f}{p.touch_time_low / MS:>8.3f}"
-                           f"{p.touch_time_high / MS:>8.3f}")
+            for d in f.predictions:
+                out.append(f"  {d.design:<22}{d.closing_velocity:>12.4f}"
+                           f"{d.closing_velocity_low:>8.4f}{d.closing_velocity_high:>8.4f}"
+                           f"{d.touch_time / MS:>12.3f}{d.touch_time_low / MS:>8.3f}"
+                           f"{d.touch_time_high / MS:>8.3f}")
         return out
 
     def fragment(self, extends: str) -> str:

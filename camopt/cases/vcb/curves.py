@@ -82,8 +82,8 @@ def read_curve(path: str | Path) -> TravelCurve:
     except FileNotFoundError:
         raise ConfigError(name, "--curve", "no such file") from None
     except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(name, "--curve", f"cannot read ({getattr(exc, 'strerror', None) or exc})"
-                          ) from None
+        why = getattr(exc, "strerror", None) or exc
+        raise ConfigError(name, "--curve", f"cannot read ({why})") from None
     rows = [r for r in csv.reader(text.splitlines()) if r and any(f.strip() for f in r)]
     if not rows:
         raise ConfigError(name, "line 1", "empty file; expected a header time_ms,travel_mm")
@@ -138,8 +138,9 @@ def read_curve(path: str | Path) -> TravelCurve:
                           f"{span / TRAVEL_COLUMNS[travel_col[0]]:g} within its noise)")
     if span < MIN_STROKE_MM * MM:
         unit = travel_col[0].split("_")[-1]
-        raise ConfigError(name, travel_col[0], f"the travel spans {span / TRAVEL_COLUMNS[travel_col[0]]:g} "
-                          f"{unit}, under {MIN_STROKE_MM:g} mm: "
+        shown = span / TRAVEL_COLUMNS[travel_col[0]]
+        raise ConfigError(name, travel_col[0], f"the travel spans {shown:g} {unit}, "
+                          f"under {MIN_STROKE_MM:g} mm: "
                           + ("metres in a _mm column? name it travel_m" if unit == "mm"
                              else "not a breaker's stroke"))
     rest = float(np.median(travel[: max(start, 1)]))

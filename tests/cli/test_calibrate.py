@@ -1,0 +1,112 @@
+"""``camopt calibrate``: JSON for scripts, the case fragment, per-curve --set, bad input."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from camopt.cli import app
+from camopt.cli.calibrate import pair_sets
+from tests.cases.vcb_ode import CURVES, LATCH_DELAY_S, SPRING_SETS, TRUTH
+from tests.conftest import CONFIGS
+from tests.helpers import load
+
+runner = CliRunner()
+VCB = str(CONFIGS / "vcb.toml")
+VENDOR, STIFF = str(CURVES / "vendor.csv"), str(CURVES / "stiff.csv")
+KC = SPRING_SETS["stiff"]
+
+
+def test_set_belongs_to_the_curve_before_it():
+    case, curves = pair_sets(["X.toml", "--set", "case.positions=50", "--curve", "a.csv",
+                              "--curve=b.csv", "--set", "kc1_n_per_mm=9", "--set=label=b",
+                              "--format", "json"])
+    assert case == ["case.positions=50"]
+    assert curves == [("a.csv", []), ("b.csv", ["kc1_n_per_mm=9", "label=b"])]
+
+
+@pytest.fixture(scope="module")
+def two(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cal") / "calibrated.toml"
+    result = runner.invoke(app, ["calibrate", VCB, "--curve", VENDOR, "--curve", STIFF,
+                                 "--set", f"kc1_n_per_mm={KC[0]}", "--set",
+                                 f"kc2_n_per_mm={KC[1]}", "--set", "label=stiff",
+                                 "--predict", "kc1_n_per_mm=8.5,kc2_n_per_mm=8.5,label=mid",
+                                 "--format", "json", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    return json.loads(result.stdout), out
+
+
+def test_json_has_rms_parameters_and_predictions_with_intervals(two):
+    data, _ = two
+    (form,) = data["forms"]
+    assert form["form"] == "efficiency_coulomb"
+    assert form["rms_mm"] == pytest.approx(0.02, rel=0.1)
+    params = {p["name"]: p for p in form["parameters"]}
+    assert params["release_offset_deg"]["low"] <= TRUTH.release_offset_deg \
+        <= params["release_offset_deg"]["high"]
+    assert params["latch_delay_ms"]["value"] == pytest.approx(LATCH_DELAY_S * 1e3, rel=0.05)
+    for p in form["parameters"]:
+        assert p["low"] <= p["value"] <= p["high"]
+    designs = {p["design"]: p for p in form["predictions"]}
+    assert set(designs) == {"reference", "stiff", "mid"}
+    for p in designs.values():
+        v = p["closing_velocity_m_s"]
+        assert v["low"] <= v["value"] <= v["high"]
+    curves = {c["design"]: c for c in form["curves"]}
+    assert curves["stiff"]["measured"]["over_travel_mm"] is not None
+    assert curves["stiff"]["fitted"]["over_travel_mm"] is None
+    assert curves["stiff"]["fitted"]["closing_time_ms"] == pytest.approx(
+        curves["stiff"]["measured"]["closing_time_ms"], abs=0.1)
+
+
+def test_the_fragment_extends_the_case_with_the_calibrated_values(two, tmp_path):
+    data, out = two
+    params = {p["name"]: p["value"] for p in data["forms"][0]["parameters"]}
+    design = out.parent / "design.toml"
+    design.write_text(f'extends = "{out.name}"\n[solver]\nname = "de_gr"\n')
+    case = load(design).case
+    assert case.release_offset_deg == pytest.approx(params["release_offset_deg"], rel=1e-5)
+    assert case.cam_friction_nm == pytest.approx(params["cam_friction_nm"], rel=1e-5)
+    assert case.l1_mm == load(VCB).case.l1_mm  # the rest from the case file
+    assert 2 <= len(case.dynamics_band) <= 64
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--curve", "missing.csv"], "missing.csv: --curve: no such file"),
+    (["--curve", VENDOR, "--set", "spring=3"], "spring: unknown; expected one of"),
+    (["--curve", VENDOR, "--set", "kc1_n_per_mm=-3"], "must be a finite positive"),
+    (["--curve", VENDOR, "--form", "viscousness"], "unknown model form; known:"),
+    (["--curve", VENDOR, "--velocity-points", "8"], "expected LOW,HIGH"),
+    (["--set", "case.nonsense=1", "--curve", VENDOR], "nonsense"),
+])
+def test_bad_input_is_one_line_and_exit_2(args, message):
+    result = runner.invoke(app, ["calibrate", VCB, *args])
+    assert result.exit_code == 2
+    assert message in result.stderr and result.stderr.count("\n") == 1
+    assert "Traceback" not in result.output
+
+
+def test_bad_curve_files_are_one_line_naming_the_file(tmp_path):
+    path = tmp_path / "headless.csv"
+    path.write_text("0,0\n0.1,0.2\n")
+    result = runner.invoke(app, ["calibrate", VCB, "--curve", str(path)])
+    assert result.exit_code == 2
+    assert result.stderr == f"error: {path}: line 1: no header: a header naming time_ms " \
+        "or time_s and travel_mm or travel_m\n"
+
+
+def test_an_existing_out_is_refused_before_the_fit(tmp_path):
+    out = tmp_path / "c.toml"
+    out.write_text("keep")
+    result = runner.invoke(app, ["calibrate", VCB, "--curve", VENDOR, "--out", str(out)])
+    assert result.exit_code == 2 and "exists" in result.stderr
+    assert out.read_text() == "keep"
+
+
+def test_a_case_without_calibration_says_so(tmp_path):
+    result = runner.invoke(app, ["calibrate", str(CONFIGS / "emb.toml"), "--curve", VENDOR])
+    assert result.exit_code == 2
+    assert "has no calibration on measured curves" in result.stderr
