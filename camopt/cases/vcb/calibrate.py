@@ -188,6 +188,9 @@ def sample_travel(time: NDArray, rod: NDArray, query: NDArray) -> NDArray:
     t[never, 0] = 0.0
     last = np.nanmax(t, axis=1, keepdims=True)
     t = np.where(np.isnan(t), last + 1.0 + np.arange(m) * 1e-9, t)  # held after a stall
+    # the nodes a stalled row never reaches hold its last reached travel
+    reached = np.maximum(np.sum(np.isfinite(time), axis=1) - 1, 0)
+    rod = np.where(np.isfinite(time), rod, rod[np.arange(r), reached][:, None])
     span = np.max(t[:, -1] - np.minimum(t[:, 0], np.min(query, axis=1))) + 10.0
     shift = (np.arange(r) * span)[:, None]
     flat = (t + shift).ravel()
