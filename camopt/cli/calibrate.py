@@ -92,7 +92,11 @@ def calibrate(
     out_path: Annotated[Path | None, typer.Option(
         "--out", help="write the calibrated values as a case fragment (TOML that extends "
         "CASE)")] = None,
-    force: Annotated[bool, typer.Option(help="overwrite an existing --out")] = False,
+    plot: Annotated[Path | None, typer.Option(
+        help="write measured vs fitted curves and residuals (PNG per form) to this "
+        "folder")] = None,
+    force: Annotated[bool, typer.Option(help="overwrite an existing --out and --plot's "
+                                        "PNGs")] = False,
     format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
 ) -> None:
     """Calibrate a case's dynamics on measured travel curves (breaker analyser CSV)."""
@@ -114,7 +118,19 @@ def calibrate(
 
             check_writable(out_path, force)
             check_not_input(out_path, (case, *curve))
+        if plot is not None:  # a --plot that is a file, or unwritable, before the work
+            from camopt.archive.files import ensure_folder
+
+            ensure_folder(plot, "--plot")
         report = get_case(config.case.kind).calibrate(config.case, request)
+        written = []
+        if plot is not None:
+            from camopt.cli.outputs import writing
+            from camopt.reporting.plots import save
+
+            with writing(plot):
+                written = save(report.figures(), plot, "calibration", force,
+                               (case, *curve), key="--plot")
         if out_path is not None:
             extends = os.path.relpath(case.resolve(), out_path.resolve().parent)
             write_files({out_path: report.fragment(Path(extends).as_posix()).encode()},
@@ -124,5 +140,8 @@ def calibrate(
         print(json.dumps(jsonable(data), indent=2))
     else:
         print("\n".join(report.lines()))
-    if out_path is not None and format != Format.json:
-        print(f"\ncalibrated values written to {out_path} (a case can extend it)")
+    if format != Format.json:
+        if out_path is not None:
+            print(f"\ncalibrated values written to {out_path} (a case can extend it)")
+        for p in written:
+            print(f"figure: {p}")

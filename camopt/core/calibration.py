@@ -9,7 +9,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 @dataclass(frozen=True)
@@ -46,3 +49,6 @@ class CalibrationReport(Protocol):
 
     def fragment(self, extends: str) -> str:
         """TOML text: ``extends = <extends>`` and a ``[case]`` of the calibrated values."""
+
+    def figures(self) -> dict[str, Figure]:
+        """Measured vs fitted curves and residuals, by name (imports matplotlib)."""

@@ -34,7 +34,8 @@ def two(tmp_path_factory):
                                  "--set", f"kc1_n_per_mm={KC[0]}", "--set",
                                  f"kc2_n_per_mm={KC[1]}", "--set", "label=stiff",
                                  "--predict", "kc1_n_per_mm=8.5,kc2_n_per_mm=8.5,label=mid",
-                                 "--format", "json", "--out", str(out)])
+                                 "--format", "json", "--out", str(out),
+                                 "--plot", str(out.parent / "figs")])
     assert result.exit_code == 0, result.output
     return json.loads(result.stdout), out
 
@@ -60,6 +61,12 @@ def test_json_has_rms_parameters_and_predictions_with_intervals(two):
     assert curves["stiff"]["fitted"]["over_travel_mm"] is None
     assert curves["stiff"]["fitted"]["closing_time_ms"] == pytest.approx(
         curves["stiff"]["measured"]["closing_time_ms"], abs=0.1)
+
+
+def test_the_residual_figure_is_written(two):
+    _, out = two
+    png = out.parent / "figs" / "calibration-fit-efficiency_coulomb.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_the_fragment_extends_the_case_with_the_calibrated_values(two, tmp_path):

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -32,6 +32,9 @@ from camopt.config.models import CaseConfig
 from camopt.core.calibration import CalibrationRequest
 from camopt.errors import ConfigError
 from camopt.units import MM, MS
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 DESIGN_KEYS = ("kc1_n_per_mm", "kc2_n_per_mm", "a1", "a2", "a3", "label")
 CURVE_KEYS = (*DESIGN_KEYS, "latch_delay_ms")
@@ -195,6 +198,11 @@ class VcbCalibrationReport:
                            f"{d.touch_time / MS:>12.3f}{d.touch_time_low / MS:>8.3f}"
                            f"{d.touch_time_high / MS:>8.3f}")
         return out
+
+    def figures(self) -> dict[str, Figure]:
+        from camopt.cases.vcb.calibration_figures import figures
+
+        return figures(self.fits)
 
     def fragment(self, extends: str) -> str:
         best = min(self.fits, key=lambda f: f.rms)
