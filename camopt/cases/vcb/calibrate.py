@@ -33,7 +33,7 @@ profiles within the threshold.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 import numpy as np
@@ -261,8 +261,10 @@ class CurveFit:
 @dataclass(frozen=True)
 class FormFit:
     """The calibration of one model form: RMS misfit over every sample (m), the
-    parameters (the form's, then each fitted latch delay in ms), their correlation
-    matrix at the optimum (linearised), the curves and the predictions."""
+    parameters (the form's, then the fitted latch delay in ms, if any), their correlation
+    matrix at the optimum (linearised: (J^T J)^-1 s^2), the curves, the predictions, and
+    ``band``: the form's parameter rows met on the profiles inside the intervals, the fit
+    first."""
 
     form: str
     description: str
@@ -271,7 +273,7 @@ class FormFit:
     correlation: NDArray
     curves: tuple[CurveFit, ...]
     predictions: tuple[Prediction, ...]
-    band: NDArray = field(repr=False)  # (k, P) form parameter rows inside the interval
+    band: NDArray = field(repr=False)
 
 
 class Calibration:
@@ -506,26 +508,21 @@ def _out(q: float, log: bool) -> float:
 def calibrate(config: VcbConfig, curves: Sequence[CurveCase], forms: Sequence[ModelForm],
               predict: Sequence[Design] = (), points: VelocityPoints | None = None
               ) -> tuple[FormFit, ...]:
-        """Fit every form to the curves jointly and predict ``predict``'s designs (the
-        case's reference design and the curves' designs if empty)."""
-        out = []
-        for form in forms:
-            cal = Calibration(config, form, curves, points)
-            fit = cal.fit()
-            best = np.array([p.value for p in fit.parameters[:cal.n_form]])
-            designs = list(predict) or _unique(cal.designs)
-            out.append(_with(fit, cal.predict(fit, designs, best)))
-        return tuple(out)
+    """Fit every form to the curves jointly and predict ``predict``'s designs (the
+    curves' designs if empty)."""
+    out = []
+    for form in forms:
+        cal = Calibration(config, form, curves, points)
+        fit = cal.fit()
+        best = np.array([p.value for p in fit.parameters[:cal.n_form]])
+        designs = list(predict) or _unique(cal.designs)
+        out.append(replace(fit, predictions=cal.predict(fit, designs, best)))
+    return tuple(out)
 
 
 def _unique(designs: Sequence[Design]) -> list[Design]:
+    """One design per label, in order."""
     seen: dict[str, Design] = {}
     for d in designs:
         seen.setdefault(d.label, d)
     return list(seen.values())
-
-
-def _with(fit: FormFit, predictions: tuple[Prediction, ...]) -> FormFit:
-    from dataclasses import replace
-
-    return replace(fit, predictions=predictions)
