@@ -78,7 +78,8 @@ def calibrate(
         "the close command); repeatable")],
     set_: Annotated[list[str] | None, typer.Option(
         "--set", help="after a --curve: that curve's design or latch delay (kc1_n_per_mm, "
-        "kc2_n_per_mm, a1, a2, a3, latch_delay_ms, label); before any: case.FIELD=VALUE")]
+        "kc2_n_per_mm, a1, a2, a3 or cam_points=FILE.csv, latch_delay_ms, label); before any: "
+        "case.FIELD=VALUE")]
     = None,
     predict: Annotated[list[str] | None, typer.Option(
         "--predict", help="another design to predict: KEY=VALUE[,KEY=VALUE] (the --set "

@@ -5,7 +5,8 @@ the case fragment ``--out`` writes).
 Per-curve settings (``--set KEY=VALUE`` after a ``--curve``) name the curve's design where
 it is not the case's reference design: ``kc1_n_per_mm``, ``kc2_n_per_mm`` (the closing
 springs), ``a1``, ``a2``, ``a3`` (the follower law's coefficients; a0 stays the case's
-Eq 8 value), and ``latch_delay_ms`` (measured: the delay is then not fitted for this
+Eq 8 value) or ``cam_points`` (a points file of the cam: :mod:`camopt.cases.vcb.cam_points`),
+and ``latch_delay_ms`` (measured: the delay is then not fitted for this
 curve) and ``label``. A design to predict (``--predict``) takes the same keys, joined by
 commas.
 """
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -25,6 +27,7 @@ from camopt.cases.vcb.calibrate import (
     FormFit,
     calibrate,
 )
+from camopt.cases.vcb.cam_points import read_cam_points
 from camopt.cases.vcb.config import VcbConfig
 from camopt.cases.vcb.curves import AnalyserQuantities, VelocityPoints, read_curve
 from camopt.cases.vcb.model import VcbModel
@@ -36,7 +39,7 @@ from camopt.units import MM, MS
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-DESIGN_KEYS = ("kc1_n_per_mm", "kc2_n_per_mm", "a1", "a2", "a3", "label")
+DESIGN_KEYS = ("kc1_n_per_mm", "kc2_n_per_mm", "a1", "a2", "a3", "cam_points", "label")
 CURVE_KEYS = (*DESIGN_KEYS, "latch_delay_ms")
 REFERENCE_LABEL = "reference"
 INTERVALS = ("profile likelihood, 95 % (chi2(1) / 2 = 1.92 times the reduced chi-square "
@@ -78,6 +81,12 @@ def design_of(config: VcbConfig, model: VcbModel, settings: dict[str, str], wher
         if key in settings:
             kc[i] = _number(settings[key], key, where)
             changed.append(f"{key.split('_')[0]}={kc[i]:g}")
+    if "cam_points" in settings:
+        if any(k in settings for k in ("a1", "a2", "a3")):
+            raise ConfigError(where, "cam_points", "give the cam as points or as a1..a3, "
+                              "not both")
+        a = read_cam_points(settings["cam_points"], model.theta_c[-1])
+        changed.append(f"cam {Path(settings['cam_points']).name}")
     for i, key in enumerate(("a1", "a2", "a3"), start=1):
         if key in settings:
             a[i] = _number(settings[key], key, where, positive=False)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -72,41 +73,46 @@ def motion_start(travel: NDArray, noise: float) -> int:
     return int(np.argmax(above)) if above.any() else len(travel)
 
 
-def read_curve(path: str | Path) -> TravelCurve:
-    """The travel curve in a CSV file (module docstring), in SI; bad input is a
-    ConfigError ``<file>: <where>: <what>``."""
+def read_table(path: str | Path, columns: Sequence[Mapping[str, float]], key: str,
+               max_rows: int = MAX_SAMPLES) -> tuple[list[str], NDArray]:
+    """The numeric columns of a CSV file with a header: for each entry of ``columns``
+    (the accepted names with their SI factors) exactly one header name; other columns
+    ignored. Returns the names found and the data (rows, len(columns)) in SI. Refused as
+    a ConfigError ``<file>: <where>: <what>``: a missing or unreadable file (``key``), an
+    empty or headerless file, a wrong header, more than ``max_rows`` rows, a row with the
+    wrong number of fields, a non-number or a non-finite value."""
     path = Path(path)
     name = str(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
-        raise ConfigError(name, "--curve", "no such file") from None
+        raise ConfigError(name, key, "no such file") from None
     except (OSError, UnicodeDecodeError) as exc:
         why = getattr(exc, "strerror", None) or exc
-        raise ConfigError(name, "--curve", f"cannot read ({why})") from None
+        raise ConfigError(name, key, f"cannot read ({why})") from None
+    wanted = "a header naming " + " and ".join(" or ".join(c) for c in columns)
     rows = [r for r in csv.reader(text.splitlines()) if r and any(f.strip() for f in r)]
     if not rows:
-        raise ConfigError(name, "line 1", "empty file; expected a header time_ms,travel_mm")
+        raise ConfigError(name, "line 1", f"empty file; expected {wanted}")
     header = [h.strip().lower() for h in rows[0]]
-    wanted = "a header naming time_ms or time_s and travel_mm or travel_m"
     if all(_is_number(h) for h in header):
         raise ConfigError(name, "line 1", f"no header: {wanted}")
-    time_col = [h for h in header if h in TIME_COLUMNS]
-    travel_col = [h for h in header if h in TRAVEL_COLUMNS]
-    if len(time_col) != 1 or len(travel_col) != 1:
+    found = [[h for h in header if h in c] for c in columns]
+    if any(len(f) != 1 for f in found):
         raise ConfigError(name, "line 1", f"columns {', '.join(header)}: need {wanted} "
                           "(one of each)")
-    it, ix = header.index(time_col[0]), header.index(travel_col[0])
-    if len(rows) - 1 > MAX_SAMPLES:
-        raise ConfigError(name, "--curve", f"{len(rows) - 1} samples, more than "
-                          f"{MAX_SAMPLES}: too long a curve (crop it to the closing)")
-    data = np.empty((len(rows) - 1, 2))
+    names = [f[0] for f in found]
+    index = [header.index(n) for n in names]
+    if len(rows) - 1 > max_rows:
+        raise ConfigError(name, key, f"{len(rows) - 1} samples, more than "
+                          f"{max_rows}: too long a curve (crop it to the closing)")
+    data = np.empty((len(rows) - 1, len(columns)))
     for k, row in enumerate(rows[1:]):
         line = k + 2
         if len(row) != len(header):
             raise ConfigError(name, f"line {line}", f"{len(row)} fields, the header has "
                               f"{len(header)}")
-        for j, col in enumerate((it, ix)):
+        for j, col in enumerate(index):
             try:
                 v = float(row[col])
             except ValueError:
@@ -115,31 +121,40 @@ def read_curve(path: str | Path) -> TravelCurve:
             if not math.isfinite(v):
                 raise ConfigError(name, f"line {line}", f"{header[col]}: {v} (every sample "
                                   "must be a finite number)")
-            data[k, j] = v
+            data[k, j] = v * columns[j][names[j]]
+    return names, data
+
+
+def read_curve(path: str | Path) -> TravelCurve:
+    """The travel curve in a CSV file (module docstring), in SI; bad input is a
+    ConfigError ``<file>: <where>: <what>``."""
+    name = str(path)
+    (time_name, travel_name), data = read_table(path, (TIME_COLUMNS, TRAVEL_COLUMNS),
+                                                "--curve")
     if len(data) < 10:
         raise ConfigError(name, "--curve", f"{len(data)} samples: too few for a travel curve")
-    time = data[:, 0] * TIME_COLUMNS[time_col[0]]
-    travel = data[:, 1] * TRAVEL_COLUMNS[travel_col[0]]
+    time, travel = data[:, 0], data[:, 1]
+    shown = time / TIME_COLUMNS[time_name]  # in the file's unit
     step = np.diff(time)
     if np.any(step <= 0):
         k = int(np.argmax(step <= 0))
         what = "repeats" if step[k] == 0 else "goes back from"
-        raise ConfigError(name, f"line {k + 3}", f"{time_col[0]} {data[k + 1, 0]:g} {what} "
-                          f"{data[k, 0]:g} on the line before: times must increase")
+        raise ConfigError(name, f"line {k + 3}", f"{time_name} {shown[k + 1]:g} {what} "
+                          f"{shown[k]:g} on the line before: times must increase")
     if time[-1] - time[0] > MAX_DURATION_S:
-        raise ConfigError(name, time_col[0], f"the curve lasts {time[-1] - time[0]:g} s, more "
+        raise ConfigError(name, time_name, f"the curve lasts {time[-1] - time[0]:g} s, more "
                           f"than {MAX_DURATION_S:g} s: too long a curve (seconds in a _ms "
                           "column?)")
     noise = noise_level(travel)
     start = motion_start(travel, noise)
     span = float(np.max(travel) - np.min(travel))
     if start >= len(travel) or span <= 10 * noise or np.max(travel) - travel[0] <= 10 * noise:
-        raise ConfigError(name, travel_col[0], f"the curve never moves (it spans "
-                          f"{span / TRAVEL_COLUMNS[travel_col[0]]:g} within its noise)")
+        raise ConfigError(name, travel_name, f"the curve never moves (it spans "
+                          f"{span / TRAVEL_COLUMNS[travel_name]:g} within its noise)")
     if span < MIN_STROKE_MM * MM:
-        unit = travel_col[0].split("_")[-1]
-        shown = span / TRAVEL_COLUMNS[travel_col[0]]
-        raise ConfigError(name, travel_col[0], f"the travel spans {shown:g} {unit}, "
+        unit = travel_name.split("_")[-1]
+        moved = span / TRAVEL_COLUMNS[travel_name]
+        raise ConfigError(name, travel_name, f"the travel spans {moved:g} {unit}, "
                           f"under {MIN_STROKE_MM:g} mm: "
                           + ("metres in a _mm column? name it travel_m" if unit == "mm"
                              else "not a breaker's stroke"))
