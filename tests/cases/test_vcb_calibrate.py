@@ -146,3 +146,19 @@ def test_sample_travel_interpolates_holds_and_rests():
     np.testing.assert_allclose(out[0], [0.0, 0.5, 2.0, 3.0])
     np.testing.assert_allclose(out[1], [0.0, 2.0, 2.0, 2.0])
     np.testing.assert_allclose(out[2], [0.0, 0.0, 0.0, 0.0])
+
+
+def test_remembered_kinematics_give_the_same_bits(problem):
+    """The calibration's model remembers kinematics by input: residuals at two parameter
+    batches are bit-identical to the plain model's (the same computation repeated)."""
+    from camopt.cases.vcb.model import VcbModel
+
+    curves = [_curve(problem, "vendor"), _curve(problem, "stiff")]
+    cal = Calibration(problem.config, FORM, curves)
+    q = cal.start()
+    Q = np.vstack([q, q + 0.01])
+    memo = [cal.residuals(q), cal.residuals(Q), cal.residuals(q)]
+    cal.model = VcbModel(problem.config)
+    plain = [cal.residuals(q), cal.residuals(Q), cal.residuals(q)]
+    for a, b in zip(memo, plain):
+        assert np.array_equal(a, b)

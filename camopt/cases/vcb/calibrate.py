@@ -47,7 +47,7 @@ from camopt.cases.vcb.curves import (
     analyse,
 )
 from camopt.cases.vcb.dynamics import MotionParameters, closing_motion
-from camopt.cases.vcb.model import VcbModel
+from camopt.cases.vcb.model import Kinematics, VcbModel
 from camopt.units import DEG, MM, MS
 
 CHI2_95_1DOF = 3.841458820694124
@@ -169,6 +169,33 @@ FORMS: dict[str, ModelForm] = {f.name: f for f in (EfficiencyCoulomb(),)}
 """The model forms calibrate fits, by name."""
 
 
+class _KinematicsMemo(VcbModel):
+    """The case's model with its kinematics remembered by input (a calibration simulates
+    the same few designs, tiled by as many parameter rows, hundreds of times: the
+    kinematics depend on the designs alone; ~20 % of an evaluation). The arrays kept are
+    read-only, so nothing downstream can change them in place."""
+
+    SIZE = 16
+
+    def __init__(self, config: VcbConfig) -> None:
+        super().__init__(config)
+        self._memo: dict[tuple, Kinematics] = {}
+
+    def kinematics(self, A: NDArray, link: NDArray, rod_offset: NDArray | float,
+                   theta_c: NDArray | None = None) -> Kinematics:
+        key = tuple(np.asarray(v, dtype=float).tobytes() + bytes(str(np.shape(v)), "ascii")
+                    for v in (A, link, rod_offset, () if theta_c is None else theta_c))
+        kin = self._memo.get(key)
+        if kin is None:
+            kin = super().kinematics(A, link, rod_offset, theta_c)
+            for a in (kin.cos4, kin.sin4, kin.s1, kin.ds1, kin.follower.dphi):
+                a.setflags(write=False)
+            if len(self._memo) >= self.SIZE:
+                self._memo.pop(next(iter(self._memo)))
+            self._memo[key] = kin
+        return kin
+
+
 def _loads(model: VcbModel):
     """The case's resisting loads, with the rod travel of its reference design."""
     c = model.c
@@ -283,7 +310,7 @@ class Calibration:
     def __init__(self, config: VcbConfig, form: ModelForm, curves: Sequence[CurveCase],
                  points: VelocityPoints | None = None) -> None:
         self.config, self.form, self.curves = config, form, tuple(curves)
-        self.model = VcbModel(config)
+        self.model = _KinematicsMemo(config)
         self.steps = config.dynamics_steps
         self.points = points or VelocityPoints.last_third(config.contact_gap_mm * MM)
         self.designs = [c.design for c in self.curves]
