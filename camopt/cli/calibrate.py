@@ -74,21 +74,26 @@ def calibrate(
     ctx: typer.Context,
     case: Annotated[Path, typer.Argument(help="case file (TOML)")],
     curve: Annotated[list[Path], typer.Option(
-        "--curve", help="travel curve CSV (time_ms,travel_mm or time_s,travel_m; time from "
+        "--curve", metavar="FILE.csv",
+        help="travel curve CSV (time_ms,travel_mm or time_s,travel_m; time from "
         "the close command); repeatable")],
     set_: Annotated[list[str] | None, typer.Option(
-        "--set", help="after a --curve: that curve's design or latch delay (kc1_n_per_mm, "
+        "--set", metavar="KEY=VALUE",
+        help="after a --curve: that curve's design or latch delay (kc1_n_per_mm, "
         "kc2_n_per_mm, a1, a2, a3 or cam_points=FILE.csv, latch_delay_ms, label); before any: "
         "case.FIELD=VALUE")]
     = None,
     predict: Annotated[list[str] | None, typer.Option(
-        "--predict", help="another design to predict: KEY=VALUE[,KEY=VALUE] (the --set "
+        "--predict", metavar="KEY=VALUE[,...]",
+        help="another design to predict: KEY=VALUE[,KEY=VALUE] (the --set "
         "keys of a design); repeatable")] = None,
     points: Annotated[str | None, typer.Option(
-        "--velocity-points", help="contact velocity between these travels, LOW,HIGH mm "
+        "--velocity-points", metavar="LOW,HIGH",
+        help="contact velocity between these travels, LOW,HIGH mm "
         "(default the case's: 2/3 of the contact gap to the touch)")] = None,
     form: Annotated[list[str] | None, typer.Option(
-        "--form", help="model form to fit (default every form of the case); repeatable")]
+        "--form", metavar="NAME",
+        help="model form to fit (default every form of the case); repeatable")]
     = None,
     out_path: Annotated[Path | None, typer.Option(
         "--out", help="write the calibrated values as a case fragment (TOML that extends "
