@@ -54,11 +54,12 @@ CHI2_95_1DOF = 3.841458820694124
 """chi-square quantile, 1 degree of freedom, 0.95 (scipy.stats.chi2.ppf(0.95, 1))."""
 ROBUST_SCALE = 3.0
 """soft-l1 loss scale in noise levels: quadratic within, linear beyond."""
-IDENTIFIED_WIDTH = 0.2
+IDENTIFIED_WITHIN = 0.05
 """A parameter counts as identified when its 95 % interval is closed inside the search
-bounds and at most this fraction of its value wide (+-10 %); the latch delay, at most
-IDENTIFIED_DELAY_MS wide (five samples of a 10 kHz analyser)."""
-IDENTIFIED_DELAY_MS = 0.5
+bounds and lies within +-5 % of its value (the accuracy a designer asks of a calibrated
+value: the truth, inside the interval, is then within 5 %); the latch delay, within
++-IDENTIFIED_DELAY_MS."""
+IDENTIFIED_DELAY_MS = 0.25
 MAX_DELAY_S = 0.1
 """Upper search bound of a fitted latch delay (s)."""
 
@@ -245,7 +246,7 @@ class CurveCase:
 class ParameterEstimate:
     """A fitted parameter (its unit): value, 95 % profile-likelihood interval (low, high;
     a search bound where the profile does not cross the threshold) and whether the curves
-    identify it (:data:`IDENTIFIED_WIDTH`)."""
+    identify it (:data:`IDENTIFIED_WITHIN`)."""
 
     name: str
     unit: str
@@ -427,12 +428,12 @@ class Calibration:
             low = _out(lo_q if lo_q is not None else self.lower[j], self.log[j])
             high = _out(hi_q if hi_q is not None else self.upper[j], self.log[j])
             value = _out(q[j], self.log[j])
-            # identified: a closed profile interval inside the search bounds, at most
-            # IDENTIFIED_WIDTH of the value wide (the delay: IDENTIFIED_DELAY_MS)
-            width = (high - low) / abs(value) if self.log[j] else (high - low) / (
-                IDENTIFIED_DELAY_MS / IDENTIFIED_WIDTH)
-            identified = bool(lo_q is not None and hi_q is not None
-                              and width <= IDENTIFIED_WIDTH)
+            # identified: a closed profile interval inside the search bounds, within
+            # IDENTIFIED_WITHIN of the value (the delay: IDENTIFIED_DELAY_MS)
+            reach = max(value - low, high - value)
+            identified = bool(lo_q is not None and hi_q is not None and (
+                reach <= IDENTIFIED_WITHIN * abs(value) if self.log[j]
+                else reach <= IDENTIFIED_DELAY_MS))
             ests.append(ParameterEstimate(name, unit, value, low, high, identified))
         P_band, _ = self.values(np.array(members))
         return FormFit(self.form.name, self.form.description, self._rms(q), tuple(ests),

@@ -187,7 +187,7 @@ class VcbCalibrationReport:
                     f"  {'parameter':<22}{'value':>12}{'low':>12}{'high':>12}  identified"]
             for p in f.parameters:
                 out.append(f"  {p.name:<22}{p.value:>12.5g}{p.low:>12.5g}{p.high:>12.5g}  "
-                           f"{'yes' if p.identified else 'NO (the curves do not fix it)'}")
+                           f"{'yes' if p.identified else 'NO (not to +-5 %)'}")
             names = [p.name for p in f.parameters]
             k = len(names)
             pairs = sorted(((abs(f.correlation[i, j]), names[i], names[j], f.correlation[i, j])
