@@ -14,7 +14,7 @@ import numpy as np
 from camopt.cases.vcb.calibrate import FORMS, CurveCase, Design, calibrate
 from camopt.cases.vcb.curves import TravelCurve, noise_level
 from camopt.cases.vcb.problem import VcbProblem
-from camopt.units import MM, MS
+from camopt.units import MM, MS, N_PER_MM
 from tests.cases import vcb_ode
 from tests.conftest import CONFIGS
 from tests.helpers import load
@@ -36,7 +36,7 @@ def main() -> None:
              "latch_delay_ms": vcb_ode.LATCH_DELAY_S / MS}
     rods = {name: vcb_ode.closing(problem, kc)[0] for name, kc in vcb_ode.SPRING_SETS.items()}
     _, _, v_third = vcb_ode.closing(problem, THIRD)
-    designs = {name: Design(name, problem.model.vendor_a, np.array(kc) / MM)
+    designs = {name: Design(name, problem.model.vendor_a, np.array(kc) * N_PER_MM)
                for name, kc in {**vcb_ode.SPRING_SETS, "third": THIRD}.items()}
     inside = total = 0
     for seed in SEEDS:

@@ -18,7 +18,7 @@ from camopt.cases.vcb.calibrate import (
 )
 from camopt.cases.vcb.curves import read_curve
 from camopt.cases.vcb.problem import VcbProblem
-from camopt.units import MM, MS
+from camopt.units import MM, MS, N_PER_MM
 from tests.cases import vcb_ode
 from tests.conftest import CONFIGS
 from tests.helpers import load
@@ -38,7 +38,7 @@ def problem():
 
 def _design(problem, name):
     kc = vcb_ode.SPRING_SETS[name]
-    return Design(name, problem.model.vendor_a, np.array(kc) / MM)
+    return Design(name, problem.model.vendor_a, np.array(kc) * N_PER_MM)
 
 
 def _curve(problem, name):

@@ -9,7 +9,7 @@ from camopt.cases.vcb.calibration_report import design_of
 from camopt.cases.vcb.cam_points import read_cam_points
 from camopt.cases.vcb.problem import VcbProblem
 from camopt.errors import ConfigError
-from camopt.units import DEG, MM
+from camopt.units import DEG, N_PER_MM
 from tests.conftest import CONFIGS
 from tests.helpers import load
 
@@ -60,7 +60,7 @@ def test_a_design_from_points_is_the_design_from_coefficients(problem, tmp_path)
     from_points = design_of(c, m, {"cam_points": str(path), "kc1_n_per_mm": "9.6"}, "x")
     reference = design_of(c, m, {}, "case")
     np.testing.assert_allclose(from_points.a, reference.a, atol=1e-9)
-    assert from_points.kc[0] == pytest.approx(9.6 / MM)
+    assert from_points.kc[0] == pytest.approx(9.6 * N_PER_MM)
     assert reference.label == "reference" and "cam.csv" in from_points.label
     with pytest.raises(ConfigError, match="not both"):
         design_of(c, m, {"cam_points": str(path), "a1": "0.2"}, "x")

@@ -23,7 +23,7 @@ from scipy.integrate import solve_ivp
 
 from camopt.cases.vcb.model import VcbModel
 from camopt.cases.vcb.problem import VcbProblem
-from camopt.units import DEG
+from camopt.units import DEG, N_PER_MM, TO_MM, TO_MS
 
 CURVES = Path(__file__).resolve().parents[1] / "data" / "curves"
 
@@ -55,7 +55,7 @@ def closing(problem: VcbProblem, kc_n_per_mm: tuple[float, float], truth: Truth 
     c, loads = problem.config, problem.load
     A = (m.vendor_a if a is None else np.asarray(a))[None, :]
     link = m.vendor_link[None, :]
-    kc = np.array([kc_n_per_mm]) * 1e3
+    kc = np.array([kc_n_per_mm]) * N_PER_MM
     eps, tf = c.efficiency, truth.friction_nm
     end = m.theta_c[-1]
 
@@ -137,7 +137,7 @@ def sample(rod, delay: float = LATCH_DELAY_S, noise: float = NOISE_M, seed: int 
 
 def write_csv(path: Path, t: np.ndarray, s: np.ndarray) -> None:
     """A CSV as an analyser exports it: time_ms,travel_mm."""
-    lines = ["time_ms,travel_mm"] + [f"{a * 1e3:.2f},{b * 1e3:.4f}" for a, b in zip(t, s)]
+    lines = ["time_ms,travel_mm"] + [f"{a * TO_MS:.2f},{b * TO_MM:.4f}" for a, b in zip(t, s)]
     path.write_text("\n".join(lines) + "\n")
 
 
@@ -150,7 +150,7 @@ def main() -> None:  # pragma: no cover - writes tests/data/curves
     for seed, (name, kc) in enumerate(SPRING_SETS.items()):
         rod, t_touch, v = closing(problem, kc)
         write_csv(CURVES / f"{name}.csv", *sample(rod, seed=seed))
-        print(name, kc, f"touch {(t_touch + LATCH_DELAY_S) * 1e3:.3f} ms, v {v:.4f} m/s")
+        print(name, kc, f"touch {(t_touch + LATCH_DELAY_S) * TO_MS:.3f} ms, v {v:.4f} m/s")
 
 
 if __name__ == "__main__":

@@ -34,7 +34,7 @@ from camopt.cases.vcb.model import VcbModel
 from camopt.config.models import CaseConfig
 from camopt.core.calibration import CalibrationRequest
 from camopt.errors import ConfigError
-from camopt.units import MM, MS
+from camopt.units import MM, MS, N_PER_MM
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -92,7 +92,7 @@ def design_of(config: VcbConfig, model: VcbModel, settings: dict[str, str], wher
             a[i] = _number(settings[key], key, where, positive=False)
             changed.append(f"{key}={a[i]:g}")
     label = settings.get("label") or (" ".join(changed) if changed else REFERENCE_LABEL)
-    return Design(label, a, kc / MM)  # N/mm -> N/m
+    return Design(label, a, kc * N_PER_MM)
 
 
 def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport:
