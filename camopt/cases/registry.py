@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from camopt.core.runview import RunView
+    from camopt.mechanics.cam_outline import CamOutline
 
 ENTRY_POINT_GROUP = "camopt.cases"
 
@@ -100,6 +101,9 @@ class CaseSpec:
     figures: str | None = None
     profiles: tuple[ProfileCurve, ...] = ()
     circles: tuple[ProfileCircle, ...] = ()
+    outline: str | None = None
+    """``"module:function"`` giving a run's closed cam outline for the workshop,
+    ``function(run, step_rad | None) -> CamOutline | None`` (imported when exported)."""
     paper: Mapping[str, Any] = field(default_factory=dict)
     resolve: Callable[[CaseConfig, ArchiveLoader], CaseConfig] | None = None
     tolerances: Mapping[str, str] = field(default_factory=dict)
@@ -156,6 +160,14 @@ class CaseSpec:
             return {}
         module, _, name = self.figures.partition(":")
         return getattr(importlib.import_module(module), name)(run)
+
+    def cam_outline(self, run: RunView, step: float | None = None) -> CamOutline | None:
+        """The run's closed cam outline (None when the case draws none or the archive
+        lacks the law); ``step`` its sampling in rad (None: the case's grid)."""
+        if self.outline is None:
+            return None
+        module, _, name = self.outline.partition(":")
+        return getattr(importlib.import_module(module), name)(run, step)  # type: ignore[no-any-return]
 
 
 _REGISTRY: dict[str, CaseSpec] = {}

@@ -64,10 +64,15 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
            = ExportFormat.csv,
            out_dir: Annotated[Path | None, typer.Option("--out", help="output folder")] = None,
            force: Annotated[bool, typer.Option(help="replace existing files of these names")]
-           = False) -> None:
-    """Export the summary and analysis curves (csv or json) or the cam profiles, base
-    circle and roller as a DXF drawing in mm (dxf); every format also writes the profiles'
-    point files (x,y,z in mm)."""
+           = False,
+           step_deg: Annotated[float, typer.Option(
+               "--step-deg", help="angle step of the dxf's CNC points table (deg)")] = 1.0
+           ) -> None:
+    """Export the summary and analysis curves (csv or json) or, for the workshop, the cam
+    as a DXF drawing in mm (dxf: the closed full-turn outline where the case has one, base
+    circle, roller and its path, pivots, datum and notes) with its curves' point files
+    (x,y,z in mm) and a CNC points table (polar and Cartesian, mm, every --step-deg).
+    The formats write distinct files, so all can go into one folder."""
     from camopt import archive
     from camopt.reporting.export import export_run
 
@@ -76,7 +81,7 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
         folder = out_dir or run_path.parent
         with writing(folder):
             written = export_run(view, folder, run_path.stem, format.value, force,
-                                 (run_path,))
+                                 (run_path,), step_deg)
     for p in written:
         print(p)
 

@@ -69,6 +69,7 @@ VCB = register_case(CaseSpec(
               ProfileCurve("cam-pitch-curve", ("pitch_x_mm",), ("pitch_y_mm",))),
     circles=(ProfileCircle("base-circle", "rb_mm"),
              ProfileCircle("roller", "rf_mm", ("pitch_x_mm", "pitch_y_mm"))),
+    outline="camopt.cases.vcb.outline:outline",
     resolve=resolve_cam_archive, tolerances=TOLERANCES,
     tolerance_classes=TOLERANCE_CLASSES, requirements=requirements,
     reference="vendor, Sec 2.3 and Table 2",
