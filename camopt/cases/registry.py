@@ -167,7 +167,7 @@ class CaseSpec:
         if self.outline is None:
             return None
         module, _, name = self.outline.partition(":")
-        return getattr(importlib.import_module(module), name)(run, step)  # type: ignore[no-any-return]
+        return getattr(importlib.import_module(module), name)(run, step)
 
 
 _REGISTRY: dict[str, CaseSpec] = {}

@@ -32,8 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.mechanics import Floats
-from camopt.mechanics import cam
+from camopt.mechanics import Floats, cam
 
 TRIAL_SPANS = np.deg2rad(np.arange(1.0, 121.0))
 """Candidate lengths of the approach and the run-out (rad): whole degrees 1..120."""
@@ -42,12 +41,14 @@ _TRIAL_SAMPLES = 97  # samples per candidate segment when judging it
 
 @dataclass(frozen=True)
 class Segment:
-    """One part of the outline: cam angles ``start``..``end`` (rad) and its law in words."""
+    """One part of the outline: cam angles ``start``..``end`` (rad), its law in words and
+    the follower's (phi, phi', phi'') at its two ends as its own law gives them, (2, 3)."""
 
     name: str
     start: float
     end: float
     law: str
+    ends: NDArray
 
 
 @dataclass(frozen=True)
@@ -224,7 +225,8 @@ def closed_outline(a: NDArray, end: float, rise_steps: int, xi: float, l2: float
     coeffs = ", ".join(f"{v:.6g}" for v in a)
     segs = [("approach", -b_a, 0.0, zero, first, "quintic Hermite from the base circle "
              "(C2 joints)"),
-            ("rise", 0.0, end, None, None, f"the design's law phi = sum a_k t**k, a_0.. = {coeffs} (rad)"),
+            ("rise", 0.0, end, None, None,
+             f"the design's law phi = sum a_k t**k, a_0.. = {coeffs} (rad)"),
             ("run-out", end, end + b_o, last, top, "quintic Hermite to zero velocity "
              f"(overtravel {math.degrees(top[0] - last[0]):.3f} deg)"),
             ("top dwell", end + b_o, end + b_o + dwell, top, top, "dwell"),
@@ -233,10 +235,14 @@ def closed_outline(a: NDArray, end: float, rise_steps: int, xi: float, l2: float
             ("base dwell", end + b_o + dwell + fall, 2 * math.pi - b_a, zero, zero,
              "base circle")]
     parts = []
-    for i, (_, t0, t1, p0, p1, _) in enumerate(segs):
-        if p0 is None:
+    states = []
+    for _, t0, t1, p0, p1, _ in segs:
+        if p0 is None or p1 is None:
             parts.append((rise_theta, f_rise, rise_geom))
+            f = cam.Follower.polynomial(a[None, :], np.array([t0, t1]), xi)
+            states.append(np.column_stack([f.phi[0], f.dphi[0], f.ddphi[0]]))
             continue
+        states.append(np.column_stack(hermite5(np.array([0.0, 1.0]), p0, p1, t1 - t0)))
         n = max(1, math.ceil((t1 - t0) / h - 1e-9))
         u = np.linspace(0.0, 1.0, n + 1)
         phi, dphi, ddphi = hermite5(u, p0, p1, t1 - t0)
@@ -264,6 +270,7 @@ def closed_outline(a: NDArray, end: float, rise_steps: int, xi: float, l2: float
         dphi=joined(lambda p: p[1].dphi), ddphi=joined(lambda p: p[1].ddphi),
         pitch=pitch, profile=profile,
         pressure_angle=joined(lambda p: p[2][2]), curvature=joined(lambda p: p[2][3]),
-        segments=tuple(Segment(name, t0, t1, text) for name, t0, t1, _, _, text in segs),
+        segments=tuple(Segment(name, t0, t1, text, ends)
+                       for (name, t0, t1, _, _, text), ends in zip(segs, states)),
         rise=slice(start_rise, start_rise + n_rise + 1), limits=limits, roller=rf,
         arm=l2, pivot=l6, xi=xi)
