@@ -1,5 +1,7 @@
-"""Figures of a tolerance analysis: histograms of the constraints (limit marked) and of
-the metrics (nominal and 5/95 % marked), and a tornado chart of one metric."""
+"""Figures of a tolerance analysis: histograms of the requirements' quantities in their
+units with the limits marked (the run's normalised constraints when its case declares no
+requirement), of the metrics (nominal, 5/95 % and any limit marked), and a tornado chart
+of one metric with its limits and each input's tolerance in its label."""
 
 from __future__ import annotations
 
@@ -8,7 +10,9 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
+from camopt.cases import run_requirements
 from camopt.core.plotting import PAPER_STYLE, new_figure, plt, readable
+from camopt.core.requirements import Requirement
 from camopt.engine.tolerance import Tolerance
 
 LIMIT_STYLE = {"color": "crimson", "linewidth": 1.5}
@@ -26,32 +30,71 @@ def _grid(n: int, title: str) -> tuple[Figure, list]:
     return fig, flat[:n]
 
 
+def limits_of(t: Tolerance) -> dict[str, Requirement]:
+    """The run's requirements with a numeric limit, by the quantity they bound."""
+    if t.run is None:
+        return {}
+    return {r.quantity: r for r in run_requirements(t.run) if not r.flag}
+
+
+def _mark_limits(ax: object, req: Requirement | None) -> None:
+    """Red lines at a requirement's finite lower and upper limits."""
+    if req is None:
+        return
+    for bound, side in ((req.lower, "lower"), (req.upper, "upper")):
+        if math.isfinite(bound):
+            ax.axvline(bound, label=f"{side} limit", **LIMIT_STYLE)  # type: ignore[attr-defined]
+
+
 def constraint_histograms(t: Tolerance) -> Figure:
-    """Each normalised constraint g over the samples; the limit g = 0 in red (feasible
-    at or left of it)."""
+    """Each requirement's quantity over the samples in its unit with its limits in red
+    and its yield in the title; a case without requirements shows the run's normalised
+    constraints g (limit g = 0, feasible at or left of it)."""
     yield_pct = 100 * float(np.mean(t.samples.feasible))
-    fig, axes = _grid(len(t.constraint_names), f"Constraints over {len(t.inputs)} samples "
-                      f"(yield {yield_pct:.1f} %)")
-    for ax, i, name in zip(axes, range(len(t.constraint_names)), t.constraint_names):
-        g = t.samples.g[:, i]
-        ax.hist(g[np.isfinite(g)], bins=40, color="tab:blue", alpha=0.8)
-        ax.axvline(0.0, label="limit", **LIMIT_STYLE)
-        ax.set_xlabel(f"{name} (normalised g)")
+    title = f"Requirements over {len(t.inputs)} samples (yield {yield_pct:.1f} %)"
+    columns = t.metric_columns(t.samples)
+    reqs = [r for r in limits_of(t).values() if r.quantity in columns]
+    if not reqs:
+        fig, axes = _grid(len(t.constraint_names), title.replace("Requirements",
+                                                                   "Constraints"))
+        for ax, i, name in zip(axes, range(len(t.constraint_names)), t.constraint_names):
+            g = t.samples.g[:, i]
+            ax.hist(g[np.isfinite(g)], bins=40, color="tab:blue", alpha=0.8)
+            ax.axvline(0.0, label="limit", **LIMIT_STYLE)
+            ax.set_xlabel(f"{name} (normalised g)")
+            ax.set_ylabel("samples")
+        return fig
+    yields = {row["quantity"]: row["yield"] for row in t.summary.get("requirements", [])}
+    fig, axes = _grid(len(reqs), title)
+    for ax, req in zip(axes, reqs):
+        values = columns[req.quantity]
+        ax.hist(values[np.isfinite(values)], bins=40, color="tab:blue", alpha=0.8)
+        _mark_limits(ax, req)
+        ax.axvline(t.summary["nominal"][req.quantity], color="black", linewidth=1.2,
+                   label="nominal")
+        share = yields.get(req.quantity)
+        ax.set_title(f"{req.name}" + (f": {100 * share:.1f} % pass" if share is not None
+                                      else ""), fontsize=8)
+        ax.set_xlabel(f"{readable(req.quantity)} ({req.unit})" if req.unit
+                      else readable(req.quantity))
         ax.set_ylabel("samples")
     return fig
 
 
 def metric_histograms(t: Tolerance) -> Figure:
-    """Every metric the varied inputs move: nominal (solid) and 5/95 % (dashed)."""
+    """Every metric the varied inputs move: nominal (solid), 5/95 % (dashed) and the
+    limits of a requirement on it (red)."""
     columns = {k: v for k, v in t.metric_columns(t.samples).items()
                if np.isfinite(v).any() and np.ptp(v[np.isfinite(v)]) > 0}
     nominal = t.summary["nominal"]
+    limits = limits_of(t)
     fig, axes = _grid(max(len(columns), 1), f"Metrics over {len(t.inputs)} samples")
     for ax, (name, values) in zip(axes, columns.items()):
         ax.hist(values[np.isfinite(values)], bins=40, color="tab:blue", alpha=0.8)
         ax.axvline(nominal[name], color="black", linewidth=1.2, label="nominal")
         for q in ("p05", "p95"):
             ax.axvline(t.summary["metrics"][name][q], **PAPER_STYLE)
+        _mark_limits(ax, limits.get(name))
         ax.set_xlabel(readable(name))
         ax.set_ylabel("samples")
     return fig
@@ -59,20 +102,34 @@ def metric_histograms(t: Tolerance) -> Figure:
 
 def tornado(t: Tolerance, metric: str) -> Figure:
     """One-at-a-time swings of ``metric``: each input at either end of its tolerance, the
-    others nominal; widest swing on top."""
+    others nominal; widest swing on top. Each bar runs from the nominal value to the
+    metric's value with the input at that end: the orange bar ends where the input at +X
+    puts the metric, the blue where -X does (whichever side of nominal that is). Labels
+    carry each input's tolerance; a requirement's limits on the metric are red lines."""
     rows = t.summary["one_at_a_time"][metric]
     base = t.summary["nominal"][metric]
+    tolerances = {v["input"]: v for v in t.summary.get("vary", [])}
     rows = sorted(rows, key=lambda r: abs(r["high"] - r["low"]))
     fig, ax = new_figure(f"Tornado: {readable(metric)} (nominal {base:.4g})",
                          readable(metric), "input at -X / +X")
     for y, r in enumerate(rows):
-        for end, color in (("low", "tab:blue"), ("high", "tab:orange")):
-            ax.barh(y, r[end] - base, left=base, color=color,
-                    label=f"input at {'-' if end == 'low' else '+'}X" if y == 0 else None)
-    ax.set_yticks(range(len(rows)), [r["input"] for r in rows])
+        for end, color, sign in (("low", "tab:blue", "-"), ("high", "tab:orange", "+")):
+            ax.barh(y, r[end] - base, left=base, color=color, alpha=0.85,
+                    label=f"input at {sign}X" if y == 0 else None, gid=f"{end}-{y}")
+    ax.set_yticks(range(len(rows)), [_tolerance_label(r["input"], tolerances)
+                                     for r in rows])
     ax.axvline(base, color="black", linewidth=1.0)
-    ax.legend()
+    _mark_limits(ax, limits_of(t).get(metric))
+    ax.legend(fontsize=7)
     return fig
+
+
+def _tolerance_label(name: str, tolerances: dict[str, dict]) -> str:
+    """``kc1_n_per_mm ±5%`` or ``case.l1_mm ±0.05``: the input and the tolerance used."""
+    v = tolerances.get(name)
+    if v is None:
+        return name
+    return f"{name} ±{v['tolerance']:g}{'%' if v['unit'] == '%' else ''}"
 
 
 def figures(t: Tolerance, metric: str | None = None) -> dict[str, Figure]:

@@ -146,11 +146,17 @@ def test_figures_mark_limits_and_swings(vcb_run, tmp_path):
                       parse_vary("r", "case.l1_mm=±0.1")], 500, 0)
     figs = figures(t, "closing_velocity_avg_m_s")
     assert set(figs) == {"constraints", "metrics", "tornado"}
-    first = figs["constraints"].axes[0]
-    assert first.get_xlabel().endswith("(normalised g)") and first.lines[0].get_xdata()[0] == 0
+    # requirements in their units, each limit a line at its value
+    by_label = {ax.get_xlabel(): ax for ax in figs["constraints"].axes if ax.get_visible()}
+    travel = by_label[f"{readable('rod_travel_mm')} (mm)"]
+    limits = sorted(line.get_xdata()[0] for line in travel.lines
+                    if line.get_label().endswith("limit"))
+    tol = run.case["rod_travel_tolerance_mm"]
+    assert limits == pytest.approx([18.0 - tol, 18.0 + tol])
     ax = figs["tornado"].axes[0]
-    # both inputs drawn (which swings the closing velocity most depends on the design)
-    assert {t.get_text() for t in ax.get_yticklabels()} == {"kc1_n_per_mm", "case.l1_mm"}
+    # both inputs drawn with their tolerance (which swings most depends on the design)
+    assert {t.get_text() for t in ax.get_yticklabels()} == {"kc1_n_per_mm ±5%",
+                                                            "case.l1_mm ±0.1"}
     assert ax.get_xlabel() == readable("closing_velocity_avg_m_s")
     r = invoke("tolerance", vcb_run, "--samples", 200, *VARY, "--plot", tmp_path / "p",
                "--tornado", "tau_max_mpa")
