@@ -87,6 +87,25 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
 
 
 @app.command()
+def dashboard(folder: Annotated[Path, typer.Argument(help="folder of archives")] = Path("runs"),
+              out: Annotated[Path | None, typer.Option(
+                  "--out", help="HTML file to write (default: FOLDER/index.html)")] = None,
+              force: Annotated[bool, typer.Option(help="overwrite --out")] = False) -> None:
+    """Write one self-contained HTML page over a folder's archives (no server, opens from
+    file://): case, verdict, expected yield, objective, date and seed of each; sort,
+    filter, tick two runs to see only what differs; links to the reports beside them."""
+    from camopt import archive
+    from camopt.cli.catalog import write_text
+    from camopt.reporting.dashboard import render
+
+    with errors():
+        target = out or folder / "index.html"
+        archive.check_writable(target, force)
+        write_text(target, render(folder), force)
+    print(target)
+
+
+@app.command()
 def report(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="archive")],
            out: Annotated[Path | None, typer.Option(
                "--out", help="HTML file to write (default: the archive's name with .html)")]
