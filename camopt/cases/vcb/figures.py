@@ -79,6 +79,14 @@ def _window(a: dict, prefix: str, gap: float) -> tuple[float, float] | None:
                  for i, level in zip(first, (2 * gap / 3, gap)))  # type: ignore[return-value]
 
 
+def _finite(metrics: dict, names: list[str]) -> list[float] | None:
+    """The metrics ``names`` as floats, or None unless all are finite numbers."""
+    values = [metrics.get(n) for n in names]
+    if all(isinstance(v, (int, float)) and np.isfinite(v) for v in values):
+        return [float(v) for v in values]  # type: ignore[arg-type]
+    return None
+
+
 def _dynamics(a: dict, run: RunView) -> dict[str, Figure]:
     """Closing against time: displacements and velocities of rod and movable contact, with
     what a breaker engineer reads on them: the contact gap, the window of the average
@@ -109,8 +117,8 @@ def _dynamics(a: dict, run: RunView) -> dict[str, Figure]:
         if window is not None:
             ax.axvspan(*window, color="tab:blue", alpha=0.12,
                        label="closing-velocity window (last third of the gap)")
-        touch = [m.get(f"touch_time{s}_ms") for s in ("", "_low", "_high")]
-        if all(isinstance(v, float) and np.isfinite(v) for v in touch):
+        touch = _finite(m, [f"touch_time{s}_ms" for s in ("", "_low", "_high")])
+        if touch is not None:
             ax.axvline(touch[0], color="k", lw=0.9, ls="--", label="contacts touch")
             if touch[2] > touch[1]:
                 ax.axvspan(touch[1], touch[2], color="grey", alpha=0.2,
@@ -120,8 +128,8 @@ def _dynamics(a: dict, run: RunView) -> dict[str, Figure]:
         if key == "velocity_m_s":
             ax.axhspan(float(band[0]), float(band[1]), color="tab:green", alpha=0.12,
                        label=f"required {band[0]:g}-{band[1]:g} m/s")
-            v = [m.get(f"closing_velocity{s}_m_s") for s in ("_avg", "_low", "_high")]
-            if window is not None and all(isinstance(x, float) and np.isfinite(x) for x in v):
+            v = _finite(m, [f"closing_velocity{s}_m_s" for s in ("_avg", "_low", "_high")])
+            if window is not None and v is not None:
                 mid = sum(window) / 2
                 ax.errorbar([mid], [v[0]], yerr=[[v[0] - v[1]], [v[2] - v[0]]], fmt="o",
                             color="tab:red", capsize=4,
