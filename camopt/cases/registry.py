@@ -82,6 +82,19 @@ class ToleranceClass:
 
 
 @dataclass(frozen=True)
+class OverlayCurve:
+    """An analysis curve drawn for several runs on one axes (``camopt plot A.h5 B.h5``):
+    a figure ``name`` and ``title``, the analysis curves of x and y and their labels."""
+
+    name: str
+    title: str
+    x: str
+    y: str
+    xlabel: str
+    ylabel: str
+
+
+@dataclass(frozen=True)
 class CaseSpec:
     """Everything camopt needs to know about one mechanism.
 
@@ -101,6 +114,9 @@ class CaseSpec:
     figures: str | None = None
     profiles: tuple[ProfileCurve, ...] = ()
     circles: tuple[ProfileCircle, ...] = ()
+    overlays: tuple[OverlayCurve, ...] = ()
+    """Curves ``camopt plot A.h5 B.h5`` draws for both runs on the same axes (the
+    ``profiles`` are overlaid too)."""
     outline: str | None = None
     """``"module:function"`` giving a run's closed cam outline for the workshop,
     ``function(run, step_rad | None) -> CamOutline | None`` (imported when exported)."""

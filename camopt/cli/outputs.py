@@ -36,24 +36,34 @@ class ExportFormat(str, enum.Enum):
 
 
 @app.command()
-def plot(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="archive")],
+def plot(paths: Annotated[list[Path], typer.Argument(
+             metavar="RUN_OR_SWEEP [RUN...]",
+             help="archive; two or more runs of one case: drawn on the same axes")],
          out_dir: Annotated[Path | None, typer.Option("--out", help="folder for the PNGs")]
          = None,
          force: Annotated[bool, typer.Option(help="replace existing PNGs of these names")]
          = False) -> None:
-    """Write PNG figures: convergence and the case's curves."""
+    """Write PNG figures: convergence and the case's curves; given several runs, their
+    cam profiles and travel and velocity curves overlaid (``A-vs-B-<figure>.png``)."""
     from camopt import archive
     from camopt.archive.sweeps import load_sweep
     from camopt.reporting import plots
 
     with errors():
-        folder = out_dir or path.parent / f"{path.stem}-plots"
-        if archive.archive_kind(path) == "sweep":
+        path = paths[0]
+        stem = "-vs-".join(p.stem for p in paths)
+        folder = out_dir or path.parent / f"{stem}-plots"
+        if len(paths) > 1:
+            runs = [archive.load_run(p) for p in paths]
+            labels = [p.stem if [q.stem for q in paths].count(p.stem) == 1 else str(p)
+                      for p in paths]
+            figures = plots.overlay_figures(runs, labels)
+        elif archive.archive_kind(path) == "sweep":
             figures = plots.sweep_figures(*load_sweep(path))
         else:
             figures = plots.run_figures(archive.load_run(path))
         with writing(folder):
-            written = plots.save(figures, folder, path.stem, force, (path,))
+            written = plots.save(figures, folder, stem, force, tuple(paths))
     for p in written:
         print(p)
 

@@ -127,6 +127,54 @@ def pareto_front(run: RunView) -> Figure:
     return fig
 
 
+def overlay_figures(runs: list[RunView], labels: list[str]) -> dict[str, Figure]:
+    """Several runs of one case kind on the same axes: each cam profile (the case's
+    ``profiles``, equal aspect, the cam pivot at the origin; the closed full-turn outline
+    where the case has one) and each of the case's
+    ``overlays`` (travel and velocity against time), one line per run labelled by
+    ``labels``; a curve some run's archive lacks is drawn for the others. Runs of
+    different kinds are bad input (ConfigError)."""
+    from camopt.errors import ConfigError
+
+    kinds = {r.kind for r in runs}
+    if len(kinds) > 1:
+        raise ConfigError(runs[1].path, "RUN", f"case '{runs[1].kind}' cannot be overlaid "
+                          f"on case '{runs[0].kind}': give runs of one case kind")
+    spec = get_case(runs[0].kind)
+    title = " vs ".join(labels)
+    figs: dict[str, Figure] = {}
+    from camopt.units import MM
+
+    for curve in spec.profiles:
+        fig, ax = new_figure(f"{curve.name}: {title}", "x (mm)", "y (mm)")
+        for run, label in zip(runs, labels):
+            a = run.analysis
+            outline = spec.cam_outline(run) if curve.name == "cam-profile" else None
+            if outline is not None:  # the full turn the workshop cuts (export --format dxf)
+                closed = np.vstack([outline.profile, outline.profile[:1]]) / MM
+                ax.plot(closed[:, 0], closed[:, 1], label=f"{label} (full turn)")
+            elif all(k in a for k in (*curve.x, *curve.y)):
+                ax.plot(np.concatenate([a[k] for k in curve.x]),
+                        np.concatenate([a[k] for k in curve.y]), label=label)
+        ax.plot([0], [0], "k+", markersize=12, label="cam pivot")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.legend(fontsize=8)
+        figs[curve.name] = fig
+    for o in spec.overlays:
+        fig, ax = new_figure(f"{o.title}: {title}", o.xlabel, o.ylabel)
+        for run, label in zip(runs, labels):
+            a = run.analysis
+            if o.x in a and o.y in a and np.size(a[o.x]) == np.size(a[o.y]):
+                ax.plot(a[o.x], a[o.y], label=label)
+        if not ax.lines:
+            ax.text(0.5, 0.5, "no run holds this curve", transform=ax.transAxes,
+                    ha="center")
+        else:
+            ax.legend(fontsize=8)
+        figs[o.name] = fig
+    return figs
+
+
 def sweep_figures(spec: Any, results: dict) -> dict[str, Figure]:
     """Convergence against function evaluations, one line per grid point (grid points of
     different population sizes spend different evaluations per generation)."""

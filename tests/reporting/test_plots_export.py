@@ -209,3 +209,38 @@ def test_vcb_closing_velocity_figure_reads_like_a_breaker_test(tmp_path):
     (avg,) = [c for c in ax.containers if c.get_label().startswith("average")]
     assert avg.lines[0].get_ydata()[0] == pytest.approx(m["closing_velocity_avg_m_s"])
     assert spans
+
+
+def test_plot_overlays_two_runs_of_one_case(case_run, tmp_path):
+    """``camopt plot A.h5 B.h5``: every overlay figure holds one line per run, labelled by
+    its archive, drawn from that archive's curves; runs of two kinds are bad input."""
+    name, path = case_run
+    if name != "vcb":
+        pytest.skip("the VCB declares overlays (and a closed outline)")
+    other = tmp_path / "other.h5"
+    archive.write_run(execute(load(CONFIGS / "vcb.toml", "run.repeats=1",
+                                   "solver.generations=5", "run.seed=7")), other)
+    runs = [archive.load_run(p) for p in (path, other)]
+    figs = plots.overlay_figures(runs, [path.stem, "other"])
+    assert {"cam-profile", "closing_travel", "closing_velocity", "rod_travel"} <= set(figs)
+    travel = figs["rod_travel"].axes[0]
+    assert [line.get_label() for line in travel.lines] == [path.stem, "other"]
+    for line, run in zip(travel.lines, runs):
+        assert np.array_equal(line.get_ydata(), run.analysis["rod_travel_mm"])
+    profile = figs["cam-profile"].axes[0]
+    closed = [line for line in profile.lines if line.get_label().endswith("(full turn)")]
+    assert len(closed) == 2
+    for line in closed:  # closed: the first point again at the end
+        assert (line.get_xdata()[0], line.get_ydata()[0]) == (line.get_xdata()[-1],
+                                                              line.get_ydata()[-1])
+    for fig in figs.values():
+        close(fig)
+    r = runner.invoke(app, ["plot", str(path), str(other), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "o" / f"{path.stem}-vs-other-closing_velocity.png").exists()
+    fs = tmp_path / "fs.h5"
+    assert runner.invoke(app, ["run", str(CONFIGS / "fast_switch.toml"), "--out", str(fs),
+                               "--quiet"]).exit_code == 0
+    bad = runner.invoke(app, ["plot", str(path), str(fs), "--out", str(tmp_path / "x")])
+    assert bad.exit_code == 2 and "cannot be overlaid" in bad.stderr
+    assert not (tmp_path / "x").exists()
