@@ -60,6 +60,11 @@ def plot(paths: Annotated[list[Path], typer.Argument(
             figures = plots.overlay_figures(runs, labels)
         elif archive.archive_kind(path) == "sweep":
             figures = plots.sweep_figures(*load_sweep(path))
+        elif archive.archive_kind(path) == "tolerance":
+            from camopt.archive.samples import load_samples
+            from camopt.reporting.tolerance_figures import figures as tolerance_figures
+
+            figures = tolerance_figures(load_samples(path))
         else:
             figures = plots.run_figures(archive.load_run(path))
         with writing(folder):
