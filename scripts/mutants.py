@@ -131,10 +131,11 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
                                "np.column_stack([nom_g, np.maximum(nom_worst, 0.0)])"),
     # the tolerance tornado's +X bar at the input's +X value (issue #37: survived every test)
     "tornado_plus_at_minus": ("camopt/reporting/tolerance_figures.py",
-                              '(("low", "tab:blue"), ("high", "tab:orange"))',
-                              '(("low", "tab:blue"), ("low", "tab:orange"))'),
+                              '(("low", "tab:blue", "-"), ("high", "tab:orange", "+"))',
+                              '(("low", "tab:blue", "-"), ("low", "tab:orange", "+"))'),
     "tornado_ends_swapped": ("camopt/reporting/tolerance_figures.py",
-                             "{'-' if end == 'low' else '+'}X", "{'+' if end == 'low' else '-'}X"),
+                             '("low", "tab:blue", "-"), ("high", "tab:orange", "+")',
+                             '("low", "tab:blue", "+"), ("high", "tab:orange", "-")'),
     # the polish under the run's budget (issue #37)
     "polish_unmetered": ("camopt/solvers/polish.py",
                          "reason = self.budget.spent(self.used + self.count + len(X))",

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -17,7 +18,8 @@ import h5py
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.archive.files import atomic_write, claim, versions
+from camopt.archive.files import atomic_write, claim, open_archive, versions
+from camopt.errors import ArchiveError
 
 SCHEMA_VERSION = 1
 
@@ -43,3 +45,39 @@ def write_samples(path: str | Path, summary: Mapping[str, Any], inputs: Mapping[
 
     with claim(path, force):  # one writer per archive; never over another's file
         return atomic_write(path, write, replace=force)
+
+
+@dataclass(frozen=True)
+class ToleranceSamples:
+    """A tolerance analysis as figures and reports read it, from a live analysis or a
+    sample archive: the ``tolerance --format json`` summary, each metric's samples
+    ``columns`` (n,), the normalised constraints ``g`` (n, m) named ``constraint_names``
+    and ``feasible`` (n,)."""
+
+    summary: dict[str, Any]
+    columns: dict[str, NDArray]
+    g: NDArray
+    constraint_names: tuple[str, ...]
+    feasible: NDArray
+    path: str = ""
+    created: str = ""
+
+
+def load_samples(path: str | Path) -> ToleranceSamples:
+    """Read a sample archive (``archive_kind = "tolerance"``); anything else, or one that
+    lacks its summary or datasets, is an ArchiveError naming the file."""
+    with open_archive(path) as f:
+        try:
+            if str(f.attrs.get("archive_kind", "run")) != "tolerance":
+                raise ArchiveError(f"{path}: archive: not a tolerance archive")
+            summary = json.loads(str(f.attrs["summary"]))
+            columns = {k: np.asarray(v[()], dtype=float) for k, v in f["metrics"].items()}
+            names = tuple(json.loads(str(f["g"].attrs["names"])))
+            return ToleranceSamples(summary, columns, np.asarray(f["g"][()], dtype=float),
+                                    names, np.asarray(f["feasible"][()], dtype=bool),
+                                    str(path), str(f.attrs.get("created", "")))
+        except ArchiveError:
+            raise
+        except Exception as exc:  # a damaged attribute or dataset: one line, no traceback
+            raise ArchiveError(f"{path}: archive: damaged tolerance archive "
+                               f"({type(exc).__name__})") from None

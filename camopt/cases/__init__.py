@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from camopt.cases.registry import (
     CaseSpec,
+    OverlayCurve,
     ProfileCircle,
     ProfileCurve,
     case_configs,
@@ -21,5 +22,5 @@ def build_problem(config: CaseConfig) -> Problem:
     return get_case(config.kind).build(config)
 
 
-__all__ = ["CaseSpec", "ProfileCircle", "ProfileCurve", "build_problem", "case_configs",
-           "cases", "get_case", "register_case", "run_requirements"]
+__all__ = ["CaseSpec", "OverlayCurve", "ProfileCircle", "ProfileCurve", "build_problem",
+           "case_configs", "cases", "get_case", "register_case", "run_requirements"]

@@ -27,6 +27,7 @@ if TYPE_CHECKING:
 
     from camopt.core.calibration import CalibrationReport, CalibrationRequest
     from camopt.core.runview import RunView
+    from camopt.mechanics.cam_outline import CamOutline
 
 ENTRY_POINT_GROUP = "camopt.cases"
 
@@ -82,6 +83,19 @@ class ToleranceClass:
 
 
 @dataclass(frozen=True)
+class OverlayCurve:
+    """An analysis curve drawn for several runs on one axes (``camopt plot A.h5 B.h5``):
+    a figure ``name`` and ``title``, the analysis curves of x and y and their labels."""
+
+    name: str
+    title: str
+    x: str
+    y: str
+    xlabel: str
+    ylabel: str
+
+
+@dataclass(frozen=True)
 class CaseSpec:
     """Everything camopt needs to know about one mechanism.
 
@@ -101,6 +115,12 @@ class CaseSpec:
     figures: str | None = None
     profiles: tuple[ProfileCurve, ...] = ()
     circles: tuple[ProfileCircle, ...] = ()
+    overlays: tuple[OverlayCurve, ...] = ()
+    """Curves ``camopt plot A.h5 B.h5`` draws for both runs on the same axes (the
+    ``profiles`` are overlaid too)."""
+    outline: str | None = None
+    """``"module:function"`` giving a run's closed cam outline for the workshop,
+    ``function(run, step_rad | None) -> CamOutline | None`` (imported when exported)."""
     paper: Mapping[str, Any] = field(default_factory=dict)
     resolve: Callable[[CaseConfig, ArchiveLoader], CaseConfig] | None = None
     tolerances: Mapping[str, str] = field(default_factory=dict)
@@ -170,6 +190,14 @@ class CaseSpec:
             return {}
         module, _, name = self.figures.partition(":")
         return getattr(importlib.import_module(module), name)(run)
+
+    def cam_outline(self, run: RunView, step: float | None = None) -> CamOutline | None:
+        """The run's closed cam outline (None when the case draws none or the archive
+        lacks the law); ``step`` its sampling in rad (None: the case's grid)."""
+        if self.outline is None:
+            return None
+        module, _, name = self.outline.partition(":")
+        return getattr(importlib.import_module(module), name)(run, step)
 
 
 _REGISTRY: dict[str, CaseSpec] = {}

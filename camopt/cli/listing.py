@@ -9,10 +9,10 @@ from typing import Annotated
 
 import typer
 from rich.markup import escape
-from rich.table import Table
 
 from camopt.cli.app import Format, app, errors
 from camopt.cli.console import out
+from camopt.cli.layout import print_table
 
 
 @app.command(name="runs")
@@ -42,16 +42,10 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
     if not rows:
         out.print(f"no archives in {escape(str(folder))}")
         return
-    table = Table(title=escape(f"{folder}: {len(rows)} archives, newest first"),
-                  title_justify="left")
-    table.add_column("archive", overflow="fold")
-    table.add_column("case", overflow="fold")
-    table.add_column("verdict", overflow="fold")
-    table.add_column("objective", justify="right", no_wrap=True)
-    table.add_column("created (UTC)", no_wrap=True)
-    for r in rows:
-        kind = "" if r["archive"] == "run" else f" ({r['archive']})"
-        table.add_row(escape(Path(r["path"]).name + kind), escape(r["case"]),
-                      escape(r["verdict"]), escape(format_value(r["objective"])),
-                      escape(r["created"][:16].replace("T", " ")))
-    out.print(table)
+    cells = [[Path(r["path"]).name + ("" if r["archive"] == "run" else f" ({r['archive']})"),
+              r["case"], r["verdict"], format_value(r["objective"]),
+              r["created"][:16].replace("T", " ")] for r in rows]
+    # columns when every name fits, else one archive per heading (never a split name)
+    print_table(f"{folder}: {len(rows)} archives, newest first (times UTC)",
+                ["archive", "case", "verdict", "objective", "created"], cells,
+                numeric=[False, False, False, True, False])

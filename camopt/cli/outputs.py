@@ -36,24 +36,39 @@ class ExportFormat(str, enum.Enum):
 
 
 @app.command()
-def plot(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="archive")],
+def plot(paths: Annotated[list[Path], typer.Argument(
+             metavar="RUN_OR_SWEEP [RUN...]",
+             help="archive; two or more runs of one case: drawn on the same axes")],
          out_dir: Annotated[Path | None, typer.Option("--out", help="folder for the PNGs")]
          = None,
          force: Annotated[bool, typer.Option(help="replace existing PNGs of these names")]
          = False) -> None:
-    """Write PNG figures: convergence and the case's curves."""
+    """Write PNG figures: convergence and the case's curves; given several runs, their
+    cam profiles and travel and velocity curves overlaid (``A-vs-B-<figure>.png``)."""
     from camopt import archive
     from camopt.archive.sweeps import load_sweep
     from camopt.reporting import plots
 
     with errors():
-        folder = out_dir or path.parent / f"{path.stem}-plots"
-        if archive.archive_kind(path) == "sweep":
+        path = paths[0]
+        stem = "-vs-".join(p.stem for p in paths)
+        folder = out_dir or path.parent / f"{stem}-plots"
+        if len(paths) > 1:
+            runs = [archive.load_run(p) for p in paths]
+            labels = [p.stem if [q.stem for q in paths].count(p.stem) == 1 else str(p)
+                      for p in paths]
+            figures = plots.overlay_figures(runs, labels)
+        elif archive.archive_kind(path) == "sweep":
             figures = plots.sweep_figures(*load_sweep(path))
+        elif archive.archive_kind(path) == "tolerance":
+            from camopt.archive.samples import load_samples
+            from camopt.reporting.tolerance_figures import figures as tolerance_figures
+
+            figures = tolerance_figures(load_samples(path))
         else:
             figures = plots.run_figures(archive.load_run(path))
         with writing(folder):
-            written = plots.save(figures, folder, path.stem, force, (path,))
+            written = plots.save(figures, folder, stem, force, tuple(paths))
     for p in written:
         print(p)
 
@@ -64,10 +79,15 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
            = ExportFormat.csv,
            out_dir: Annotated[Path | None, typer.Option("--out", help="output folder")] = None,
            force: Annotated[bool, typer.Option(help="replace existing files of these names")]
-           = False) -> None:
-    """Export the summary and analysis curves (csv or json) or the cam profiles, base
-    circle and roller as a DXF drawing in mm (dxf); every format also writes the profiles'
-    point files (x,y,z in mm)."""
+           = False,
+           step_deg: Annotated[float, typer.Option(
+               "--step-deg", help="angle step of the dxf's CNC points table (deg)")] = 1.0
+           ) -> None:
+    """Export the summary and analysis curves (csv or json) or, for the workshop, the cam
+    as a DXF drawing in mm (dxf: the closed full-turn outline where the case has one, base
+    circle, roller and its path, pivots, datum and notes) with its curves' point files
+    (x,y,z in mm) and a CNC points table (polar and Cartesian, mm, every --step-deg).
+    The formats write distinct files, so all can go into one folder."""
     from camopt import archive
     from camopt.reporting.export import export_run
 
@@ -76,9 +96,28 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
         folder = out_dir or run_path.parent
         with writing(folder):
             written = export_run(view, folder, run_path.stem, format.value, force,
-                                 (run_path,))
+                                 (run_path,), step_deg)
     for p in written:
         print(p)
+
+
+@app.command()
+def dashboard(folder: Annotated[Path, typer.Argument(help="folder of archives")] = Path("runs"),
+              out: Annotated[Path | None, typer.Option(
+                  "--out", help="HTML file to write (default: FOLDER/index.html)")] = None,
+              force: Annotated[bool, typer.Option(help="overwrite --out")] = False) -> None:
+    """Write one self-contained HTML page over a folder's archives (no server, opens from
+    file://): case, verdict, expected yield, objective, date and seed of each; sort,
+    filter, tick two runs to see only what differs; links to the reports beside them."""
+    from camopt import archive
+    from camopt.cli.catalog import write_text
+    from camopt.reporting.dashboard import render
+
+    with errors():
+        target = out or folder / "index.html"
+        archive.check_writable(target, force)
+        write_text(target, render(folder), force)
+    print(target)
 
 
 @app.command()

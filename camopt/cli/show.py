@@ -24,22 +24,29 @@ def show(run_paths: Annotated[list[Path], typer.Argument(
          format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
          ) -> None:
     """Show archives: a run's best design beside the reference design, its repeats and
-    table; a sweep's grid points ranked (as compare SWEEP). Several archives (a glob such
+    table; a sweep's grid points ranked (as compare SWEEP); a tolerance archive's yield
+    and spreads (as ``camopt tolerance`` printed them). Several archives (a glob such
     as runs/NAME-*.h5) are each shown, in the order given (a glob's order: oldest
     first, as the names carry the time); with --format json, as a JSON array."""
     from camopt import archive
     from camopt.archive.sweeps import load_sweep
     from camopt.reporting import report
+    from camopt.reporting.report import jsonable
 
     with errors():  # every archive read before anything is printed
         loaded: list[tuple[str, Any]] = []
         for path in run_paths:
-            if archive.archive_kind(path) == "sweep":
+            kind = archive.archive_kind(path)
+            if kind == "sweep":
                 loaded.append(("sweep", report.rank_sweep(*load_sweep(path))))
+            elif kind == "tolerance":
+                from camopt.archive.samples import load_samples
+
+                loaded.append(("tolerance", jsonable(load_samples(path).summary)))
             else:
                 loaded.append(("run", archive.load_run(path)))
     if format is Format.json:
-        docs = [item if kind == "sweep" else report.show(item) for kind, item in loaded]
+        docs = [item if kind != "run" else report.show(item) for kind, item in loaded]
         sys.stdout.write(json.dumps(docs[0] if len(docs) == 1 else docs, indent=2) + "\n")
         return
     for i, (kind, item) in enumerate(loaded):
@@ -47,6 +54,10 @@ def show(run_paths: Annotated[list[Path], typer.Argument(
             out.print()
         if kind == "sweep":
             print_ranking(item)
+        elif kind == "tolerance":
+            from camopt.cli.tolerance import print_tolerance
+
+            print_tolerance(item)
         else:
             print_show(item)
 

@@ -147,8 +147,9 @@ def sentence(checks: Sequence[Check]) -> str:
 
 def yields(requirements: Sequence[Requirement], samples: Mapping[str, NDArray],
            ) -> list[dict[str, Any]]:
-    """Per requirement, the share of ``samples`` (``{quantity: (n,)}``) that passes and the
-    margin's percentiles; requirements whose quantity is not sampled are left out."""
+    """Per requirement, its finite limits (``lower``/``upper``, None when unbounded), the
+    share of ``samples`` (``{quantity: (n,)}``) that passes and the margin's percentiles;
+    requirements whose quantity is not sampled are left out."""
     out = []
     for r in requirements:
         if r.quantity not in samples:
@@ -158,6 +159,8 @@ def yields(requirements: Sequence[Requirement], samples: Mapping[str, NDArray],
         finite = m[np.isfinite(m)]
         pct = (np.percentile(finite, [5, 50]).tolist() if finite.size else [None, None])
         out.append({"name": r.name, "quantity": r.quantity, "limit": r.limit,
+                    "lower": r.lower if math.isfinite(r.lower) else None,
+                    "upper": r.upper if math.isfinite(r.upper) else None, "flag": r.flag,
                     "unit": r.unit, "yield": float(np.mean(r.passes(v))),
                     "margin_p5": pct[0], "margin_p50": pct[1]})
     return out

@@ -114,15 +114,29 @@ def sweep_context(path: Path) -> dict[str, Any]:
 
 
 def render(path: Path) -> str:
-    """The HTML page of a run or sweep archive."""
+    """The HTML page of a run, sweep or tolerance archive."""
     import jinja2
 
     env = jinja2.Environment(loader=jinja2.PackageLoader("camopt.reporting", "templates"),
                              autoescape=True, undefined=jinja2.StrictUndefined,
                              trim_blocks=True, lstrip_blocks=True)
     env.filters["num"] = number
-    if archive.archive_kind(path) == "sweep":
+    kind = archive.archive_kind(path)
+    if kind == "tolerance":
+        return env.get_template("tolerance.html.j2").render(**tolerance_context(path))
+    if kind == "sweep":
         context = sweep_context(path)
     else:
         context = run_context(archive.load_run(path))
     return env.get_template("report.html.j2").render(**context)
+
+
+def tolerance_context(path: Path) -> dict[str, Any]:
+    """What the page shows of a tolerance archive: its summary (``s``, as ``tolerance
+    --format json`` printed it) and its figures drawn from the stored samples."""
+    from camopt.archive.samples import load_samples
+    from camopt.reporting.tolerance_figures import figures
+
+    samples = load_samples(path)
+    return {"title": path.name, "s": report.jsonable(samples.summary),
+            "created": samples.created, "figures": _figures(figures(samples))}

@@ -103,9 +103,11 @@ def run_figures(run: RunView) -> dict[str, Figure]:
 
 
 def pareto_front(run: RunView) -> Figure:
-    """The Pareto set in its first two objectives, infeasible members hollow, and the
-    reference design (:func:`camopt.reporting.report.reference`) marked when both its values are
-    known."""
+    """The Pareto set in its first two objectives, infeasible members hollow, with the
+    reference design (:func:`camopt.reporting.report.reference`), the front's knee
+    (:func:`camopt.core.pareto.summary`) and the headline design (the best by the run's
+    scalar objective) marked; one whose value is unknown or unbounded is named in a note
+    with the reason instead."""
     names, _ = pareto.objectives(run)
     a, b = names[:2]
     fig, ax = new_figure(f"Pareto front ({len(run.table)} designs)", readable(a), readable(b))
@@ -119,12 +121,86 @@ def pareto_front(run: RunView) -> Figure:
     from camopt.reporting.report import reference
 
     label, ref = reference(run)  # one name everywhere: "reference: vendor, Sec 2.3 ..."
-    point = [ref.get(n) for n in (a, b)]
-    if label and all(isinstance(v, (int, float)) and np.isfinite(v) for v in point):
-        ax.scatter([point[0]], [point[1]], marker="*", s=160, color=PAPER_STYLE["color"],
-                   label=label, zorder=3)
-    ax.legend()
+    notes = []
+    marks: list[tuple[str, list[Any], dict[str, Any]]] = [
+        (label, [ref.get(n) for n in (a, b)],
+         {"marker": "*", "s": 160, "color": PAPER_STYLE["color"]})] if label else []
+    doc = pareto.summary(run) or {}
+    if doc.get("knee") is None:
+        notes.append("knee: none (no feasible design on the front)")
+    else:
+        marks.append(("knee", [doc["knee"].get(n) for n in (a, b)],
+                      {"marker": "D", "s": 60, "facecolors": "none", "edgecolors": "black"}))
+    marks.append((f"headline (best {run.objective_name})",
+                  [run.best.metrics.get(n, run.best.objective if n == run.objective_name
+                                        else None) for n in (a, b)],
+                  {"marker": "X", "s": 90, "color": "tab:red"}))
+    for name, point, style in marks:
+        if all(isinstance(v, (int, float)) and np.isfinite(v) for v in point):
+            ax.scatter([point[0]], [point[1]], label=name, zorder=3, **style)
+        else:  # say why a marker is missing rather than leave the reader to wonder
+            values = ", ".join(f"{readable(n)} {_value(v)}" for n, v in zip((a, b), point))
+            notes.append(f"{name} not drawn: {values}")
+    if notes:
+        ax.text(0.01, 0.01, "\n".join(notes), transform=ax.transAxes, fontsize=7,
+                va="bottom", ha="left", color="dimgrey")
+    ax.legend(fontsize=8)
     return fig
+
+
+def _value(v: Any) -> str:
+    """A marker's coordinate in a note: the number, 'unbounded' or 'unknown'."""
+    if isinstance(v, (int, float)):
+        return "unbounded" if np.isinf(v) else "undefined (NaN)" if np.isnan(v) else f"{v:.4g}"
+    return "unknown"
+
+
+def overlay_figures(runs: list[RunView], labels: list[str]) -> dict[str, Figure]:
+    """Several runs of one case kind on the same axes: each cam profile (the case's
+    ``profiles``, equal aspect, the cam pivot at the origin; the closed full-turn outline
+    where the case has one) and each of the case's
+    ``overlays`` (travel and velocity against time), one line per run labelled by
+    ``labels``; a curve some run's archive lacks is drawn for the others. Runs of
+    different kinds are bad input (ConfigError)."""
+    from camopt.errors import ConfigError
+
+    kinds = {r.kind for r in runs}
+    if len(kinds) > 1:
+        raise ConfigError(runs[1].path, "RUN", f"case '{runs[1].kind}' cannot be overlaid "
+                          f"on case '{runs[0].kind}': give runs of one case kind")
+    spec = get_case(runs[0].kind)
+    title = " vs ".join(labels)
+    figs: dict[str, Figure] = {}
+    from camopt.units import MM
+
+    for curve in spec.profiles:
+        fig, ax = new_figure(f"{curve.name}: {title}", "x (mm)", "y (mm)")
+        for run, label in zip(runs, labels):
+            a = run.analysis
+            outline = spec.cam_outline(run) if curve.name == "cam-profile" else None
+            if outline is not None:  # the full turn the workshop cuts (export --format dxf)
+                closed = np.vstack([outline.profile, outline.profile[:1]]) / MM
+                ax.plot(closed[:, 0], closed[:, 1], label=f"{label} (full turn)")
+            elif all(k in a for k in (*curve.x, *curve.y)):
+                ax.plot(np.concatenate([a[k] for k in curve.x]),
+                        np.concatenate([a[k] for k in curve.y]), label=label)
+        ax.plot([0], [0], "k+", markersize=12, label="cam pivot")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.legend(fontsize=8)
+        figs[curve.name] = fig
+    for o in spec.overlays:
+        fig, ax = new_figure(f"{o.title}: {title}", o.xlabel, o.ylabel)
+        for run, label in zip(runs, labels):
+            a = run.analysis
+            if o.x in a and o.y in a and np.size(a[o.x]) == np.size(a[o.y]):
+                ax.plot(a[o.x], a[o.y], label=label)
+        if not ax.lines:
+            ax.text(0.5, 0.5, "no run holds this curve", transform=ax.transAxes,
+                    ha="center")
+        else:
+            ax.legend(fontsize=8)
+        figs[o.name] = fig
+    return figs
 
 
 def sweep_figures(spec: Any, results: dict) -> dict[str, Figure]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import pytest
@@ -96,6 +97,15 @@ def test_runs_lists_each_archive_with_case_verdict_and_date(tmp_path):
     assert rows[0]["created"].startswith("20") and rows[1]["verdict"].startswith("file: not")
     table = runner.invoke(app, ["runs", str(tmp_path)], env={"COLUMNS": "100"})
     assert table.exit_code == 0 and "fast_switch" in table.stdout
+    # at 80 columns a long default name is never split: each archive heads its values
+    long = tmp_path / "fast_switch_pareto-20261125T140812123456Z.h5"
+    shutil.copy(tmp_path / "a.h5", long)
+    narrow = runner.invoke(app, ["runs", str(tmp_path)], env={"COLUMNS": "80"})
+    assert narrow.exit_code == 0
+    lines = narrow.stdout.splitlines()
+    assert max(len(line) for line in lines) <= 80
+    assert long.name in lines and "a.h5" in lines
+    assert any(line.startswith("  case: fast_switch; verdict: ") for line in lines)
     missing = runner.invoke(app, ["runs", str(tmp_path / "none")])
     assert missing.exit_code == 2 and missing.stderr.startswith("error: ")
 

@@ -135,3 +135,25 @@ def test_summary_names_objectives_extent_knee_and_the_headline(fronts):
     shown = runner.invoke(app, ["show", str(fronts[1])], env={"COLUMNS": "80"})
     assert "Pareto front:" in shown.stdout and "knee" in shown.stdout
     assert "headline design below: " in shown.stdout
+
+
+def test_plot_marks_knee_and_headline_and_says_why_a_marker_is_absent(fronts):
+    """The knee at pareto.summary's knee, the headline design at the best's metrics; a
+    reference with an unbounded value is named in a note with the reason, not dropped."""
+    from dataclasses import replace
+
+    view = archive.load_run(fronts[1])
+    doc = pareto.summary(view)
+    ax = plots.pareto_front(view).axes[0]
+    by = {c.get_label(): c.get_offsets() for c in ax.collections}
+    np.testing.assert_array_equal(by["knee"], [[doc["knee"]["f"], doc["knee"]["norm"]]])
+    headline = [k for k in by if k.startswith("headline")]
+    assert headline == ["headline (best f)"]
+    # the objective itself is the run's objective, not among its metrics
+    np.testing.assert_array_equal(by[headline[0]], [[view.best.objective,
+                                                     view.best.metrics["norm"]]])
+    unbounded = replace(view, best=replace(view.best, metrics={
+        **view.best.metrics, "initial_f": float("inf"), "initial_norm": 0.2}))
+    ax = plots.pareto_front(unbounded).axes[0]
+    notes = " ".join(t.get_text() for t in ax.texts)
+    assert "reference: initial design not drawn: f unbounded, norm 0.2" in notes

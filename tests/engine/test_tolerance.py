@@ -126,7 +126,10 @@ def test_bad_vary_is_one_line_exit_2(vcb_run, vary, message):
     assert len(lines) == 1 and lines[0].startswith(f"error: {vcb_run}: ") and message in lines[0]
 
 
-def test_out_writes_samples_and_show_refuses_it(vcb_run, tmp_path):
+def test_out_writes_samples_that_show_report_and_plot_read(vcb_run, tmp_path):
+    """A tolerance archive can be handed over: ``show`` prints what ``tolerance`` did
+    (its JSON is the stored summary), ``report`` writes its page with the figures drawn
+    from the stored samples, ``plot`` its PNGs; ``compare``, which needs runs, refuses."""
     out = tmp_path / "tol.h5"
     r = invoke("tolerance", vcb_run, "--samples", 300, *VARY, "--out", out)
     assert r.exit_code == 0, r.output
@@ -135,8 +138,23 @@ def test_out_writes_samples_and_show_refuses_it(vcb_run, tmp_path):
         assert f["inputs/case.l1_mm"].shape == (300,) and f["feasible"].shape == (300,)
         assert json.loads(f.attrs["summary"])["samples"] == 300
         assert float(np.mean(f["feasible"][()])) == json.loads(f.attrs["summary"])["yield"]
+    with h5py.File(out, "r") as f:
+        stored = json.loads(f.attrs["summary"])
     r = invoke("show", out)
-    assert r.exit_code == 2 and "a tolerance archive, not a run archive" in r.stderr
+    assert r.exit_code == 0, r.output
+    assert f"yield (feasible share): {stored['yield']:.1%}" in r.stdout
+    shown = json.loads(invoke("show", out, "--format", "json").stdout)
+    assert shown["yield"] == stored["yield"] and shown["vary"] == stored["vary"]
+    page = tmp_path / "tol.html"
+    r = invoke("report", out, "--out", page)
+    assert r.exit_code == 0, r.output
+    html = page.read_text()
+    assert f"yield (feasible share) {100 * stored['yield']:.1f} % over 300 samples" in html
+    assert html.count('<img src="data:image/svg+xml;base64,') == 3
+    r = invoke("plot", out, "--out", tmp_path / "p")
+    assert r.exit_code == 0 and len(r.stdout.split()) == 3
+    r = invoke("compare", out, vcb_run)
+    assert r.exit_code == 2 and r.stderr.startswith("error: ")
     assert invoke("tolerance", vcb_run, *VARY, "--out", out).exit_code == 2  # exists
 
 
@@ -146,11 +164,17 @@ def test_figures_mark_limits_and_swings(vcb_run, tmp_path):
                       parse_vary("r", "case.l1_mm=±0.1")], 500, 0)
     figs = figures(t, "closing_velocity_avg_m_s")
     assert set(figs) == {"constraints", "metrics", "tornado"}
-    first = figs["constraints"].axes[0]
-    assert first.get_xlabel().endswith("(normalised g)") and first.lines[0].get_xdata()[0] == 0
+    # requirements in their units, each limit a line at its value
+    by_label = {ax.get_xlabel(): ax for ax in figs["constraints"].axes if ax.get_visible()}
+    travel = by_label[readable("rod_travel_mm")]
+    limits = sorted(line.get_xdata()[0] for line in travel.lines
+                    if line.get_label().endswith("limit"))
+    tol = run.case["rod_travel_tolerance_mm"]
+    assert limits == pytest.approx([18.0 - tol, 18.0 + tol])
     ax = figs["tornado"].axes[0]
-    # both inputs drawn (which swings the closing velocity most depends on the design)
-    assert {t.get_text() for t in ax.get_yticklabels()} == {"kc1_n_per_mm", "case.l1_mm"}
+    # both inputs drawn with their tolerance (which swings most depends on the design)
+    assert {t.get_text() for t in ax.get_yticklabels()} == {"kc1_n_per_mm ±5%",
+                                                            "case.l1_mm ±0.1"}
     assert ax.get_xlabel() == readable("closing_velocity_avg_m_s")
     r = invoke("tolerance", vcb_run, "--samples", 200, *VARY, "--plot", tmp_path / "p",
                "--tornado", "tau_max_mpa")

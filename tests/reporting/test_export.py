@@ -1,5 +1,7 @@
-"""``camopt export --format dxf``: the profiles, base circle and roller read back with
-ezdxf agree with the exported point files."""
+"""``camopt export``: the DXF's profiles, base circle and roller read back with ezdxf
+agree with the exported point files; the VCB cam is one closed outline that starts and
+ends on the base circle and leaves the rise's geometry as the requirements judged it; the
+CNC points table; formats into one folder do not collide."""
 
 from __future__ import annotations
 
@@ -42,8 +44,9 @@ def test_dxf_profile_matches_the_point_file(exported):
     assert doc.units == units.MM
     msp = doc.modelspace()
     layers = {e.dxf.layer for e in msp}
-    expected = {"cam-profile", "base-circle"} | ({"cam-pitch-curve", "roller"}
-                                                 if name == "vcb" else set())
+    expected = {"cam-profile", "base-circle"} | (
+        {"cam-pitch-curve", "roller", "roller-path", "pivots", "datum", "notes"}
+        if name == "vcb" else set())
     assert layers == expected
     for curve in ("cam-profile", "cam-pitch-curve"):
         if curve not in layers:
@@ -53,6 +56,116 @@ def test_dxf_profile_matches_the_point_file(exported):
         points = np.loadtxt(out / f"{name}-{curve}.txt", delimiter=",")
         assert drawn.shape == points[:, :2].shape and len(drawn) > 100
         assert np.max(np.abs(drawn - points[:, :2])) < TOL_MM
+
+
+def _outline(msp):
+    (poly,) = msp.query('LWPOLYLINE[layer=="cam-profile"]')
+    return poly, np.array([(x, y) for x, y, *_ in poly.get_points("xy")])
+
+
+def _circumradius(p):
+    """Signed radius of the circle through each three successive points (mm), (m - 2,)."""
+    a, b, c = p[:-2], p[1:-1], p[2:]
+    cross = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    sides = (np.hypot(*(b - a).T) * np.hypot(*(c - b).T) * np.hypot(*(c - a).T))
+    return sides / (2 * cross)
+
+
+def test_vcb_cam_outline_is_one_closed_polyline_from_the_base_circle(exported):
+    """Issue #35's "done when": one closed polyline (ezdxf) that starts and ends on the
+    base circle (its first vertex, and the one the closure returns to)."""
+    name, view, out = exported
+    if name != "vcb":
+        pytest.skip("the EMB cam draws its archived profile")
+    msp = ezdxf.readfile(out / f"{name}.dxf").modelspace()
+    assert len(msp.query('LWPOLYLINE[layer=="cam-profile"]')) == 1
+    poly, drawn = _outline(msp)
+    assert poly.closed
+    rb = view.case["rb_mm"]
+    assert np.hypot(*drawn[0]) == pytest.approx(rb, abs=1e-9)
+    assert np.hypot(*drawn[-1]) == pytest.approx(rb, abs=1e-9)  # the base dwell's last
+    # the cam stays outside the base circle (nothing under it) and turns once
+    assert np.min(np.hypot(*drawn.T)) >= rb - 1e-9
+    polar = np.unwrap(np.arctan2(drawn[:, 1], drawn[:, 0]))
+    assert abs(polar[-1] - polar[0]) == pytest.approx(2 * np.pi, abs=np.radians(1.5))
+    notes = msp.query('MTEXT[layer=="notes"]')[0].text
+    for word in ("approach", "rise: 0.0 to 140.0 deg", "run-out", "top dwell",
+                 "return", "3-4-5", "base dwell"):
+        assert word in notes
+
+
+def test_vcb_outline_leaves_the_rise_geometry_unchanged(exported):
+    """Over the actuated angle the drawn vertices are the archived profile (1e-9 mm),
+    the outline's pressure angle the archived one (1e-9 deg), and the curvature radius
+    measured on the drawn polyline (circumradius of successive vertices, a second code
+    path, at the rise's inner vertices) is the archived Eq 15 radius within 1 % (the
+    1 deg chords' error)."""
+    name, view, out = exported
+    if name != "vcb":
+        pytest.skip("the EMB cam draws its archived profile")
+    from camopt.cases import get_case
+
+    _, drawn = _outline(ezdxf.readfile(out / f"{name}.dxf").modelspace())
+    a = view.analysis
+    stored = np.column_stack([a["profile_x_mm"], a["profile_y_mm"]])
+    # the rise's first vertex is the one nearest the archived start
+    i = int(np.argmin(np.hypot(*(drawn - stored[0]).T)))
+    rise = drawn[i:i + len(stored)]
+    assert np.max(np.abs(rise - stored)) < 1e-9
+    outline = get_case("vcb").cam_outline(view)
+    assert np.max(np.abs(np.degrees(outline.pressure_angle[outline.rise])
+                         - a["pressure_angle_deg"])) < 1e-9
+    measured = _circumradius(rise)  # at the rise's inner vertices
+    assert np.allclose(measured, a["curvature_mm"][1:-1], rtol=0.01)
+
+
+def test_cnc_points_table(exported, tmp_path):
+    """Polar and Cartesian (mm) at the chosen step; radii on the base circle where the
+    cam dwells there; independent of the dense sampling (0.02 vs 0.01 deg: 1e-4 mm)."""
+    name, view, out = exported
+    if name != "vcb":
+        pytest.skip("the EMB cam has no closed outline")
+    from camopt.cases import get_case
+    from camopt.reporting.export import points_table
+    from camopt.units import DEG
+
+    r = runner.invoke(app, ["export", str(view.path), "--format", "dxf", "--out",
+                            str(tmp_path), "--step-deg", "2.5"])
+    assert r.exit_code == 0, r.output
+    table = np.loadtxt(tmp_path / f"{name}-cam-points.csv", delimiter=",", skiprows=1)
+    assert (tmp_path / f"{name}-cam-points.csv").read_text().splitlines()[0] == \
+        "polar_angle_deg,radius_mm,x_mm,y_mm"
+    assert table.shape == (144, 4)
+    assert np.allclose(table[:, 0], np.arange(0, 360, 2.5))
+    assert np.allclose(np.hypot(table[:, 2], table[:, 3]), table[:, 1], atol=2e-6)
+    assert np.min(table[:, 1]) == pytest.approx(view.case["rb_mm"], abs=1e-6)
+    spec = get_case("vcb")
+    fine = points_table(spec.cam_outline(view, 0.01 * DEG), 2.5)
+    assert np.max(np.abs(fine - table)) < 1e-4
+    bad = runner.invoke(app, ["export", str(view.path), "--format", "dxf", "--out",
+                              str(tmp_path / "bad"), "--step-deg", "0"])
+    assert bad.exit_code == 2 and bad.stderr.startswith("error: ")
+    assert "--step-deg" in bad.stderr and not (tmp_path / "bad").exists()
+
+
+def test_formats_into_one_folder_do_not_collide(exported, tmp_path):
+    """csv, json and dxf into one folder, no --force: distinct files, none replaced;
+    the curve tables put time first."""
+    name, view, _ = exported
+    written = []
+    for fmt in ("csv", "json", "dxf"):
+        r = runner.invoke(app, ["export", str(view.path), "--format", fmt, "--out",
+                                str(tmp_path)])
+        assert r.exit_code == 0, r.output
+        written += r.stdout.split()
+    assert len(written) == len(set(written)) == len(list(tmp_path.iterdir()))
+    for table in tmp_path.glob(f"{name}-curves-*.csv"):
+        header = table.read_text().splitlines()[0].split(",")
+        times = [k for k in header if k.removeprefix("initial_").startswith("time_")]
+        assert header[:len(times)] == times
+    if name == "vcb":
+        assert any(table.read_text().startswith("time_ms,")
+                   for table in tmp_path.glob(f"{name}-curves-*.csv"))
 
 
 def test_dxf_circles_are_the_case_radii(exported):

@@ -219,3 +219,29 @@ def test_verdict_table_is_on_the_first_screen(every_report, name, tmp_path):
     html = every_report[name].read_text()
     assert re.search(r'id="verdict-sentence">(PASS|FAIL|not judged)', html)
     assert int(attrs["verdictrows"]) >= 1  # a table, not only the sentence
+
+
+# after load on a phone: the verdict table's pass column and the page's right edge
+PHONE = """<script>window.addEventListener("load", () => {
+  const d = document.body.dataset;
+  const cells = [...document.querySelectorAll("#verdict-table tr > :last-child")];
+  d.passright = Math.round(Math.max(...cells.map(c => c.getBoundingClientRect().right)));
+  d.passleft = Math.round(Math.min(...cells.map(c => c.getBoundingClientRect().left)));
+  d.passtext = cells.map(c => c.textContent.trim()).join(",");
+  d.innerwidth = window.innerWidth;
+  d.scrollwidth = document.documentElement.scrollWidth;
+});</script>"""
+
+
+@needs_browser
+@pytest.mark.parametrize("name", ["vcb", "emb"])
+def test_verdict_columns_fit_a_phone(every_report, name, tmp_path):
+    """On a 390 x 844 phone the requirement table's pass column lies inside the screen
+    for every row, and the page never runs off to the right."""
+    _, attrs, shot = open_in_browser(every_report[name], tmp_path, PHONE, (390, 844), "phone")
+    width = int(attrs["innerwidth"])
+    assert 0 <= int(attrs["passleft"]) < int(attrs["passright"]) <= width, attrs
+    assert int(attrs["scrollwidth"]) <= width, attrs
+    passes = attrs["passtext"].split(",")
+    assert passes[0] == "pass" and set(passes[1:]) <= {"pass", "FAIL", "-"}, passes
+    assert not_blank(shot) > 0.02

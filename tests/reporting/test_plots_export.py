@@ -88,16 +88,16 @@ def test_export_csv_and_json(case_run, tmp_path):
     assert runner.invoke(app, ["export", str(path), "--out", str(tmp_path)]).exit_code == 0
     rows = list(csv.reader((tmp_path / f"{path.stem}-summary.csv").open()))
     assert rows[0] == ["section", "name", "value"] and len(rows) > 3
-    # the profiles' point files exist now: a second export replaces them only with --force
+    # formats write distinct files: json beside csv needs no --force; csv again does
     again = ["export", str(path), "--format", "json", "--out", str(tmp_path)]
-    if name in ("vcb", "emb_cam"):  # cases with cam profiles
-        refused = runner.invoke(app, again)
-        assert refused.exit_code == 2 and "pass --force" in refused.output
-        assert not (tmp_path / f"{path.stem}.json").exists()  # all or nothing
-    assert runner.invoke(app, [*again, "--force"]).exit_code == 0
+    assert runner.invoke(app, again).exit_code == 0
+    refused = runner.invoke(app, ["export", str(path), "--out", str(tmp_path)])
+    assert refused.exit_code == 2 and "pass --force" in refused.output
     doc = json.loads((tmp_path / f"{path.stem}.json").read_text())
     assert {"case", "best", "analysis"} <= set(doc)
-    if name in ("vcb", "emb_cam"):
+    if name in ("vcb", "emb_cam"):  # cases with cam profiles: point files with the DXF
+        assert runner.invoke(app, ["export", str(path), "--format", "dxf", "--out",
+                                   str(tmp_path)]).exit_code == 0
         pts = np.loadtxt(tmp_path / f"{path.stem}-cam-profile.txt", delimiter=",")
         assert pts.shape[1] == 3 and len(pts) > 100 and np.all(pts[:, 2] == 0)
 
@@ -178,3 +178,69 @@ def test_convergence_axis_fits_what_the_data_reach():
     x0, x1 = ax.get_xlim()
     assert x0 < 1 < x1 and ax.get_yscale() == "linear"
     close(fig)
+
+
+def test_vcb_closing_velocity_figure_reads_like_a_breaker_test(tmp_path):
+    """The velocity figure shades the averaging window where the archived contact travel
+    crosses 2/3 of the gap and the gap (rtol 1e-9: the same interpolation of the stored
+    curve), draws the requirement band, the touch instant and the average with its band
+    over the parameter sets (the archived metrics)."""
+    path = tmp_path / "vv.h5"
+    archive.write_run(execute(load(CONFIGS / "vcb_velocity.toml", "run.repeats=1",
+                                   "solver.generations=30")), path)
+    run = archive.load_run(path)
+    a, m = run.analysis, run.best.metrics
+    gap = run.case["contact_gap_mm"]
+    if not np.nanmax(a["dyn_contact_travel_mm"]) >= gap:
+        pytest.skip("this short search's design never closes")
+    ax = plots.run_figures(run)["closing_velocity"].axes[0]
+    spans = {p.get_label(): p.get_x() for p in ax.patches}
+    shaded = [p for p in ax.patches if p.get_label().startswith("closing-velocity window")]
+    (window,) = shaded
+    t, s = a["time_ms"], a["dyn_contact_travel_mm"]
+    start = np.interp(2 * gap / 3, s[: np.argmax(s >= gap) + 1],
+                      t[: np.argmax(s >= gap) + 1])
+    assert window.get_x() == pytest.approx(start, rel=1e-9)
+    assert window.get_x() + window.get_width() == pytest.approx(m["touch_time_ms"], rel=1e-3)
+    band = [p for p in ax.patches if p.get_label().startswith("required")][0]
+    assert (band.get_y(), band.get_y() + band.get_height()) == pytest.approx((0.7, 1.1))
+    touch = [line for line in ax.lines if line.get_label() == "contacts touch"]
+    assert touch and touch[0].get_xdata()[0] == pytest.approx(m["touch_time_ms"])
+    (avg,) = [c for c in ax.containers if c.get_label().startswith("average")]
+    assert avg.lines[0].get_ydata()[0] == pytest.approx(m["closing_velocity_avg_m_s"])
+    assert spans
+
+
+def test_plot_overlays_two_runs_of_one_case(case_run, tmp_path):
+    """``camopt plot A.h5 B.h5``: every overlay figure holds one line per run, labelled by
+    its archive, drawn from that archive's curves; runs of two kinds are bad input."""
+    name, path = case_run
+    if name != "vcb":
+        pytest.skip("the VCB declares overlays (and a closed outline)")
+    other = tmp_path / "other.h5"
+    archive.write_run(execute(load(CONFIGS / "vcb.toml", "run.repeats=1",
+                                   "solver.generations=5", "run.seed=7")), other)
+    runs = [archive.load_run(p) for p in (path, other)]
+    figs = plots.overlay_figures(runs, [path.stem, "other"])
+    assert {"cam-profile", "closing_travel", "closing_velocity", "rod_travel"} <= set(figs)
+    travel = figs["rod_travel"].axes[0]
+    assert [line.get_label() for line in travel.lines] == [path.stem, "other"]
+    for line, run in zip(travel.lines, runs):
+        assert np.array_equal(line.get_ydata(), run.analysis["rod_travel_mm"])
+    profile = figs["cam-profile"].axes[0]
+    closed = [line for line in profile.lines if line.get_label().endswith("(full turn)")]
+    assert len(closed) == 2
+    for line in closed:  # closed: the first point again at the end
+        assert (line.get_xdata()[0], line.get_ydata()[0]) == (line.get_xdata()[-1],
+                                                              line.get_ydata()[-1])
+    for fig in figs.values():
+        close(fig)
+    r = runner.invoke(app, ["plot", str(path), str(other), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "o" / f"{path.stem}-vs-other-closing_velocity.png").exists()
+    fs = tmp_path / "fs.h5"
+    assert runner.invoke(app, ["run", str(CONFIGS / "fast_switch.toml"), "--out", str(fs),
+                               "--quiet"]).exit_code == 0
+    bad = runner.invoke(app, ["plot", str(path), str(fs), "--out", str(tmp_path / "x")])
+    assert bad.exit_code == 2 and "cannot be overlaid" in bad.stderr
+    assert not (tmp_path / "x").exists()

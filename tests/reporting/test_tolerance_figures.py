@@ -48,3 +48,32 @@ def test_tornado_draws_each_inputs_plus_x_end_at_its_high_value():
     ax = fig.axes[0]
     assert [t.get_text() for t in ax.get_yticklabels()] == ["case.c_mm", "b_deg", "a_mm"]
     assert all(np.isclose(p.get_x(), NOMINAL) for p in ax.patches)  # from the nominal
+
+
+def _by_gid(ax):
+    return {p.get_gid(): p for p in ax.patches}
+
+
+def test_tornado_labels_carry_the_tolerance_and_the_legend_its_colours():
+    """With the analysis' ``vary`` rows, each label names the input and its tolerance; the
+    legend's colours are the bars' (-X blue, +X orange)."""
+    # a: raising the input lowers the metric; b: raising it raises the metric
+    summary = {"nominal": {"m": 10.0},
+               "one_at_a_time": {"m": [{"input": "a", "low": 12.0, "high": 7.0},
+                                       {"input": "b", "low": 9.5, "high": 10.5}]},
+               "vary": [{"input": "a", "tolerance": 5.0, "unit": "%"},
+                        {"input": "b", "tolerance": 0.1, "unit": "own"}]}
+    ax = tornado(SimpleNamespace(summary=summary, run=None), "m").axes[0]
+    bars = _by_gid(ax)
+    # widest swing on top: b (width 1) at y 0, a (width 5) at y 1
+    assert [t.get_text() for t in ax.get_yticklabels()] == ["b ±0.1", "a ±5%"]
+    for y, (low, high) in enumerate(((9.5, 10.5), (12.0, 7.0))):
+        plus, minus = bars[f"high-{y}"], bars[f"low-{y}"]
+        assert plus.get_x() == pytest.approx(10.0)  # from nominal ...
+        assert plus.get_x() + plus.get_width() == pytest.approx(high)  # ... to +X's value
+        assert minus.get_x() + minus.get_width() == pytest.approx(low)
+        assert plus.get_facecolor() != minus.get_facecolor()
+    legend = {t.get_text(): h.get_facecolor()
+              for t, h in zip(ax.get_legend().get_texts(), ax.get_legend().legend_handles)}
+    assert legend == {"input at -X": bars["low-0"].get_facecolor(),
+                      "input at +X": bars["high-0"].get_facecolor()}

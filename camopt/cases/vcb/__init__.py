@@ -7,6 +7,7 @@ from __future__ import annotations
 from camopt.cases.registry import (
     ArchiveLoader,
     CaseSpec,
+    OverlayCurve,
     ProfileCircle,
     ProfileCurve,
     ToleranceClass,
@@ -69,6 +70,15 @@ VCB = register_case(CaseSpec(
               ProfileCurve("cam-pitch-curve", ("pitch_x_mm",), ("pitch_y_mm",))),
     circles=(ProfileCircle("base-circle", "rb_mm"),
              ProfileCircle("roller", "rf_mm", ("pitch_x_mm", "pitch_y_mm"))),
+    outline="camopt.cases.vcb.outline:outline",
+    overlays=tuple(OverlayCurve(f"closing_{what}", f"Closing: movable contact {what}",
+                                "time_ms", f"dyn_contact_{key}",
+                                "time from the springs' release (ms)", label)
+                   for what, key, label in (("travel", "travel_mm", "displacement (mm)"),
+                                            ("velocity", "velocity_m_s", "velocity (m/s)"))
+                   ) + (OverlayCurve("rod_travel", "Rod travel along the stroke",
+                                     "cam_angle_deg", "rod_travel_mm",
+                                     "cam angle theta_c (deg)", "rod travel s1 (mm)"),),
     resolve=resolve_cam_archive, tolerances=TOLERANCES,
     tolerance_classes=TOLERANCE_CLASSES, requirements=requirements,
     reference="vendor, Sec 2.3 and Table 2",

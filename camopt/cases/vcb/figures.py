@@ -7,6 +7,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from camopt.cases.vcb.paper import PAPER
+from camopt.cases.vcb.requirements import CLOSING_VELOCITY_M_S
 from camopt.core.plotting import PAPER_STYLE, log_scale_if_spread, new_figure
 from camopt.core.runview import RunView
 
@@ -62,13 +63,40 @@ def figures(run: RunView) -> dict[str, Figure]:
     ax.legend()
     figs["forces"] = fig
     if "time_ms" in a:
-        figs.update(_dynamics(a))
+        figs.update(_dynamics(a, run))
     return figs
 
 
-def _dynamics(a: dict) -> dict[str, Figure]:
-    """Closing against time: displacements and velocities of rod and movable contact."""
+def _window(a: dict, prefix: str, gap: float) -> tuple[float, float] | None:
+    """Times (ms) at which the movable contact has covered 2/3 of its gap and all of it:
+    the window the average closing velocity is taken over (the last third of the contact
+    stroke, Sec 2.1), read off the archived travel curve; None if it never gets there."""
+    t, s = a[prefix + "time_ms"], a[prefix + "dyn_contact_travel_mm"]
+    if not t.size or np.nanmax(s) < gap:
+        return None
+    first = [int(np.argmax(s >= level)) for level in (2 * gap / 3, gap)]
+    return tuple(float(np.interp(level, s[max(i - 1, 0):i + 1], t[max(i - 1, 0):i + 1]))
+                 for i, level in zip(first, (2 * gap / 3, gap)))  # type: ignore[return-value]
+
+
+def _finite(metrics: dict, names: list[str]) -> list[float] | None:
+    """The metrics ``names`` as floats, or None unless all are finite numbers."""
+    values = [metrics.get(n) for n in names]
+    if all(isinstance(v, (int, float)) and np.isfinite(v) for v in values):
+        return [float(v) for v in values]  # type: ignore[arg-type]
+    return None
+
+
+def _dynamics(a: dict, run: RunView) -> dict[str, Figure]:
+    """Closing against time: displacements and velocities of rod and movable contact, with
+    what a breaker engineer reads on them: the contact gap, the window of the average
+    closing velocity (shaded), the requirement band (green), the optimum's average over
+    the window with its band over the parameter sets equally consistent with the ADAMS
+    data (error bar), and the touch instant with that band (dashed line, grey span)."""
     figs = {}
+    m = run.best.metrics
+    gap = run.case.get("contact_gap_mm")
+    band = run.case.get("closing_velocity_m_s") or CLOSING_VELOCITY_M_S
     for key, title, ylabel in (
         ("travel_mm", "Closing: rod and movable contact against time", "displacement (mm)"),
         ("velocity_m_s", "Closing: rod and movable contact velocity", "velocity (m/s)"),
@@ -79,6 +107,34 @@ def _dynamics(a: dict) -> dict[str, Figure]:
             ax.plot(t, a[prefix + "dyn_rod_" + key], style, label=f"rod, {label}")
             ax.plot(t, a[prefix + "dyn_contact_" + key], style, lw=2.5, alpha=0.5,
                     label=f"movable contact, {label}")
-        ax.legend(fontsize=8)
+        # the curves set the time axis; a parameter set that closes far later is a span
+        # running off it, not a reason to squeeze the curves
+        times = np.concatenate([a[p + "time_ms"] for p, _, _ in DESIGNS])
+        if times.size:
+            ax.set_xlim(float(times.min()), float(times.max()))
+        limits = ax.get_xlim()
+        window = _window(a, "", float(gap)) if gap is not None else None
+        if window is not None:
+            ax.axvspan(*window, color="tab:blue", alpha=0.12,
+                       label="closing-velocity window (last third of the gap)")
+        touch = _finite(m, [f"touch_time{s}_ms" for s in ("", "_low", "_high")])
+        if touch is not None:
+            ax.axvline(touch[0], color="k", lw=0.9, ls="--", label="contacts touch")
+            if touch[2] > touch[1]:
+                ax.axvspan(touch[1], touch[2], color="grey", alpha=0.2,
+                           label="touch over the parameter sets")
+        if key == "travel_mm" and gap is not None:
+            ax.axhline(gap, color="k", lw=0.6, ls=":", label=f"contact gap {gap:g} mm")
+        if key == "velocity_m_s":
+            ax.axhspan(float(band[0]), float(band[1]), color="tab:green", alpha=0.12,
+                       label=f"required {band[0]:g}-{band[1]:g} m/s")
+            v = _finite(m, [f"closing_velocity{s}_m_s" for s in ("_avg", "_low", "_high")])
+            if window is not None and v is not None:
+                mid = sum(window) / 2
+                ax.errorbar([mid], [v[0]], yerr=[[v[0] - v[1]], [v[2] - v[0]]], fmt="o",
+                            color="tab:red", capsize=4,
+                            label=f"average {v[0]:.3g} m/s ({v[1]:.3g}-{v[2]:.3g} over sets)")
+        ax.set_xlim(*limits)
+        ax.legend(fontsize=7)
         figs["closing_" + key.split("_")[0]] = fig
     return figs

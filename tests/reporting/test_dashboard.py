@@ -1,0 +1,102 @@
+"""``camopt dashboard``: one offline page over a folder of archives, loaded in headless
+Chromium (network blocked): it lists every archive with its verdict, sorts on a click,
+filters, and two ticked runs show only the values that differ."""
+
+from __future__ import annotations
+
+import shutil
+
+import pytest
+from typer.testing import CliRunner
+
+from camopt.cli import app
+from tests.conftest import CONFIGS
+from tests.reporting.test_html_report import EXTERNAL, needs_browser, open_in_browser
+
+runner = CliRunner()
+# the shipped configs, with small budgets (the page, not the optimum, is under test)
+RUNS = {"vcb": ("vcb.toml", ["run.repeats=1", "solver.generations=8"]),
+        "vcb_velocity": ("vcb_velocity.toml", ["run.repeats=1", "solver.generations=8"]),
+        "fast_switch": ("fast_switch.toml", []),
+        "emb": ("emb.toml", ["solver.iterations=10", "solver.particles=10", "run.repeats=1"]),
+        "opening_spring": ("opening_spring_pp3.toml", [])}
+# after load: sort by objective (twice: descending), filter, tick two vcb runs
+PROBE = """<script>window.addEventListener("load", () => {
+  const d = document.body.dataset;
+  const names = () => [...document.querySelectorAll("#runs tbody tr:not(.hidden) td.name")]
+    .map(td => td.textContent.trim().split(" ")[0]);
+  d.total = names().length;
+  d.verdicts = [...document.querySelectorAll("#runs tbody tr td:nth-child(4)")]
+    .map(td => td.textContent).join(",");
+  const objectives = () => [...document.querySelectorAll("#runs tbody tr td:nth-child(6)")]
+    .map(td => td.textContent.trim().split(" ")[0]);
+  const th = document.querySelector('#runs th[data-key="objective"]');
+  th.click(); d.ascending = objectives().join(",");
+  th.click(); d.descending = objectives().join(",");
+  const f = document.getElementById("filter");
+  f.value = "vcb"; f.dispatchEvent(new Event("input"));
+  d.filtered = names().join(",");
+  const picks = [...document.querySelectorAll("#runs tbody tr:not(.hidden) .pick")];
+  for (const p of picks.slice(0, 2)) { p.checked = true; p.dispatchEvent(new Event("change")); }
+  d.compare = document.getElementById("compare-title").textContent;
+  d.hidden = document.getElementById("compare").hidden;
+  d.diff = [...document.querySelectorAll("#diff tbody tr td:first-child")]
+    .map(td => td.textContent).join(",");
+  const same = [...document.querySelectorAll("#diff tbody tr")]
+    .filter(tr => tr.cells[1].textContent === tr.cells[2].textContent).length;
+  d.same = same;
+});</script>"""
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    runs = tmp_path_factory.mktemp("runs")
+    for name, (file, overrides) in RUNS.items():
+        sets = [a for o in overrides for a in ("--set", o)]
+        r = runner.invoke(app, ["run", str(CONFIGS / file), "--out", str(runs / f"{name}.h5"),
+                                "--quiet", *sets])
+        assert r.exit_code == 0, r.output
+    assert runner.invoke(app, ["report", str(runs / "fast_switch.h5")]).exit_code == 0
+    (runs / "notes.h5").write_text("not an archive")  # listed, never fatal
+    r = runner.invoke(app, ["dashboard", str(runs)])
+    assert r.exit_code == 0, r.output
+    assert r.stdout == f"{runs / 'index.html'}\n"
+    return runs
+
+
+def test_page_is_self_contained_and_links_reports(folder):
+    page = (folder / "index.html").read_text()
+    assert not EXTERNAL.search(page)
+    assert '<a href="fast_switch.html">fast_switch.h5</a>' in page
+    assert "<script src" not in page and "<link" not in page
+    r = runner.invoke(app, ["dashboard", str(folder)])  # never over a page without --force
+    assert r.exit_code == 2 and r.stderr.startswith("error: ")
+    assert runner.invoke(app, ["dashboard", str(folder), "--force"]).exit_code == 0
+
+
+@needs_browser
+@pytest.mark.parametrize("window", [(1280, 900), (390, 844)])
+def test_dashboard_sorts_filters_and_compares_in_chromium(folder, tmp_path, window):
+    console, d, shot = open_in_browser(folder / "index.html", tmp_path, PROBE, window,
+                                       f"probed-{window[0]}", "--enable-logging=stderr",
+                                       "--v=0")
+    assert not [c for c in console if "Uncaught" in c or "Error" in c], console
+    assert int(d["total"]) == len(RUNS) + 1
+    verdicts = d["verdicts"].split(",")
+    assert set(verdicts) <= {"pass", "fail", "-", "not a camopt archive"} or verdicts
+    assert "pass" in verdicts or "fail" in verdicts
+    for order, direction in (("ascending", 1), ("descending", -1)):
+        cells = d[order].split(",")
+        shown = [float(c) for c in cells if c != "-"]
+        assert len(shown) == len(RUNS) and cells[len(shown):] == ["-"]  # missing last
+        assert shown == sorted(shown, reverse=direction < 0)
+    assert d["filtered"].split(",") == ["vcb_velocity.h5", "vcb.h5"]
+    assert d["hidden"] == "false"
+    assert d["compare"].startswith("vcb_velocity.h5 vs vcb.h5: ")
+    diff = d["diff"].split(",")
+    # only what differs: the config's changes between the two files are there, no equal row
+    assert "config.run.name" in diff and int(d["same"]) == 0
+    assert any(k.startswith("result.") for k in diff)
+    assert shot.stat().st_size > 5000
+    keep = shutil.copy(shot, tmp_path / f"dashboard-{window[0]}x{window[1]}.png")
+    print(keep)
