@@ -8,7 +8,6 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
-from scipy.optimize import minimize
 
 from camopt.config.models import MAX_LOCAL_ITERATIONS, MAX_STARTS
 from camopt.solvers.multistart import MultiStart, MultiStartOptions
@@ -50,6 +49,8 @@ class Simplex(MultiStart):
         return float(ev.f[0] + self.options.penalty * ev.violation[0])
 
     def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:
+        from scipy.optimize import minimize  # scipy.optimize: 0.5 s, only for a run
+
         o = self.options
         u0 = np.clip(self.problem.to_unit(x0), 0.0, 1.0)
         # scipy's default simplex is 5 % of each coordinate: degenerate near a bound

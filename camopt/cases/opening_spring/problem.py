@@ -20,7 +20,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.integrate import solve_ivp
 
 from camopt.cases.opening_spring.config import OpeningSpringConfig
 from camopt.core.capabilities import HasResiduals
@@ -269,6 +268,8 @@ class OpeningSpringProblem(Problem, HasResiduals):
                 return d * (np.sin(y[0]) - np.sin(self.theta0)) - mm * MM
             event.direction = 1  # type: ignore[attr-defined]
             return event
+
+        from scipy.integrate import solve_ivp  # not at import: validate never integrates
 
         stop = travel(c.gap_mm)
         stop.terminal = True
