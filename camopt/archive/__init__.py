@@ -38,7 +38,11 @@ _HOME = {
     "read_table": "tables", "write_table": "tables",
 }
 
-__all__ = sorted(_HOME)
+__all__ = ["Claim", "archive_kind", "atomic_write", "check_not_input", "check_writable", "claim",
+           "default_path", "describe_file", "ensure_folder", "load_run", "open_archive",
+           "read_regular", "read_table", "resolve_references", "versions", "write_files",
+           "write_run", "write_table"]
+assert sorted(__all__) == sorted(_HOME)
 
 
 def __getattr__(name: str) -> Any:
