@@ -252,33 +252,38 @@ def spearman_columns(inputs: NDArray, columns: dict[str, NDArray]
     each metric, rows where it is NaN are dropped, and rho is Pearson's correlation of
     the ranks (average ranks for ties, ``scipy.stats.rankdata``), which is
     ``scipy.stats.spearmanr`` of the pair. Each column is ranked once: a metric once,
-    the inputs once per distinct set of dropped rows (most metrics have none), instead
-    of both columns again for every pair (k x metrics rankings of 10^6 values). None
-    where either column is constant (an input at +-0, a metric the inputs do not move)
-    or fewer than 3 rows remain."""
+    the inputs once per distinct set of dropped rows (most metrics share one: none),
+    instead of both columns again for every pair (k x metrics rankings of 10^6 values).
+    Metrics are grouped by their dropped rows first, so one group's input ranks (n x k)
+    are held at a time. None where either column is constant (an input at +-0, a metric
+    the inputs do not move) or fewer than 3 rows remain."""
     from scipy.stats import rankdata
 
     k = inputs.shape[1]
-    # kept rows -> the inputs' centred ranks, their norms, which inputs are constant
-    input_ranks: dict[bytes, tuple[NDArray, NDArray, NDArray]] = {}
     out: dict[str, list[float | None]] = {}
+    groups: dict[bytes, list[str]] = {}  # the kept rows (packed) -> metrics that keep them
     for name, values in columns.items():
         keep = ~np.isnan(values)
         kept = values[keep]
         if kept.size < 3 or np.all(kept == kept[0]):
             out[name] = [None] * k
-            continue
-        key = np.packbits(keep).tobytes()
-        if key not in input_ranks:
-            drawn = inputs[keep]
-            r = rankdata(drawn, axis=0)
-            r -= r.mean(axis=0)
-            input_ranks[key] = (r, np.sqrt(np.einsum("ij,ij->j", r, r)),
-                                np.all(drawn == drawn[0], axis=0))
-        r_in, norm_in, constant = input_ranks[key]
-        r_m = rankdata(kept)
-        r_m -= r_m.mean()
-        with np.errstate(invalid="ignore", divide="ignore"):
-            rho = (r_m @ r_in) / (norm_in * np.sqrt(r_m @ r_m))
-        out[name] = [None if constant[j] else _finite_or_none(float(rho[j])) for j in range(k)]
-    return out
+        else:
+            groups.setdefault(np.packbits(keep).tobytes(), []).append(name)
+    for names in groups.values():
+        keep = ~np.isnan(columns[names[0]])
+        r_in = np.empty((int(keep.sum()), k))
+        constant = np.empty(k, dtype=bool)
+        for j in range(k):  # column by column: one column's sort temporaries at a time
+            drawn = inputs[keep, j]
+            constant[j] = bool(np.all(drawn == drawn[0]))
+            r_in[:, j] = rankdata(drawn)
+        r_in -= r_in.mean(axis=0)
+        norm_in = np.sqrt(np.einsum("ij,ij->j", r_in, r_in))
+        for name in names:
+            r_m = rankdata(columns[name][keep])
+            r_m -= r_m.mean()
+            with np.errstate(invalid="ignore", divide="ignore"):
+                rho = (r_m @ r_in) / (norm_in * np.sqrt(r_m @ r_m))
+            out[name] = [None if constant[j] else _finite_or_none(float(rho[j]))
+                         for j in range(k)]
+    return {name: out[name] for name in columns}
