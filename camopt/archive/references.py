@@ -9,7 +9,6 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from camopt.archive.runs import load_run
 from camopt.cases import get_case
 from camopt.config import LoadedConfig
 from camopt.core.runview import RunView
@@ -23,6 +22,8 @@ def resolve_references(config: LoadedConfig) -> LoadedConfig:
         return config
 
     def load(key: str, ref: str) -> RunView:
+        from camopt.archive.runs import load_run  # h5py only for a case that refers
+
         path = Path(ref)
         if not path.is_file() and (Path(config.path).parent / ref).is_file():
             path = Path(config.path).parent / ref

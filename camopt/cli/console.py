@@ -3,6 +3,8 @@ stderr) and the one cell format of plain tables."""
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from rich.console import Console
@@ -10,6 +12,34 @@ from rich.markup import escape
 
 out = Console()
 err = Console(stderr=True)
+
+
+@contextlib.contextmanager
+def rows_bar(label: str, quiet: bool) -> Iterator[Callable[[int, int], None] | None]:
+    """A rich progress bar on stderr over rows evaluated (``camopt.core.batch.RowsDone``:
+    rows done, rows in all), or None with ``--quiet`` or when stderr is not a terminal
+    (a pipe or a log file gets no bar)."""
+    if quiet or not err.is_terminal:
+        yield None
+        return
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    with Progress(TextColumn(escape(label)), BarColumn(), MofNCompleteColumn(),
+                  TimeElapsedColumn(), TimeRemainingColumn(), console=err,
+                  transient=True) as bar:
+        task = bar.add_task(label, total=None)
+
+        def rows_done(done: int, total: int) -> None:
+            bar.update(task, total=total, completed=done)
+
+        yield rows_done
 
 
 def fmt(value: Any) -> str:

@@ -48,8 +48,8 @@ def run(
         path = out_path or default_out(config.run.name)
         with claim_out(path, force, inputs=(case,)):
             tune_allocator()
-            with progress(quiet) as callback:
-                record = execute(config, callback=callback, jobs=jobs)
+            with progress(quiet) as (callback, check):
+                record = execute(config, callback=callback, jobs=jobs, check_progress=check)
             with deferred() as signals:  # a Ctrl-C now must not discard finished work
                 archive.write_run(record, path, force=force)
     if quiet:
@@ -104,9 +104,11 @@ def claim_out(path: Path, force: bool, resuming: bool = False,
 
 @contextlib.contextmanager
 def progress(quiet: bool) -> Iterator[Any]:
-    """A rich progress bar over repeats x iterations when stderr is a terminal."""
+    """Rich progress bars on stderr when it is a terminal: the search (repeats x
+    iterations) and a robust run's final check (designs x draws, rows). Yields the two
+    callbacks (None, None with ``--quiet`` or without a terminal); one live display."""
     if quiet or not err.is_terminal:
-        yield None
+        yield None, None
         return
     from rich.progress import (
         BarColumn,
@@ -127,6 +129,10 @@ def progress(quiet: bool) -> Iterator[Any]:
             bar.update(task, total=total, completed=done, best=f"{p.best_objective:.6g}",
                        description=f"repeat {p.repeat + 1}/{p.repeats}")
 
-        yield callback
+        def check(done: int, total: int) -> None:
+            bar.update(task, total=total, completed=done, best="-",
+                       description="robust final check (samples)")
+
+        yield callback, check
 
 

@@ -12,7 +12,7 @@ import typer
 from rich.markup import escape
 
 from camopt.cli.app import Format, app, errors
-from camopt.cli.console import fmt, out
+from camopt.cli.console import fmt, out, rows_bar
 from camopt.cli.layout import print_table
 from camopt.errors import CamoptError
 
@@ -60,6 +60,8 @@ def tolerance(
     target: Annotated[float | None, typer.Option(
         help="yield target of --allocate (default the run's robust.yield_target, else "
         "0.95)")] = None,
+    quiet: Annotated[bool, typer.Option(
+        help="no progress bar (there is none when stderr is not a terminal)")] = False,
 ) -> None:
     """Vary a run's optimum within tolerances: yield, percentiles, sensitivities."""
     from camopt import archive
@@ -88,7 +90,9 @@ def tolerance(
             archive.check_not_input(out_path, [run_path])
         if plot is not None:  # a file, FIFO or unwritable folder: one line, before any work
             archive.ensure_folder(plot, "--plot")
-        result = analyse(run, varies, samples, seed, Distribution(dist.value), used_class)
+        with rows_bar("tolerance samples", quiet) as rows_done:
+            result = analyse(run, varies, samples, seed, Distribution(dist.value), used_class,
+                             rows_done)
         doc = jsonable(result.summary)
         if tornado is not None and tornado not in doc["metrics"]:
             raise CamoptError(f"{run_path}: --tornado: no metric '{tornado}'; the case "

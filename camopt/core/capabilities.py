@@ -9,7 +9,7 @@ work, never a silent fallback in the middle of a run (nevergrad's class qualifie
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -99,10 +99,11 @@ class Stochastic(Protocol):
         """The best design this repeat saw whose nominal evaluation is feasible, or None."""
         ...
 
-    def final_check(self, best: NDArray, seen: Sequence[NDArray], seed: int
-                    ) -> dict[str, Any]:
+    def final_check(self, best: NDArray, seen: Sequence[NDArray], seed: int,
+                    progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
         """The run's check of its best design and of the best of the repeats' ``seen``
-        nominal designs, for the archive's ``robust_check`` (plain JSON data)."""
+        nominal designs, for the archive's ``robust_check`` (plain JSON data); ``progress``
+        is told the rows done and in all as the check's chunks finish."""
         ...
 
 

@@ -10,7 +10,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from pymoo.indicators.hv import HV
 
 from camopt.core.runview import RunView
 
@@ -108,6 +107,8 @@ def compare_fronts(runs: list[RunView]) -> dict[str, Any] | None:
     ideal, nadir = union.min(axis=0), union.max(axis=0)
     span = np.where(nadir > ideal, nadir - ideal, 1.0)
     ref = np.full(len(names), 1.0 + REFERENCE_MARGIN)
+    from pymoo.indicators.hv import HV  # pymoo only when a front is measured
+
     indicator = HV(ref_point=ref)
     values = [float(indicator((f - ideal) / span)) if len(f) else 0.0 for f in fronts]
     return {"objectives": list(names),

@@ -56,11 +56,14 @@ def pin_blas_threads() -> None:
     result depends on the thread count (``OPENBLAS_NUM_THREADS``, the machine's cores, a
     Dask worker's setting): the same sweep gave different cells on different executors.
     camopt's parallelism is across processes (repeats, cells), so one BLAS thread per
-    process costs nothing there and makes every result independent of where it ran."""
+    process costs nothing there and makes every result independent of where it ran.
+
+    scipy's BLAS (a library of its own, loaded with ``scipy.linalg``) is not loaded here
+    (``validate`` would pay ~0.1 s CPU for it): OpenBLAS reads ``OPENBLAS_NUM_THREADS``
+    when it loads, so one loaded later starts on one thread (tests/core/test_perf.py)."""
     import os
 
     import numpy  # noqa: F401  (loads numpy's BLAS, so threadpoolctl finds it)
-    import scipy.linalg  # noqa: F401  (and scipy's, a library of its own)
     from threadpoolctl import threadpool_limits
 
     for name in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS"):

@@ -9,7 +9,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import stats
 
 if TYPE_CHECKING:
     from camopt.config.sweep_spec import SweepSpec
@@ -72,6 +71,8 @@ def share_interval(successes: ArrayLike, trials: int, confidence: float = 0.95
     0.920 at p = 0.995; computed exactly in tests/core/test_stats.py), which is where
     quick yield estimates and robust designs live; Clopper-Pearson covers at least the
     stated level for every n and p, at the price of a slightly wider interval."""
+    from scipy import stats  # ~1 s to import: only where an interval is computed
+
     k = np.asarray(successes, dtype=float)
     alpha = 1.0 - confidence
     with np.errstate(invalid="ignore"):
@@ -100,6 +101,8 @@ def compare_objectives(a: ArrayLike, b: ArrayLike) -> dict[str, float]:
     if a.size < 2 or b.size < 2 or np.all(np.concatenate([a, b]) == a[0]):
         return {"p_value": 1.0, "p_a_better": 0.5, "rank_biserial": 0.0,
                 "median_a": float(np.median(a)), "median_b": float(np.median(b))}
+    from scipy import stats
+
     res = stats.mannwhitneyu(a, b, alternative="two-sided")
     p_a_better = 1.0 - float(res.statistic) / (a.size * b.size)
     return {"p_value": float(res.pvalue), "p_a_better": p_a_better,

@@ -178,7 +178,8 @@ def draw(rng: np.random.Generator, n: int, nominal: NDArray, half: NDArray,
 
 
 def apply(problem: Problem, X: NDArray, varies: Sequence[Vary], values: NDArray,
-          describe: bool = False, size: int | None = None) -> Evaluation:
+          describe: bool = False, size: int | None = None,
+          progress: batch.RowsDone | None = None) -> Evaluation:
     """Designs ``X`` (rows, n_var), SI, with the varied inputs set to ``values`` (rows, k)
     in the inputs' own units (display units for variables), evaluated in row chunks of
     ``size`` (:mod:`camopt.core.batch`; unset: its default): the case's ``describe_with`` when a
@@ -193,5 +194,5 @@ def apply(problem: Problem, X: NDArray, varies: Sequence[Vary], values: NDArray,
             X[:, i] = values[:, j] / problem.variables[i].scale
     assert not fields or isinstance(problem, VariesCase)
     if fields or describe:
-        return batch.describe(problem, X, fields, size)
-    return batch.evaluate(problem, X, size)
+        return batch.describe(problem, X, fields, size, progress)
+    return batch.evaluate(problem, X, size, progress)

@@ -238,7 +238,8 @@ def _parallel_repeats(problem: Problem, solver_cls: type[Solver], config: Loaded
 
 
 def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None = None,
-            callback: Callable[[Progress], None] | None = None, jobs: int = 1) -> RunRecord:
+            callback: Callable[[Progress], None] | None = None, jobs: int = 1,
+            check_progress: batch.RowsDone | None = None) -> RunRecord:
     """Run a validated config: every repeat, then the best design's metrics and analysis.
     ``seed`` and ``repeats`` override the config's (prefer setting ``run.seed`` and
     ``run.repeats`` in the config, so the archive records the config as run). ``jobs``
@@ -248,7 +249,8 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
     A KeyboardInterrupt (Ctrl-C, or SIGTERM turned into one by the CLI) after at least one
     finished repeat ends the run early: the record holds the finished repeats and
     ``interrupted`` is set, so the caller can keep them. Before any repeat finished it
-    propagates."""
+    propagates. ``check_progress`` is told the rows done of a robust run's final check
+    (:func:`camopt.engine.robust.check`) after each chunk."""
     problem, solver_cls = prepare(config)
     seed = config.run.seed if seed is None else seed
     repeats = config.run.repeats if repeats is None else repeats
@@ -280,16 +282,17 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
             config, seed, records, best, dict(problem.metrics(best.x)),
             dict(problem.analysis(best.x)), problem.names, problem.scale,
             problem.constraint_names, problem.objective_name, interrupted,
-            _robust_check(problem, records, best, seed), failure, problem)
+            _robust_check(problem, records, best, seed, check_progress), failure, problem)
     record.interrupted |= bool(signals)
     return record
 
 
-def _robust_check(problem: Problem, records: list[Repeat], best: Repeat,
-                  seed: int) -> dict[str, Any] | None:
+def _robust_check(problem: Problem, records: list[Repeat], best: Repeat, seed: int,
+                  progress: batch.RowsDone | None = None) -> dict[str, Any] | None:
     """Stochastic (robust) runs: the problem's final check of the best design and of the
-    best nominally feasible design the repeats saw; None otherwise."""
+    best nominally feasible design the repeats saw (``progress`` told the rows done);
+    None otherwise."""
     if not isinstance(problem, Stochastic):
         return None
     return problem.final_check(best.x, [r.nominal_x for r in records
-                                        if r.nominal_x is not None], seed)
+                                        if r.nominal_x is not None], seed, progress)

@@ -60,6 +60,7 @@ from numpy.typing import NDArray
 
 from camopt.config.models import CaseConfig, RobustSection
 from camopt.core import stats
+from camopt.core.batch import RowsDone
 from camopt.core.capabilities import (
     HasFamily,
     HasResiduals,
@@ -163,14 +164,15 @@ class Sampled:
         return self.worst <= FEASIBILITY_TOL
 
 
-def sample(problem: Problem, plan: Plan, X: NDArray, unit: NDArray) -> Sampled:
+def sample(problem: Problem, plan: Plan, X: NDArray, unit: NDArray,
+           progress: RowsDone | None = None) -> Sampled:
     """Evaluate designs ``X`` (n, n_var) at draws ``unit`` (S, k): n x S rows in chunks of
     ``plan.spec.chunk_rows`` (:mod:`camopt.core.batch`); draws outside an input's physical
-    range count as failed."""
+    range count as failed. ``progress`` is told the rows done after each chunk."""
     n, S = len(X), len(unit)
     values = _values(problem, plan, X, unit)
     ev = apply(problem, np.repeat(X, S, axis=0), plan.varies, values,
-               size=plan.spec.chunk_rows)
+               size=plan.spec.chunk_rows, progress=progress)
     ev = mark(ev, outside(values, plan.ranges))
     g = np.where(np.isnan(ev.g), np.inf, ev.g).reshape(n, S, -1)
     f = np.asarray(ev.f, dtype=float).reshape(n, S)
@@ -317,15 +319,15 @@ class RobustProblem(Problem, Stochastic):
     def nominal_design(self) -> NDArray | None:
         return None if self.nominal_best is None else self.nominal_best[0]
 
-    def final_check(self, best: NDArray, seen: Sequence[NDArray], seed: int
-                    ) -> dict[str, Any]:
+    def final_check(self, best: NDArray, seen: Sequence[NDArray], seed: int,
+                    progress: RowsDone | None = None) -> dict[str, Any]:
         """The best design and the best nominally feasible design ``seen`` (lowest nominal
         objective over the repeats) checked on the same fresh draws (:func:`check`)."""
         designs = [best]
         if seen:
             f = self.base.evaluate(np.array(seen)).f
             designs.append(seen[int(np.argmin(f))])
-        checked = check(self, designs, seed)
+        checked = check(self, designs, seed, progress)
         result: dict[str, Any] = {"robust": checked[0]}
         if len(checked) > 1:
             result["nominal"] = {**checked[1], "x": self.base.to_display(designs[1])}
@@ -409,18 +411,20 @@ def repeat_seed(child: np.random.SeedSequence, stage: int = 0) -> np.random.Seed
                                   spawn_key=(*child.spawn_key, ROBUST_KEY, stage))
 
 
-def check(problem: RobustProblem, designs: Sequence[NDArray], seed: int) -> list[dict[str, Any]]:
+def check(problem: RobustProblem, designs: Sequence[NDArray], seed: int,
+          progress: RowsDone | None = None) -> list[dict[str, Any]]:
     """The final check: designs (SI) evaluated at ``check_samples`` fresh draws, the same
     draws for every design. Per design: nominal objective, mean and quantile objective,
     yield with its Clopper-Pearson interval, and per constraint its nominal value and its value at
-    the yield target's order statistic (normalised, <= 0 met: the margin)."""
+    the yield target's order statistic (normalised, <= 0 met: the margin). ``progress``
+    is told the rows (designs x draws) done after each chunk."""
     spec = problem.plan.spec
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(ROBUST_KEY, CHECK_KEY)))
     unit = unit_draws(rng, spec.check_samples, len(problem.plan.varies),
                       problem.plan.distribution)
     X = np.array(designs, dtype=float)
     nominal = problem.base.evaluate(X)
-    s = sample(problem.base, problem.plan, X, unit)
+    s = sample(problem.base, problem.plan, X, unit, progress)
     k = order_index(spec.yield_target, spec.check_samples)
     at_target = np.partition(s.g, k, axis=1)[:, k, :]
     mean = statistic(s.f, "mean", spec.quantile)

@@ -23,9 +23,9 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import stats
 
 from camopt.cases import build_problem, get_case, run_requirements
+from camopt.core.batch import RowsDone
 from camopt.core.problem import FEASIBILITY_TOL, Evaluation, Problem
 from camopt.core.runview import RunView
 from camopt.core.stats import share_interval
@@ -116,9 +116,11 @@ def nominal_inputs(run: RunView, problem: Problem, varies: Sequence[Vary]) -> ND
 
 def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
             distribution: Distribution = Distribution.uniform,
-            tolerance_class: str | None = None) -> Tolerance:
+            tolerance_class: str | None = None,
+            progress: RowsDone | None = None) -> Tolerance:
     """Draw ``samples`` sets of the varied inputs from ``SeedSequence(seed)`` and evaluate
-    them, the nominal design and the one-at-a-time ends together (row chunks)."""
+    them, the nominal design and the one-at-a-time ends together (row chunks; ``progress``
+    is told the rows done, of 1 + 2 k + samples, after each)."""
     if not varies:
         raise CamoptError(f"{run.path}: --vary: give at least one input to vary")
     if samples < 2:
@@ -132,7 +134,7 @@ def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
     ends[np.arange(0, 2 * k, 2), np.arange(k)] -= half
     ends[np.arange(1, 2 * k, 2), np.arange(k)] += half
     values = np.vstack([nominal, ends, drawn])
-    ev, bad = evaluate_inputs(run, problem, varies, values, describe=True)
+    ev, bad = evaluate_inputs(run, problem, varies, values, describe=True, progress=progress)
     result = Tolerance(run.path, list(varies), distribution, seed, nominal, drawn,
                        ev.take(0), ev.take(slice(1, 1 + 2 * k)),
                        ev.take(slice(1 + 2 * k, None)), problem.objective_name,
@@ -151,12 +153,13 @@ def draw_inputs(seed: int, samples: int, nominal: NDArray, half: NDArray,
 
 
 def evaluate_inputs(run: RunView, problem: Problem, varies: Sequence[Vary], values: NDArray,
-              describe: bool) -> tuple[Evaluation, NDArray]:
+              describe: bool, progress: RowsDone | None = None) -> tuple[Evaluation, NDArray]:
     """The run's best design with its varied inputs set to ``values`` (rows, k), rows
     whose inputs leave their physical range counted as failed (docs/tolerance.md), and
-    those rows (rows,) bool."""
+    those rows (rows,) bool. ``progress`` is told the rows done after each chunk."""
     x0 = problem.from_display(run.best.x)
-    ev = apply(problem, np.tile(x0, (len(values), 1)), varies, values, describe=describe)
+    ev = apply(problem, np.tile(x0, (len(values), 1)), varies, values, describe=describe,
+               progress=progress)
     ranges = [physical_range(problem, get_case(run.kind).config, v) for v in varies]
     bad = outside(values, ranges)
     return mark(ev, bad), bad
@@ -172,6 +175,7 @@ def summarise(t: Tolerance) -> dict[str, Any]:
     columns = t.metric_columns(t.samples)
     swings = t.metric_columns(t.swings)
     metrics, sensitivity, tornado = {}, {}, {}
+    rhos = spearman_columns(t.inputs, columns)
     for name, values in columns.items():
         with np.errstate(invalid="ignore"):
             finite = values[~np.isnan(values)]
@@ -179,7 +183,7 @@ def summarise(t: Tolerance) -> dict[str, Any]:
         metrics[name] = {"p05": float(p[0]), "p50": float(p[1]), "p95": float(p[2])}
         rows: list[dict[str, Any]] = []  # one JSON row per varied input
         for j, v in enumerate(t.varies):
-            rows.append({"input": v.name, "spearman": _spearman(t.inputs[:, j], values),
+            rows.append({"input": v.name, "spearman": rhos[name][j],
                          "low": float(swings[name][2 * j]),
                          "high": float(swings[name][2 * j + 1])})
         rows.sort(key=lambda r: -abs(r["spearman"]) if r["spearman"] is not None else 1.0)
@@ -239,12 +243,47 @@ def requirement_yields(t: Tolerance, columns: dict[str, NDArray]) -> list[dict[s
     return out
 
 
-def _spearman(a: NDArray, b: NDArray) -> float | None:
-    """Spearman's rank correlation of two columns (NaN rows dropped); None where either
-    is constant (an input at +-0, a metric the inputs do not move)."""
-    ok = ~(np.isnan(a) | np.isnan(b))
-    a, b = a[ok], b[ok]
-    if a.size < 3 or np.all(a == a[0]) or np.all(b == b[0]):
-        return None
-    rho = stats.spearmanr(a, b).statistic
-    return _finite_or_none(rho)
+def spearman_columns(inputs: NDArray, columns: dict[str, NDArray]
+                     ) -> dict[str, list[float | None]]:
+    """Spearman's rank correlation of every metric column with every input column.
+
+    ``inputs`` (n, k) are the drawn inputs (finite); each column of ``columns`` is (n,)
+    with NaN where a sample has no value (the objective of an infeasible sample). For
+    each metric, rows where it is NaN are dropped, and rho is Pearson's correlation of
+    the ranks (average ranks for ties, ``scipy.stats.rankdata``), which is
+    ``scipy.stats.spearmanr`` of the pair. Each column is ranked once: a metric once,
+    the inputs once per distinct set of dropped rows (most metrics share one: none),
+    instead of both columns again for every pair (k x metrics rankings of 10^6 values).
+    Metrics are grouped by their dropped rows first, so one group's input ranks (n x k)
+    are held at a time. None where either column is constant (an input at +-0, a metric
+    the inputs do not move) or fewer than 3 rows remain."""
+    from scipy.stats import rankdata
+
+    k = inputs.shape[1]
+    out: dict[str, list[float | None]] = {}
+    groups: dict[bytes, list[str]] = {}  # the kept rows (packed) -> metrics that keep them
+    for name, values in columns.items():
+        keep = ~np.isnan(values)
+        kept = values[keep]
+        if kept.size < 3 or np.all(kept == kept[0]):
+            out[name] = [None] * k
+        else:
+            groups.setdefault(np.packbits(keep).tobytes(), []).append(name)
+    for names in groups.values():
+        keep = ~np.isnan(columns[names[0]])
+        r_in = np.empty((int(keep.sum()), k))
+        constant = np.empty(k, dtype=bool)
+        for j in range(k):  # column by column: one column's sort temporaries at a time
+            drawn = inputs[keep, j]
+            constant[j] = bool(np.all(drawn == drawn[0]))
+            r_in[:, j] = rankdata(drawn)
+        r_in -= r_in.mean(axis=0)
+        norm_in = np.sqrt(np.einsum("ij,ij->j", r_in, r_in))
+        for name in names:
+            r_m = rankdata(columns[name][keep])
+            r_m -= r_m.mean()
+            with np.errstate(invalid="ignore", divide="ignore"):
+                rho = (r_m @ r_in) / (norm_in * np.sqrt(r_m @ r_m))
+            out[name] = [None if constant[j] else _finite_or_none(float(rho[j]))
+                         for j in range(k)]
+    return {name: out[name] for name in columns}

@@ -8,7 +8,6 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
-from scipy.optimize import root
 
 from camopt.config.models import MAX_STARTS
 from camopt.core.capabilities import HasResiduals
@@ -67,6 +66,8 @@ class NewtonPP(MultiStart):
         return float(np.linalg.cond(J))
 
     def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:
+        from scipy.optimize import root  # scipy.optimize: 0.5 s, only for a run
+
         sol = root(self._residual, self.problem.to_unit(x0), method=self.options.method,
                    options={"xtol": self.options.xtol} if self.options.method == "hybr"
                    else {"xtol": self.options.xtol, "ftol": 1e-15})

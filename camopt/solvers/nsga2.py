@@ -23,13 +23,6 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field, model_validator
-from pymoo.algorithms.moo.nsga2 import NSGA2 as PymooNSGA2
-from pymoo.core.evaluator import Evaluator
-from pymoo.core.problem import Problem as PymooProblem
-from pymoo.core.termination import NoTermination
-from pymoo.operators.crossover.sbx import SBX
-from pymoo.operators.mutation.pm import PM
-from pymoo.problems.static import StaticProblem
 
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
 from camopt.core.capabilities import Repairable
@@ -98,6 +91,13 @@ class NSGA2(Solver):
         self.objectives = tuple(options.objectives) or (problem.objective_name,)
         self.sign = np.array([-1.0 if o in options.maximise else 1.0 for o in self.objectives])
         self._check_names()
+        # pymoo costs ~0.6 s to import: only a run that builds this solver pays it
+        from pymoo.algorithms.moo.nsga2 import NSGA2 as PymooNSGA2
+        from pymoo.core.problem import Problem as PymooProblem
+        from pymoo.core.termination import NoTermination
+        from pymoo.operators.crossover.sbx import SBX
+        from pymoo.operators.mutation.pm import PM
+
         n_constr = problem.n_constr + 1  # + one: every objective finite
         self.pproblem = PymooProblem(n_var=problem.n_var, n_obj=len(self.objectives),
                                      n_ieq_constr=n_constr, xl=problem.lower,
@@ -141,6 +141,9 @@ class NSGA2(Solver):
         return X.copy()
 
     def tell(self, X: NDArray, ev: Evaluation) -> None:
+        from pymoo.core.evaluator import Evaluator
+        from pymoo.problems.static import StaticProblem
+
         pop, self._pending = self._pending, None
         F = self.objective_matrix(ev) * self.sign
         finite = np.isfinite(F).all(axis=1) & np.isfinite(ev.f)

@@ -22,7 +22,6 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
-from scipy.optimize import minimize
 
 from camopt.config.models import MAX_LOCAL_ITERATIONS, SolverOptions
 from camopt.core.problem import Evaluation, Problem
@@ -315,6 +314,8 @@ def _slsqp(problem: Problem, x0: NDArray, options: PolishOptions
                 for k, cap in options.limits.items()]
         c = np.r_[-ev.g[0], caps] - margin
         return np.where(np.isfinite(c), c, -_BAD)
+
+    from scipy.optimize import minimize  # scipy.optimize: 0.5 s, only for a run
 
     x, nfev, message = start, 0, ""
     start_feasible = bool(np.all(constraints(start, 0.0) >= 0))

@@ -8,11 +8,15 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
 HEAVY = ("numpy", "scipy", "scipy.stats", "h5py", "pymoo", "matplotlib", "dask",
          "jinja2", "ezdxf", "camopt.engine.driver", "camopt.cases", "camopt.archive")
+
+ROOT = Path(__file__).resolve().parents[2]
+ARCHIVE = str(ROOT / "tests" / "data" / "archives" / "run_main_52e31ad.h5")
 
 PROBE = """
 import json, sys
@@ -30,7 +34,7 @@ def loaded_after(*args: str) -> tuple[int, set[str]]:
     """Exit code and the modules loaded once ``camopt ARGS`` has run, in a fresh
     interpreter (this test process has imported everything already)."""
     done = subprocess.run([sys.executable, "-c", PROBE, json.dumps(list(args))],
-                          capture_output=True, text=True, check=True)
+                          capture_output=True, text=True, check=True, cwd=ROOT)
     result = json.loads(done.stdout.strip().splitlines()[-1])
     return result["code"], set(result["modules"])
 
@@ -47,3 +51,28 @@ def test_probe_sees_a_command_that_imports_them() -> None:
     code, modules = loaded_after("init", "vcb")
     assert code in (0, None)
     assert {"pydantic", "numpy", "camopt.cases"} <= modules
+
+
+# what a command that evaluates nothing must not load (issue #36): scipy's submodules
+# (scipy.stats alone was ~1.4 s of CPU), pymoo, the plotting and report libraries, the
+# compiler; and validate reads no archive, so no h5py
+NEVER_FOR_CHECKS = ("scipy.stats", "scipy.optimize", "scipy.special", "scipy.linalg",
+                    "scipy.integrate", "scipy.interpolate", "scipy.spatial", "pymoo",
+                    "matplotlib", "jinja2", "ezdxf", "dask", "numba")
+
+
+def test_validate_loads_no_solver_library() -> None:
+    code, modules = loaded_after("validate", "configs/vcb_velocity.toml")
+    assert code in (0, None)
+    assert not modules & {*NEVER_FOR_CHECKS, "h5py"}, sorted(modules & {*NEVER_FOR_CHECKS,
+                                                                         "h5py"})
+    assert {"numpy", "pydantic", "camopt.cases"} <= modules  # the probe sees the case
+
+
+@pytest.mark.parametrize("command", ["show", "runs"])
+def test_show_and_runs_load_no_solver_library(command: str) -> None:
+    target = ARCHIVE if command == "show" else str(Path(ARCHIVE).parent)
+    code, modules = loaded_after(command, target)
+    assert code in (0, None)
+    assert not modules & set(NEVER_FOR_CHECKS), sorted(modules & set(NEVER_FOR_CHECKS))
+    assert "h5py" in modules  # the probe sees the archive being read

@@ -72,3 +72,17 @@ def test_metrics_that_change_between_chunks_are_refused(sphere_case):
     problem.evaluate = lambda X: Evaluation(real(X).f, real(X).g, next(calls))
     with pytest.raises(ValueError, match="differ from the first chunk"):
         batch.evaluate(problem, np.zeros((3, 4)), size=2)
+
+
+def test_progress_is_told_each_chunk_and_changes_nothing():
+    """The progress callback (issue #36) hears the rows done after every chunk, ending
+    at all rows, and the Evaluation is the one without it."""
+    problem = build_problem(load(CONFIGS / "fast_switch.toml").case)
+    X = problem.sample(np.random.default_rng(np.random.SeedSequence(9)), 50)
+    heard: list[tuple[int, int]] = []
+    ev = batch.evaluate(problem, X, size=16, progress=lambda d, n: heard.append((d, n)))
+    assert heard == [(16, 50), (32, 50), (48, 50), (50, 50)]
+    _same(ev, batch.evaluate(problem, X, size=16))
+    heard.clear()
+    batch.describe(problem, X[:3], size=16, progress=lambda d, n: heard.append((d, n)))
+    assert heard == [(3, 3)]  # one chunk: told once, at the end

@@ -122,9 +122,13 @@ def test_objective_statistics():
 def test_run_is_reproducible_and_checked():
     cfg = load(CONFIGS / "fast_switch_de.toml", *SMALL, "robust.samples=8",
                "robust.check_samples=200")
-    a, b = execute(cfg), execute(cfg)
+    heard: list[tuple[int, int]] = []
+    a, b = execute(cfg), execute(cfg, check_progress=lambda d, n: heard.append((d, n)))
     np.testing.assert_array_equal(a.best.x, b.best.x)
-    assert a.robust_check == b.robust_check
+    assert a.robust_check == b.robust_check  # the progress callback changes nothing
+    designs = 1 + ("nominal" in a.robust_check)  # the check's rows: designs x draws
+    assert heard and heard[-1] == (designs * 200, designs * 200)
+    assert [d for d, _ in heard] == sorted(d for d, _ in heard)
     check = a.robust_check["robust"]
     assert check["samples"] == 200 and 0 <= check["yield_low"] <= check["yield"] <= 1
     assert a.problem.constraint_names[-1] == "yield" and len(a.best.g) == a.problem.n_constr

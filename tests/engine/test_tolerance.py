@@ -231,3 +231,72 @@ def test_yield_per_requirement_raw_metrics_and_json_only_on_stdout(vcb_run, tmp_
     assert r.exit_code == 0, r.output
     assert json.loads(r.stdout)["requirements"]
     assert r.stderr.count(".png") == 3
+
+
+# --- Spearman ranks computed once per column (issue #36) -------------------------------
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+from scipy import stats  # noqa: E402
+
+from camopt.engine.tolerance import spearman_columns  # noqa: E402
+
+
+def _pairwise(inputs, values):
+    """scipy.stats.spearmanr per (input, metric) pair, NaN rows dropped: the reference."""
+    out = []
+    for j in range(inputs.shape[1]):
+        ok = ~np.isnan(values)
+        a, b = inputs[ok, j], values[ok]
+        if a.size < 3 or np.all(a == a[0]) or np.all(b == b[0]):
+            out.append(None)
+        else:
+            out.append(float(stats.spearmanr(a, b).statistic))
+    return out
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(3, 60), k=st.integers(1, 4),
+       ties=st.booleans(), nan_share=st.sampled_from([0.0, 0.2, 0.9]))
+def test_spearman_columns_equal_scipy_per_pair(seed, n, k, ties, nan_share):
+    """Ranks once per column give scipy's spearmanr of each pair to 1e-12: with ties
+    (rounded draws), NaN rows in some metrics, constant inputs and metrics."""
+    rng = np.random.default_rng(seed)
+    inputs = rng.normal(size=(n, k))
+    if ties:
+        inputs = np.round(inputs, 1)
+    inputs[:, -1] = 0.5 if k > 1 else inputs[:, -1]  # an input at +-0
+    a = inputs[:, 0] ** 3 + rng.normal(scale=0.3, size=n)
+    columns = {"a": a, "b": np.where(rng.random(n) < nan_share, np.nan, a - inputs[:, -1]),
+               "c": np.where(rng.random(n) < nan_share, np.nan, rng.normal(size=n)),
+               "const": np.full(n, 2.0), "empty": np.full(n, np.nan)}
+    got = spearman_columns(inputs, columns)
+    for name, values in columns.items():
+        want = _pairwise(inputs, values)
+        assert [w is None for w in want] == [g is None for g in got[name]], name
+        assert np.allclose([g for g in got[name] if g is not None],
+                           [w for w in want if w is not None], rtol=0, atol=1e-12), name
+
+
+def test_progress_bar_on_a_terminal_only(vcb_run, monkeypatch):
+    """``tolerance`` draws a bar on stderr when it is a terminal, and not with --quiet
+    (issue #36); the JSON on stdout is the same either way."""
+    import io
+
+    from rich.console import Console
+
+    from camopt.cli import console
+
+    def run(*extra):
+        buffer = io.StringIO()
+        monkeypatch.setattr(console, "err", Console(file=buffer, force_terminal=True,
+                                                    width=100))
+        r = invoke("tolerance", vcb_run, "--samples", 600, "--seed", 0, *VARY, *extra,
+                   "--format", "json")
+        assert r.exit_code == 0, r.output
+        return r.stdout, buffer.getvalue()
+
+    shown, bar = run()
+    quiet, nothing = run("--quiet")
+    assert "tolerance samples" in bar and "605/605" in bar  # nominal + 2 x 2 ends + 600
+    assert nothing == ""
+    assert json.loads(shown) == json.loads(quiet)

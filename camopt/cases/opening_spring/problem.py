@@ -20,7 +20,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.integrate import solve_ivp
 
 from camopt.cases.opening_spring.config import OpeningSpringConfig
 from camopt.core.capabilities import HasResiduals
@@ -221,8 +220,9 @@ class OpeningSpringProblem(Problem, HasResiduals):
         k = 1 + self._n_points
         l0 = self._value(X, "l0_mm")
         sq = 2 * available / inertia[:, 1:k]
-        rate = np.sqrt(np.abs(sq))
-        rate[sq < 0] *= -1.0  # the energy cannot reach that point: a negative rate
+        # the energy cannot reach that point: a negative rate (one copysign, not a masked
+        # multiply: this runs once per Nelder-Mead evaluation)
+        rate = np.copysign(np.sqrt(np.abs(sq)), sq)
         if c.mode == "design":
             err = self.points_rate - rate
             f = (err * err).sum(axis=1)  # Eq 4
@@ -269,6 +269,8 @@ class OpeningSpringProblem(Problem, HasResiduals):
                 return d * (np.sin(y[0]) - np.sin(self.theta0)) - mm * MM
             event.direction = 1  # type: ignore[attr-defined]
             return event
+
+        from scipy.integrate import solve_ivp  # not at import: validate never integrates
 
         stop = travel(c.gap_mm)
         stop.terminal = True

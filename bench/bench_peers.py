@@ -1,0 +1,257 @@
+"""camopt's shipped config against other optimisers on the same Problem objects (issue #36).
+
+Peers (optional, ``pip install 'camopt[peers]'``; a missing one is reported and skipped):
+scipy's ``differential_evolution``, pycma (``cma``, IPOP restarts), pymoo's DE and GA,
+nevergrad's NGOpt. Each solver minimises camopt's own Problem (``evaluate`` over a whole
+population per call) for each objective, seeds interleaved in one process.
+
+Constraints: pymoo takes the case's ``g`` as inequality constraints; scipy and pycma get a
+scalar that ranks feasible designs by the objective and infeasible ones after every
+feasible one, by their violation (``1e9 + 1e6 * violation``: Deb's rules as a scalar).
+Integer variables (fast switch coils) are rounded before every peer evaluation, as camopt's
+solvers snap them.
+
+Measured per solver and seed, through one wrapper around ``Problem.evaluate`` (the same
+for camopt and every peer): the best *feasible* objective among every design evaluated,
+and the CPU time (``time.process_time``: other sessions on a shared host do not count)
+at which each best-so-far was reached. Budget: the evaluations camopt's shipped config
+used with that seed; a peer stops at its first generation at or past it. Reported:
+the median over seeds of the best objective at equal budget, the feasible share of
+seeds, and the median CPU to reach the best peer's median quality (``-`` when a solver
+never reaches it; objectives within ``SAME`` relative are one quality).
+Run ``python -m bench.bench_peers [seeds] [objective ...]``.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from camopt.core.problem import Problem
+from camopt.engine.driver import load, prepare, run_repeat
+
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+OBJECTIVES = {"vcb_velocity": "vcb_velocity.toml", "emb": "emb.toml",
+              "fast_switch_de": "fast_switch_de.toml"}
+SEEDS = 5
+INFEASIBLE = 1e9  # a scalar peer's floor for infeasible designs (every feasible one is below)
+SAME = 1e-6
+"""Relative difference below which two objectives count as one quality: below the
+models' own resolution (sampled measures, the local stages' tolerances); the fast
+switch's 17.984828 and 17.984829 ms are one design."""
+
+
+@dataclass
+class Trace:
+    """Best feasible objective so far against CPU seconds since the solver started."""
+
+    start: float = field(default_factory=time.process_time)
+    nfev: int = 0
+    best: float = np.inf
+    cpu: list[float] = field(default_factory=list)
+    value: list[float] = field(default_factory=list)
+
+    def record(self, f: NDArray, feasible: NDArray) -> None:
+        self.nfev += len(f)
+        ok = feasible & np.isfinite(f)
+        if ok.any() and float(f[ok].min()) < self.best:
+            self.best = float(f[ok].min())
+            self.cpu.append(time.process_time() - self.start)
+            self.value.append(self.best)
+
+    def cpu_to(self, quality: float) -> float:
+        """CPU seconds until the best-so-far was at or below ``quality`` (inf: never)."""
+        for t, v in zip(self.cpu, self.value):
+            if v <= quality + SAME * abs(quality):
+                return t
+        return np.inf
+
+
+def traced(problem: Problem, trace: Trace, snap_integers: bool) -> Callable[[NDArray], tuple]:
+    """``X (n, n_var) -> (f, g, feasible, violation)`` through ``problem.evaluate``,
+    recorded in ``trace``; integer variables rounded first when ``snap_integers``."""
+    lower, upper, integer = problem.lower, problem.upper, problem.integer
+
+    def evaluate(X: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        X = np.clip(np.atleast_2d(np.asarray(X, dtype=float)), lower, upper)
+        if snap_integers and integer.any():
+            X[:, integer] = np.rint(X[:, integer])
+        ev = problem.evaluate(X)
+        f = np.asarray(ev.f, dtype=float)
+        trace.record(f, ev.feasible)
+        return f, np.asarray(ev.g, dtype=float), ev.feasible, ev.violation
+    return evaluate
+
+
+def scalar(evaluate: Callable[[NDArray], tuple], X: NDArray) -> NDArray:
+    """Deb's rules as one number per design (for peers without constraints)."""
+    f, _, feasible, violation = evaluate(X)
+    bad = INFEASIBLE + 1e6 * np.where(np.isfinite(violation), violation, 1e6)
+    return np.where(feasible & np.isfinite(f), f, bad)
+
+
+# ---- the solvers: each (problem, budget, seed, trace) -> None --------------------------
+def run_camopt(cfg, problem: Problem, solver_cls, seed: int, trace: Trace) -> int:
+    """camopt's shipped config, one repeat (seed child ``seed``); its nfev."""
+    original = problem.evaluate
+
+    def recording(X: NDArray):
+        ev = original(X)
+        trace.record(np.asarray(ev.f, dtype=float), ev.feasible)
+        return ev
+    problem.evaluate = recording  # type: ignore[method-assign]
+    try:
+        child = np.random.SeedSequence(cfg.run.seed).spawn(seed + 1)[seed]
+        rec = run_repeat(problem, solver_cls, cfg, child, seed, 1)
+    finally:
+        del problem.evaluate
+    return rec.nfev
+
+
+def run_scipy_de(problem: Problem, budget: int, seed: int, trace: Trace) -> None:
+    from scipy.optimize import differential_evolution
+
+    evaluate = traced(problem, trace, snap_integers=True)
+    popsize = 10  # scipy's default: 10 x n_var individuals
+    pop = popsize * problem.n_var
+    differential_evolution(lambda x: scalar(evaluate, np.asarray(x).T),
+                           list(zip(problem.lower, problem.upper)), popsize=popsize,
+                           maxiter=max(budget // pop - 1, 1), tol=0, polish=False,
+                           vectorized=True, updating="deferred", rng=seed)
+
+
+def run_pycma(problem: Problem, budget: int, seed: int, trace: Trace) -> None:
+    """pycma with IPOP restarts (population doubled per restart) until the budget."""
+    import cma
+
+    evaluate = traced(problem, trace, snap_integers=True)
+    lo, span = problem.lower, problem.upper - problem.lower
+    rng = np.random.default_rng(seed)
+    popsize, restart = None, 0
+    while trace.nfev < budget:
+        opts = {"bounds": [0, 1], "seed": int(rng.integers(1, 2**31)), "verbose": -9,
+                "maxfevals": budget - trace.nfev}
+        if popsize:
+            opts["popsize"] = popsize
+        es = cma.CMAEvolutionStrategy(rng.random(problem.n_var), 0.3, opts)
+        while not es.stop() and trace.nfev < budget:
+            U = np.array(es.ask())
+            es.tell(list(U), list(scalar(evaluate, lo + U * span)))
+        popsize = 2 * es.popsize
+        restart += 1
+
+
+def _pymoo(problem: Problem, budget: int, seed: int, trace: Trace, algorithm) -> None:
+    from pymoo.core.problem import Problem as PymooProblem
+    from pymoo.optimize import minimize
+
+    evaluate = traced(problem, trace, snap_integers=True)
+
+    class Wrapped(PymooProblem):
+        def __init__(self) -> None:
+            super().__init__(n_var=problem.n_var, n_obj=1, n_ieq_constr=problem.n_constr,
+                             xl=problem.lower, xu=problem.upper)
+
+        def _evaluate(self, X, out, *args, **kwargs):
+            f, g, _, _ = evaluate(X)
+            out["F"] = np.where(np.isfinite(f), f, 1e30)[:, None]
+            out["G"] = np.where(np.isfinite(g), g, 1e30)
+
+    minimize(Wrapped(), algorithm, ("n_eval", budget), seed=seed, verbose=False)
+
+
+def run_pymoo_de(problem: Problem, budget: int, seed: int, trace: Trace) -> None:
+    from pymoo.algorithms.soo.nonconvex.de import DE
+
+    _pymoo(problem, budget, seed, trace, DE(pop_size=100))
+
+
+def run_pymoo_ga(problem: Problem, budget: int, seed: int, trace: Trace) -> None:
+    from pymoo.algorithms.soo.nonconvex.ga import GA
+
+    _pymoo(problem, budget, seed, trace, GA(pop_size=100))
+
+
+def run_nevergrad(problem: Problem, budget: int, seed: int, trace: Trace) -> None:
+    import nevergrad as ng
+
+    evaluate = traced(problem, trace, snap_integers=True)
+    param = ng.p.Array(shape=(problem.n_var,), lower=0.0, upper=1.0)
+    param.random_state = np.random.RandomState(seed)
+    opt = ng.optimizers.NGOpt(parametrization=param, budget=budget, num_workers=50)
+    lo, span = problem.lower, problem.upper - problem.lower
+    while trace.nfev < budget:
+        cands = [opt.ask() for _ in range(50)]
+        values = scalar(evaluate, lo + np.array([c.value for c in cands]) * span)
+        for c, v in zip(cands, values):
+            opt.tell(c, float(v))
+
+
+PEERS: dict[str, tuple[str, Callable[..., None]]] = {
+    "scipy DE": ("scipy", run_scipy_de),
+    "pycma IPOP": ("cma", run_pycma),
+    "pymoo DE": ("pymoo", run_pymoo_de),
+    "pymoo GA": ("pymoo", run_pymoo_ga),
+    "nevergrad NGOpt": ("nevergrad", run_nevergrad),
+}
+
+
+def compare(objective: str, seeds: int) -> None:
+    """One objective: camopt and every installed peer, seeds interleaved; print the table."""
+    cfg = load(CONFIGS / OBJECTIVES[objective], ["run.repeats=1"])
+    problem, solver_cls = prepare(cfg)
+    available = {name: fn for name, (module, fn) in PEERS.items()
+                 if importlib.util.find_spec(module) is not None}
+    missing = [name for name in PEERS if name not in available]
+    traces: dict[str, list[Trace]] = {"camopt": [], **{name: [] for name in available}}
+    for seed in range(seeds):
+        trace = Trace()
+        budget = run_camopt(cfg, problem, solver_cls, seed, trace)
+        traces["camopt"].append(trace)
+        for name, fn in available.items():
+            trace = Trace()
+            fn(problem, budget, seed, trace)
+            traces[name].append(trace)
+    best = {name: statistics.median(t.best for t in ts) for name, ts in traces.items()}
+    peers = {k: v for k, v in best.items() if k != "camopt"}
+    best_peer = min(peers, key=lambda k: peers[k]) if peers else None
+    quality = peers[best_peer] if best_peer else np.inf
+    polish = " + polish" if getattr(cfg.solver, "polish", None) else ""
+    print(f"{objective} ({cfg.solver.name}{polish}, {seeds} seeds, budget = camopt's "
+          "evaluations, median "
+          f"{statistics.median(t.nfev for t in traces['camopt']):.0f}):")
+    print(f"  {'solver':16s} {'median best':>14s} {'feasible':>9s} {'median nfev':>12s} "
+          f"{'CPU s to ' + format(quality, '.6g'):>20s}")
+    for name, ts in traces.items():
+        cpu = statistics.median(t.cpu_to(quality) for t in ts)
+        print(f"  {name:16s} {best[name]:14.6f} {sum(np.isfinite(t.best) for t in ts):5d}/"
+              f"{len(ts):<3d} {statistics.median(t.nfev for t in ts):12.0f} "
+              f"{'-' if not np.isfinite(cpu) else format(cpu, '.2f'):>20s}")
+    if missing:
+        print(f"  not installed: {', '.join(missing)}")
+    if best_peer is not None:
+        ahead = best["camopt"] <= quality + SAME * abs(quality)
+        ours = statistics.median(t.cpu_to(quality) for t in traces["camopt"])
+        theirs = statistics.median(t.cpu_to(quality) for t in traces[best_peer])
+        print(f"  camopt {'at least as good as' if ahead else 'BEHIND'} the best peer "
+              f"({best_peer}); CPU to its quality: camopt {ours:.2f} s, {best_peer} "
+              f"{theirs:.2f} s")
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = list(sys.argv[1:] if argv is None else argv)
+    seeds = int(args.pop(0)) if args and args[0].isdigit() else SEEDS
+    for objective in args or list(OBJECTIVES):
+        compare(objective, seeds)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,32 @@
+"""``pin_blas_threads`` leaves every BLAS on one thread, also scipy's when it loads after
+the call (it is not imported by the call, so ``validate`` does not pay for it)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+PROBE = """
+import json, os, sys
+for name in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS",
+             "OMP_NUM_THREADS"):
+    os.environ.pop(name, None)
+from camopt.core.perf import pin_blas_threads
+pin_blas_threads()
+before = "scipy.linalg" in sys.modules
+import scipy.linalg  # its BLAS loads now, after the pin
+from threadpoolctl import threadpool_info, threadpool_limits
+blas = [i for i in threadpool_info() if i["user_api"] == "blas"]
+print(json.dumps({"before": before, "threads": [i["num_threads"] for i in blas],
+                  "libs": [i["filepath"] for i in blas]}))
+"""
+
+
+def test_blas_loaded_after_the_pin_runs_on_one_thread() -> None:
+    done = subprocess.run([sys.executable, "-c", PROBE], capture_output=True, text=True,
+                          check=True)
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert not result["before"]
+    assert any("scipy" in lib for lib in result["libs"]), result["libs"]
+    assert result["threads"] and all(n == 1 for n in result["threads"]), result
