@@ -22,17 +22,10 @@ def rows_bar(label: str, quiet: bool) -> Iterator[Callable[[int, int], None] | N
     if quiet or not err.is_terminal:
         yield None
         return
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
+    from rich import progress as rp
 
-    with Progress(TextColumn(escape(label)), BarColumn(), MofNCompleteColumn(),
-                  TimeElapsedColumn(), TimeRemainingColumn(), console=err,
+    with rp.Progress(rp.TextColumn(escape(label)), rp.BarColumn(), rp.MofNCompleteColumn(),
+                  rp.TimeElapsedColumn(), rp.TimeRemainingColumn(), console=err,
                   transient=True) as bar:
         task = bar.add_task(label, total=None)
 

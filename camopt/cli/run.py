@@ -110,17 +110,11 @@ def progress(quiet: bool) -> Iterator[Any]:
     if quiet or not err.is_terminal:
         yield None, None
         return
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-    )
+    from rich import progress as rp
 
-    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-               TextColumn("best {task.fields[best]}"), TimeElapsedColumn())
-    with Progress(*columns, console=err, transient=True) as bar:
+    columns = (rp.TextColumn("{task.description}"), rp.BarColumn(), rp.MofNCompleteColumn(),
+               rp.TextColumn("best {task.fields[best]}"), rp.TimeElapsedColumn())
+    with rp.Progress(*columns, console=err, transient=True) as bar:
         task = bar.add_task("solving", total=None, best="-")
 
         def callback(p: Any) -> None:
