@@ -38,7 +38,8 @@ def main(samples: int = 20_000, seed: int = 20261124, latch_deg: float | None = 
     k = len(np.ravel(problem.band.cam_kg_m2))
     sets = [problem.dynamics] + [
         MotionParameters(**{f.name: float(np.ravel(getattr(problem.band, f.name))[i])
-                            for f in fields(MotionParameters)}) for i in range(k)]
+                            for f in fields(MotionParameters)
+                            if getattr(problem.band, f.name) is not None}) for i in range(k)]
     sets = [replace(s, release_offset_rad=float(np.ravel(s.release_offset_rad)[0]) + moved)
             for s in sets]
     released = np.array([np.isfinite(free_rotation(problem.model, kc, s)[1]) for s in sets])

@@ -150,6 +150,15 @@ class VcbConfig(CaseConfig):
     latch_energy_min_j: float = Field(
         0.0, ge=0, description="kinetic energy the hook needs at the end of the stroke "
         "(assumed, docs/assumptions.md)")
+    release_torque_margin_min: float = Field(
+        1.2, ge=1.0, le=100.0, description="least eps T_s / T_f at the release, the closing "
+        "springs' torque on the cam at rest against the friction torque, in every set of the "
+        "band (constraint with require_latch; a requirement always) (assumed: a spring 5 % "
+        "soft and friction 10 % high still release; docs/assumptions.md)")
+    lift_off_fraction_min: float = Field(
+        0.05, ge=0.0, lt=1.0, description="least torque the cam passes to the roller, as a "
+        "share of the springs' mean driving torque over the stroke (constraint with "
+        "forbid_lift_off; a requirement always) (assumed; docs/assumptions.md)")
     # contact stress (Table 1, Eqs 27-31)
     cam_modulus_gpa: Modulus = Field(210.0, description="E of cam and roller (S45C) (Table 1)")
     poisson: float = Field(0.3, ge=0, lt=0.5, description="Poisson's ratio (Table 1)")

@@ -72,7 +72,12 @@ class MotionParameters:
     ``contacts_kg`` the three moving contacts, carried by the rod until they touch;
     ``release_offset_rad`` the charged spring crank's angle past its dead centre when the
     closing latch lets go; ``friction_nm`` a Coulomb friction torque referred to the cam
-    shaft, against the cam's rotation whenever it turns (N m)."""
+    shaft, against the cam's rotation while it drives the roller (N m);
+    ``release_friction_nm`` the same in the free rotation from the release (None: the
+    driven closing's ``friction_nm``; 0 for a model form with friction only in the
+    driven closing); ``efficiency`` the share of the springs' work that drives (Eq 26's
+    eps; None: the case's ``efficiency``; 1 for a form with Coulomb friction alone).
+    The model forms (:mod:`camopt.cases.vcb.forms`) map their fitted vectors to these."""
 
     cam_kg_m2: NDArray | float
     follower_kg_m2: NDArray | float
@@ -80,24 +85,33 @@ class MotionParameters:
     contacts_kg: NDArray | float
     release_offset_rad: NDArray | float
     friction_nm: NDArray | float = 0.0
+    release_friction_nm: NDArray | float | None = None
+    efficiency: NDArray | float | None = None
 
-    def columns(self, n: int) -> ParameterColumns:
-        """The same parameters as (n, 1) columns (what the motions broadcast against)."""
+    def columns(self, n: int, efficiency: float) -> ParameterColumns:
+        """The same parameters as (n, 1) columns (what the motions broadcast against);
+        ``efficiency`` fills an unset ``efficiency`` (the case's eps)."""
         def col(v: NDArray | float) -> NDArray:
             return np.broadcast_to(np.ravel(np.asarray(v, dtype=float)), (n,))[:, None]
-        return ParameterColumns(**{f.name: col(getattr(self, f.name)) for f in fields(self)})
+        resolved = replace(
+            self, efficiency=efficiency if self.efficiency is None else self.efficiency,
+            release_friction_nm=(self.friction_nm if self.release_friction_nm is None
+                                 else self.release_friction_nm))
+        return ParameterColumns(**{f.name: col(getattr(resolved, f.name))
+                                   for f in fields(self)})
 
     def repeat(self, n: int) -> MotionParameters:
         """Each of k parameter sets repeated for n designs in a row: (k n,) arrays ordered
-        set-major (set 0 for every design, then set 1, ...)."""
+        set-major (set 0 for every design, then set 1, ...); unset fields stay unset."""
         return replace(self, **{f.name: np.repeat(np.ravel(np.asarray(getattr(self, f.name),
                                                                       dtype=float)), n)
-                                for f in fields(self)})
+                                for f in fields(self) if getattr(self, f.name) is not None})
 
 
 @dataclass(frozen=True)
 class ParameterColumns:
-    """:class:`MotionParameters` as (n, 1) columns, one row per design (SI)."""
+    """:class:`MotionParameters` as (n, 1) columns, one row per design (SI), every field
+    resolved."""
 
     cam_kg_m2: NDArray
     follower_kg_m2: NDArray
@@ -105,6 +119,8 @@ class ParameterColumns:
     contacts_kg: NDArray
     release_offset_rad: NDArray
     friction_nm: NDArray
+    release_friction_nm: NDArray
+    efficiency: NDArray
 
 
 @dataclass(frozen=True)
@@ -113,9 +129,11 @@ class ClosingEvents:
     ``cam_contact_time`` (s), ``touch_time`` (s), ``touch_velocity`` (m/s),
     ``closing_velocity_avg`` (m/s, over the last third of the contact stroke, Sec 2.1),
     ``closing_time`` (s, to theta_end; inf if stalled), ``final_kinetic`` (J, at
-    theta_end), ``touch_loss`` (J), ``latched`` and ``reach``, the fraction of theta_end
-    the cam turns before it stalls (1 if latched). What a band member contributes
-    (:func:`closing_events`)."""
+    theta_end), ``touch_loss`` (J), ``latched``, ``reach``, the fraction of theta_end
+    the cam turns before its kinetic energy first reaches zero (1 if latched; 0 if it
+    never meets the roller), and ``release_torque_ratio``, eps T_s / T_f at the release
+    crank angle (the cam starts iff it exceeds 1; inf without friction in the free
+    rotation). What a band member contributes (:func:`closing_events`)."""
 
     cam_contact_time: NDArray
     touch_time: NDArray
@@ -126,6 +144,7 @@ class ClosingEvents:
     touch_loss: NDArray
     latched: NDArray
     reach: NDArray
+    release_torque_ratio: NDArray
 
 
 @dataclass(frozen=True)
@@ -203,17 +222,81 @@ def _at(a: NDArray, k: NDArray, w: NDArray) -> NDArray:
         return (1 - w) * a[rows, np.maximum(k - 1, 0)] + w * a[rows, k]
 
 
+HERMITE_POINTS = 16
+"""Points per interval at which :func:`first_zero` evaluates the energy's cubic Hermite
+interpolant between two nodes (the root is then interpolated linearly between them)."""
+
+
+def first_zero(x: NDArray, energy: NDArray, slope: NDArray) -> NDArray:
+    """The first coordinate where the kinetic energy reaches zero, per row (n,), nan where
+    it stays positive: ``energy`` (n, m) and its exact derivative ``slope`` (n, m, the net
+    torque) at the nodes ``x`` ((m,) or (n, m), increasing). Between two nodes the energy is
+    its cubic Hermite interpolant (values and slopes at both ends: error O(h^4)), evaluated
+    at :data:`HERMITE_POINTS` points, so a zero between nodes is found even where both
+    nodes are positive (the cam comes to rest and would be pushed on again: it stays).
+    A start at rest with a positive slope (the release) is not a zero."""
+    x = np.broadcast_to(x, energy.shape)
+    h = (x[:, 1:] - x[:, :-1])[:, :, None]
+    t = np.arange(1, HERMITE_POINTS + 1)[None, None, :] / HERMITE_POINTS
+    t2, t3 = t * t, t * t * t
+    e = ((2 * t3 - 3 * t2 + 1) * energy[:, :-1, None] + (t3 - 2 * t2 + t) * h * slope[:, :-1, None]
+         + (-2 * t3 + 3 * t2) * energy[:, 1:, None] + (t3 - t2) * h * slope[:, 1:, None])
+    e[:, :, -1] = energy[:, 1:]  # the nodes themselves exactly
+    flat = e.reshape(len(e), -1)  # (n, (m - 1) * points) in order of x
+    below = flat <= 0
+    hit = below.any(axis=1)
+    j = np.argmax(below, axis=1)
+    rows = np.arange(len(e))
+    # linear between the last positive point and the first one at or below zero
+    before = np.where(j > 0, flat[rows, np.maximum(j - 1, 0)], energy[:, 0])
+    after = flat[rows, j]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        frac = np.clip(np.nan_to_num(before / (before - after), nan=1.0), 0.0, 1.0)
+    cell, point = np.divmod(j, HERMITE_POINTS)
+    tt = (point + frac) / HERMITE_POINTS  # position in the interval, 0..1
+    root = x[rows, cell] + tt * h[rows, cell, 0]
+    return np.where(hit, root, np.nan)
+
+
+def release_torque_ratio(model: VcbModel, kc: NDArray, p: ParameterColumns) -> NDArray:
+    """eps T_s / T_f at the release crank angle, (n,): the springs' torque on the cam at
+    rest there, eps of it driving (Eq 26), against the friction torque of the free
+    rotation. The cam starts iff this exceeds 1 (Coulomb friction holds it up to T_f; a
+    torque ratio of exactly 1 does not start it). inf where there is no friction there
+    (and the springs turn it), 0 where the springs hold it back (crank at or before its
+    dead centre)."""
+    start = model.dead_centre + p.release_offset_rad[:, 0] - model.contact_crank_angle
+    ext, rate = model.closing_spring_geometry(start)
+    torque = _row_torque(model, kc, ext, rate)
+    driving = p.efficiency[:, 0] * np.maximum(torque, 0.0)
+    friction = p.release_friction_nm[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(friction > 0, driving / friction, np.where(driving > 0, np.inf, 0.0))
+
+
+def _row_torque(model: VcbModel, kc: NDArray, ext: NDArray, rate: NDArray) -> NDArray:
+    """Closing springs' torque (N m) with one spring geometry per row: ``ext``, ``rate``
+    (n,) or (n, m) for ``kc`` (n, 2)."""
+    c = model.c
+    k1, k2 = (kc[:, i].reshape((-1,) + (1,) * (np.ndim(ext) - 1)) for i in range(2))
+    return (k1 * (c.kc1_precompression_mm * MM - ext)
+            + k2 * (c.kc2_precompression_mm * MM - ext)) * rate
+
+
 def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps: int = 64
                   ) -> tuple[NDArray, NDArray]:
     """Cam speed (rad/s) and time (s) when the freely turning cam meets the roller, (n,):
     from rest, the crank ``release_offset`` past its dead centre, to the crank angle
-    QOX + theta0 (theta_c = 0), under eps of the closing springs' work with J_cam alone.
-    A crank at or before its dead centre never turns (infinite time). The speed is exact
-    (the energy at the contact); the time, on ``steps`` intervals graded toward the
-    release, is within 4e-5 of 12,800 intervals at the vendor's latch (14.07 deg) and
-    1e-5 at 18.8 deg: 64 rather than more, because with the latch a design variable
-    every sampled part has its own path and this geometry is a third of a band's cost."""
-    p = params.columns(len(kc))
+    QOX + theta0 (theta_c = 0), under eps of the closing springs' work and the free
+    rotation's friction torque with J_cam alone. Whether the cam starts is decided at the
+    release itself (:func:`release_torque_ratio` > 1, not at a node); it stops on the way
+    (infinite time) if its kinetic energy reaches zero between the release and the roller
+    (:func:`first_zero`, between nodes too). The speed is exact (the energy at the
+    contact); the time, on ``steps`` intervals graded toward the release, is within 4e-5
+    of 12,800 intervals at the vendor's latch (14.07 deg) and 1e-5 at 18.8 deg: 64 rather
+    than more, because with the latch a design variable every sampled part has its own
+    path and this geometry is a third of a band's cost."""
+    p = params.columns(len(kc), model.c.efficiency)
     # cam angle theta_c of the release: negative, measured back from the roller contact
     start = model.dead_centre + p.release_offset_rad - model.contact_crank_angle
     u = np.linspace(0.0, 1.0, steps + 1)[None, :]
@@ -221,72 +304,105 @@ def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps:
     # parameter set), the energy on it linearly on the rates: geometry once per offset
     offsets, which = np.unique(start[:, 0], return_inverse=True)
     theta = offsets[:, None] * (1 - u * u)  # graded toward the release, at rest there
-    extension, _ = model.closing_spring_geometry(theta)
-    per_rate = 0.5 * np.stack([(model.c.kc1_precompression_mm * MM - extension) ** 2,
-                               (model.c.kc2_precompression_mm * MM - extension) ** 2])
-    released = per_rate[:, :, :1] - per_rate  # (2, offsets, m): energy given up per N/m
+    extension, rate = model.closing_spring_geometry(theta)
+    pre = np.array([model.c.kc1_precompression_mm, model.c.kc2_precompression_mm])[:, None,
+                                                                                     None] * MM
+    per_rate = 0.5 * (pre - extension) ** 2  # (2, offsets, m): stored energy per N/m
+    released = per_rate[:, :, :1] - per_rate  # energy given up per N/m
+    torque_per_rate = (pre - extension) * rate
     work = kc[:, :1] * released[0][which] + kc[:, 1:2] * released[1][which]
-    kinetic = model.c.efficiency * work - p.friction_nm * (theta[which] - start)
+    torque = kc[:, :1] * torque_per_rate[0][which] + kc[:, 1:2] * torque_per_rate[1][which]
+    eps, friction = p.efficiency, p.release_friction_nm
+    kinetic = eps * work - friction * (theta[which] - start)
     with np.errstate(invalid="ignore", divide="ignore"):
         omega = np.sqrt(np.maximum(2 * kinetic / p.cam_kg_m2, 0.0))
     time = _cumulative_time(-2 * start * u, omega, 1.0 / steps)[:, -1]
-    # friction at least the springs' torque: the cam never gets away (or stops on the way)
-    stuck = (p.release_offset_rad[:, 0] <= 0) | ~(start[:, 0] < 0) | np.any(
-        kinetic[:, 1:] <= 0, axis=1)
+    starts = (p.release_offset_rad[:, 0] > 0) & (start[:, 0] < 0) & (
+        release_torque_ratio(model, kc, p) > 1)
+    stops = np.isfinite(first_zero(theta[which], kinetic, eps * torque - friction))
+    stuck = ~starts | stops
     return np.where(stuck, 0.0, omega[:, -1]), np.where(stuck, np.inf, time)
 
 
-def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
-                   rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
-                   steps: int) -> ClosingMotion:
-    """Closing of n designs (follower law ``A`` (n, d + 1), spring rates ``kc`` (n, 2)
-    N/m, linkage ``link`` (n, 5)) from the release of the closing springs, by the
-    work-energy equation on ``steps`` graded intervals of the cam angle: the events and
-    the curves."""
-    motion = _closing(model, A, kc, link, rod_offset, loads, params, steps, 1, True)
-    assert isinstance(motion, ClosingMotion)
-    return motion
+@dataclass(frozen=True)
+class ClosingState:
+    """Everything the closing's events and curves are read from, for n rows (designs, or
+    sets x designs): the graded cam-angle grid ``theta`` (m,) with ``dtheta_du`` and the
+    step ``du``; the kinematics ``s1``, ``ds1`` (n, m); the springs' driving torque
+    ``drive`` (eps T_s - T_f, N m, (n, m)); the parameters ``p``; the free rotation's
+    ``t_free``, ``release_ratio`` (n,); the speeds and energies before and after the
+    contacts' touch (n, m); the touch interval ``k``, fraction ``w`` and instant
+    (``theta_touch``, ``t_touch``, ``t_k`` the first node after it); ``stall_theta`` where
+    the kinetic energy first reaches zero (nan: never) and ``stalled_at``, the first node
+    at or beyond it (m if none). Built by :func:`closing_state`; read by the pure
+    :func:`events_of` and :func:`curves_of`."""
+
+    theta: NDArray
+    dtheta_du: NDArray
+    du: float
+    gap: float
+    s1: NDArray
+    ds1: NDArray
+    drive: NDArray
+    p: ParameterColumns
+    t_free: NDArray
+    release_ratio: NDArray
+    omega_before: NDArray
+    omega_after: NDArray
+    kinetic: NDArray
+    after: NDArray
+    k: NDArray
+    touched: NDArray
+    v_touch: NDArray
+    loss: NDArray
+    t_before: NDArray
+    t_touch: NDArray
+    t_k: NDArray
+    cells: NDArray
+    stall_theta: NDArray
+    stalled_at: NDArray
+
+    @property
+    def latched(self) -> NDArray:
+        """(n,) bool: the kinetic energy stays positive to the end of the stroke."""
+        return np.isnan(self.stall_theta)
 
 
-def closing_events(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
-                   rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
-                   steps: int, sets: int = 1) -> ClosingEvents:
-    """The events of :func:`closing_motion` alone (no curves: what a band member gives),
-    for ``sets`` parameter sets per design: ``params`` holds that many for every design
-    (:meth:`MotionParameters.repeat`, set-major) and the result has sets x n rows. The
+def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
+                  rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
+                  steps: int, sets: int = 1) -> ClosingState:
+    """The closing of n designs (follower law ``A`` (n, d + 1), spring rates ``kc``
+    (n, 2) N/m, linkage ``link`` (n, 5)) from the release of the closing springs, by the
+    work-energy equation on ``steps`` graded intervals of the cam angle, for ``sets``
+    parameter sets per design (``params`` holds that many for every design,
+    :meth:`MotionParameters.repeat`, set-major; the rows are sets x designs). The
     kinematics and the resisting springs' work, which do not depend on the parameters,
     are computed once per design."""
-    return _closing(model, A, kc, link, rod_offset, loads, params, steps, sets, False)
-
-
-def _closing(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
-             rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
-             steps: int, sets: int, curves: bool) -> ClosingEvents:
-    """:func:`closing_motion` (``curves``) or :func:`closing_events`."""
-    c = model.c
     n = len(A) * sets
-    p = params.columns(n)
+    p = params.columns(n, model.c.efficiency)
     end = model.theta_c[-1]
     theta, dtheta_du = graded_grid(end, steps)
     kin = model.kinematics(A, link, rod_offset, theta)
     extension, rate = model.closing_spring_geometry(theta)
     spring = model.closing_energy(kc, extension)
+    springs_torque = model.closing_torque(kc, (extension, rate))
     dphi, s1, ds1 = kin.dphi, kin.s1, kin.ds1
     resisting = loads.resistant_energy(s1)
     if sets > 1:
-        dphi, s1, ds1, spring, resisting, kc = (
-            np.tile(a, (sets, 1)) for a in (dphi, s1, ds1, spring, resisting, kc))
-    eps = c.efficiency
+        dphi, s1, ds1, spring, springs_torque, resisting, kc = (
+            np.tile(a, (sets, 1))
+            for a in (dphi, s1, ds1, spring, springs_torque, resisting, kc))
+    eps, friction = p.efficiency, p.friction_nm
     follower = p.follower_kg_m2 * dphi * dphi  # J_f phi'^2
     # 1. free rotation, then the plastic impact of the cam on the roller at rest
     omega_free, t_free = free_rotation(model, kc, params)
     moving = p.rod_kg + p.contacts_kg
     j_before = p.cam_kg_m2 + follower + moving * ds1 * ds1
     omega0 = np.ravel(p.cam_kg_m2 * omega_free[:, None] / j_before[:, :1])
-    kinetic = 0.5 * j_before[:, 0] * omega0**2
+    kinetic0 = 0.5 * j_before[:, 0] * omega0**2
     # 2. work-energy equation up to the touch
-    ke_before = kinetic[:, None] + eps * (spring[:, :1] - spring) - resisting
-    ke_before -= p.friction_nm * theta
+    ke_before = kinetic0[:, None] + eps * (spring[:, :1] - spring) - resisting
+    ke_before -= friction * theta
     with np.errstate(invalid="ignore"):
         omega_before = np.sqrt(np.maximum(2 * ke_before / j_before, 0.0))
     gap = loads.gap
@@ -298,9 +414,9 @@ def _closing(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     theta_touch = _at(theta[None, :], k, w)
     ds1_touch = _at(ds1, k, w)
     dphi_touch = _at(dphi, k, w)
-    ke_touch = (kinetic + eps * (spring[:, 0] - _at(spring, k, w))
+    ke_touch = (kinetic0 + eps[:, 0] * (spring[:, 0] - _at(spring, k, w))
                 - loads.resistant_energy(np.full((n, 1), gap))[:, 0]
-                - p.friction_nm[:, 0] * theta_touch)
+                - friction[:, 0] * theta_touch)
     j_touch = (p.cam_kg_m2[:, 0] + p.follower_kg_m2[:, 0] * dphi_touch**2
                + moving[:, 0] * ds1_touch**2)
     with np.errstate(invalid="ignore"):
@@ -314,12 +430,17 @@ def _closing(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
         omega_after = np.sqrt(np.maximum(2 * ke_after / j_after, 0.0))
     index = np.arange(theta.size)[None, :]
     after = touched[:, None] & (index >= k[:, None])
-    kinetic_now = np.where(after, ke_after, ke_before)
-    stalled_at = np.where((kinetic_now[:, 1:] <= 0).any(axis=1),
-                          np.argmax(kinetic_now[:, 1:] <= 0, axis=1) + 1, theta.size)
+    kinetic = np.where(after, ke_after, ke_before)
+    # the first zero of the kinetic energy, between nodes too: its slope is the net torque
+    drive = eps * springs_torque - friction
+    slope = drive - loads.resistant_force(s1) * ds1
+    stall_theta = first_zero(theta, kinetic, slope)
     # a cam the springs cannot turn away from its release (friction at least their torque)
     # never reaches the roller: nothing of the closing happens
-    stalled_at = np.where(np.isfinite(t_free), stalled_at, 1)
+    stall_theta = np.where(np.isfinite(t_free), stall_theta, 0.0)
+    stalled_at = np.where(np.isnan(stall_theta), theta.size,
+                          np.searchsorted(theta, np.nan_to_num(stall_theta)))
+    stalled_at = np.where(np.isfinite(t_free), np.maximum(stalled_at, 1), 1)
     # 4. time: before the touch from omega_before; after it from the touch instant on
     du = 1.0 / steps
     t_before = t_free[:, None] + _cumulative_time(dtheta_du[None, :], omega_before, du)
@@ -331,41 +452,81 @@ def _closing(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     with np.errstate(divide="ignore", invalid="ignore"):
         first_cell = (theta[k] - theta_touch) * 0.5 * (1 / omega_touch + 1 / omega_after[rows, k])
         g = dtheta_du / omega_after
-    t_k = t_touch + first_cell
     cells = 0.5 * (g[:, 1:] + g[:, :-1]) * du  # cell i - 1 .. i at column i - 1
     cells = np.where(index[:, 1:] > k[:, None], cells, 0.0)  # only whole cells after k
-    latched = stalled_at == theta.size
-    # 5. the paper's average closing velocity: the last third of the contact stroke
-    k3, w3 = _crossing(s1, 2 * gap / 3)
-    t_two_thirds = np.where(k3 > 0, _at(t_before, k3, w3), np.nan)
-    reached = touched & (stalled_at > k)
+    # a stall inside the touch's interval comes before or after the touch itself
+    reached = touched & ~(stall_theta <= theta_touch)
+    return ClosingState(
+        theta=theta, dtheta_du=dtheta_du, du=du, gap=gap, s1=s1, ds1=ds1, drive=drive, p=p,
+        t_free=t_free, release_ratio=release_torque_ratio(model, kc, p),
+        omega_before=omega_before, omega_after=omega_after, kinetic=kinetic, after=after,
+        k=k, touched=reached, v_touch=v_touch, loss=loss, t_before=t_before,
+        t_touch=t_touch, t_k=t_touch + first_cell, cells=cells, stall_theta=stall_theta,
+        stalled_at=stalled_at)
+
+
+def events_of(s: ClosingState) -> ClosingEvents:
+    """The closing's events (n,) read from its state (no curves: what a band member
+    gives): the end time is the last node's, after the touch if it came (the running
+    sum's last term: the same bits as :func:`curves_of`'s last time)."""
+    touched = s.k > 0
+    t_end = np.where(touched, s.t_k + np.cumsum(s.cells, axis=1)[:, -1], s.t_before[:, -1])
+    return ClosingEvents(closing_time=np.where(s.latched, t_end, np.inf), **_events(s))
+
+
+def _events(s: ClosingState) -> dict[str, NDArray]:
+    """The events both readings share (all but the closing time)."""
+    end = s.theta[-1]
+    # the paper's average closing velocity: the last third of the contact stroke
+    k3, w3 = _crossing(s.s1, 2 * s.gap / 3)
+    t_two_thirds = np.where(k3 > 0, _at(s.t_before, k3, w3), np.nan)
     with np.errstate(divide="ignore", invalid="ignore"):
-        v_avg = np.where(reached, (gap / 3) / (t_touch - t_two_thirds), np.nan)
-    events = dict(
-        cam_contact_time=t_free, touch_time=np.where(reached, t_touch, np.inf),
-        touch_velocity=v_touch, closing_velocity_avg=v_avg,
-        final_kinetic=np.where(latched, kinetic_now[:, -1], 0.0), touch_loss=loss,
-        latched=latched, reach=theta[stalled_at - 1] / end)
-    if not curves:  # the end time alone: the last node's, after the touch if it came
-        # (the running sum's last term: the same bits as the curve's last time)
-        t_end = np.where(touched, t_k + np.cumsum(cells, axis=1)[:, -1], t_before[:, -1])
-        return ClosingEvents(closing_time=np.where(latched, t_end, np.inf), **events)
-    t_after = t_k[:, None] + np.concatenate([np.zeros((n, 1)), np.cumsum(cells, axis=1)],
-                                            axis=1)
-    time = np.where(after, t_after, t_before)
-    time = np.where(index >= stalled_at[:, None], np.inf, time)
-    omega = np.where(after, omega_after, omega_before)
-    rod_velocity = ds1 * omega
-    contact_velocity = np.where(after, 0.0, rod_velocity)
+        v_avg = np.where(s.touched, (s.gap / 3) / (s.t_touch - t_two_thirds), np.nan)
+    latched = s.latched
+    return dict(
+        cam_contact_time=s.t_free, touch_time=np.where(s.touched, s.t_touch, np.inf),
+        touch_velocity=s.v_touch, closing_velocity_avg=v_avg,
+        final_kinetic=np.where(latched, s.kinetic[:, -1], 0.0), touch_loss=s.loss,
+        latched=latched, reach=np.where(latched, 1.0, np.nan_to_num(s.stall_theta) / end),
+        release_torque_ratio=s.release_ratio)
+
+
+def curves_of(s: ClosingState) -> ClosingMotion:
+    """The closing's events and curves (n, m) read from its state."""
+    n = len(s.s1)
+    index = np.arange(s.theta.size)[None, :]
+    t_after = s.t_k[:, None] + np.concatenate([np.zeros((n, 1)), np.cumsum(s.cells, axis=1)],
+                                              axis=1)
+    time = np.where(s.after, t_after, s.t_before)
+    time = np.where(index >= s.stalled_at[:, None], np.inf, time)
+    omega = np.where(s.after, s.omega_after, s.omega_before)
+    rod_velocity = s.ds1 * omega
+    contact_velocity = np.where(s.after, 0.0, rod_velocity)
     # torque the cam passes on: eps T - T_f - J_cam omega domega/dtheta (negative: lift-off)
-    torque = eps * model.closing_torque(kc, (extension, rate)) - p.friction_nm
-    accel = 0.5 * np.gradient(omega * omega, theta, axis=1)
-    cam_torque = torque - p.cam_kg_m2 * accel
+    accel = 0.5 * np.gradient(omega * omega, s.theta, axis=1)
+    cam_torque = s.drive - s.p.cam_kg_m2 * accel
     return ClosingMotion(
-        theta_c=theta, time=time, omega=omega, rod=s1, rod_velocity=rod_velocity,
-        contact=np.minimum(s1, gap), contact_velocity=contact_velocity,
-        cam_torque=cam_torque, closing_time=np.where(latched, time[:, -1], np.inf),
-        **events)
+        theta_c=s.theta, time=time, omega=omega, rod=s.s1, rod_velocity=rod_velocity,
+        contact=np.minimum(s.s1, s.gap), contact_velocity=contact_velocity,
+        cam_torque=cam_torque, closing_time=np.where(s.latched, time[:, -1], np.inf),
+        **_events(s))
+
+
+def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
+                   rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
+                   steps: int) -> ClosingMotion:
+    """Closing of n designs from the release of the closing springs: the events and the
+    curves (:func:`closing_state`, :func:`curves_of`)."""
+    return curves_of(closing_state(model, A, kc, link, rod_offset, loads, params, steps))
+
+
+def closing_events(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
+                   rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
+                   steps: int, sets: int = 1) -> ClosingEvents:
+    """The events of :func:`closing_motion` alone for ``sets`` parameter sets per design
+    (:func:`closing_state`, :func:`events_of`): sets x n rows."""
+    return events_of(closing_state(model, A, kc, link, rod_offset, loads, params, steps,
+                                   sets))
 
 
 def _path(model: VcbModel, link: NDArray, rod_offset: NDArray | float, start: NDArray,
@@ -391,8 +552,8 @@ def opening_motion(model: VcbModel, A: NDArray, link: NDArray, rod_offset: NDArr
     rod is back at the gap, where a plastic impact picks them up (generalised momentum
     kept), and the opening spring carries all to s1 = 0."""
     n = len(A)
-    p = params.columns(n)
-    eps = model.c.efficiency
+    p = params.columns(n, model.c.efficiency)
+    eps = p.efficiency
     end = model.theta_c[-1]
     phi_open = A[:, 0]
     phi_closed = A @ end ** np.arange(A.shape[1])
@@ -411,7 +572,7 @@ def opening_motion(model: VcbModel, A: NDArray, link: NDArray, rod_offset: NDArr
     k, w = _crossing(-s, -loads.gap)
     departure = np.where(k > 0, _at(t1, k, w), np.inf)
     phi_gap = _at(phi_closed[:, None] + (phi_open - phi_closed)[:, None] * u * u, k, w)
-    ke_gap = eps * (loads.resistant_energy(travel[:, 0]) - loads.resistant_energy(
+    ke_gap = eps[:, 0] * (loads.resistant_energy(travel[:, 0]) - loads.resistant_energy(
         np.full(n, loads.gap)))
     # phase 2: contacts picked up at the gap; from phi_gap to the opened state, linearly
     s2_rel, ds2_du, dphi2_du = _path(model, link, rod_offset, phi_gap, phi_open, u, False)

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import CamDesign, VcbConfig
+from camopt.cases.vcb.constraints import CONSTRAINTS, Terms
 from camopt.cases.vcb.dynamics import (
     ClosingEvents,
     ClosingMotion,
@@ -23,12 +24,11 @@ from camopt.cases.vcb.model import (
     phi_max,
     rate_zeros,
     row_max,
-    unassembled,
 )
 from camopt.core.capabilities import VariesCase
 from camopt.core.problem import Evaluation, ObjectiveFloor, Problem, Variable
 from camopt.errors import ConfigError
-from camopt.mechanics import cam, fourbar, hertz
+from camopt.mechanics import cam, hertz
 from camopt.units import DEG, MM, MS
 
 LINK_FIELDS = ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
@@ -64,8 +64,6 @@ class VcbProblem(Problem, VariesCase):
                                             1 / DEG),)
             self.release_column = len(self.variables) - 1 if r is not None else None
             self.case_release = c.release_offset_deg * DEG
-            self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly",
-                                     "rod_travel")
         else:
             if c.cam_design is None:  # cam_archive is read into cam_design before a build
                 raise ConfigError("case", "cam_archive", "the step-1 archive was not read")
@@ -78,18 +76,8 @@ class VcbProblem(Problem, VariesCase):
                 for name, b, f in (("l1_mm", c.l1_bounds_mm, MM), ("l3_mm", c.l3_bounds_mm, MM),
                                    ("l4_mm", c.l4_bounds_mm, MM), ("l5_mm", c.l5_bounds_mm, MM),
                                    ("theta1_deg", c.theta1_bounds_deg, DEG)))
-            self.constraint_names = ("phi_max_low", "phi_max_high", "monotonic", "assembly",
-                                     "rod_travel", "grashof")
-        if c.stress_constraint:
-            self.constraint_names += ("shear_yield",)
-        if c.closing_velocity_m_s is not None:
-            self.constraint_names += ("closing_velocity_low", "closing_velocity_high")
-        if c.require_latch:
-            self.constraint_names += ("latch",)
-        if c.forbid_lift_off:
-            self.constraint_names += ("lift_off",)
-        if c.pressure_angle_max_deg is not None:
-            self.constraint_names += ("pressure_angle",)
+        self.constraints = tuple(con for con in CONSTRAINTS if con.applies(c))
+        self.constraint_names = tuple(con.name for con in self.constraints)
         self.dynamics = MotionParameters(c.cam_inertia_kg_m2, c.follower_inertia_kg_m2,
                                          c.rod_mass_kg, c.contacts_mass_kg,
                                          c.release_offset_deg * DEG, c.cam_friction_nm)
@@ -211,81 +199,46 @@ class VcbProblem(Problem, VariesCase):
         bal = m.balance(kin, kc, torque, self.load)
         end = m.theta_c[-1]
         zeros = rate_zeros(A, end)  # where phi' = 0: dwell, and phi_max's candidates
-        phi_top = phi_max(A, end, zeros) / DEG  # exact, not the sampled maximum
-        travel = kin.s1[:, -1]
-        lo, hi = c.phi_max_deg
         sigma_max = m.peak_stress(A, kin.follower, torque, zeros)
-        tau_max = hertz.max_shear_stress(sigma_max)  # Eq 31
         motion = self.motion(X, link) if (detail or self.search_dynamics) else None
-        motion_band = self.motion_band(X, motion, link) if motion is not None else None
-        if motion is not None:  # over the part of the stroke the cam reaches
-            cam_torque_min = np.min(np.where(np.isfinite(motion.time), motion.cam_torque,
-                                             np.inf), axis=1)
-        if detail or c.pressure_angle_max_deg is not None:
-            psi_max = np.max(np.abs(cam.pressure_angle(m.l2, m.l6, kin.follower)), axis=1) / DEG
-        def spread() -> MotionBand:  # the dynamic constraints exist only with the motion
-            assert motion_band is not None
-            return motion_band
-
-        def limits() -> tuple[float, float]:
-            assert c.closing_velocity_m_s is not None
-            return c.closing_velocity_m_s
-
-        g = {
-            "phi_max_low": lambda: 1 - phi_top / lo,  # Eq 40
-            "phi_max_high": lambda: phi_top / hi - 1,  # Eq 40
-            "monotonic": lambda: -np.min(kin.dphi, axis=1),
-            "assembly": lambda: unassembled(kin.cos4, kin.ds1),
-            # normalised by the travel itself, as the other limits are by their bound (a
-            # scale of the tolerance made far-off designs' violations dwarf the others)
-            "rod_travel": lambda: (np.abs(travel / MM - c.rod_travel_mm)
-                                   - c.rod_travel_tolerance_mm) / c.rod_travel_mm,
-            "grashof": lambda: -fourbar.grashof_margin(link[:, 0], m.l2, link[:, 1],
-                                                       link[:, 2]) / m.l2,  # Eq 43
-            "shear_yield": lambda: tau_max / (c.shear_yield_mpa * 1e6) - 1,
-            # the whole band of closing velocities inside the requirement
-            "closing_velocity_low": lambda: 1 - spread().velocity_low / limits()[0],
-            "closing_velocity_high": lambda: spread().velocity_high / limits()[1] - 1,
-            # continuous across the limit: the kinetic energy left (share of the driving
-            # work) when the cam latches, the share of the stroke it misses when it stalls;
-            # the worst parameter set of the band
-            "latch": lambda: np.where(spread().latched,
-                                      c.latch_energy_min_j - spread().kinetic_low,
-                                      c.latch_energy_min_j
-                                      + bal.driving * (1 - spread().reach_low))
-            / bal.driving,
-        }
-        g["lift_off"] = lambda: -cam_torque_min * end / bal.driving
-        g["pressure_angle"] = lambda: psi_max / c.pressure_angle_max_deg - 1
-        G = np.column_stack([g[name]() for name in self.constraint_names])
+        q = Terms(config=c, model=m, kin=kin, bal=bal, link=link,
+                  phi_top=phi_max(A, end, zeros) / DEG,  # exact, not the sampled maximum
+                  tau_max=hertz.max_shear_stress(sigma_max),  # Eq 31
+                  motion=motion,
+                  band=self.motion_band(X, motion, link) if motion is not None else None)
+        G = np.column_stack([con.g(q) for con in self.constraints])
         G = np.where(np.isnan(G), np.inf, G)
         violation = np.clip(G, 0, None).sum(axis=1)
         base = np.abs(bal.surplus) if c.objective_form == "net" else m.abs_sum(bal)
         f = np.where(np.isfinite(base) & np.isfinite(violation),
                      base + c.penalty * violation, np.inf)  # Eq 39
         extras = {
-            "phi_max_deg": phi_top, "sigma_max_mpa": sigma_max / 1e6,
-            "tau_max_mpa": tau_max / 1e6,
+            "phi_max_deg": q.phi_top, "sigma_max_mpa": sigma_max / 1e6,
+            "tau_max_mpa": q.tau_max / 1e6,
             "driving_work_j": bal.driving, "resistant_work_j": bal.resistant,
-            "surplus_work_j": bal.surplus, "rod_travel_mm": travel / MM,
+            "surplus_work_j": bal.surplus, "rod_travel_mm": q.travel / MM,
         }
         if motion is not None:
+            spread = q.spread
             extras.update({
                 # the identified parameters, and the band over the sets equally
                 # consistent with the ADAMS data (dynamics_band): every velocity and time
                 "closing_velocity_avg_m_s": motion.closing_velocity_avg,
-                "closing_velocity_low_m_s": spread().velocity_low,
-                "closing_velocity_high_m_s": spread().velocity_high,
+                "closing_velocity_low_m_s": spread.velocity_low,
+                "closing_velocity_high_m_s": spread.velocity_high,
             })
             for name, (field, unit, scale) in BANDED.items():
                 extras[name] = getattr(motion, field) / scale
-                extras[name.replace(unit, "_low" + unit)] = spread().low[field] / scale
-                extras[name.replace(unit, "_high" + unit)] = spread().high[field] / scale
+                extras[name.replace(unit, "_low" + unit)] = spread.low[field] / scale
+                extras[name.replace(unit, "_high" + unit)] = spread.high[field] / scale
             extras.update({
                 "latch_kinetic_energy_j": motion.final_kinetic,
-                "latch_kinetic_energy_low_j": spread().kinetic_low,
-                "cam_torque_min_nm": cam_torque_min,
-                "latched": spread().latched.astype(float),  # at every end of the band
+                "latch_kinetic_energy_low_j": spread.kinetic_low,
+                "cam_torque_min_nm": q.cam_torque_min,
+                "lift_off_torque_ratio": q.lift_off_ratio,
+                "release_torque_margin": motion.release_torque_ratio,
+                "release_torque_margin_low": spread.release_ratio_low,
+                "latched": spread.latched.astype(float),  # at every end of the band
             })
         if detail:
             con = m.contact(kin.follower, torque)
@@ -294,7 +247,7 @@ class VcbProblem(Problem, VariesCase):
             eq39 = m.abs_sum(bal)
             extras.update({
                 **{f"a{k}": A[:, k] for k in range(A.shape[1])},
-                "pressure_angle_max_deg": psi_max,
+                "pressure_angle_max_deg": q.psi_max,
                 "curvature_min_mm": np.min(con.curvature, axis=1) / MM,
                 # unbounded where the follower dwells (Fn = T / arm, arm = 0 there)
                 "normal_force_max_n": np.where(np.isfinite(dwell), np.inf,
@@ -378,13 +331,14 @@ class MotionBand:
     parameter sets equally consistent with the ADAMS data (``dynamics_band``): average
     closing velocity (m/s; 0 under a set with which the contacts never meet), latched under
     every set, least kinetic energy at the latch (J), least reach (fraction of the
-    stroke), and the least and greatest of every :data:`BANDED` motion quantity (SI)."""
+    stroke), least release torque ratio (eps T_s / T_f at the release), and the least and greatest of every :data:`BANDED` motion quantity (SI)."""
 
     velocity_low: NDArray
     velocity_high: NDArray
     latched: NDArray
     kinetic_low: NDArray
     reach_low: NDArray
+    release_ratio_low: NDArray
     low: dict[str, NDArray]
     high: dict[str, NDArray]
 
@@ -406,6 +360,7 @@ class MotionBand:
                        latched=np.asarray(stack("latched").all(axis=0)),
                        kinetic_low=stack("final_kinetic").min(axis=0),
                        reach_low=stack("reach").min(axis=0),
+                       release_ratio_low=stack("release_torque_ratio").min(axis=0),
                        low={f: a.min(axis=0) for f, a in fields.items()},
                        high={f: a.max(axis=0) for f, a in fields.items()})
 
