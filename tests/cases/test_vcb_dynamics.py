@@ -10,6 +10,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from camopt.cases.vcb import VcbProblem
+from camopt.cases.vcb.dynamics import first_zero
 from camopt.cases.vcb.identify import DATA, PARAMETERS, VcbDynamicsIdentification
 from camopt.engine.driver import execute
 from camopt.units import MS
@@ -344,3 +345,64 @@ def test_a_cam_the_springs_cannot_release_never_closes():
     free = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]",
                            "case.release_offset_deg=1.0", "case.cam_friction_nm=0").case)
     assert free.motion(free.vendor_x()).latched[0]  # the same springs close without it
+
+
+@pytest.mark.parametrize("ratio", [0.999, 1.001])
+def test_release_decision_matches_an_ode_at_torque_ratios_either_side_of_one(ratio):
+    """Friction set so that eps T_s / T_f at the vendor's release crank angle is 0.999 or
+    1.001: the test's own ODE of the free rotation (J_cam theta'' = eps T(theta) - T_f while
+    turning; Coulomb friction holds the cam at rest while eps T <= T_f; DOP853, rtol 1e-11)
+    decides as camopt does: at 0.999 the cam never leaves the release (no contact, no
+    latch), at 1.001 it meets the roller at the ODE's time within 2e-3 (the start is slow
+    near a ratio of 1: the 64-interval free rotation is within 1.4e-3 at 1.001, 1e-5 at
+    1.2)."""
+    base = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]").case)
+    m, c = base.model, base.config
+    _, kc, _ = base.designs(base.vendor_x())
+    start = m.dead_centre + c.release_offset_deg * np.pi / 180 - m.contact_crank_angle
+    spring = m.closing_torque(kc, m.closing_spring_geometry(np.array([start])))[0, 0]
+    friction = float(c.efficiency * spring / ratio)
+    p = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]",
+                        f"case.cam_friction_nm={friction!r}").case)
+    mo = p.motion(p.vendor_x())
+
+    def rhs(_t, y):
+        torque = m.closing_torque(kc, m.closing_spring_geometry(np.array([y[0]])))[0, 0]
+        net = c.efficiency * torque - friction
+        turning = y[1] > 0 or net > 0  # static friction holds a cam at rest up to T_f
+        return [y[1], net / c.cam_inertia_kg_m2 if turning else 0.0]
+
+    def contact(_t, y):
+        return y[0]
+
+    contact.terminal = True
+    sol = solve_ivp(rhs, (0.0, 0.5), [start, 0.0], method="DOP853", rtol=1e-11, atol=1e-13,
+                    events=contact)
+    assert mo.release_torque_ratio[0] == pytest.approx(ratio, rel=1e-12)
+    if ratio < 1:
+        assert sol.status == 0 and np.all(sol.y[0] == start)  # the ODE's cam never moves
+        assert np.isinf(mo.cam_contact_time[0]) and not mo.latched[0] and mo.reach[0] == 0
+    else:
+        assert sol.status == 1
+        assert mo.cam_contact_time[0] == pytest.approx(sol.t_events[0][0], rel=2e-3)
+
+
+def test_first_zero_finds_a_zero_between_positive_nodes():
+    """An energy positive at every node that dips below zero between two (the phantom
+    creep of issue #31): the first zero is found inside the interval, exactly for a
+    quadratic (the Hermite interpolant reproduces it), whatever the node spacing; an
+    energy that stays positive has none; a start at rest with a positive slope is not
+    one."""
+    def e(x):
+        return (x - 0.5) ** 2 - 0.001
+
+    def de(x):
+        return 2 * (x - 0.5)
+
+    root = 0.5 - np.sqrt(0.001)
+    for x in (np.array([0.0, 1.0, 2.0]), np.linspace(0.0, 2.0, 7)):
+        assert e(x).min() > 0  # no node sees it
+        assert first_zero(x, e(x)[None], de(x)[None])[0] == pytest.approx(root, abs=1e-9)
+    x = np.linspace(0.0, 1.0, 5)
+    assert np.isnan(first_zero(x, (e(x) + 0.01)[None], de(x)[None])[0])
+    assert np.isnan(first_zero(x, (x * (2 - x))[None], (2 - 2 * x)[None])[0])

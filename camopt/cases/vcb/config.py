@@ -18,6 +18,9 @@ StressMpa = Annotated[Positive, Plausible(10.0, 10_000.0)]  # MPa
 Mass = Annotated[Positive, Plausible(1e-3, 1000.0)]  # kg
 Inertia = Annotated[Positive, Plausible(1e-7, 10.0)]  # kg m^2
 
+RELEASE_TORQUE_MARGIN_MIN = 1.2  # assumed: docs/assumptions.md, "VCB: release and lift-off"
+LIFT_OFF_FRACTION_MIN = 0.05  # assumed: docs/assumptions.md, "VCB: release and lift-off"
+
 
 # the parameter sets configs/vcb_identify_dynamics.toml finds as consistent with the ADAMS
 # data as the identified one (configs/vcb.toml's dynamics_band: `camopt init vcb` prints it)
@@ -151,14 +154,15 @@ class VcbConfig(CaseConfig):
         0.0, ge=0, description="kinetic energy the hook needs at the end of the stroke "
         "(assumed, docs/assumptions.md)")
     release_torque_margin_min: float = Field(
-        1.2, ge=1.0, le=100.0, description="least eps T_s / T_f at the release, the closing "
-        "springs' torque on the cam at rest against the friction torque, in every set of the "
-        "band (constraint with require_latch; a requirement always) (assumed: a spring 5 % "
-        "soft and friction 10 % high still release; docs/assumptions.md)")
+        RELEASE_TORQUE_MARGIN_MIN, ge=1.0, le=100.0, description="least eps T_s / T_f at "
+        "the release, the closing springs' torque on the cam at rest against the friction "
+        "torque, in every set of the band (constraint with require_latch; a requirement "
+        "always) (assumed: a spring 5 % soft and friction 10 % high still release; "
+        "docs/assumptions.md)")
     lift_off_fraction_min: float = Field(
-        0.05, ge=0.0, lt=1.0, description="least torque the cam passes to the roller, as a "
-        "share of the springs' mean driving torque over the stroke (constraint with "
-        "forbid_lift_off; a requirement always) (assumed; docs/assumptions.md)")
+        LIFT_OFF_FRACTION_MIN, ge=0.0, lt=1.0, description="least torque the cam passes to "
+        "the roller, as a share of the springs' mean driving torque over the stroke "
+        "(constraint with forbid_lift_off; a requirement always) (assumed; docs/assumptions.md)")
     # contact stress (Table 1, Eqs 27-31)
     cam_modulus_gpa: Modulus = Field(210.0, description="E of cam and roller (S45C) (Table 1)")
     poisson: float = Field(0.3, ge=0, lt=0.5, description="Poisson's ratio (Table 1)")

@@ -223,39 +223,61 @@ def _at(a: NDArray, k: NDArray, w: NDArray) -> NDArray:
 
 
 HERMITE_POINTS = 16
-"""Points per interval at which :func:`first_zero` evaluates the energy's cubic Hermite
-interpolant between two nodes (the root is then interpolated linearly between them)."""
+"""Points per interval at which :func:`first_zero` looks for the energy's first sign
+change on its cubic Hermite interpolant between two nodes."""
+BISECTIONS = 30
+"""Bisections of that sub-interval: the root to 2^-30 of it."""
+
+
+def _hermite(t: NDArray, h: NDArray, e0: NDArray, d0: NDArray, e1: NDArray, d1: NDArray
+             ) -> NDArray:
+    """The cubic Hermite interpolant at fraction t of an interval of length h with values
+    e0, e1 and slopes d0, d1 at its ends (arrays broadcast)."""
+    t2, t3 = t * t, t * t * t
+    return ((2 * t3 - 3 * t2 + 1) * e0 + (t3 - 2 * t2 + t) * h * d0
+            + (-2 * t3 + 3 * t2) * e1 + (t3 - t2) * h * d1)
 
 
 def first_zero(x: NDArray, energy: NDArray, slope: NDArray) -> NDArray:
     """The first coordinate where the kinetic energy reaches zero, per row (n,), nan where
     it stays positive: ``energy`` (n, m) and its exact derivative ``slope`` (n, m, the net
     torque) at the nodes ``x`` ((m,) or (n, m), increasing). Between two nodes the energy is
-    its cubic Hermite interpolant (values and slopes at both ends: error O(h^4)), evaluated
+    its cubic Hermite interpolant (values and slopes at both ends: error O(h^4)), scanned
     at :data:`HERMITE_POINTS` points, so a zero between nodes is found even where both
-    nodes are positive (the cam comes to rest and would be pushed on again: it stays).
-    A start at rest with a positive slope (the release) is not a zero."""
+    nodes are positive (the cam comes to rest and would be pushed on again: it stays);
+    the root is then bisected on the cubic. A start at rest with a positive slope (the
+    release) is not a zero."""
     x = np.broadcast_to(x, energy.shape)
-    h = (x[:, 1:] - x[:, :-1])[:, :, None]
-    t = np.arange(1, HERMITE_POINTS + 1)[None, None, :] / HERMITE_POINTS
-    t2, t3 = t * t, t * t * t
-    e = ((2 * t3 - 3 * t2 + 1) * energy[:, :-1, None] + (t3 - 2 * t2 + t) * h * slope[:, :-1, None]
-         + (-2 * t3 + 3 * t2) * energy[:, 1:, None] + (t3 - t2) * h * slope[:, 1:, None])
-    e[:, :, -1] = energy[:, 1:]  # the nodes themselves exactly
-    flat = e.reshape(len(e), -1)  # (n, (m - 1) * points) in order of x
-    below = flat <= 0
-    hit = below.any(axis=1)
-    j = np.argmax(below, axis=1)
-    rows = np.arange(len(e))
-    # linear between the last positive point and the first one at or below zero
-    before = np.where(j > 0, flat[rows, np.maximum(j - 1, 0)], energy[:, 0])
-    after = flat[rows, j]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        frac = np.clip(np.nan_to_num(before / (before - after), nan=1.0), 0.0, 1.0)
-    cell, point = np.divmod(j, HERMITE_POINTS)
-    tt = (point + frac) / HERMITE_POINTS  # position in the interval, 0..1
-    root = x[rows, cell] + tt * h[rows, cell, 0]
-    return np.where(hit, root, np.nan)
+    h = x[:, 1:] - x[:, :-1]
+    e0, d0, e1, d1 = energy[:, :-1], slope[:, :-1], energy[:, 1:], slope[:, 1:]
+    # the interpolant is at least min(e0, e1) - 4/27 h (|d0| + |d1|) (the bounds of its
+    # basis functions): only intervals where that is not positive can hold a zero, and
+    # none after the first node at or below zero (its interval holds one)
+    low = energy[:, 1:] <= 0
+    last = np.where(low.any(axis=1), np.argmax(low, axis=1), e0.shape[1])
+    rows, cells = np.nonzero(
+        (np.minimum(e0, e1) - 4 / 27 * h * (np.abs(d0) + np.abs(d1)) <= 0)
+        & (np.arange(e0.shape[1])[None, :] <= last[:, None]))
+    ends = (h[rows, cells], e0[rows, cells], d0[rows, cells], e1[rows, cells],
+            d1[rows, cells])
+    t = np.arange(1, HERMITE_POINTS + 1)[None, :] / HERMITE_POINTS
+    e = _hermite(t, *(a[:, None] for a in ends))
+    e[:, -1] = ends[3]  # the right node itself exactly
+    below = e <= 0
+    zero = below.any(axis=1)
+    # each row's first candidate interval that holds a zero (candidates are row-major)
+    first_rows, first = np.unique(rows[zero], return_index=True)
+    pick = np.flatnonzero(zero)[first]
+    point = np.argmax(below[pick], axis=1)
+    args = tuple(a[pick] for a in ends)
+    lo, hi = point / HERMITE_POINTS, (point + 1) / HERMITE_POINTS  # e(lo) > 0 >= e(hi)
+    for _ in range(BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        positive = _hermite(mid, *args) > 0
+        lo, hi = np.where(positive, mid, lo), np.where(positive, hi, mid)
+    root = np.full(len(energy), np.nan)
+    root[first_rows] = x[first_rows, cells[pick]] + hi * args[0]
+    return root
 
 
 def release_torque_ratio(model: VcbModel, kc: NDArray, p: ParameterColumns) -> NDArray:
@@ -388,10 +410,11 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     springs_torque = model.closing_torque(kc, (extension, rate))
     dphi, s1, ds1 = kin.dphi, kin.s1, kin.ds1
     resisting = loads.resistant_energy(s1)
+    resisting_torque = loads.resistant_force(s1) * ds1  # Fr ds1/dtheta
     if sets > 1:
-        dphi, s1, ds1, spring, springs_torque, resisting, kc = (
-            np.tile(a, (sets, 1))
-            for a in (dphi, s1, ds1, spring, springs_torque, resisting, kc))
+        dphi, s1, ds1, spring, springs_torque, resisting, resisting_torque, kc = (
+            np.tile(a, (sets, 1)) for a in (dphi, s1, ds1, spring, springs_torque, resisting,
+                                            resisting_torque, kc))
     eps, friction = p.efficiency, p.friction_nm
     follower = p.follower_kg_m2 * dphi * dphi  # J_f phi'^2
     # 1. free rotation, then the plastic impact of the cam on the roller at rest
@@ -433,8 +456,7 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     kinetic = np.where(after, ke_after, ke_before)
     # the first zero of the kinetic energy, between nodes too: its slope is the net torque
     drive = eps * springs_torque - friction
-    slope = drive - loads.resistant_force(s1) * ds1
-    stall_theta = first_zero(theta, kinetic, slope)
+    stall_theta = first_zero(theta, kinetic, drive - resisting_torque)
     # a cam the springs cannot turn away from its release (friction at least their torque)
     # never reaches the roller: nothing of the closing happens
     stall_theta = np.where(np.isfinite(t_free), stall_theta, 0.0)

@@ -331,7 +331,8 @@ class MotionBand:
     parameter sets equally consistent with the ADAMS data (``dynamics_band``): average
     closing velocity (m/s; 0 under a set with which the contacts never meet), latched under
     every set, least kinetic energy at the latch (J), least reach (fraction of the
-    stroke), least release torque ratio (eps T_s / T_f at the release), and the least and greatest of every :data:`BANDED` motion quantity (SI)."""
+    stroke), least release torque ratio (eps T_s / T_f at the release), and the least and
+    greatest of every :data:`BANDED` motion quantity (SI)."""
 
     velocity_low: NDArray
     velocity_high: NDArray

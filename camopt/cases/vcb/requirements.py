@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Collection, Mapping
 from typing import Any
 
+from camopt.cases.vcb.config import LIFT_OFF_FRACTION_MIN, RELEASE_TORQUE_MARGIN_MIN
 from camopt.core.requirements import Requirement
 
 CLOSING_VELOCITY_M_S = (0.7, 1.1)  # Sec 2.1: 0.9 +- 0.2 m/s
@@ -60,7 +61,29 @@ def requirements(case: Mapping[str, Any], names: Collection[str]) -> tuple[Requi
                                 else "latch_kinetic_energy_j", "J",
                                 lower=float(case["latch_energy_min_j"]),
                                 source="config latch_energy_min_j (assumed)"))
-    if case.get("forbid_lift_off"):
-        reqs.append(Requirement("least cam torque (no lift-off)", "cam_torque_min_nm", "N m",
-                                lower=0.0, source="config forbid_lift_off"))
+    reqs += dynamic_requirements(case, names)
     return tuple(reqs)
+
+
+def dynamic_requirements(case: Mapping[str, Any], names: Collection[str]
+                         ) -> list[Requirement]:
+    """What the closing dynamics must show whether or not the run searched for it: the
+    closing springs start the cam with a margin over the friction at the release (the
+    band's least ratio where a band is reported), and the cam keeps pressing the roller
+    (least cam torque a share of the mean driving torque). None without the dynamics."""
+    reqs = []
+    if "release_torque_margin" in names:
+        low = "release_torque_margin_low" in names
+        reqs.append(Requirement(
+            "springs' torque / friction at the release" + (", low end" if low else ""),
+            "release_torque_margin_low" if low else "release_torque_margin",
+            lower=float(case.get("release_torque_margin_min", RELEASE_TORQUE_MARGIN_MIN)),
+            source="config release_torque_margin_min (assumed)",
+            failing="a slightly soft spring or stiff bearing keeps the cam at its release"))
+    if "lift_off_torque_ratio" in names:
+        reqs.append(Requirement(
+            "least cam torque / mean driving torque (no lift-off)", "lift_off_torque_ratio",
+            lower=float(case.get("lift_off_fraction_min", LIFT_OFF_FRACTION_MIN)),
+            source="config lift_off_fraction_min (assumed)",
+            failing="the roller comes near to lifting off the cam"))
+    return reqs

@@ -1,0 +1,50 @@
+"""The VCB constraint table (camopt/cases/vcb/constraints.py): its rows in the archive's
+order, and the signs of the dynamic ones (g <= 0 met)."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from camopt.cases.vcb import VcbProblem
+from camopt.cases.vcb.constraints import CONSTRAINTS
+from tests.conftest import CONFIGS
+from tests.helpers import load
+
+ROW = {con.name: con for con in CONSTRAINTS}
+
+
+def test_names_are_listed_once_and_a_config_takes_its_rows_in_order():
+    names = [con.name for con in CONSTRAINTS]
+    assert len(names) == len(set(names))
+    p = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
+    assert p.constraint_names == tuple(n for n in names if n != "grashof")
+    assert VcbProblem(load(CONFIGS / "vcb.toml").case).constraint_names == (
+        "phi_max_low", "phi_max_high", "monotonic", "assembly", "rod_travel", "shear_yield")
+
+
+def test_lift_off_is_met_above_the_share_and_violated_below():
+    """The least cam torque as a share of the mean driving torque: 20 % meets a 5 %
+    limit (g < 0), 0 % and a pulling cam (-10 %) violate it (g > 0), by the gap."""
+    q = SimpleNamespace(config=SimpleNamespace(lift_off_fraction_min=0.05),
+                        lift_off_ratio=np.array([0.2, 0.0, -0.1]))
+    np.testing.assert_allclose(ROW["lift_off"].g(q), [-0.15, 0.05, 0.15])
+
+
+def test_release_torque_is_met_above_the_margin_and_violated_below():
+    q = SimpleNamespace(config=SimpleNamespace(release_torque_margin_min=1.2),
+                        spread=SimpleNamespace(release_ratio_low=np.array([1.5, 1.2, 1.0])))
+    np.testing.assert_allclose(ROW["release_torque"].g(q), [-0.25, 0.0, 1 / 6])
+
+
+def test_lift_off_share_reads_the_least_cam_torque_over_the_mean_driving_torque():
+    """In a real evaluation: the share is cam_torque_min x stroke angle / driving work,
+    and the constraint is the limit less it."""
+    p = VcbProblem(load(CONFIGS / "vcb_velocity.toml", "case.dynamics_steps=100").case)
+    ev = p.evaluate(p.vendor_x()[None, :])
+    e = ev.extras
+    share = e["cam_torque_min_nm"] * p.model.theta_c[-1] / e["driving_work_j"]
+    np.testing.assert_allclose(e["lift_off_torque_ratio"], share, rtol=1e-12)
+    g = ev.g[:, p.constraint_names.index("lift_off")]
+    np.testing.assert_allclose(g, p.config.lift_off_fraction_min - share, rtol=1e-12)
