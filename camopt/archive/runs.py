@@ -48,6 +48,7 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
         "objective_name": rec.objective_name, "x_units": "display",
         "interrupted": rec.interrupted, "repeats_done": len(rec.repeats),
         **({"robust_check": json.dumps(rec.robust_check)} if rec.robust_check else {}),
+        **({"findings": json.dumps(rec.findings)} if rec.findings else {}),
     }
     scale = rec.scale  # x in the units the variable names say
     f.attrs.update(attrs)
@@ -295,6 +296,7 @@ def _load(f: h5py.File, path: str | Path) -> RunView:
         repeats_done=len(repeats), config_as_run=str(attrs.get("config_as_run", "")),
         robust=config.get("robust") or {},
         robust_check=json.loads(attrs["robust_check"]) if "robust_check" in attrs else {},
+        findings=json.loads(attrs["findings"]) if "findings" in attrs else {},
         versions={k: str(v) for k, v in attrs.items()
                   if k.endswith("_version") and k != "schema_version"},
     )

@@ -109,6 +109,9 @@ def print_show(view: RunView, rows: int | None = None) -> None:
     style = "green" if view.best.feasible else "bold red"
     out.print(f"run's constraints: [{style}]{escape(report.status(view))}[/]", highlight=False)
     print_best(report.summary(view))  # raw values: inf and NaN are shown
+    if doc.get("model_forms"):  # an identification's forms (the parameters: --format json)
+        print_fitted("model forms fitted on the same data", doc["model_forms"],
+                     ["name", "misfit", "max_residual_pct", "kept"], None)
     robust = report.robust_summary(view)
     if robust is not None:
         out.print(robust_table(robust))

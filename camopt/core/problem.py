@@ -186,6 +186,12 @@ class Problem:
         """Curves of one design for the archive's ``/analysis`` (none by default)."""
         return {}
 
+    def findings(self, x: NDArray) -> Mapping[str, object]:
+        """What the run found beyond the best design's metrics, as JSON-able data under
+        top-level names of ``show --format json`` (an identification's model forms and
+        identifiability); none by default."""
+        return {}
+
     def objective_floor(self) -> ObjectiveFloor | None:
         """What no feasible design can go below (``camopt validate`` warns of a ``run.target``
         under it), or None when the case cannot say."""

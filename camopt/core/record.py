@@ -119,6 +119,9 @@ class RunRecord:
     failure: str | None = None
     """What stopped the run when it was not a signal (a worker process died)."""
     problem: Problem | None = field(default=None, repr=False, compare=False)
+    findings: dict[str, Any] = field(default_factory=dict)
+    """:meth:`Problem.findings` of the best design (JSON-able): what the archive stores as
+    ``findings`` and ``show`` reports under its own names."""
 
 
 def seed_id(seq: np.random.SeedSequence) -> int:

@@ -64,6 +64,9 @@ class RunView:
     robust_check: dict[str, Any] = field(default_factory=dict)
     """Robust runs: the final check of the best design (``robust``) and of the best
     nominally feasible design seen (``nominal``) on fresh draws (docs/tolerance.md)."""
+    findings: dict[str, Any] = field(default_factory=dict)
+    """What the run found beyond the best design's metrics (``Problem.findings``: an
+    identification's ``model_forms`` and ``identifiability``)."""
 
     @property
     def solver_name(self) -> str:

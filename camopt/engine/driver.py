@@ -282,7 +282,8 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
             config, seed, records, best, dict(problem.metrics(best.x)),
             dict(problem.analysis(best.x)), problem.names, problem.scale,
             problem.constraint_names, problem.objective_name, interrupted,
-            _robust_check(problem, records, best, seed, check_progress), failure, problem)
+            _robust_check(problem, records, best, seed, check_progress), failure, problem,
+            dict(problem.findings(best.x)))
     record.interrupted |= bool(signals)
     return record
 

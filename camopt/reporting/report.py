@@ -66,7 +66,8 @@ def show(run: RunView) -> dict[str, Any]:
     """The ``show --format json`` document: verdict ("pass"/"fail") with its sentence and
     requirements (each with name, limit, value, margin, pass), case, solver, best,
     repeats, table, the reference design with its own verdict, and for a multi-objective
-    run (a solver with ``objectives``) ``pareto``. These keys are a contract scripts rely
+    run (a solver with ``objectives``) ``pareto``, and a case's findings under their own
+    names (``model_forms``, ``identifiability``). These keys are a contract scripts rely
     on; the two-column view is :func:`summary`."""
     repeats = [{k: getattr(r, attr) for k, attr in REPEAT_KEYS.items()} for r in run.repeats]
     best = {k: v for k, v in asdict(run.best).items() if k != "repeat"}
@@ -86,6 +87,8 @@ def show(run: RunView) -> dict[str, Any]:
         doc["pareto_summary"] = pareto.summary(run)
     if run.robust:
         doc["robust"] = {"settings": run.robust, "check": run.robust_check}
+    # a case's findings under their own names, never over the contract's keys
+    doc.update({k: v for k, v in run.findings.items() if k not in doc})
     return jsonable(doc)
 
 

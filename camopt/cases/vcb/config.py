@@ -18,6 +18,9 @@ StressMpa = Annotated[Positive, Plausible(10.0, 10_000.0)]  # MPa
 Mass = Annotated[Positive, Plausible(1e-3, 1000.0)]  # kg
 Inertia = Annotated[Positive, Plausible(1e-7, 10.0)]  # kg m^2
 
+ModelFormName = Literal["efficiency_coulomb", "coulomb", "efficiency_driven_coulomb",
+                        "driven_coulomb", "fitted_efficiency"]
+"""The model forms of :mod:`camopt.cases.vcb.forms` (which checks that the two agree)."""
 RELEASE_TORQUE_MARGIN_MIN = 1.2  # assumed: docs/assumptions.md, "VCB: release and lift-off"
 LIFT_OFF_FRACTION_MIN = 0.05  # assumed: docs/assumptions.md, "VCB: release and lift-off"
 
@@ -296,3 +299,13 @@ class VcbDynamicsIdentifyConfig(VcbConfig):
                                               description="search range (physical)")
     cam_friction_bounds_nm: Bounds = Field(Bounds(lower=0.0, upper=50.0),
                                            description="search range")
+    efficiency_bounds: Bounds = Field(Bounds(lower=0.3, upper=1.0),
+                                      description="search range of a fitted efficiency")
+    model_form: ModelFormName = Field(
+        "efficiency_coulomb", description="the losses the search fits (camopt/cases/vcb/"
+        "forms.py); every form is fitted and reported after the run (camopt option)")
+    form_keep_ratio: float = Field(
+        1.5, ge=1.0, description="a form is kept (in every band) when its largest residual "
+        "is at most this many times the best form's ... (assumed; docs/assumptions.md)")
+    form_keep_pct: Positive = Field(
+        10.0, description="... or at most this (%), whichever is larger (assumed)")

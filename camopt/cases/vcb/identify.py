@@ -15,13 +15,14 @@ Table 4): :class:`VcbDynamicsIdentification`, with the leave-one-out validation
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import VcbDynamicsIdentifyConfig, VcbIdentifyConfig
-from camopt.cases.vcb.dynamics import MotionParameters, closing_motion, opening_motion
+from camopt.cases.vcb.dynamics import MotionParameters, opening_motion
+from camopt.cases.vcb.forms import FORMS, INERTIAS, ModelForm, get_form
 from camopt.cases.vcb.model import VcbModel
 from camopt.core.problem import Evaluation, Problem, Variable
 from camopt.units import DEG, MM, MS
@@ -107,14 +108,14 @@ DATA = (
     Datum("closing_velocity_avg_m_s", "closing_velocity", "closing_velocity_target_m_s", "m/s"),
     Datum("closing_time_ms", "closing_time", "closed_by_ms", "ms", upper_bound_only=True),
 )
-PARAMETERS = ("cam_inertia_kg_m2", "rod_mass_kg", "contacts_mass_kg", "release_offset_deg",
-              "cam_friction_nm")
+PARAMETERS = FORMS[0].parameters
+"""The shipped form's parameters (J_cam kg m^2, m_rod kg, m_c kg, release offset deg,
+friction torque N m)."""
 
 
 def motion_parameters(X: NDArray, follower_kg_m2: float) -> MotionParameters:
-    """Rows (J_cam kg m^2, m_rod kg, m_c kg, release offset deg, friction torque N m) as
-    MotionParameters."""
-    return MotionParameters(X[:, 0], follower_kg_m2, X[:, 1], X[:, 2], X[:, 3] * DEG, X[:, 4])
+    """Rows of the shipped form's :data:`PARAMETERS` as MotionParameters."""
+    return FORMS[0].motion_parameters(X, follower_kg_m2)
 
 
 class VcbDynamicsIdentification(Problem):
@@ -132,10 +133,8 @@ class VcbDynamicsIdentification(Problem):
     def __init__(self, config: VcbDynamicsIdentifyConfig) -> None:
         self.config = c = config
         self.model = m = VcbModel(config)
-        b = (c.cam_inertia_bounds_kg_m2, c.rod_mass_bounds_kg, c.contacts_mass_bounds_kg,
-             c.release_offset_bounds_deg, c.cam_friction_bounds_nm)
-        self.variables = tuple(Variable(name, bound.lower, bound.upper)
-                               for name, bound in zip(PARAMETERS, b))
+        self.form = get_form(c.model_form)
+        self.variables = self.form.variables(c)
         self.A = m.vendor_a[None, :]
         self.kc = np.array([[c.kc1_n_per_mm, c.kc2_n_per_mm]]) * 1e3
         self.rod_offset = c.rod_arm_offset_deg * DEG
@@ -147,14 +146,14 @@ class VcbDynamicsIdentification(Problem):
 
     def predict(self, X: NDArray) -> NDArray:
         """The seven simulated data of the vendor design for each parameter row of ``X``
-        (n, 5), (n, 7) in the units of :data:`DATA`."""
+        (n, p), (n, 7) in the units of :data:`DATA`."""
         c, m = self.config, self.model
         X = np.atleast_2d(np.asarray(X, dtype=float))
         n = len(X)
-        params = motion_parameters(X, c.follower_inertia_kg_m2)
+        params = self.form.motion_parameters(X, c.follower_inertia_kg_m2)
         A, link = np.tile(self.A, (n, 1)), np.tile(m.vendor_link, (n, 1))
-        closing = closing_motion(m, A, np.tile(self.kc, (n, 1)), link, self.rod_offset,
-                                 self.load, params, c.dynamics_steps)
+        closing = self.form.closing(m, A, np.tile(self.kc, (n, 1)), link, self.rod_offset,
+                                    self.load, X, c.follower_inertia_kg_m2, c.dynamics_steps)
         opening = opening_motion(m, A, link, self.rod_offset, self.load, params)
         return np.column_stack([
             opening.departure_time / MS, opening.open_time / MS,
@@ -180,14 +179,25 @@ class VcbDynamicsIdentification(Problem):
             extras[f"residual_{d.key}_pct"] = 100 * r[:, i]
         extras["max_residual_pct"] = 100 * np.max(np.abs(r), axis=1)
         extras["n_data"] = np.full(len(X), float(len(DATA)))
-        extras["n_parameters"] = np.full(len(X), float(len(PARAMETERS)))
+        extras["n_parameters"] = np.full(len(X), float(len(self.variables)))
         return Evaluation(f=np.sum(r * r, axis=1), g=np.zeros((len(X), 0)), extras=extras)
+
+    def findings(self, x: NDArray) -> dict[str, object]:
+        """Every model form fitted on the same data from the run's best ``x`` (p,), which
+        are kept (:func:`fit_forms`), and the identifiability of the run's form at ``x``
+        (:func:`identifiability`): ``show --format json``'s ``model_forms`` and
+        ``identifiability``."""
+        x = np.asarray(x, dtype=float)
+        fits = fit_forms(self.config, dict(zip(self.names, x)))
+        return {"model_forms": [f.to_json() for f in fits],
+                "identifiability": {"form": self.form.name,
+                                    **identifiability(self, x).to_json()}}
 
 
 def fit(problem: VcbDynamicsIdentification, start: NDArray, drop: int | None = None
         ) -> NDArray:
     """Least squares (scipy, trust region in log parameters, within the bounds) of the
-    data, without datum ``drop`` when given; returns the parameters (5,)."""
+    data, without datum ``drop`` when given; returns the parameters (p,)."""
     from scipy.optimize import least_squares  # only here: keeps the case's import light
 
     keep = np.array([i != drop for i in range(len(DATA))])
@@ -197,8 +207,21 @@ def fit(problem: VcbDynamicsIdentification, start: NDArray, drop: int | None = N
     def residuals(q: NDArray) -> NDArray:
         return problem.residuals(problem.predict(np.exp(q)[None, :]))[0, keep]
 
+    def jacobian(q: NDArray) -> NDArray:
+        return log_jacobian(problem, np.exp(q))[keep]
+
     x0 = np.clip(np.log(start), lower + 1e-9, upper - 1e-9)
-    return np.exp(least_squares(residuals, x0, bounds=(lower, upper), x_scale=1.0).x)
+    return np.exp(least_squares(residuals, x0, jac=jacobian, bounds=(lower, upper),
+                                x_scale=1.0).x)
+
+
+def log_jacobian(problem: VcbDynamicsIdentification, x: NDArray, step: float = 1e-6
+                 ) -> NDArray:
+    """d residual / d log parameter at ``x`` (p,), (7, p), by central differences of
+    ``step`` in every log parameter, all 2 p simulations in one vectorised call."""
+    q = np.log(x)[None, :] + step * np.vstack([np.eye(len(x)), -np.eye(len(x))])
+    r = problem.residuals(problem.predict(np.exp(q)))
+    return ((r[:len(x)] - r[len(x):]) / (2 * step)).T
 
 
 def leave_one_out(problem: VcbDynamicsIdentification, best: NDArray
@@ -214,7 +237,7 @@ def leave_one_out(problem: VcbDynamicsIdentification, best: NDArray
         rows.append({"datum": d.name, "value": float(problem.targets[i]),
                      "predicted": float(y[0, i]), "residual_pct": 100 * float(r[i]),
                      "max_residual_others_pct": 100 * float(np.max(np.abs(np.delete(r, i)))),
-                     **{name: float(v) for name, v in zip(PARAMETERS, x)}})
+                     **{name: float(v) for name, v in zip(problem.names, x)}})
     return rows
 
 
@@ -254,3 +277,101 @@ def consistent_band(problem: VcbDynamicsIdentification, best: NDArray, samples: 
         return best[None, :]
     pick = np.unique(np.r_[np.argmin(members, axis=0), np.argmax(members, axis=0)])
     return members[pick]
+
+
+@dataclass(frozen=True)
+class FormFit:
+    """One model form fitted on the seven ADAMS data: the ``form``, its parameters ``x``
+    (p,) in their names' units, the ``misfit`` (sum of squared relative residuals), the
+    largest residual (%) and each datum's (%), and whether it is ``kept`` (every band and
+    robust draw runs over the kept forms: :func:`fit_forms`)."""
+
+    form: ModelForm
+    x: NDArray
+    misfit: float
+    max_residual_pct: float
+    residuals_pct: dict[str, float]
+    kept: bool = False
+
+    def to_json(self) -> dict[str, object]:
+        """The form's row of ``show --format json``'s ``model_forms``."""
+        return {"name": self.form.name, "summary": self.form.summary,
+                "misfit": self.misfit, "max_residual_pct": self.max_residual_pct,
+                "kept": self.kept,
+                "parameters": {n: float(v) for n, v in zip(self.form.parameters, self.x)},
+                "residuals_pct": self.residuals_pct}
+
+
+def fit_forms(config: VcbDynamicsIdentifyConfig, start: dict[str, float]
+              ) -> tuple[FormFit, ...]:
+    """Every model form (:data:`~camopt.cases.vcb.forms.FORMS`) fitted by least squares
+    from two starts, ``start`` (values by parameter name; a form's parameters it lacks
+    from the config's) and a release 8 deg past the dead centre with 2 N m of friction,
+    the better kept. A form is kept when its largest residual is at most
+    ``form_keep_ratio`` times the best form's or at most ``form_keep_pct``, whichever is
+    larger: a form that fits the data about as well as the best is as credible."""
+    fits = []
+    for form in FORMS:
+        problem = VcbDynamicsIdentification(config.model_copy(update={"model_form": form.name}))
+        defaults = {"efficiency": config.efficiency, "cam_friction_nm": config.cam_friction_nm,
+                    **{n: getattr(config, n) for n in INERTIAS}}
+        first = np.array([start.get(n, defaults[n]) for n in form.parameters])
+        second = np.array([{"release_offset_deg": 8.0, "cam_friction_nm": 2.0}.get(n, v)
+                           for n, v in zip(form.parameters, first)])
+        x = min((fit(problem, s) for s in (first, second)),
+                key=lambda x: float(problem.evaluate(x[None, :]).f[0]))
+        ev = problem.evaluate(x[None, :])
+        fits.append(FormFit(form, x, float(ev.f[0]), float(ev.extras["max_residual_pct"][0]),
+                            {d.name: float(ev.extras[f"residual_{d.key}_pct"][0])
+                             for d in DATA}))
+    best = min(f.max_residual_pct for f in fits)
+    limit = max(config.form_keep_ratio * best, config.form_keep_pct)
+    return tuple(replace(f, kept=f.max_residual_pct <= limit) for f in fits)
+
+
+@dataclass(frozen=True)
+class Identifiability:
+    """What the seven data determine about a form's parameters at its fit, from the
+    Jacobian J of the relative residuals with respect to the log parameters (7, p):
+    its ``singular_values`` (descending) and condition number, the parameters'
+    ``correlations`` (p, p, from (J^T J)^-1) and the ``determined`` combinations: the
+    right singular vectors whose singular value is at least ``DETERMINED`` of the
+    largest, each a product of the parameters' powers (log-linear) with its singular
+    value; the rest (``undetermined``) move the fit by less than that."""
+
+    names: tuple[str, ...]
+    singular_values: NDArray
+    correlations: NDArray
+    determined: tuple[dict[str, float], ...]
+    undetermined: tuple[dict[str, float], ...]
+
+    DETERMINED = 0.01
+
+    def to_json(self) -> dict[str, object]:
+        s = self.singular_values
+        return {"parameters": list(self.names), "singular_values": s.tolist(),
+                "condition": float(s[0] / s[-1]) if s[-1] > 0 else float("inf"),
+                "correlations": {a: {b: float(self.correlations[i, j])
+                                     for j, b in enumerate(self.names)}
+                                 for i, a in enumerate(self.names)},
+                "determined": list(self.determined), "undetermined": list(self.undetermined)}
+
+
+def identifiability(problem: VcbDynamicsIdentification, x: NDArray) -> Identifiability:
+    """:class:`Identifiability` of ``problem``'s form at parameters ``x`` (p,)."""
+    jac = log_jacobian(problem, x)
+    _, s, vt = np.linalg.svd(jac, full_matrices=False)
+    cov = np.linalg.pinv(jac.T @ jac)
+    sd = np.sqrt(np.abs(np.diag(cov)))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        corr = cov / np.outer(sd, sd)
+
+    def combination(i: int) -> dict[str, float]:
+        v = vt[i] * np.sign(vt[i][np.argmax(np.abs(vt[i]))])  # largest exponent positive
+        return {"singular_value": float(s[i]),
+                **{f"exponent_{n}": float(c) for n, c in zip(problem.names, v)}}
+
+    determined = s >= Identifiability.DETERMINED * s[0]
+    return Identifiability(problem.names, s, corr,
+                           tuple(combination(int(i)) for i in np.flatnonzero(determined)),
+                           tuple(combination(int(i)) for i in np.flatnonzero(~determined)))

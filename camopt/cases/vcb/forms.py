@@ -1,0 +1,136 @@
+"""Model forms of the VCB closing dynamics: which losses the rigid model charges, and so
+which parameters a fit on measured events (the vendor's ADAMS data,
+:mod:`camopt.cases.vcb.identify`) or travel curves (calibration) determines.
+
+Every form keeps the inertias of :mod:`camopt.cases.vcb.dynamics` (J_cam, m_rod, m_c) and
+the closing latch's release offset; they differ in the losses, each an equivalent for
+what the rigid, one-degree-of-freedom model leaves out (bearing and contact friction,
+damping, the springs' own mass):
+
+* ``efficiency_coulomb`` (the shipped fit): eps = the case's ``efficiency`` (Eq 26, 0.85)
+  on every spring's work and a Coulomb torque T_f at the cam shaft whenever it turns;
+* ``coulomb``: T_f alone (eps = 1), from the release on;
+* ``efficiency_driven_coulomb``: the case's eps, T_f only while the cam drives the roller
+  (the free rotation from the release turns without it);
+* ``driven_coulomb``: T_f only in the driven closing, eps = 1;
+* ``fitted_efficiency``: no friction torque; eps itself fitted (a loss proportional to the
+  springs' work, in the opening too).
+
+A form is data (:class:`ModelForm`): its fitted parameters with their bounds (the
+identification config's ``*_bounds`` fields) and the map from a parameter vector to
+:class:`~camopt.cases.vcb.dynamics.MotionParameters`, with which :meth:`ModelForm.closing`
+simulates the closing (events and rod travel curve) of designs, vectorised over rows.
+Viscous friction (a torque c omega) is not among them: the work it takes depends on the
+speed, so the work-energy integration would become a time-stepped ODE
+(docs/assumptions.md, "VCB: model forms").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+import numpy as np
+from numpy.typing import NDArray
+
+from camopt.cases.vcb.config import ModelFormName, VcbDynamicsIdentifyConfig
+from camopt.cases.vcb.dynamics import (
+    ClosingEvents,
+    ClosingMotion,
+    MotionParameters,
+    closing_events,
+    closing_motion,
+)
+from camopt.cases.vcb.model import Loads, VcbModel
+from camopt.core.problem import Variable
+from camopt.errors import ConfigError
+from camopt.units import DEG
+
+INERTIAS = ("cam_inertia_kg_m2", "rod_mass_kg", "contacts_mass_kg", "release_offset_deg")
+"""The parameters every form fits (units in the names)."""
+BOUNDS = {"cam_inertia_kg_m2": "cam_inertia_bounds_kg_m2", "rod_mass_kg": "rod_mass_bounds_kg",
+          "contacts_mass_kg": "contacts_mass_bounds_kg",
+          "release_offset_deg": "release_offset_bounds_deg",
+          "cam_friction_nm": "cam_friction_bounds_nm", "efficiency": "efficiency_bounds"}
+"""Each fitted parameter's bounds: the identification config's field."""
+
+
+@dataclass(frozen=True)
+class ModelForm:
+    """One model form: ``name``, a one-line ``summary``, where the efficiency comes from
+    (``case``: the case's ``efficiency``; ``none``: 1; ``fitted``: a parameter) and where
+    the Coulomb friction torque acts (``everywhere``: from the release on; ``driven``:
+    only while the cam drives the roller; ``none``)."""
+
+    name: str
+    summary: str
+    efficiency: Literal["case", "none", "fitted"]
+    friction: Literal["everywhere", "driven", "none"]
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        """The fitted parameters' names, units in the names (the order of a vector)."""
+        return (INERTIAS + (("cam_friction_nm",) if self.friction != "none" else ())
+                + (("efficiency",) if self.efficiency == "fitted" else ()))
+
+    def variables(self, config: VcbDynamicsIdentifyConfig) -> tuple[Variable, ...]:
+        """The parameters with the identification config's bounds."""
+        return tuple(Variable(name, getattr(config, BOUNDS[name]).lower,
+                              getattr(config, BOUNDS[name]).upper) for name in self.parameters)
+
+    def motion_parameters(self, X: NDArray, follower_kg_m2: float) -> MotionParameters:
+        """Parameter rows ``X`` (n, len(parameters)), in the names' units, as
+        MotionParameters (SI), one set per row."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        col = dict(zip(self.parameters, X.T))
+        friction = col.get("cam_friction_nm", 0.0)
+        return MotionParameters(
+            col["cam_inertia_kg_m2"], follower_kg_m2, col["rod_mass_kg"],
+            col["contacts_mass_kg"], col["release_offset_deg"] * DEG, friction,
+            release_friction_nm=0.0 if self.friction == "driven" else None,
+            efficiency={"case": None, "none": 1.0}.get(self.efficiency, col.get("efficiency")))
+
+    def closing(self, model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
+                rod_offset: NDArray | float, loads: Loads, X: NDArray, follower_kg_m2: float,
+                steps: int) -> ClosingMotion:
+        """The closing of n designs (``A`` (n, d + 1), ``kc`` (n, 2) N/m, ``link`` (n, 5))
+        under parameter rows ``X`` (n, p), one per design: events and curves (rod travel
+        ``rod`` against ``time``, (n, m))."""
+        return closing_motion(model, A, kc, link, rod_offset, loads,
+                              self.motion_parameters(X, follower_kg_m2), steps)
+
+    def events(self, model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
+               rod_offset: NDArray | float, loads: Loads, X: NDArray, follower_kg_m2: float,
+               steps: int) -> ClosingEvents:
+        """As :meth:`closing`, the events alone, every parameter row of ``X`` (k, p) for
+        every design: k x n rows, set-major."""
+        params = self.motion_parameters(X, follower_kg_m2).repeat(len(A))
+        return closing_events(model, A, kc, link, rod_offset, loads, params, steps,
+                              sets=len(np.atleast_2d(X)))
+
+
+FORMS = (
+    ModelForm("efficiency_coulomb", "Eq 26's efficiency and a Coulomb torque at the cam shaft",
+              "case", "everywhere"),
+    ModelForm("coulomb", "a Coulomb torque at the cam shaft alone (no efficiency)",
+              "none", "everywhere"),
+    ModelForm("efficiency_driven_coulomb", "Eq 26's efficiency; Coulomb torque only while "
+              "the cam drives the roller", "case", "driven"),
+    ModelForm("driven_coulomb", "a Coulomb torque only while the cam drives the roller",
+              "none", "driven"),
+    ModelForm("fitted_efficiency", "an efficiency on every spring's work, fitted; no "
+              "friction torque", "fitted", "none"),
+)
+"""Every model form, the shipped one first."""
+FORM_NAMES = tuple(f.name for f in FORMS)
+assert len(set(FORM_NAMES)) == len(FORMS), "a model form's name is taken twice"
+assert set(FORM_NAMES) == set(get_args(ModelFormName)), "config.ModelFormName is out of date"
+
+
+def get_form(name: str) -> ModelForm:
+    """The form named ``name``; bad input names the known ones."""
+    for f in FORMS:
+        if f.name == name:
+            return f
+    raise ConfigError("case", "model_form", f"unknown form {name!r}; known: "
+                      f"{', '.join(FORM_NAMES)}")
