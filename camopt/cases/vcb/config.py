@@ -22,21 +22,33 @@ ModelFormName = Literal["efficiency_coulomb", "coulomb", "efficiency_driven_coul
                         "driven_coulomb", "fitted_efficiency"]
 """The model forms of :mod:`camopt.cases.vcb.forms` (which checks that the two agree)."""
 RELEASE_TORQUE_MARGIN_MIN = 1.2  # assumed: docs/assumptions.md, "VCB: release and lift-off"
+LATCH_ENERGY_MAX_J = 5.0  # assumed: docs/assumptions.md, "VCB: release and lift-off"
 LIFT_OFF_FRACTION_MIN = 0.05  # assumed: docs/assumptions.md, "VCB: release and lift-off"
 
 
-# the parameter sets configs/vcb_identify_dynamics.toml finds as consistent with the ADAMS
-# data as the identified one (configs/vcb.toml's dynamics_band: `camopt init vcb` prints it)
+# the parameter sets configs/vcb_identify_dynamics.toml finds consistent with the ADAMS
+# data over the kept model forms (its `band.sets`, copied; configs/vcb.toml's dynamics_band:
+# `camopt init vcb` prints it): the shipped form's fit and one more set, then the
+# Coulomb-only form's fit and six sets (docs/assumptions.md, "VCB: model forms and band")
 IDENTIFIED_BAND = (
-    (5.64626e-04, 0.0, 3.54841, 1.81367, 14.1861, 11.6054),
-    (6.78154e-04, 0.0, 2.20351, 2.17329, 14.1862, 11.4612),
-    (6.43821e-04, 0.0, 2.72897, 1.96873, 14.1876, 11.5294),
-    (6.60326e-04, 0.0, 2.07452, 2.13524, 14.0754, 11.4291),
-    (5.25923e-04, 0.0, 3.65582, 1.76595, 13.9024, 11.4151),
-    (5.51211e-04, 0.0, 3.80522, 1.73414, 14.0637, 11.5555),
-    (5.81539e-04, 0.0, 2.48737, 2.15945, 13.9477, 11.4056),
-    (5.00000e-04, 0.0, 3.48440, 1.88934, 13.9240, 11.5155),
+    (5.77191e-04, 0.0, 2.88047, 2.01795, 14.0752, 11.5320, 11.5320, 0.85),
+    (6.73501e-04, 0.0, 2.62303, 2.06484, 14.0811, 11.4450, 11.4450, 0.85),
+    (5.45857e-04, 0.0, 3.37668, 2.36702, 16.2819, 15.8205, 15.8205, 1.0),
+    (5.39430e-04, 0.0, 3.86767, 2.22606, 16.2853, 15.7734, 15.7734, 1.0),
+    (6.49865e-04, 0.0, 2.98928, 2.65002, 16.2988, 15.7730, 15.7730, 1.0),
+    (5.00000e-04, 0.0, 3.13591, 2.17846, 16.1459, 15.7405, 15.7405, 1.0),
+    (6.60377e-04, 0.0, 2.90333, 2.22431, 16.2958, 15.6899, 15.6899, 1.0),
+    (5.00000e-04, 0.0, 3.84972, 2.05527, 16.3107, 15.9045, 15.9045, 1.0),
+    (5.78443e-04, 0.0, 3.50285, 2.22727, 16.4043, 15.8452, 15.8452, 1.0),
 )
+
+
+BandRow = (tuple[float, float, float, float, float, float]
+           | tuple[float, float, float, float, float, float, float, float])
+"""A parameter set of the band: (cam_inertia_kg_m2, follower_inertia_kg_m2, rod_mass_kg,
+contacts_mass_kg, release_offset_deg, cam_friction_nm[, release_friction_nm,
+efficiency]): six values are the shipped form (the free rotation's friction the
+same, the case's efficiency), eight any model form's (camopt/cases/vcb/forms.py)."""
 
 
 class CamDesign(Strict):
@@ -131,13 +143,13 @@ class VcbConfig(CaseConfig):
     cam_friction_nm: float = Field(
         11.53, ge=0, le=1000.0, description="Coulomb friction torque referred to the cam shaft, "
         "against the cam whenever it turns, beyond Eq 26's efficiency (identified)")
-    dynamics_band: list[tuple[float, float, float, float, float, float]] = Field(
-        default_factory=lambda: list(IDENTIFIED_BAND), max_length=64,
-        description="parameter sets (cam_inertia_kg_m2, "
-        "follower_inertia_kg_m2, rod_mass_kg, contacts_mass_kg, release_offset_deg, "
-        "cam_friction_nm) as "
-        "consistent with the ADAMS data as the identified one: every closing velocity and "
-        "time is reported as the band over them (configs/vcb_identify_dynamics.toml)")
+    dynamics_band: list[BandRow] = Field(
+        default_factory=lambda: list[BandRow](IDENTIFIED_BAND), max_length=64,
+        description="parameter sets (BandRow: six values, or eight with the free "
+        "rotation's friction and the efficiency of any model form) consistent with the "
+        "ADAMS data within their reading error widened by the kept forms' residuals: every "
+        "closing velocity, time and latch energy is reported as the band over them "
+        "(configs/vcb_identify_dynamics.toml, its band.sets)")
     dynamics_steps: int = Field(
         400, ge=50, le=100_000, description="graded cam-angle intervals of the work-energy "
         "integration (independent of positions) (camopt option)")
@@ -156,6 +168,11 @@ class VcbConfig(CaseConfig):
     latch_energy_min_j: float = Field(
         0.0, ge=0, description="kinetic energy the hook needs at the end of the stroke "
         "(assumed, docs/assumptions.md)")
+    latch_energy_max_j: float = Field(
+        LATCH_ENERGY_MAX_J, gt=0, description="kinetic energy the prop and stop may absorb "
+        "at the end of the stroke, the band's greatest (constraint with require_latch; a "
+        "requirement always) (assumed: ~the contact springs' work over 1.2 mm of overtravel; "
+        "docs/assumptions.md)")
     release_torque_margin_min: float = Field(
         RELEASE_TORQUE_MARGIN_MIN, ge=1.0, le=100.0, description="least eps T_s / T_f at "
         "the release, the closing springs' torque on the cam at rest against the friction "
@@ -309,3 +326,6 @@ class VcbDynamicsIdentifyConfig(VcbConfig):
         "is at most this many times the best form's ... (assumed; docs/assumptions.md)")
     form_keep_pct: Positive = Field(
         10.0, description="... or at most this (%), whichever is larger (assumed)")
+    band_samples: int = Field(2000, ge=10, le=100_000, description="draws per kept form "
+                              "for the band of parameter sets (camopt option)")
+    band_seed: int = Field(0, ge=0, description="seed of the band's draws (camopt option)")

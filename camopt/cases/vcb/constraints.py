@@ -121,6 +121,9 @@ CONSTRAINTS = (
     Constraint("closing_velocity_high", lambda c: c.closing_velocity_m_s is not None,
                lambda q: q.spread.velocity_high / q.velocity_limits[1] - 1),
     Constraint("latch", lambda c: c.require_latch, _latch),
+    # what the prop and stop must absorb: the band's greatest energy left at the latch
+    Constraint("latch_energy_high", lambda c: c.require_latch,
+               lambda q: q.spread.kinetic_high / q.config.latch_energy_max_j - 1),
     # the cam must start in every set of the band, with the assumed margin on the
     # springs' torque against the friction at the release (a latch needs a release)
     Constraint("release_torque", lambda c: c.require_latch,

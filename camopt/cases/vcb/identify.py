@@ -185,11 +185,13 @@ class VcbDynamicsIdentification(Problem):
     def findings(self, x: NDArray) -> dict[str, object]:
         """Every model form fitted on the same data from the run's best ``x`` (p,), which
         are kept (:func:`fit_forms`), and the identifiability of the run's form at ``x``
-        (:func:`identifiability`): ``show --format json``'s ``model_forms`` and
+        (:func:`identifiability`) and the band of parameter sets over the kept forms
+        (:func:`data_band`): ``show --format json``'s ``model_forms``, ``band`` and
         ``identifiability``."""
         x = np.asarray(x, dtype=float)
         fits = fit_forms(self.config, dict(zip(self.names, x)))
         return {"model_forms": [f.to_json() for f in fits],
+                "band": data_band(self.config, fits),
                 "identifiability": {"form": self.form.name,
                                     **identifiability(self, x).to_json()}}
 
@@ -241,42 +243,103 @@ def leave_one_out(problem: VcbDynamicsIdentification, best: NDArray
     return rows
 
 
-def consistent_band(problem: VcbDynamicsIdentification, best: NDArray, samples: int,
-                    seed: int) -> NDArray:
-    """Parameter sets that predict every ADAMS datum as well as ``best`` does, within the
-    data's reading error (each simulated datum within +-velocity_reading_pct of best's
-    velocity prediction or +-time_reading_ms of its time prediction), (k, 5): from
-    ``samples`` log-uniform draws in a box around ``best`` sized by the linearised
-    sensitivities, the extremes of each parameter among the consistent draws (k <= 10)."""
-    c = problem.config
+def data_tolerance(config: VcbDynamicsIdentifyConfig, widened: float) -> NDArray:
+    """How far each simulated datum may lie from the datum itself, (7,) in the data's
+    units: the reading error (``velocity_reading_pct`` of a velocity, ``time_reading_ms``
+    of a time), widened to ``widened`` (a fraction: the largest residual of the kept
+    forms' fits) of the datum where that is larger, since no kept form meets the data
+    closer than its own residuals."""
+    targets = np.array([getattr(config, d.field) for d in DATA])
+    reading = np.array([config.velocity_reading_pct / 100 * v if d.unit == "m/s"
+                        else config.time_reading_ms for d, v in zip(DATA, targets)])
+    return np.maximum(reading, widened * np.abs(targets))
+
+
+def consistent_band(problem: VcbDynamicsIdentification, best: NDArray, tolerance: NDArray,
+                    samples: int, rng: np.random.Generator) -> NDArray:
+    """Parameter sets of ``problem``'s form that predict every ADAMS datum within
+    ``tolerance`` (7,) of the datum itself (the one-sided closing time only below its
+    bound plus the tolerance), (k, p) with ``best`` (p,) first: from ``samples``
+    log-uniform draws in a box around ``best`` sized by the linearised sensitivities,
+    the extremes of each parameter among the consistent draws (k <= 2 p + 1)."""
     y0 = problem.predict(best[None, :])[0]
-    tol = np.array([c.velocity_reading_pct / 100 * abs(v) if d.unit == "m/s"
-                    else c.time_reading_ms for d, v in zip(DATA, y0)])
-    # box half-widths: how far each parameter alone may move before some datum leaves its
-    # reading error (linearised), times 3 so that combined moves are sampled too
+    # box half-widths: how far each parameter alone may move before some datum moves by
+    # its tolerance (linearised), times 3 so that combined moves are sampled too
     h = 1e-3
     steps = np.exp(np.log(best)[None, :] + h * np.eye(len(best)))
-    slope = np.abs(problem.predict(steps) - y0) / h  # (4, 7): d datum / d log parameter
+    slope = np.abs(problem.predict(steps) - y0) / h  # (p, 7): d datum / d log parameter
     event = ~problem.one_sided
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(slope[:, event] > 0, tol[event] / slope[:, event], np.inf)
-    half = 3 * np.min(ratio, axis=1)
-    half = np.minimum(half, 1.0)
-    rng = np.random.default_rng(seed)
-    q = np.log(best) + rng.uniform(-1, 1, (samples, len(best))) * half
+        ratio = np.where(slope[:, event] > 0, tolerance[event] / slope[:, event], np.inf)
+    half = np.minimum(3 * np.min(ratio, axis=1), 1.0)
     lower = np.log(np.maximum([v.lower for v in problem.variables], 1e-9))
     upper = np.log([v.upper for v in problem.variables])
-    q = np.clip(q, lower, upper)
+    q = np.clip(np.log(best) + rng.uniform(-1, 1, (samples, len(best))) * half, lower, upper)
     y = problem.predict(np.exp(q))
-    # events within their reading error of best's prediction; the one-sided datum (closed
-    # by the simulation's end) only met
-    ok = np.all(np.abs(y - y0)[:, event] <= tol[event], axis=1) & np.all(
-        (y <= problem.targets + tol)[:, ~event], axis=1)
+    ok = np.all(np.abs(y - problem.targets)[:, event] <= tolerance[event], axis=1) & np.all(
+        (y <= problem.targets + tolerance)[:, ~event], axis=1)
     members = np.exp(q[ok])
     if len(members) == 0:
         return best[None, :]
     pick = np.unique(np.r_[np.argmin(members, axis=0), np.argmax(members, axis=0)])
-    return members[pick]
+    return np.vstack([best[None, :], members[pick]])
+
+
+BAND_COLUMNS = ("cam_inertia_kg_m2", "follower_inertia_kg_m2", "rod_mass_kg",
+                "contacts_mass_kg", "release_offset_deg", "cam_friction_nm",
+                "release_friction_nm", "efficiency")
+"""A ``dynamics_band`` row: every MotionParameters field, in the units of the names."""
+
+
+def band_rows(form: ModelForm, X: NDArray, config: VcbDynamicsIdentifyConfig) -> NDArray:
+    """Parameter rows ``X`` (k, p) of ``form`` as ``dynamics_band`` rows (k, 8)."""
+    mp = form.motion_parameters(X, config.follower_inertia_kg_m2)
+    k = len(np.atleast_2d(X))
+    friction = mp.friction_nm if mp.release_friction_nm is None else mp.release_friction_nm
+    eps = config.efficiency if mp.efficiency is None else mp.efficiency
+    columns = (mp.cam_kg_m2, mp.follower_kg_m2, mp.rod_kg, mp.contacts_kg,
+               np.asarray(mp.release_offset_rad) / DEG, mp.friction_nm, friction, eps)
+    return np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), (k,))
+                            for c in columns])
+
+
+def data_band(config: VcbDynamicsIdentifyConfig, fits: tuple[FormFit, ...]
+              ) -> dict[str, object]:
+    """The band of every VCB prediction: for each kept form, the parameter sets consistent
+    with the data within :func:`data_tolerance` widened by the kept forms' largest
+    residual (:func:`consistent_band`, ``band_samples`` draws from a generator seeded by
+    ``band_seed`` and spawned per form), as ``dynamics_band`` rows (``sets``), with the
+    tolerance, each form's count and the range of each datum's prediction over the sets
+    beside the datum and its reading-error interval."""
+    kept = [f for f in fits if f.kept]
+    widened = max(f.max_residual_pct for f in kept) / 100
+    tolerance = data_tolerance(config, widened)
+    rngs = [np.random.default_rng(s)
+            for s in np.random.SeedSequence(config.band_seed).spawn(len(FORMS))]
+    rows, counts, predictions = [], {}, []
+    for f in kept:
+        problem = VcbDynamicsIdentification(config.model_copy(update={"model_form": f.form.name}))
+        X = consistent_band(problem, f.x, tolerance, config.band_samples,
+                            rngs[FORMS.index(f.form)])
+        rows.append(band_rows(f.form, X, config))
+        counts[f.form.name] = len(X)
+        predictions.append(problem.predict(X))
+    y = np.vstack(predictions)
+    reading = data_tolerance(config, 0.0)
+    targets = np.array([getattr(config, d.field) for d in DATA])
+    return {
+        "widened_by_pct": 100 * widened, "sets_per_form": counts,
+        "columns": list(BAND_COLUMNS), "sets": np.vstack(rows).tolist(),
+        "data": [{"datum": d.name, "value": float(v), "upper_bound_only": d.upper_bound_only,
+                  "reading_low": None if d.upper_bound_only else float(v - r),
+                  "reading_high": float(v + r), "tolerance": float(t),
+                  "predicted_low": float(lo), "predicted_high": float(hi),
+                  # how far the band stays from the reading-error interval (0: reaches it)
+                  "misses_reading_interval_by": float(max(lo - (v + r), 0.0) if
+                                                      d.upper_bound_only else
+                                                      max(lo - (v + r), (v - r) - hi, 0.0))}
+                 for d, v, r, t, lo, hi in zip(DATA, targets, reading, tolerance,
+                                               y.min(axis=0), y.max(axis=0))]}
 
 
 @dataclass(frozen=True)

@@ -81,9 +81,13 @@ class VcbProblem(Problem, VariesCase):
         self.dynamics = MotionParameters(c.cam_inertia_kg_m2, c.follower_inertia_kg_m2,
                                          c.rod_mass_kg, c.contacts_mass_kg,
                                          c.release_offset_deg * DEG, c.cam_friction_nm)
-        band = np.asarray(c.dynamics_band, dtype=float).reshape(-1, 6)
+        # six-value rows are the shipped form: the free rotation's friction the same, the
+        # case's efficiency
+        band = np.array([tuple(r) + ((r[5], c.efficiency) if len(r) == 6 else ())
+                         for r in c.dynamics_band], dtype=float).reshape(-1, 8)
         self.band = MotionParameters(band[:, 0], band[:, 1], band[:, 2], band[:, 3],
-                                     band[:, 4] * DEG, band[:, 5]) if len(band) else None
+                                     band[:, 4] * DEG, band[:, 5], band[:, 6],
+                                     band[:, 7]) if len(band) else None
         self.search_dynamics = (c.closing_velocity_m_s is not None or c.require_latch
                                 or c.forbid_lift_off)
 
@@ -234,6 +238,9 @@ class VcbProblem(Problem, VariesCase):
             extras.update({
                 "latch_kinetic_energy_j": motion.final_kinetic,
                 "latch_kinetic_energy_low_j": spread.kinetic_low,
+                "latch_kinetic_energy_high_j": spread.kinetic_high,
+                "band_sets": np.full(len(spread.latched), float(spread.sets)),
+                "band_sets_not_latched": spread.not_latched.astype(float),
                 "cam_torque_min_nm": q.cam_torque_min,
                 "lift_off_torque_ratio": q.lift_off_ratio,
                 "release_torque_margin": motion.release_torque_ratio,
@@ -330,16 +337,21 @@ class MotionBand:
     """Extremes of the closing per design (n,) over the identified parameters and the
     parameter sets equally consistent with the ADAMS data (``dynamics_band``): average
     closing velocity (m/s; 0 under a set with which the contacts never meet), latched under
-    every set, least kinetic energy at the latch (J), least reach (fraction of the
-    stroke), least release torque ratio (eps T_s / T_f at the release), and the least and
-    greatest of every :data:`BANDED` motion quantity (SI)."""
+    every set, least and greatest kinetic energy at the latch (J), least reach (fraction
+    of the stroke), least release torque ratio (eps T_s / T_f at the release), the number
+    of parameter sets (``sets``, the identified one included) and of those under which
+    the cam does not release and latch (``not_latched``), and the least and greatest of
+    every :data:`BANDED` motion quantity (SI)."""
 
     velocity_low: NDArray
     velocity_high: NDArray
     latched: NDArray
     kinetic_low: NDArray
+    kinetic_high: NDArray
     reach_low: NDArray
     release_ratio_low: NDArray
+    sets: int
+    not_latched: NDArray
     low: dict[str, NDArray]
     high: dict[str, NDArray]
 
@@ -360,8 +372,10 @@ class MotionBand:
             return cls(velocity_low=v.min(axis=0), velocity_high=v.max(axis=0),
                        latched=np.asarray(stack("latched").all(axis=0)),
                        kinetic_low=stack("final_kinetic").min(axis=0),
+                       kinetic_high=stack("final_kinetic").max(axis=0),
                        reach_low=stack("reach").min(axis=0),
                        release_ratio_low=stack("release_torque_ratio").min(axis=0),
+                       sets=k + 1, not_latched=(~stack("latched")).sum(axis=0),
                        low={f: a.min(axis=0) for f, a in fields.items()},
                        high={f: a.max(axis=0) for f, a in fields.items()})
 

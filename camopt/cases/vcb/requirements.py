@@ -9,7 +9,11 @@ from __future__ import annotations
 from collections.abc import Collection, Mapping
 from typing import Any
 
-from camopt.cases.vcb.config import LIFT_OFF_FRACTION_MIN, RELEASE_TORQUE_MARGIN_MIN
+from camopt.cases.vcb.config import (
+    LATCH_ENERGY_MAX_J,
+    LIFT_OFF_FRACTION_MIN,
+    RELEASE_TORQUE_MARGIN_MIN,
+)
 from camopt.core.requirements import Requirement
 
 CLOSING_VELOCITY_M_S = (0.7, 1.1)  # Sec 2.1: 0.9 +- 0.2 m/s
@@ -72,6 +76,20 @@ def dynamic_requirements(case: Mapping[str, Any], names: Collection[str]
     band's least ratio where a band is reported), and the cam keeps pressing the roller
     (least cam torque a share of the mean driving torque). None without the dynamics."""
     reqs = []
+    if "band_sets_not_latched" in names:
+        reqs.append(Requirement(
+            "parameter sets of the band in which the cam does not release and latch",
+            "band_sets_not_latched", upper=0.0,
+            source="every kept model form and set (docs/assumptions.md)",
+            failing="the closing depends on which model form or parameter set is right"))
+    high = "latch_kinetic_energy_high_j" in names
+    if high or "latch_kinetic_energy_j" in names:
+        reqs.append(Requirement(
+            "kinetic energy the latch absorbs" + (", high end" if high else ""),
+            "latch_kinetic_energy_high_j" if high else "latch_kinetic_energy_j", "J",
+            upper=float(case.get("latch_energy_max_j", LATCH_ENERGY_MAX_J)),
+            source="config latch_energy_max_j (assumed)",
+            failing="the prop and stop take more than they are assumed to absorb"))
     if "release_torque_margin" in names:
         low = "release_torque_margin_low" in names
         reqs.append(Requirement(
