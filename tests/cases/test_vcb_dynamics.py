@@ -234,6 +234,7 @@ def test_identification_meets_every_adams_datum(identification, reported):
     assert ev.extras["max_residual_pct"][0] <= 10.0
 
 
+@pytest.mark.slow
 def test_identification_run_reproduces_the_config_values():
     """configs/vcb_identify_dynamics.toml (DE-gr, its 3 repeats, 80 generations) reports
     n_data, n_parameters, the largest residual and each datum's residual, and fits the
@@ -257,6 +258,28 @@ def test_identification_run_reproduces_the_config_values():
     assert rec.best.fun <= 1.02 * config_f
     for r in rec.repeats:
         assert r.success or r.fun > config_f  # another basin: a worse fit, said so
+    # every model form fitted on the same data, kept by the stated criterion
+    forms = {f["name"]: f for f in rec.findings["model_forms"]}
+    assert len(forms) >= 4
+    best = min(f["max_residual_pct"] for f in forms.values())
+    for f in forms.values():
+        assert {"misfit", "max_residual_pct", "kept", "parameters"} <= f.keys()
+        assert f["kept"] == (f["max_residual_pct"] <= max(1.5 * best, 10.0))
+    assert forms["coulomb"]["kept"] and forms["efficiency_coulomb"]["kept"]
+    assert forms["coulomb"]["misfit"] < forms["efficiency_coulomb"]["misfit"]
+    # identifiability: the release offset and the friction move together (issue #31)
+    ident = rec.findings["identifiability"]
+    s = ident["singular_values"]
+    assert s == sorted(s, reverse=True) and ident["condition"] > 50
+    assert ident["correlations"]["release_offset_deg"]["cam_friction_nm"] > 0.99
+    # the band over the kept forms reaches every datum's reading interval, or misses it by
+    # less than the widening it carries
+    band = rec.findings["band"]
+    assert set(band["sets_per_form"]) == {n for n, f in forms.items() if f["kept"]}
+    for d in band["data"]:
+        assert d["misses_reading_interval_by"] <= d["tolerance"], d["datum"]
+    velocity = next(d for d in band["data"] if d["datum"] == "closing_velocity_avg_m_s")
+    assert velocity["misses_reading_interval_by"] == 0
 
 
 def test_band_members_are_consistent_with_the_data_in_their_form(identification):

@@ -27,7 +27,7 @@ speed, so the work-energy integration would become a time-stepped ODE
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 from typing import Literal, get_args
 
 import numpy as np
@@ -104,9 +104,13 @@ class ModelForm:
                steps: int) -> ClosingEvents:
         """As :meth:`closing`, the events alone, every parameter row of ``X`` (k, p) for
         every design: k x n rows, set-major."""
-        params = self.motion_parameters(X, follower_kg_m2).repeat(len(A))
-        return closing_events(model, A, kc, link, rod_offset, loads, params, steps,
-                              sets=len(np.atleast_2d(X)))
+        k = len(np.atleast_2d(X))
+        mp = self.motion_parameters(X, follower_kg_m2)
+        # one value per set (a form's fixed value for all) before each is repeated
+        params = replace(mp, **{f.name: np.broadcast_to(np.asarray(v, dtype=float), (k,))
+                                for f in fields(mp)
+                                if (v := getattr(mp, f.name)) is not None}).repeat(len(A))
+        return closing_events(model, A, kc, link, rod_offset, loads, params, steps, sets=k)
 
 
 FORMS = (
