@@ -78,14 +78,14 @@ def dynamic_requirements(case: Mapping[str, Any], names: Collection[str]
     reqs = []
     if "band_sets_not_latched" in names:
         reqs.append(Requirement(
-            "parameter sets of the band in which the cam does not release and latch",
+            "band sets in which the cam does not close",
             "band_sets_not_latched", upper=0.0,
             source="every kept model form and set (docs/assumptions.md)",
             failing="the closing depends on which model form or parameter set is right"))
     high = "latch_kinetic_energy_high_j" in names
     if high or "latch_kinetic_energy_j" in names:
         reqs.append(Requirement(
-            "kinetic energy the latch absorbs" + (", high end" if high else ""),
+            "latch energy to absorb" + (", high end" if high else ""),
             "latch_kinetic_energy_high_j" if high else "latch_kinetic_energy_j", "J",
             upper=float(case.get("latch_energy_max_j", LATCH_ENERGY_MAX_J)),
             source="config latch_energy_max_j (assumed)",
@@ -93,14 +93,14 @@ def dynamic_requirements(case: Mapping[str, Any], names: Collection[str]
     if "release_torque_margin" in names:
         low = "release_torque_margin_low" in names
         reqs.append(Requirement(
-            "springs' torque / friction at the release" + (", low end" if low else ""),
+            "release torque / friction" + (", low end" if low else ""),
             "release_torque_margin_low" if low else "release_torque_margin",
             lower=float(case.get("release_torque_margin_min", RELEASE_TORQUE_MARGIN_MIN)),
             source="config release_torque_margin_min (assumed)",
             failing="a slightly soft spring or stiff bearing keeps the cam at its release"))
     if "lift_off_torque_ratio" in names:
         reqs.append(Requirement(
-            "least cam torque / mean driving torque (no lift-off)", "lift_off_torque_ratio",
+            "least cam torque / mean drive (lift-off)", "lift_off_torque_ratio",
             lower=float(case.get("lift_off_fraction_min", LIFT_OFF_FRACTION_MIN)),
             source="config lift_off_fraction_min (assumed)",
             failing="the roller comes near to lifting off the cam"))
