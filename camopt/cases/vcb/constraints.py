@@ -8,19 +8,16 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.cases.vcb.band import MotionBand
 from camopt.cases.vcb.config import VcbConfig
 from camopt.cases.vcb.dynamics import ClosingMotion
 from camopt.cases.vcb.model import ForceBalance, Kinematics, VcbModel, unassembled
 from camopt.mechanics import cam, fourbar
 from camopt.units import DEG, MM, MPA
-
-if TYPE_CHECKING:
-    from camopt.cases.vcb.problem import MotionBand
 
 
 @dataclass

@@ -4,15 +4,15 @@ or step 2 (four-bar), Kang, Huang & Yang (2023), Eqs 37-43."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.cases.vcb.band import BANDED, MotionBand
 from camopt.cases.vcb.config import CamDesign, VcbConfig
 from camopt.cases.vcb.constraints import CONSTRAINTS, Terms
 from camopt.cases.vcb.dynamics import (
-    ClosingEvents,
     ClosingMotion,
     MotionParameters,
     closing_events,
@@ -29,7 +29,7 @@ from camopt.core.capabilities import VariesCase
 from camopt.core.problem import Evaluation, ObjectiveFloor, Problem, Variable
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, hertz
-from camopt.units import DEG, MM, MS
+from camopt.units import DEG, MM
 
 LINK_FIELDS = ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
 """The linkage fields of ``[case]`` in the order of a linkage row (``designs``)."""
@@ -330,61 +330,3 @@ class VcbProblem(Problem, VariesCase):
         out = self.curves(np.asarray(x, dtype=float))
         out.update({f"initial_{k}": v for k, v in self.curves(self.vendor_x()).items()})
         return out
-
-
-@dataclass(frozen=True)
-class MotionBand:
-    """Extremes of the closing per design (n,) over the identified parameters and the
-    parameter sets equally consistent with the ADAMS data (``dynamics_band``): average
-    closing velocity (m/s; 0 under a set with which the contacts never meet), latched under
-    every set, least and greatest kinetic energy at the latch (J), least reach (fraction
-    of the stroke), least release torque ratio (eps T_s / T_f at the release), the number
-    of parameter sets (``sets``, the identified one included) and of those under which
-    the cam does not release and latch (``not_latched``), and the least and greatest of
-    every :data:`BANDED` motion quantity (SI)."""
-
-    velocity_low: NDArray
-    velocity_high: NDArray
-    latched: NDArray
-    kinetic_low: NDArray
-    kinetic_high: NDArray
-    reach_low: NDArray
-    release_ratio_low: NDArray
-    sets: int
-    not_latched: NDArray
-    low: dict[str, NDArray]
-    high: dict[str, NDArray]
-
-    @classmethod
-    def of(cls, nominal: ClosingEvents, members: ClosingEvents | None = None, k: int = 0
-           ) -> MotionBand:
-        """The band of ``nominal`` (n designs) and ``members`` (k sets x n designs)."""
-        def stack(name: str) -> NDArray:
-            first = getattr(nominal, name)[None, :]
-            if members is None:
-                return first
-            return np.concatenate([first, getattr(members, name).reshape(k, -1)])
-        # contacts that never meet close at zero speed: finite, so that a search starting
-        # among stalling designs still sees how far it is from the requirement
-        v = np.nan_to_num(stack("closing_velocity_avg"), nan=0.0)
-        fields = {field: stack(field) for field, _, _ in BANDED.values()}
-        with np.errstate(invalid="ignore"):
-            return cls(velocity_low=v.min(axis=0), velocity_high=v.max(axis=0),
-                       latched=np.asarray(stack("latched").all(axis=0)),
-                       kinetic_low=stack("final_kinetic").min(axis=0),
-                       kinetic_high=stack("final_kinetic").max(axis=0),
-                       reach_low=stack("reach").min(axis=0),
-                       release_ratio_low=stack("release_torque_ratio").min(axis=0),
-                       sets=k + 1, not_latched=(~stack("latched")).sum(axis=0),
-                       low={f: a.min(axis=0) for f, a in fields.items()},
-                       high={f: a.max(axis=0) for f, a in fields.items()})
-
-
-BANDED = {
-    "touch_velocity_m_s": ("touch_velocity", "_m_s", 1.0),
-    "cam_contact_time_ms": ("cam_contact_time", "_ms", MS),
-    "touch_time_ms": ("touch_time", "_ms", MS),
-    "closing_time_ms": ("closing_time", "_ms", MS),
-}
-"""Reported with their band: extra name -> (ClosingMotion field, the name's unit suffix,
-SI factor); the band's extras insert low/high before the unit (``touch_time_low_ms``)."""
