@@ -1,0 +1,60 @@
+"""Hardening round 4 (issue #30): each test here failed on main before the fix it names.
+
+Reuses round 3's helpers (tests/cli/test_faults.py)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from camopt import archive
+from tests.cli.test_faults import CAMOPT, FAST, invoke, one_error_line
+
+
+@pytest.fixture(scope="module")
+def fast_run(tmp_path_factory) -> Path:
+    """A finished fast-switch run archive (enumeration: seconds)."""
+    out = tmp_path_factory.mktemp("fast") / "run.h5"
+    assert invoke("run", FAST, "--out", out, "--quiet").exit_code == 0
+    return out
+
+
+# ---- a folder whose name is not valid UTF-8 ---------------------------------------------
+@pytest.mark.parametrize("command", ["run", "sweep", "report", "tolerance", "show"])
+def test_a_non_utf8_folder_is_refused_before_any_work(tmp_path, fast_run, command):
+    """Decision (docs/reliability.md): an argument that is not valid UTF-8 is refused at
+    once, one line naming it with its bytes escaped, exit 2; nothing written. (main: run,
+    sweep, report and tolerance did all the work, then ended 'internal error:
+    UnicodeEncodeError'.)"""
+    folder = os.path.join(os.fsencode(tmp_path), b"caf\xe9")  # Latin-1 'cafe'
+    os.mkdir(folder)
+    case = os.path.join(folder, b"case.toml")
+    run = os.path.join(folder, b"run.h5")
+    Path(os.fsdecode(case)).write_bytes(Path(FAST).read_bytes())
+    Path(os.fsdecode(run)).write_bytes(fast_run.read_bytes())
+    out = os.path.join(folder, b"out.h5")
+    args = {"run": [b"run", case, b"--out", out],
+            "sweep": [b"sweep", case, b"--seeds", b"0:1", b"--out", out],
+            "report": [b"report", run],
+            "tolerance": [b"tolerance", run, b"--samples", b"20", b"--out", out],
+            "show": [b"show", run]}[command]
+    proc = subprocess.run([*map(os.fsencode, CAMOPT), *args], capture_output=True,
+                          timeout=60)
+    err = proc.stderr.decode()
+    assert proc.returncode == 2 and one_error_line(err), err
+    assert "caf\\xe9" in err and "not valid UTF-8" in err
+    assert sorted(os.listdir(folder)) == [b"case.toml", b"run.h5"]
+
+
+def test_inside_a_non_utf8_folder_relative_paths_work(tmp_path, fast_run):
+    """The remedy the error names: from inside the folder, relative paths are UTF-8."""
+    folder = os.path.join(os.fsencode(tmp_path), b"caf\xe9")
+    os.mkdir(folder)
+    Path(os.fsdecode(os.path.join(folder, b"run.h5"))).write_bytes(fast_run.read_bytes())
+    proc = subprocess.run([*CAMOPT, "report", "run.h5"], cwd=folder, capture_output=True,
+                          text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert archive.load_run(os.fsdecode(os.path.join(folder, b"run.h5"))).kind == "fast_switch"
