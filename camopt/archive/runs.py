@@ -125,7 +125,33 @@ def load_run(path: str | Path) -> RunView:
         with damaged(path):
             check_schema(f, READABLE_SCHEMAS, RUN_SCHEMA)
             view = _load(f, path)
+            check_variables(view)
         return view
+
+
+def check_variables(view: RunView) -> None:
+    """The stored variable names must be those the case's problem has for the stored
+    config (a renamed or foreign ``variables`` attribute would otherwise show values under
+    wrong names and make ``tolerance`` fail on a missing one). A config this camopt no
+    longer accepts (an archive of another version) cannot be rebuilt, so is not compared:
+    it is shown as stored, and ``tolerance``, which must rebuild it, refuses it with the
+    config's own error (docs/reliability.md)."""
+    from pydantic import ValidationError
+
+    from camopt.cases import build_problem
+    from camopt.engine.driver import validate
+    from camopt.errors import CamoptError
+
+    try:
+        config = validate({"case": view.case, "solver": view.solver, "run": view.run},
+                          view.path)
+        with np.errstate(all="ignore"):  # a non-assembling design is the run's business
+            names = tuple(build_problem(config.case).names)
+    except (CamoptError, ValidationError):
+        return
+    if names != tuple(view.variables):
+        raise ArchiveError(f"variables {', '.join(view.variables)} do not match case "
+                           f"'{view.kind}' with its stored config ({', '.join(names)})")
 
 
 # what load_run reads: (HDF5 path, attribute names)
@@ -266,6 +292,10 @@ def _read_best(best: h5py.Group, layout: _Layout) -> BestView:
     names, constraints = layout.names, layout.constraints
     if best["x"].shape != (len(names),) or g.shape != (len(constraints),):
         raise ArchiveError("/best: x or g does not match the variables and constraints")
+    # a search only ever stores a design inside its finite bounds: a NaN or infinite best
+    # (or a NaN objective) is damage, never a design to give a verdict on
+    if not np.all(np.isfinite(best["x"][()])) or np.isnan(float(best.attrs["objective"])):
+        raise ArchiveError("/best: the best design or its objective is not finite")
     return BestView(
         objective=float(best.attrs["objective"]),
         feasible=bool(best.attrs["feasible"]),

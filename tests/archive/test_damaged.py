@@ -69,6 +69,14 @@ RUN_DAMAGE = {
                                         f["best"].create_dataset("x", data=[1.0])),
     "newer schema": _set_attr("schema_version", 99),
     "no repeats": lambda f: [f["repeats"].__delitem__(k) for k in list(f["repeats"])],
+    # issue #30: names that are not the case's (tolerance ended 'internal error: KeyError')
+    "variables renamed": lambda f: f.attrs.__setitem__("variables", json.dumps(
+        [f"v{i}" for i in range(len(json.loads(f.attrs["variables"])))])),
+    "variables swapped": lambda f: f.attrs.__setitem__("variables", json.dumps(
+        json.loads(f.attrs["variables"])[::-1])),
+    # issue #30: a NaN best was shown 'PASS: meets all 6 requirements'
+    "NaN best design": lambda f: f["best"]["x"].__setitem__(0, np.nan),
+    "NaN best objective": _set_attr("objective", np.nan, "/best"),
 }
 
 
@@ -78,7 +86,9 @@ def test_damaged_run_archives(good, tmp_path, damage):
     shutil.copy(good[0], path)
     with h5py.File(path, "a") as f:
         RUN_DAMAGE[damage](f)
-    for args in (["show", path], ["compare", good[0], path], ["export", path, "--out", tmp_path]):
+    for args in (["show", path], ["compare", good[0], path], ["export", path, "--out", tmp_path],
+                 ["tolerance", path, "--samples", "20"], ["report", path, "--out",
+                                                          tmp_path / "r.html"]):
         r = invoke(*args)
         one_error_line(r, path)
         assert ": archive: " in r.stderr
