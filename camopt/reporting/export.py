@@ -139,9 +139,24 @@ def export_files(run: RunView, out_dir: Path, stem: str, fmt: str) -> dict[Path,
     return files
 
 
+# a spreadsheet reads a cell starting with one of these as a formula (OWASP's CSV
+# injection list: tab and carriage return start one too)
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def neutralise(cell: object) -> object:
+    """A CSV cell a spreadsheet will not run: a string starting with a formula character
+    gets a leading apostrophe (shown as text, the apostrophe hidden); numbers, negative
+    ones included, stay numbers. An archive handed over may carry any string (a metric's
+    text, a curve's name)."""
+    if isinstance(cell, str) and cell.startswith(FORMULA_STARTS):
+        return "'" + cell
+    return cell
+
+
 def _csv(rows: list[list[object]]) -> bytes:
     text = io.StringIO(newline="")
-    csv.writer(text).writerows(rows)
+    csv.writer(text).writerows([[neutralise(c) for c in row] for row in rows])
     return text.getvalue().encode()
 
 

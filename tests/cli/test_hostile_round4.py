@@ -11,15 +11,7 @@ from pathlib import Path
 import pytest
 
 from camopt import archive
-from tests.cli.test_faults import CAMOPT, FAST, invoke, one_error_line
-
-
-@pytest.fixture(scope="module")
-def fast_run(tmp_path_factory) -> Path:
-    """A finished fast-switch run archive (enumeration: seconds)."""
-    out = tmp_path_factory.mktemp("fast") / "run.h5"
-    assert invoke("run", FAST, "--out", out, "--quiet").exit_code == 0
-    return out
+from tests.cli.test_faults import CAMOPT, FAST, one_error_line
 
 
 # ---- a folder whose name is not valid UTF-8 ---------------------------------------------
