@@ -13,6 +13,7 @@ from camopt.archive.files import (
     describe_file,
     ensure_folder,
     open_archive,
+    output_folder,
     read_regular,
     versions,
     write_files,
@@ -23,5 +24,5 @@ from camopt.archive.tables import read_table, write_table
 
 __all__ = ["Claim", "archive_kind", "atomic_write", "check_not_input", "check_writable", "claim",
            "default_path", "describe_file", "ensure_folder", "load_run", "open_archive",
-           "read_regular", "read_table", "resolve_references", "versions", "write_files",
-           "write_run", "write_table"]
+           "output_folder", "read_regular", "read_table", "resolve_references", "versions",
+           "write_files", "write_run", "write_table"]

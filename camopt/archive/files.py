@@ -335,16 +335,49 @@ def _write_temp(path: Path, data: bytes | memoryview) -> tuple[int, str]:
 def ensure_folder(folder: Path, key: str = "--out") -> Path:
     """``folder`` made if missing; a file, FIFO or device of that name, or a folder that
     cannot be made, is an ArchiveError naming ``key`` (checked before any work)."""
-    folder = Path(folder)
+    _make_folder(Path(folder), key)
+    return Path(folder)
+
+
+def _make_folder(folder: Path, key: str) -> list[Path]:
+    """:func:`ensure_folder`'s work; the folders it made, deepest first."""
     if os.path.lexists(folder) and not folder.is_dir():
         raise ArchiveError(f"{folder}: {key}: exists and is not a folder")
+    missing = []
+    level = folder
+    while not os.path.lexists(level) and level != level.parent:
+        missing.append(level)
+        level = level.parent
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ArchiveError(f"{folder}: {key}: cannot create the folder "
                            f"({exc.strerror})") from None
-    _probe(folder, f"{folder}: {key}")
-    return folder
+    try:
+        _probe(folder, f"{folder}: {key}")
+    except BaseException:
+        _remove_empty(missing)
+        raise
+    return missing
+
+
+def _remove_empty(folders: Sequence[Path]) -> None:
+    for made in folders:  # deepest first; one another program filled stays
+        with contextlib.suppress(OSError):
+            os.rmdir(made)
+
+
+@contextlib.contextmanager
+def output_folder(folder: Path, key: str = "--out") -> Iterator[Path]:
+    """:func:`ensure_folder` for a command's output files: when the command then fails (a
+    full disk, Ctrl-C, bad input found later), the folders it made are removed again if
+    still empty, so a failed ``plot --out p`` leaves no empty ``p/``."""
+    made = _make_folder(Path(folder), key)
+    try:
+        yield Path(folder)
+    except BaseException:
+        _remove_empty(made)
+        raise
 
 
 def write_files(contents: dict[Path, bytes], force: bool = False,

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from camopt import archive
-from tests.cli.test_faults import CAMOPT, FAST, one_error_line
+from tests.cli.test_faults import CAMOPT, FAST, _fsize_limit, one_error_line
 
 
 # ---- a folder whose name is not valid UTF-8 ---------------------------------------------
@@ -50,3 +50,20 @@ def test_inside_a_non_utf8_folder_relative_paths_work(tmp_path, fast_run):
                           text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
     assert archive.load_run(os.fsdecode(os.path.join(folder, b"run.h5"))).kind == "fast_switch"
+
+
+# ---- a full disk leaves no empty output folder --------------------------------------------
+def test_a_full_disk_leaves_no_empty_output_folder(tmp_path, fast_run):
+    """`plot --out p/q` on a full disk (the PNGs exceed a 3000-byte file limit): one error
+    line, and neither p/q nor p, made by the command, is left behind empty (main left
+    them); a folder that existed stays (export: tests/cli/test_faults.py)."""
+    command = "plot"
+    out = tmp_path / "p" / "q"
+    proc = subprocess.run([*CAMOPT, command, fast_run, "--out", out], capture_output=True,
+                          text=True, timeout=60, preexec_fn=_fsize_limit)
+    assert proc.returncode == 2 and one_error_line(proc.stderr), proc.stderr
+    assert not (tmp_path / "p").exists()
+    (tmp_path / "p").mkdir()
+    proc = subprocess.run([*CAMOPT, command, fast_run, "--out", tmp_path / "p"],
+                          capture_output=True, text=True, timeout=60, preexec_fn=_fsize_limit)
+    assert proc.returncode == 2 and list((tmp_path / "p").iterdir()) == []
