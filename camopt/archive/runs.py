@@ -32,6 +32,34 @@ from camopt.errors import ArchiveError
 
 SCHEMA_VERSION = 2
 READABLE_SCHEMAS = (1, 2)
+NOTE_CHARS = 2000
+"""A repeat's note or message is cut to this many characters when read: an archive handed
+over may carry a 60 MB note, which ``show`` would otherwise spend minutes and gigabytes
+laying out (the archive keeps it whole: ``h5dump`` shows it)."""
+MAX_NOTES = 20
+"""At most this many notes per repeat are read (the rest counted in a last note)."""
+MAX_NOTES_CHARS = 1 << 20
+"""A repeat's notes attribute longer than this is not parsed at all (one note says so)."""
+
+
+def bounded_text(text: str) -> str:
+    """``text`` cut to :data:`NOTE_CHARS` characters, saying how much was left out."""
+    if len(text) <= NOTE_CHARS:
+        return text
+    return f"{text[:NOTE_CHARS]}... ({len(text) - NOTE_CHARS} more characters in the archive)"
+
+
+def _bounded_notes(text: object, where: str) -> tuple[str, ...]:
+    """A repeat's notes (a JSON list of strings), bounded: see :data:`NOTE_CHARS`."""
+    text = str(text)
+    if len(text) > MAX_NOTES_CHARS:
+        return (f"({len(text)} characters of notes not read: over camopt's "
+                f"{MAX_NOTES_CHARS}-character limit; h5dump shows them)",)
+    notes = _json_list(text, where)
+    kept = [bounded_text(str(n)) for n in notes[:MAX_NOTES]]
+    if len(notes) > MAX_NOTES:
+        kept.append(f"... {len(notes) - MAX_NOTES} more notes in the archive")
+    return tuple(kept)
 
 
 def _write(f: h5py.File, rec: RunRecord) -> None:
@@ -269,14 +297,14 @@ def _read_repeat(grp: h5py.Group, key: str, layout: _Layout) -> Repeat:
     return Repeat(
         x=grp["x"][()] * layout.to_si, fun=fun,
         success=_success(a, fun, feasible, layout.target),
-        message=str(a["message"]), nfev=int(a["nfev"]), nit=int(a["nit"]),
+        message=bounded_text(str(a["message"])), nfev=int(a["nfev"]), nit=int(a["nit"]),
         index=int(key[1:]), spawn_key=tuple(json.loads(a["spawn_key"])),
         seed=int(a["seed"]), feasible=feasible, violation=float(a["violation"]),
         converged_nit=int(a["converged_nit"]),
         nfev_to_target=nfev_to_target(history, layout.target),
         wall_s=float(a["wall_s"]), history=history,
         g=grp["g"][()] if "g" in grp else np.zeros(0),
-        notes=tuple(json.loads(a["notes"])))
+        notes=_bounded_notes(a["notes"], f"/repeats/{key}: notes"))
 
 
 def _read_repeats(f: h5py.File, layout: _Layout) -> list[Repeat]:

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from camopt import archive
-from tests.cli.test_faults import CAMOPT, FAST, _fsize_limit, one_error_line
+from tests.cli.test_faults import CAMOPT, DE, FAST, TINY, _fsize_limit, invoke, one_error_line
 
 
 # ---- a folder whose name is not valid UTF-8 ---------------------------------------------
@@ -67,3 +67,39 @@ def test_a_full_disk_leaves_no_empty_output_folder(tmp_path, fast_run):
     proc = subprocess.run([*CAMOPT, command, fast_run, "--out", tmp_path / "p"],
                           capture_output=True, text=True, timeout=60, preexec_fn=_fsize_limit)
     assert proc.returncode == 2 and list((tmp_path / "p").iterdir()) == []
+
+
+# ---- a huge note: show is fast and bounded ------------------------------------------------
+@pytest.fixture(scope="module")
+def de_run(tmp_path_factory) -> Path:
+    """A tiny DE-gr run of two repeats (`show` prints their notes)."""
+    out = tmp_path_factory.mktemp("de") / "de.h5"
+    r = invoke("run", DE, "--out", out, "--quiet", "--repeats", "2", *TINY)
+    assert r.exit_code == 0, r.output
+    return out
+
+
+@pytest.mark.parametrize("notes", [["x" * 5_000_000], ["y" * 3000] * 500])
+def test_show_of_an_archive_with_a_huge_note_is_bounded(tmp_path, de_run, notes):
+    """A handed-over archive whose repeat carries a 5 MB note (or 500 long ones): `show`
+    prints a bounded excerpt saying how much it left out (main printed all of it: a 60 MB
+    note took minutes and 850 MB)."""
+    import json
+
+    import h5py
+
+    from camopt.archive import runs
+
+    path = tmp_path / "noted.h5"
+    path.write_bytes(de_run.read_bytes())
+    with h5py.File(path, "a") as f:
+        for repeat in f["repeats"].values():
+            repeat.attrs["notes"] = json.dumps(notes)
+            repeat.attrs["message"] = "m" * 100_000
+    for repeat in archive.load_run(path).repeats:
+        assert 0 < len(repeat.notes) <= runs.MAX_NOTES + 1
+        assert all(len(n) <= runs.NOTE_CHARS + 100 for n in repeat.notes)
+        assert len(repeat.message) <= runs.NOTE_CHARS + 100
+    proc = subprocess.run([*CAMOPT, "show", path], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert len(proc.stdout) < 100_000 and "characters" in proc.stdout
