@@ -13,7 +13,7 @@ import enum
 import sys
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import click
 import typer
@@ -42,7 +42,7 @@ class _Group(TyperGroup):
     UTF-8 text (HDF5 attributes, HTML, JSON), and a run that did all its work and then
     could not record its own path would lose it; docs/reliability.md."""
 
-    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+    def parse_args(self, ctx: Any, args: list[str]) -> list[str]:  # typer's own click Context
         bad = non_utf8_argument(args)
         if bad is not None:
             print(f"error: {bad}: argument: not valid UTF-8 (camopt records paths as UTF-8 "
