@@ -181,7 +181,7 @@ user_names = st.builds(
             max_size=8))
 
 
-@settings(max_examples=60, deadline=None,
+@settings(max_examples=60, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(name=user_names)
 def test_the_sweeper_never_removes_a_users_temporary_file(tmp_path, name):
