@@ -62,6 +62,21 @@ SPHERE = register_case(CaseSpec(kind="sphere", config=SphereConfig, problem=Sphe
 """The test-only case, registered like any plugin case (no monkeypatching)."""
 
 
+@pytest.fixture(scope="session")
+def fast_run(tmp_path_factory) -> Path:
+    """A finished fast-switch run archive (the paper's enumeration: seconds), to copy and
+    craft; never written to."""
+    from typer.testing import CliRunner
+
+    from camopt.cli import app
+
+    out = tmp_path_factory.mktemp("fast") / "run.h5"
+    r = CliRunner().invoke(app, ["run", str(CONFIGS / "fast_switch.toml"), "--out", str(out),
+                                 "--quiet"])
+    assert r.exit_code == 0, r.output
+    return out
+
+
 @pytest.fixture
 def sphere_case() -> type[SphereProblem]:
     """The sphere case's Problem class (the kind is registered at import)."""

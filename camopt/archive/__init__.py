@@ -20,6 +20,7 @@ if TYPE_CHECKING:
         describe_file,
         ensure_folder,
         open_archive,
+        output_folder,
         read_regular,
         versions,
         write_files,
@@ -31,7 +32,7 @@ if TYPE_CHECKING:
 _HOME = {
     **dict.fromkeys(("Claim", "archive_kind", "atomic_write", "check_not_input",
                      "check_writable", "claim", "default_path", "describe_file",
-                     "ensure_folder", "open_archive", "read_regular", "versions",
+                     "ensure_folder", "open_archive", "output_folder", "read_regular", "versions",
                      "write_files"), "files"),
     "resolve_references": "references",
     "load_run": "runs", "write_run": "runs",
@@ -40,8 +41,8 @@ _HOME = {
 
 __all__ = ["Claim", "archive_kind", "atomic_write", "check_not_input", "check_writable", "claim",
            "default_path", "describe_file", "ensure_folder", "load_run", "open_archive",
-           "read_regular", "read_table", "resolve_references", "versions", "write_files",
-           "write_run", "write_table"]
+           "output_folder", "read_regular", "read_table", "resolve_references", "versions",
+           "write_files", "write_run", "write_table"]
 assert sorted(__all__) == sorted(_HOME)
 
 

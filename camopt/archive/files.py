@@ -7,13 +7,18 @@ Writing an archive (``claim`` then ``atomic_write``):
   an error naming the holder (pid, host, start time). The kernel drops the lock when its
   holder dies, so a killed writer never blocks the next one.
 - Nothing half-written: the archive is built in memory (h5py on a ``BytesIO``), written to
-  a temporary file ``.<name>.<random>.tmp`` beside the target with plain ``os.write``
+  a temporary file ``.<name>.camopt-<random>.tmp`` beside the target with plain ``os.write``
   (a full disk is an ``OSError`` there, never inside HDF5), synced, and moved into
   place. Without ``force`` the move is a hard link, which fails rather than replace a
   file another program made meanwhile; with ``force`` only a regular file is replaced.
 - Temporary files are removed on errors and on SIGINT/SIGTERM (the CLI turns SIGTERM into
   KeyboardInterrupt); those a SIGKILL leaves are removed by the next ``claim`` in that
-  folder (a temporary file whose archive nobody holds locked is stale).
+  folder. Every temporary file (archives, and the files of ``export``, ``report``,
+  ``plot`` and ``init``) carries a name only camopt makes (``.camopt-`` and 8 hex digits
+  before ``.tmp``) and is held under an exclusive ``flock`` of its own from its creation
+  until it is moved into place or removed; the sweeper removes only a file with such a
+  name whose lock it can take (its writer is dead). A user's ``.notes.abcd1234.tmp`` (an
+  editor's autosave) is never touched, nor a live writer's temporary file of any command.
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ import secrets
 import socket
 import stat
 import tempfile
+import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
@@ -41,10 +47,13 @@ import numpy as np
 import camopt
 from camopt.errors import ArchiveError
 
-# the temporary file's name adds 14 bytes and a leading dot to the archive's name, and a
+# the temporary file's name adds 21 bytes and a leading dot to the archive's name, and a
 # file name has at most 255 bytes
 MAX_NAME_BYTES = 200
-_TMP = re.compile(r"\.(?P<target>.+)\.[A-Za-z0-9_]{8}\.tmp")
+# a temporary file's name: only camopt makes '.camopt-<8 hex>.tmp' (docs/reliability.md)
+_TMP = re.compile(r"\.(?P<target>.+)\.camopt-[0-9a-f]{8}\.tmp")
+HOLDER_WAIT_S = 2.0
+"""How long a second writer waits for a just-started holder to write who it is."""
 _held: dict[Path, int] = {}  # archives this process holds locked -> lock file descriptor
 
 
@@ -131,11 +140,18 @@ def _unlock(path: Path, fd: int) -> None:
 
 
 def _holder(path: Path) -> str:
-    try:
-        text = read_regular(_lock_path(path), "lock") or b""
-        return text.decode().strip() or "unknown process"
-    except (OSError, UnicodeDecodeError):
-        return "unknown process"
+    """Who holds ``path``'s lock, as its holder wrote it. A holder that has just taken the
+    lock writes its line a moment later: an empty lock file is read again for up to
+    :data:`HOLDER_WAIT_S` before the holder is called unknown."""
+    deadline = time.monotonic() + HOLDER_WAIT_S
+    while True:
+        try:
+            text = (read_regular(_lock_path(path), "lock") or b"").decode().strip()
+        except (OSError, UnicodeDecodeError):
+            return "unknown process"
+        if text or time.monotonic() >= deadline:
+            return text or "unknown process"
+        time.sleep(0.02)
 
 
 @dataclass
@@ -170,10 +186,11 @@ def claim(path: Path, force: bool = False) -> Iterator[Claim]:
                            f"({_holder(path)})")
     try:
         started = datetime.now(timezone.utc).isoformat(timespec="seconds")
-        try:  # who holds it, for the error a second writer gets (best effort: disk full)
-            os.ftruncate(fd, 0)
-            os.write(fd, f"pid {os.getpid()} on {socket.gethostname()} since {started}\n"
-                     .encode())
+        try:  # who holds it, for the error a second writer gets (best effort: disk full);
+            # written over a dead holder's line before truncating, so never read empty
+            line = f"pid {os.getpid()} on {socket.gethostname()} since {started}\n".encode()
+            os.pwrite(fd, line, 0)
+            os.ftruncate(fd, len(line))
         except OSError:
             pass
         _held[key] = fd
@@ -185,35 +202,38 @@ def claim(path: Path, force: bool = False) -> Iterator[Claim]:
 
 
 def remove_stale(folder: Path) -> list[Path]:
-    """Remove temporary archive files in ``folder`` that no writer holds (left by a killed
-    camopt); the paths removed."""
+    """Remove camopt's temporary files in ``folder`` whose writer is dead (a SIGKILL left
+    them): a name only camopt makes (:data:`_TMP`) and a lock nobody holds (every writer
+    holds its temporary file's ``flock`` until it is published or removed). Anything else,
+    a user's ``.X.abcd1234.tmp`` among them, is left alone. The paths removed."""
     removed: list[Path] = []
     try:
         names = os.listdir(folder)
     except OSError:
         return removed
     for name in names:
-        match = _TMP.fullmatch(name)
-        if not match:
+        if not _TMP.fullmatch(name):
             continue
-        target = folder / match.group("target")
-        key = Path(os.path.abspath(target))
-        fd = None
-        if key not in _held:
-            try:
-                fd = _try_lock(target)
-            except OSError:
-                continue
-            if fd is None:  # its writer is alive
-                continue
+        tmp = folder / name
         try:
-            os.unlink(folder / name)
-            removed.append(folder / name)
+            fd = os.open(tmp, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+        except OSError:
+            continue
+        try:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                continue
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:  # its writer is alive
+                continue
+            if os.stat(tmp, follow_symlinks=False).st_ino != os.fstat(fd).st_ino:
+                continue  # replaced meanwhile: not the file we locked
+            os.unlink(tmp)  # under the lock: its creator checks the name after locking
+            removed.append(tmp)
         except OSError:
             pass
         finally:
-            if fd is not None:
-                _unlock(target, fd)
+            os.close(fd)
     return removed
 
 
@@ -238,70 +258,126 @@ def atomic_write(path: Path, write: Callable[[h5py.File], None], replace: bool =
     with h5py.File(buffer, "w") as f:
         write(f)
     data = buffer.getbuffer()
-    tmp: str | None = None
+    held: tuple[int, str] | None = None
     try:
-        tmp = _write_temp(path, data)
-        _publish(Path(tmp), path, replace)
-        tmp = None
+        held = _write_temp(path, data)
+        _publish(Path(held[1]), path, replace)
+        os.close(held[0])
+        held = None
     except OSError as exc:
         if isinstance(exc, ArchiveError):
             raise
         raise ArchiveError(f"{path}: archive: cannot write ({exc.strerror or exc}); "
                            "nothing written") from None
     finally:
-        if tmp is not None:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
+        if held is not None:
+            _discard(held)
     return path
 
 
+def _discard(held: tuple[int, str]) -> None:
+    """Remove a temporary file, then release its lock (in that order: see remove_stale)."""
+    with contextlib.suppress(OSError):
+        os.unlink(held[1])
+    with contextlib.suppress(OSError):
+        os.close(held[0])
+
+
+def temporary_name(path: Path) -> Path:
+    """A fresh name ``.<name>.camopt-<8 hex>.tmp`` beside ``path``: a name only camopt
+    makes, the one kind :func:`remove_stale` may remove."""
+    return _folder(path) / f".{path.name}.camopt-{secrets.token_hex(4)}.tmp"
+
+
 def _new_temporary(path: Path) -> tuple[int, str]:
-    """A new file ``.<name>.<8 random>.tmp`` beside ``path`` (``O_EXCL``), open for writing,
-    with the permissions any new file gets (0666 less the umask; mkstemp's 0600 would
-    keep the archive from the user's group)."""
+    """A new file (:func:`temporary_name`, ``O_EXCL``) beside ``path``, open for writing and
+    held under an exclusive ``flock`` until its descriptor is closed, with the permissions
+    any new file gets (0666 less the umask; mkstemp's 0600 would keep the archive from the
+    user's group). A sweeper that took the lock between the creation and ours has removed
+    the name: the name is checked under the lock and another one made."""
     folder = _folder(path)
     for _ in range(100):
-        tmp = folder / f".{path.name}.{secrets.token_hex(4)}.tmp"
+        tmp = temporary_name(path)
         try:
-            return os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC,
-                           0o666), str(tmp)
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)
         except FileExistsError:
             continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)  # a sweeper holds it for a moment at most
+            if os.stat(tmp, follow_symlinks=False).st_ino == os.fstat(fd).st_ino:
+                return fd, str(tmp)
+        except FileNotFoundError:
+            pass
+        except BaseException:
+            _discard((fd, str(tmp)))
+            raise
+        os.close(fd)
     raise FileExistsError(errno.EEXIST, "no free temporary name", str(folder))
 
 
-def _write_temp(path: Path, data: bytes | memoryview) -> str:
-    """``data`` in a new, synced temporary file ``.<name>.<random>.tmp`` beside ``path``
-    (plain ``os.write``: a full disk is an OSError); its name. Removed on failure."""
+def _write_temp(path: Path, data: bytes | memoryview) -> tuple[int, str]:
+    """``data`` in a new, synced temporary file beside ``path`` (:func:`_new_temporary`;
+    plain ``os.write``: a full disk is an OSError): its still locked descriptor and its
+    name, for the caller to publish and then close (:func:`_discard` on failure). Removed
+    on failure."""
     fd, tmp = _new_temporary(path)
     try:
-        try:
-            view = memoryview(data)
-            while view:
-                view = view[os.write(fd, view):]
-            os.fsync(fd)
-        finally:
-            os.close(fd)
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
+        os.fsync(fd)
     except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+        _discard((fd, tmp))
         raise
-    return tmp
+    return fd, tmp
 
 
 def ensure_folder(folder: Path, key: str = "--out") -> Path:
     """``folder`` made if missing; a file, FIFO or device of that name, or a folder that
     cannot be made, is an ArchiveError naming ``key`` (checked before any work)."""
-    folder = Path(folder)
+    _make_folder(Path(folder), key)
+    return Path(folder)
+
+
+def _make_folder(folder: Path, key: str) -> list[Path]:
+    """:func:`ensure_folder`'s work; the folders it made, deepest first."""
     if os.path.lexists(folder) and not folder.is_dir():
         raise ArchiveError(f"{folder}: {key}: exists and is not a folder")
+    missing = []
+    level = folder
+    while not os.path.lexists(level) and level != level.parent:
+        missing.append(level)
+        level = level.parent
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ArchiveError(f"{folder}: {key}: cannot create the folder "
                            f"({exc.strerror})") from None
-    _probe(folder, f"{folder}: {key}")
-    return folder
+    try:
+        _probe(folder, f"{folder}: {key}")
+    except BaseException:
+        _remove_empty(missing)
+        raise
+    return missing
+
+
+def _remove_empty(folders: Sequence[Path]) -> None:
+    for made in folders:  # deepest first; one another program filled stays
+        with contextlib.suppress(OSError):
+            os.rmdir(made)
+
+
+@contextlib.contextmanager
+def output_folder(folder: Path, key: str = "--out") -> Iterator[Path]:
+    """:func:`ensure_folder` for a command's output files: when the command then fails (a
+    full disk, Ctrl-C, bad input found later), the folders it made are removed again if
+    still empty, so a failed ``plot --out p`` leaves no empty ``p/``."""
+    made = _make_folder(Path(folder), key)
+    try:
+        yield Path(folder)
+    except BaseException:
+        _remove_empty(made)
+        raise
 
 
 def write_files(contents: dict[Path, bytes], force: bool = False,
@@ -316,18 +392,17 @@ def write_files(contents: dict[Path, bytes], force: bool = False,
     for path in contents:
         check_writable(path, force)
         check_not_input(path, inputs)
-    temps: dict[Path, str] = {}
+    temps: dict[Path, tuple[int, str]] = {}
     published: list[Path] = []
     try:
         for path, data in contents.items():
             temps[path] = _write_temp(path, data)
-        for path, tmp in temps.items():
+        for path, (_, tmp) in temps.items():
             _publish(Path(tmp), path, force)
             published.append(path)
     except BaseException as exc:  # KeyboardInterrupt too: nothing half-done stays
-        for tmp in temps.values():
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
+        for held in temps.values():
+            _discard(held)
         if not force:  # without --force every published file is new: ours to remove
             for path in published:
                 with contextlib.suppress(OSError):
@@ -337,6 +412,8 @@ def write_files(contents: dict[Path, bytes], force: bool = False,
             raise ArchiveError(f"{where}: --out: cannot write ({exc.strerror or exc}); "
                                "nothing written") from None
         raise
+    for fd, _ in temps.values():  # published: release the temporary files' locks
+        os.close(fd)
     return published
 
 

@@ -32,6 +32,34 @@ from camopt.errors import ArchiveError
 
 SCHEMA_VERSION = 2
 READABLE_SCHEMAS = (1, 2)
+NOTE_CHARS = 2000
+"""A repeat's note or message is cut to this many characters when read: an archive handed
+over may carry a 60 MB note, which ``show`` would otherwise spend minutes and gigabytes
+laying out (the archive keeps it whole: ``h5dump`` shows it)."""
+MAX_NOTES = 20
+"""At most this many notes per repeat are read (the rest counted in a last note)."""
+MAX_NOTES_CHARS = 1 << 20
+"""A repeat's notes attribute longer than this is not parsed at all (one note says so)."""
+
+
+def bounded_text(text: str) -> str:
+    """``text`` cut to :data:`NOTE_CHARS` characters, saying how much was left out."""
+    if len(text) <= NOTE_CHARS:
+        return text
+    return f"{text[:NOTE_CHARS]}... ({len(text) - NOTE_CHARS} more characters in the archive)"
+
+
+def _bounded_notes(text: object, where: str) -> tuple[str, ...]:
+    """A repeat's notes (a JSON list of strings), bounded: see :data:`NOTE_CHARS`."""
+    text = str(text)
+    if len(text) > MAX_NOTES_CHARS:
+        return (f"({len(text)} characters of notes not read: over camopt's "
+                f"{MAX_NOTES_CHARS}-character limit; h5dump shows them)",)
+    notes = _json_list(text, where)
+    kept = [bounded_text(str(n)) for n in notes[:MAX_NOTES]]
+    if len(notes) > MAX_NOTES:
+        kept.append(f"... {len(notes) - MAX_NOTES} more notes in the archive")
+    return tuple(kept)
 
 
 def _write(f: h5py.File, rec: RunRecord) -> None:
@@ -126,7 +154,33 @@ def load_run(path: str | Path) -> RunView:
         with damaged(path):
             check_schema(f, READABLE_SCHEMAS, RUN_SCHEMA)
             view = _load(f, path)
+            check_variables(view)
         return view
+
+
+def check_variables(view: RunView) -> None:
+    """The stored variable names must be those the case's problem has for the stored
+    config (a renamed or foreign ``variables`` attribute would otherwise show values under
+    wrong names and make ``tolerance`` fail on a missing one). A config this camopt no
+    longer accepts (an archive of another version) cannot be rebuilt, so is not compared:
+    it is shown as stored, and ``tolerance``, which must rebuild it, refuses it with the
+    config's own error (docs/reliability.md)."""
+    from pydantic import ValidationError
+
+    from camopt.cases import build_problem
+    from camopt.engine.driver import validate
+    from camopt.errors import CamoptError
+
+    try:
+        config = validate({"case": view.case, "solver": view.solver, "run": view.run},
+                          view.path)
+        with np.errstate(all="ignore"):  # a non-assembling design is the run's business
+            names = tuple(build_problem(config.case).names)
+    except (CamoptError, ValidationError):
+        return
+    if names != tuple(view.variables):
+        raise ArchiveError(f"variables {', '.join(view.variables)} do not match case "
+                           f"'{view.kind}' with its stored config ({', '.join(names)})")
 
 
 # what load_run reads: (HDF5 path, attribute names)
@@ -244,14 +298,14 @@ def _read_repeat(grp: h5py.Group, key: str, layout: _Layout) -> Repeat:
     return Repeat(
         x=grp["x"][()] * layout.to_si, fun=fun,
         success=_success(a, fun, feasible, layout.target),
-        message=str(a["message"]), nfev=int(a["nfev"]), nit=int(a["nit"]),
+        message=bounded_text(str(a["message"])), nfev=int(a["nfev"]), nit=int(a["nit"]),
         index=int(key[1:]), spawn_key=tuple(json.loads(a["spawn_key"])),
         seed=int(a["seed"]), feasible=feasible, violation=float(a["violation"]),
         converged_nit=int(a["converged_nit"]),
         nfev_to_target=nfev_to_target(history, layout.target),
         wall_s=float(a["wall_s"]), history=history,
         g=grp["g"][()] if "g" in grp else np.zeros(0),
-        notes=tuple(json.loads(a["notes"])))
+        notes=_bounded_notes(a["notes"], f"/repeats/{key}: notes"))
 
 
 def _read_repeats(f: h5py.File, layout: _Layout) -> list[Repeat]:
@@ -267,6 +321,10 @@ def _read_best(best: h5py.Group, layout: _Layout) -> BestView:
     names, constraints = layout.names, layout.constraints
     if best["x"].shape != (len(names),) or g.shape != (len(constraints),):
         raise ArchiveError("/best: x or g does not match the variables and constraints")
+    # a search only ever stores a design inside its finite bounds: a NaN or infinite best
+    # (or a NaN objective) is damage, never a design to give a verdict on
+    if not np.all(np.isfinite(best["x"][()])) or np.isnan(float(best.attrs["objective"])):
+        raise ArchiveError("/best: the best design or its objective is not finite")
     return BestView(
         objective=float(best.attrs["objective"]),
         feasible=bool(best.attrs["feasible"]),

@@ -179,7 +179,13 @@ class SweepWriter:
 
 
 def read_journal(path: Path, spec: SweepSpec) -> list[Repeat]:
-    """The complete lines of an archive's journal as cells (none without a journal)."""
+    """The complete lines of an archive's journal as cells (none without a journal).
+
+    A last line without its newline was cut short by a kill and is ignored; a blank line
+    (whitespace only: a hand edit, a disk that padded a block) holds no cell and is
+    skipped. A damaged line elsewhere (a cut line another line was written after) is an
+    ArchiveError naming the line and the remedy: delete it and ``--resume``, which runs
+    its cell again (cells are reproducible from the seed, so nothing is lost)."""
     journal = journal_path(path)
     text = read_regular(journal, "journal")  # a FIFO there is refused, never waited on
     if text is None:
@@ -187,10 +193,14 @@ def read_journal(path: Path, spec: SweepSpec) -> list[Repeat]:
     cells, sweep_id = [], spec.sweep_id
     for number, line in enumerate(text.split(b"\n")[:-1], 1):  # the rest is cut short
         where = f"journal {journal.name} line {number}"
+        if not line.strip():
+            continue
         try:
             row = json.loads(line)
         except ValueError as exc:
-            raise ArchiveError(f"{where}: damaged ({exc})") from None
+            raise ArchiveError(f"{where}: damaged ({exc}); delete that line from "
+                               f"{journal} and run `camopt sweep --resume {path}` (its cell "
+                               "is run again)") from None
         if not isinstance(row, dict) or row.pop(SWEEP_KEY, None) != sweep_id:
             raise ArchiveError(f"{where}: not a line of this sweep (its {SWEEP_KEY} is "
                                f"not {sweep_id}); remove the journal to drop it")

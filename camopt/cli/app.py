@@ -13,10 +13,11 @@ import enum
 import sys
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import click
 import typer
+from typer.core import TyperGroup
 
 from camopt.engine import interrupts
 from camopt.errors import CamoptError
@@ -24,8 +25,36 @@ from camopt.errors import CamoptError
 if TYPE_CHECKING:
     from camopt.config import LoadedConfig
 
+def non_utf8_argument(args: Sequence[str]) -> str | None:
+    """The first argument that is not valid UTF-8 (Python holds its bytes as surrogate
+    escapes), shown with those bytes as ``\\xNN``; None when all are valid."""
+    for arg in args:
+        try:
+            arg.encode("utf-8")
+        except UnicodeEncodeError:
+            return arg.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    return None
+
+
+class _Group(TyperGroup):
+    """camopt's command group: refuses, before any work, an argument that is not valid
+    UTF-8 (a path under a folder so named). Archives, reports and exports store paths as
+    UTF-8 text (HDF5 attributes, HTML, JSON), and a run that did all its work and then
+    could not record its own path would lose it; docs/reliability.md."""
+
+    def parse_args(self, ctx: Any, args: list[str]) -> list[str]:  # typer's own click Context
+        bad = non_utf8_argument(args)
+        if bad is not None:
+            print(f"error: {bad}: argument: not valid UTF-8 (camopt records paths as UTF-8 "
+                  "text); rename the file or folder, or run from inside it with a "
+                  "relative path", file=sys.stderr)
+            raise SystemExit(2)  # typer's Exit escapes argument parsing as a bug
+        return super().parse_args(ctx, args)
+
+
 # -h as --help on every command; typer's --install-completion / --show-completion
-app = typer.Typer(rich_markup_mode="rich", no_args_is_help=True, add_completion=True,
+app = typer.Typer(cls=_Group, rich_markup_mode="rich", no_args_is_help=True,
+                  add_completion=True,
                   context_settings={"help_option_names": ["-h", "--help"]},
                   help="Batch optimiser for spring-actuated mechanisms.")
 

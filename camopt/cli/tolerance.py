@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import enum
 import json
 import sys
@@ -88,18 +89,20 @@ def tolerance(
         if out_path is not None:
             archive.check_writable(out_path, force)
             archive.check_not_input(out_path, [run_path])
-        if plot is not None:  # a file, FIFO or unwritable folder: one line, before any work
-            archive.ensure_folder(plot, "--plot")
-        with rows_bar("tolerance samples", quiet) as rows_done:
-            result = analyse(run, varies, samples, seed, Distribution(dist.value), used_class,
-                             rows_done)
-        doc = jsonable(result.summary)
-        if tornado is not None and tornado not in doc["metrics"]:
-            raise CamoptError(f"{run_path}: --tornado: no metric '{tornado}'; the case "
-                              f"reports {', '.join(doc['metrics'])}")
-        if out_path is not None:
-            _write(result, out_path, force)
-        written = _figures(result, plot, tornado, run_path.stem, force) if plot else []
+        with contextlib.ExitStack() as stack:
+            if plot is not None:  # a file, FIFO or unwritable folder: one line, before any
+                # work; the folder, if made here, is removed again should the rest fail
+                stack.enter_context(archive.output_folder(plot, "--plot"))
+            with rows_bar("tolerance samples", quiet) as rows_done:
+                result = analyse(run, varies, samples, seed, Distribution(dist.value),
+                                 used_class, rows_done)
+            doc = jsonable(result.summary)
+            if tornado is not None and tornado not in doc["metrics"]:
+                raise CamoptError(f"{run_path}: --tornado: no metric '{tornado}'; the case "
+                                  f"reports {', '.join(doc['metrics'])}")
+            if out_path is not None:
+                _write(result, out_path, force)
+            written = _figures(result, plot, tornado, run_path.stem, force) if plot else []
     if format is Format.json:  # stdout holds only the JSON; the figures' paths on stderr
         sys.stdout.write(json.dumps(doc, indent=2) + "\n")
         for p in written:

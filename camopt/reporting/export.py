@@ -47,7 +47,7 @@ def export_run(run: RunView, out_dir: Path, stem: str, fmt: str, force: bool = F
     so is a step outside (0, 30] deg. The files are built in memory and written all or
     nothing (:func:`camopt.archive.files.write_files`): never over an existing file
     without ``force``, never through a link, never over one of ``inputs``."""
-    from camopt.archive.files import ensure_folder, write_files
+    from camopt.archive.files import output_folder, write_files
 
     spec = get_case(run.kind)
     if not (np.isfinite(step_deg) and 0 < step_deg <= 30):
@@ -56,8 +56,8 @@ def export_run(run: RunView, out_dir: Path, stem: str, fmt: str, force: bool = F
         files = dxf_files(run, out_dir, stem, spec, step_deg)
     else:
         files = export_files(run, out_dir, stem, fmt)
-    ensure_folder(out_dir)
-    return write_files(files, force, inputs)
+    with output_folder(out_dir):  # a folder this made is removed again on failure
+        return write_files(files, force, inputs)
 
 
 def dxf_files(run: RunView, out_dir: Path, stem: str, spec: CaseSpec, step_deg: float
@@ -139,9 +139,24 @@ def export_files(run: RunView, out_dir: Path, stem: str, fmt: str) -> dict[Path,
     return files
 
 
+# a spreadsheet reads a cell starting with one of these as a formula (OWASP's CSV
+# injection list: tab and carriage return start one too)
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def neutralise(cell: object) -> object:
+    """A CSV cell a spreadsheet will not run: a string starting with a formula character
+    gets a leading apostrophe (shown as text, the apostrophe hidden); numbers, negative
+    ones included, stay numbers. An archive handed over may carry any string (a metric's
+    text, a curve's name)."""
+    if isinstance(cell, str) and cell.startswith(FORMULA_STARTS):
+        return "'" + cell
+    return cell
+
+
 def _csv(rows: list[list[object]]) -> bytes:
     text = io.StringIO(newline="")
-    csv.writer(text).writerows(rows)
+    csv.writer(text).writerows([[neutralise(c) for c in row] for row in rows])
     return text.getvalue().encode()
 
 

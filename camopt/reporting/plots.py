@@ -241,16 +241,16 @@ def save(figures: dict[str, Figure], out_dir: Path, stem: str, force: bool = Fal
     """Write each figure as ``<stem>-<name>.png`` and close them: rendered in memory, then
     written all or nothing (:func:`camopt.archive.files.write_files`: never over an
     existing file without ``force``, never through a link, never over one of ``inputs``)."""
-    from camopt.archive.files import ensure_folder, write_files
+    from camopt.archive.files import output_folder, write_files
 
-    ensure_folder(out_dir, key)
-    files = {}
-    try:
-        for name, fig in figures.items():
-            png = io.BytesIO()
-            fig.savefig(png, dpi=110, format="png")
-            files[out_dir / f"{stem}-{name}.png"] = png.getvalue()
-    finally:
-        for fig in figures.values():
-            close(fig)
-    return write_files(files, force, inputs)
+    with output_folder(out_dir, key):  # a folder this made is removed again on failure
+        files = {}
+        try:
+            for name, fig in figures.items():
+                png = io.BytesIO()
+                fig.savefig(png, dpi=110, format="png")
+                files[out_dir / f"{stem}-{name}.png"] = png.getvalue()
+        finally:
+            for fig in figures.values():
+                close(fig)
+        return write_files(files, force, inputs)

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from camopt.archive.sweeps import SWEEP_KEY, cell_row, journal_path, load_sweep
 from camopt.cli import app
 from camopt.cli.app import INTERNAL
 from tests.conftest import CONFIGS
@@ -69,6 +70,14 @@ RUN_DAMAGE = {
                                         f["best"].create_dataset("x", data=[1.0])),
     "newer schema": _set_attr("schema_version", 99),
     "no repeats": lambda f: [f["repeats"].__delitem__(k) for k in list(f["repeats"])],
+    # issue #30: names that are not the case's (tolerance ended 'internal error: KeyError')
+    "variables renamed": lambda f: f.attrs.__setitem__("variables", json.dumps(
+        [f"v{i}" for i in range(len(json.loads(f.attrs["variables"])))])),
+    "variables swapped": lambda f: f.attrs.__setitem__("variables", json.dumps(
+        json.loads(f.attrs["variables"])[::-1])),
+    # issue #30: a NaN best was shown 'PASS: meets all 6 requirements'
+    "NaN best design": lambda f: f["best"]["x"].__setitem__(0, np.nan),
+    "NaN best objective": _set_attr("objective", np.nan, "/best"),
 }
 
 
@@ -78,7 +87,9 @@ def test_damaged_run_archives(good, tmp_path, damage):
     shutil.copy(good[0], path)
     with h5py.File(path, "a") as f:
         RUN_DAMAGE[damage](f)
-    for args in (["show", path], ["compare", good[0], path], ["export", path, "--out", tmp_path]):
+    for args in (["show", path], ["compare", good[0], path], ["export", path, "--out", tmp_path],
+                 ["tolerance", path, "--samples", "20"], ["report", path, "--out",
+                                                          tmp_path / "r.html"]):
         r = invoke(*args)
         one_error_line(r, path)
         assert ": archive: " in r.stderr
@@ -149,3 +160,37 @@ def test_damaged_sweep_journal(good, tmp_path):
         r = invoke(*args)
         one_error_line(r, path)
         assert ": archive: " in r.stderr
+
+
+def _journal_lines(sweep):
+    """Complete journal lines for the cells of ``sweep`` (as a running sweep writes them)."""
+    spec, cells = load_sweep(sweep)
+    return [json.dumps({SWEEP_KEY: spec.sweep_id, **cell_row(r)}) for r in cells.values()]
+
+
+def test_a_blank_journal_line_is_skipped(good, tmp_path):
+    """Issue #30: a blank line between complete ones holds no cell: the sweep reads."""
+    path = tmp_path / "s.h5"
+    shutil.copy(good[1], path)
+    a, b = _journal_lines(path)[:2]
+    journal_path(path).write_text(f"{a}\n\n  \n{b}\n")
+    assert len(load_sweep(path)[1]) == 2
+    assert invoke("compare", path).exit_code == 0
+
+
+def test_a_cut_line_in_the_middle_of_the_journal_names_the_remedy(good, tmp_path):
+    """Issue #30: a line cut short with another written after it is one error line naming
+    the line, the journal and the remedy (delete it, --resume); after that remedy the
+    sweep resumes and reads."""
+    path = tmp_path / "s.h5"
+    shutil.copy(good[1], path)
+    a, b = _journal_lines(path)[:2]
+    journal = journal_path(path)
+    journal.write_text(f"{a}\n{b[:len(b) // 2]}\n{a}\n")
+    r = invoke("compare", path)
+    one_error_line(r, path)
+    assert "line 2: damaged" in r.stderr and str(journal) in r.stderr
+    assert f"camopt sweep --resume {path}" in r.stderr
+    journal.write_text(f"{a}\n{a}\n")  # the remedy: the line deleted
+    assert invoke("sweep", "--resume", path, "--quiet", "--jobs", "1").exit_code == 0
+    assert invoke("compare", path).exit_code == 0

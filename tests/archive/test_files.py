@@ -4,19 +4,26 @@ full disk, a kill or a signal, --out never replaces anything but a regular file.
 from __future__ import annotations
 
 import errno
+import fcntl
 import os
 import resource
 import signal
 import subprocess
 import sys
+import tempfile
+import threading
 import time
+from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from camopt import archive
 from camopt.archive import files
 from camopt.cli import app
+from camopt.errors import ArchiveError
 from tests.conftest import CONFIGS
 
 runner = CliRunner()
@@ -43,6 +50,25 @@ def test_a_second_writer_fails_naming_the_holder(tmp_path):
     assert proc.stderr.count("\n") == 1
     assert f"another camopt is writing this archive (pid {os.getpid()}" in proc.stderr
     assert leftovers(tmp_path) == []
+
+
+def test_a_writer_racing_a_just_started_one_names_it(tmp_path):
+    """The holder writes who it is a moment after taking the lock; a second writer that
+    comes in between waits for the line instead of saying 'unknown process'."""
+    out = tmp_path / "a.h5"
+    lock = tmp_path / ".a.h5.lock"
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+    fcntl.flock(fd, fcntl.LOCK_EX)  # taken, its line not yet written
+    late = threading.Timer(0.3, os.pwrite, (fd, b"pid 4242 on host since now\n", 0))
+    late.start()
+    try:
+        with pytest.raises(ArchiveError, match=r"another camopt is writing this archive "
+                                               r"\(pid 4242 on host since now\)"):
+            with archive.claim(out):
+                pass
+    finally:
+        late.join()
+        os.close(fd)
 
 
 def test_two_concurrent_runs_into_one_file_never_both_succeed(tmp_path):
@@ -122,18 +148,72 @@ def test_sigterm_removes_everything_half_done(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def _dead_temporary(target):
+    """A temporary file as a camopt SIGKILLed while writing ``target`` leaves it: camopt's
+    name, its lock released with the dead process."""
+    fd, tmp = files._new_temporary(target)
+    os.write(fd, b"partial")
+    os.close(fd)  # what the kernel does when its holder dies
+    return tmp
+
+
 def test_stale_temporary_files_of_a_killed_writer_are_removed(tmp_path):
-    stale = tmp_path / ".old.h5.abcd_123.tmp"  # as SIGKILL during a write leaves it
-    live = tmp_path / ".busy.h5.zzzz_999.tmp"
+    stale = _dead_temporary(tmp_path / "old.h5")
     out = tmp_path / "a.h5"
-    with archive.claim(tmp_path / "busy.h5"):  # its writer is alive: kept
-        stale.write_bytes(b"partial")
-        live.write_bytes(b"in progress")
+    fd, live = files._new_temporary(tmp_path / "busy.h5")  # its writer is alive: kept
+    try:
         proc = subprocess.run([*CAMOPT, "run", FAST, "--out", str(out), "--quiet"],
                               capture_output=True, text=True, timeout=60)
+    finally:
+        os.close(fd)
     assert proc.returncode == 0
     assert proc.stderr == f"note: removed {stale} (a temporary file left by a killed camopt)\n"
-    assert not stale.exists() and live.exists()
+    assert not os.path.exists(stale) and os.path.exists(live)
+
+
+# names as editors and other programs make them: '.X.<8 characters>.tmp' (vim, gedit and
+# camopt before issue #30 all used this shape); camopt's own names are '.camopt-<8 hex>'
+user_names = st.builds(
+    lambda stem, tag: f".{stem}.{tag}.tmp",
+    st.text(st.characters(min_codepoint=33, max_codepoint=0x2FF, exclude_characters="/"),
+            min_size=1, max_size=20),
+    st.text("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_", min_size=8,
+            max_size=8))
+
+
+@settings(max_examples=60, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(name=user_names)
+def test_the_sweeper_never_removes_a_users_temporary_file(tmp_path, name):
+    """A user's file named like a temporary (an editor's autosave) survives every claim;
+    a dead camopt temporary in the same folder is removed (the sweeper does run)."""
+    folder = Path(tempfile.mkdtemp(dir=tmp_path))
+    mine = folder / name
+    mine.write_bytes(b"my notes")
+    stale = _dead_temporary(folder / "old.h5")
+    with archive.claim(folder / "a.h5") as held:
+        assert held.stale == [Path(stale)]
+    assert mine.read_bytes() == b"my notes"
+
+
+def test_a_run_starting_beside_a_live_export_leaves_its_temporary_file(tmp_path, monkeypatch):
+    """export/report/plot/init write through write_files: a `run` that claims an archive
+    in the same folder while their temporary files wait to be published (here: between
+    writing and publishing) must not remove them; the export then completes."""
+    publish = files._publish
+    started = []
+
+    def run_starts_meanwhile(tmp, path, replace):
+        if not started:
+            started.append(True)
+            with archive.claim(tmp_path / "run.h5") as held:
+                assert held.stale == []
+        publish(tmp, path, replace)
+
+    monkeypatch.setattr(files, "_publish", run_starts_meanwhile)
+    written = files.write_files({tmp_path / "a.csv": b"x,y\n", tmp_path / "b.csv": b"1,2\n"})
+    assert [p.read_bytes() for p in written] == [b"x,y\n", b"1,2\n"]
+    assert leftovers(tmp_path) == []
 
 
 @pytest.mark.parametrize("target", ["/dev/null", "link"])

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from camopt import archive
 from camopt.cases.fast_switch import FastSwitchConfig, FastSwitchProblem
@@ -293,3 +295,23 @@ def test_r20_joint_load_off_table():
     load = 1.2 * (v.x4 - v.x5) / np.sqrt(1 - v.x1**2) * np.abs(0.5 * v.x2**2 - v.x8)
     assert abs(g["R20"][0]) > 0.05  # far enough from active that a factor 1.1 would show
     assert g["R20"][0] == pytest.approx(load[0] / 1500.0 - 1.0, rel=1e-12)
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(st.data())
+def test_designs_at_the_bounds_evaluate_without_numpy_warnings(data):
+    """Issue #30: DE clips trial designs onto the bounds, where the pin can sit on the
+    crank's pivot (span 0): evaluate and describe handle it (a mask, R9b violated) and
+    print no RuntimeWarning onto stderr."""
+    import warnings
+
+    p = FastSwitchProblem(load(CONFIGS / "fast_switch_de.toml").case)
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1)))
+    X = p.sample(rng, 64)
+    corner = np.where(rng.random(X.shape) < 0.5, p.lower, p.upper)
+    X = np.where(rng.random(X.shape) < data.draw(st.floats(0.2, 1.0)), corner, X)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ev = p.evaluate(X)
+        p.describe(X)
+    assert not np.isnan(ev.f).any()

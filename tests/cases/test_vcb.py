@@ -125,8 +125,10 @@ def test_evaluation_is_vectorised_and_row_independent(problem):
     whole = problem.evaluate(X)
     for i in (0, 17, 49):
         one = problem.evaluate(X[i : i + 1])
-        assert one.f[0] == whole.f[i] or (np.isinf(one.f[0]) and np.isinf(whole.f[i]))
-        np.testing.assert_array_equal(one.g[0], whole.g[i])
+        # a row alone vs in a batch of 50: numpy's SIMD kernels may round a row differently
+        # by its place in the batch, so to rounding (inf where inf)
+        np.testing.assert_allclose(one.f[0], whole.f[i], rtol=1e-12)
+        np.testing.assert_allclose(one.g[0], whole.g[i], rtol=1e-12, atol=1e-12)
 
 
 @pytest.mark.slow

@@ -34,3 +34,21 @@ def test_loop_closure_round_trip():
     assert np.isclose(np.arccos(crank_angle_for_span(r2, r3, span)), theta2)
     assert np.isclose(coupler_angle(r2, r3, theta2, span), th3)
     assert np.isclose(r2 * np.sin(theta2) + r3 * np.sin(th3), 0.0, atol=1e-15)
+
+
+def test_the_pin_on_the_pivot_and_the_dead_centre_are_masks_not_warnings():
+    """Issue #30: a zero span (the pin on the crank's pivot) cannot close the loop: inf,
+    and at the dead centre (r2 sin theta2 = r3) the derivatives are NaN; neither by a
+    division by zero (on main both printed a numpy RuntimeWarning onto stderr)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        cos2 = crank_angle_for_span(np.array([0.02, 0.02, 0.0]), 0.03,
+                                    np.array([0.0, 0.04, 0.04]))
+        _, d3, dd3, ds, dds = coupler_derivatives(0.03, 0.03, np.array([np.pi / 2, 0.3]))
+        scalar = coupler_derivatives(0.03, 0.03, np.pi / 2)
+    assert np.isinf(cos2[0]) and np.isinf(cos2[2]) and np.isfinite(cos2[1])
+    assert np.isnan([d3[0], dd3[0], ds[0], dds[0]]).all()
+    assert np.isfinite([d3[1], dd3[1], ds[1], dds[1]]).all()
+    assert np.isnan(float(scalar[1]))
