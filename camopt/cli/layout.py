@@ -27,12 +27,17 @@ def _longest_word(text: str) -> int:
     return max((len(w) for w in text.split()), default=0)
 
 
-def fits(columns: Sequence[str], rows: Sequence[Sequence[str]], width: int) -> bool:
+def fits(columns: Sequence[str], rows: Sequence[Sequence[str]], width: int,
+         numeric: Sequence[bool] = ()) -> bool:
     """Whether the columns fit ``width`` with every column as wide as its longest word
-    (header included; a cell of a right-justified number is one word)."""
-    need = 1 + sum(BORDER + max(_longest_word(c), *(_longest_word(r[i]) for r in rows))
-                   for i, c in enumerate(columns)) if rows else 0
-    return need <= width
+    (header included), or its longest cell for a ``numeric`` column (printed unwrapped)."""
+    def need(i: int, c: str) -> int:
+        whole = i < len(numeric) and numeric[i]
+        cells = [len(r[i]) if whole else _longest_word(r[i]) for r in rows]
+        return BORDER + max(_longest_word(c), *cells)
+
+    total = 1 + sum(need(i, c) for i, c in enumerate(columns)) if rows else 0
+    return total <= width
 
 
 def print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]],
@@ -47,7 +52,7 @@ def print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]
     styles = list(styles) + [None] * (len(rows) - len(styles))
     if title:  # a line of its own: a table's title wraps at the table's width
         out.print(f"[italic]{escape(title)}[/]", highlight=False)
-    if fits(columns, rows, out.width):
+    if fits(columns, rows, out.width, numeric):
         table = Table()
         for c, num in zip(columns, numeric):
             table.add_column(escape(c), justify="right" if num else "left",
@@ -124,20 +129,32 @@ def print_show(view: RunView, rows: int | None = None) -> None:
         best = doc["best"]
         columns = ["label", *best["x"], view.objective_name, "feasible", "active", "violated"]
         print_fitted("solver's table", doc["table"], columns, rows)
+    out.print(f"[bold]{escape(doc['next'])}[/]", highlight=False)
 
 
 def print_verdict(doc: dict[str, Any], title: str = "best design") -> None:
-    """The overall verdict in words, the requirement | limit | value | margin | pass table
+    """The answer first: a robust run's yield against its target, the overall verdict in
+    words, the expected yield, then the requirement | limit | value | margin | pass table
     of ``doc`` (``report.show``'s), and the reference design's verdict in one line."""
     from camopt.reporting import report
 
-    style = "bold green" if doc["verdict"] == "pass" else "bold red"
+    if doc.get("robust_yield"):
+        met = doc["robust_yield"]["meets_target"]
+        style = "bold green" if met else "bold red" if met is False else "bold"
+        out.print(f"[{style}]{escape(report.robust_text(doc['robust_yield']))}[/]",
+                  highlight=False)
+    plain_pass = doc["verdict"] == "pass" and not doc.get("at_limit")
+    style = ("bold green" if plain_pass else "bold yellow" if doc["verdict"] == "pass"
+             else "bold red")
     out.print(f"[{style}]{escape(doc['verdict_sentence'])}[/]", highlight=False)
+    if doc.get("expected_yield"):
+        out.print(escape(report.yield_text(doc["expected_yield"])), highlight=False)
     rows = report.verdict_rows(doc["requirements"])
-    styles = ["red" if r["pass"] is False else None for r in doc["requirements"]]
+    styles = ["red" if r["pass"] is False else "yellow" if r.get("at_limit") else None
+              for r in doc["requirements"]]
     if rows:
         print_table(f"requirements of the {title}", report.VERDICT_COLUMNS, rows,
-                    numeric=[False, True, True, True, True], styles=styles)
+                    numeric=[False, True, True, False, True], styles=styles)
     ref = doc.get("reference")
     if ref:
         judged = {"pass": "[green]PASS[/]", "fail": "[red]FAIL[/]"}.get(ref["verdict"] or "",

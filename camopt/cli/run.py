@@ -36,6 +36,8 @@ def run(
     from camopt.cli.layout import print_show
     from camopt.core.perf import tune_allocator
     from camopt.engine.driver import execute, prepare
+    from camopt.core.runview import record_view
+    from camopt.engine.tolerance import expected_yield
 
     overrides = list(set_ or [])
     if seed is not None:  # recorded in the archive's config like any override
@@ -50,6 +52,8 @@ def run(
             tune_allocator()
             with progress(quiet) as (callback, check):
                 record = execute(config, callback=callback, jobs=jobs, check_progress=check)
+            if record.repeats and not record.failure:  # stored: show and report read it
+                record.expected_yield = expected_yield(record_view(record, str(path)))
             with deferred() as signals:  # a Ctrl-C now must not discard finished work
                 archive.write_run(record, path, force=force)
     if quiet:

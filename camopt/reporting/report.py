@@ -10,7 +10,7 @@ import numpy as np
 
 from camopt.cases import run_requirements
 from camopt.core import pareto, stats
-from camopt.core.requirements import Requirement, check, sentence
+from camopt.core.requirements import Requirement, Spread, check, engineering, sentence
 from camopt.core.requirements import verdict as verdict_of
 from camopt.core.runview import RunView, design_values
 from camopt.errors import ConfigError
@@ -74,7 +74,9 @@ def show(run: RunView) -> dict[str, Any]:
     judged = verdict(run)
     label, ref = reference(run)
     doc = {"verdict": judged["verdict"], "verdict_sentence": judged["sentence"],
-           "requirements": judged["requirements"], "case": run.case, "solver": run.solver,
+           "requirements": judged["requirements"],
+           "at_limit": [r["name"] for r in judged["requirements"] if r["at_limit"]],
+           "expected_yield": expected(run), "next": next_step(run, judged), "case": run.case, "solver": run.solver,
            "best": best, "repeats": repeats, "table": run.table}
     if label:
         ref_judged = verdict(run, ref)
@@ -87,6 +89,7 @@ def show(run: RunView) -> dict[str, Any]:
         doc["pareto_summary"] = pareto.summary(run)
     if run.robust:
         doc["robust"] = {"settings": run.robust, "check": run.robust_check}
+        doc["robust_yield"] = robust_yield(run)
     # a case's findings under their own names, never over the contract's keys
     doc.update({k: v for k, v in run.findings.items() if k not in doc})
     return jsonable(doc)
@@ -156,11 +159,120 @@ def reference(run: RunView) -> tuple[str, dict[str, Any]]:
     return f"reference: {spec.reference or 'paper'}", values
 
 
+_ESTIMATED: dict[str, dict[str, Any]] = {}
+"""Expected yields estimated at show time for archives that lack one, by path (a process
+shows an old archive's estimate once)."""
+
+
+def expected(run: RunView) -> dict[str, Any]:
+    """The best design's quick expected yield (``value``, ``low``, ``high``, ``samples``,
+    per-requirement spreads): as ``camopt run`` stored it, else (an archive older than the
+    estimate) estimated now, the same way (:func:`camopt.engine.tolerance.expected_yield`,
+    a few seconds), and marked ``"estimated": "at show time"``."""
+    if run.expected_yield:
+        return run.expected_yield
+    if run.path not in _ESTIMATED:
+        from camopt.engine.tolerance import expected_yield
+
+        with np.errstate(all="ignore"):
+            _ESTIMATED[run.path] = {**expected_yield(run), "estimated": "at show time"}
+    return _ESTIMATED[run.path]
+
+
+def spreads(run: RunView) -> dict[str, Spread]:
+    """Per requirement name, its quantity's spread under the default tolerances (from
+    :func:`expected`), what decides which passing requirement is at its limit."""
+    return {r["name"]: Spread(r.get("half_spread"), r["yield"])
+            for r in expected(run).get("requirements", [])}
+
+
+def robust_yield(run: RunView) -> dict[str, Any] | None:
+    """A robust run's answer: the final check's yield of the robust optimum with its
+    interval, samples and the target (``value``, ``low``, ``high``, ``samples``,
+    ``target``, ``meets_target``: the interval's low end at or above the target); None for
+    a nominal run."""
+    checked = (run.robust_check or {}).get("robust")
+    if not checked:
+        return None
+    target = run.robust.get("yield_target")
+    low = checked.get("yield_low")
+    return {"value": checked.get("yield"), "low": low, "high": checked.get("yield_high"),
+            "samples": checked.get("samples"), "target": target,
+            "meets_target": None if target is None or low is None else low >= target}
+
+
+def yield_text(y: dict[str, Any]) -> str:
+    """``expected yield 0.0 % [0.0, 1.3] (300 draws of the case's tolerances)``, or why
+    there is none."""
+    if y.get("value") is None:
+        return f"expected yield: not estimated ({y.get('reason', 'no estimate')})"
+    when = ", estimated at show time" if y.get("estimated") else ""
+    return (f"expected yield {100 * y['value']:.1f} % [{100 * y['low']:.1f}, "
+            f"{100 * y['high']:.1f}] ({y['samples']} draws of the case's default "
+            f"tolerances{when})")
+
+
+def robust_text(y: dict[str, Any]) -> str:
+    """``robust: yield 96.5 % [95.8, 97.0] against a 95 % target (20000 fresh draws)``."""
+    target = "" if y["target"] is None else f" against a {100 * y['target']:.3g} % target"
+    met = {True: ": meets it", False: ": below it", None: ""}[y["meets_target"]]
+    return (f"robust: yield {100 * y['value']:.1f} % [{100 * y['low']:.1f}, "
+            f"{100 * y['high']:.1f}]{target}{met if target else ''} "
+            f"({y['samples']} fresh draws)")
+
+
+LOW_YIELD = 0.9
+"""Below this expected yield a passing design is not ready to build: ``next`` points to
+tolerance analysis and a robust run."""
+
+
+def next_step(run: RunView, judged: dict[str, Any]) -> str:
+    """One line saying what to do next, fitting the result: a robust config (a sibling
+    ``*_robust.toml`` of the run's case file when there is one), tolerance analysis, more
+    budget, or the report."""
+    path = run.path
+    robust_yield_doc = robust_yield(run)
+    if robust_yield_doc is not None:
+        if robust_yield_doc["meets_target"] is False:
+            return ("next: the robust yield is below its target: more generations "
+                    "(--set solver.generations=...) or more check draws, or a lower "
+                    "robust.yield_target")
+        return f"next: camopt report {path} (or camopt export {path} --format dxf)"
+    if not run.best.feasible:
+        return ("next: no feasible design: more budget (--set solver.generations=... or "
+                "--repeats) or a wider bound on the variables the constraints push against")
+    if judged["verdict"] != "pass":
+        return ("next: the run's search leaves out the requirements it fails: run a case "
+                "file that requires them (a config of this kind with them as constraints)")
+    y = expected(run)
+    at_limit = [r for r in judged["requirements"] if r.get("at_limit")]
+    if at_limit or (y.get("value") is not None and y["value"] < LOW_YIELD):
+        robust_cfg = robust_sibling(run)
+        then = (f"camopt run {robust_cfg}" if robust_cfg
+                else "a [robust] table in the case file (docs/tolerance.md)")
+        return f"next: camopt tolerance {path} --samples 2000; for parts made to tolerance: {then}"
+    return f"next: camopt report {path} (or camopt export {path} --format dxf)"
+
+
+def robust_sibling(run: RunView) -> str:
+    """The shipped robust config of the run's case file (``configs/vcb_velocity.toml`` ->
+    ``configs/vcb_velocity_robust.toml``) when it exists, else ''."""
+    from pathlib import Path
+
+    if not run.config_path:
+        return ""
+    p = Path(run.config_path)
+    sibling = p.with_name(f"{p.stem}_robust.toml")
+    return str(sibling) if sibling.is_file() else ""
+
+
 def verdict(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any]:
     """Requirements evaluated on the best design (or on ``values``, the reference's):
-    ``{"requirements": [...], "verdict": "pass"/"fail", "sentence": words}``."""
+    ``{"requirements": [...], "verdict": "pass"/"fail", "sentence": words}``; the best
+    design's passing requirements are judged at their limit against the spread of the
+    expected-yield estimate (:func:`spreads`), the reference's against its band."""
     reqs = run_requirements(run, run.best.violated if values is None else None)
-    checks = check(reqs, design_values(run, values))
+    checks = check(reqs, design_values(run, values), spreads(run) if values is None else None)
     if values is None:
         return {"requirements": [c.as_dict() for c in checks], "verdict": verdict_of(checks),
                 "sentence": sentence(checks)}
@@ -177,24 +289,47 @@ def verdict(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any
             "sentence": words}
 
 
-VERDICT_COLUMNS = ("requirement", "limit", "value", "margin", "pass")
+VERDICT_COLUMNS = ("requirement", "limit", "value", "margin (% of band)", "pass")
 
 
 def verdict_rows(requirements: list[dict[str, Any]]) -> list[list[str]]:
     """The verdict table's cells (:data:`VERDICT_COLUMNS`) of requirements as
-    :func:`verdict` gives them: values and margins with their unit, flags as yes/no."""
+    :func:`verdict` gives them: values with their unit (6 significant digits), margins in
+    3 with their unit and, for a two-sided limit, as a share of its band; flags as yes/no;
+    pass, FAIL or "at limit"; a quantity the design does not reach is "n/a" and fails."""
     rows = []
     for r in requirements:
         flag = r["limit"] == "yes"
         unit = f" {r['unit']}" if r["unit"] and r["value"] is not None else ""
         value = (None if r["value"] is None else bool(r["value"]) if flag else r["value"])
-        margin = "-" if r["margin"] is None or flag else format_value(r["margin"]) + unit
-        shown = format_value(value) + ("" if flag else unit)
-        if value is None and r["pass"] is False:
-            shown = "n/a"  # NaN: a quantity the design does not reach (a stroke unfinished)
-        rows.append([r["name"], r["limit"], shown,
-                     margin, {True: "pass", False: "FAIL", None: "-"}[r["pass"]]])
+        rows.append([r["name"], r["limit"], _value_cell(value, flag, unit, r["pass"]),
+                     _margin_cell(r, flag, unit), _pass_cell(r)])
     return rows
+
+
+def _value_cell(value: Any, flag: bool, unit: str, passed: bool | None) -> str:
+    if value is None and passed is False:
+        return "n/a"  # NaN: a quantity the design does not reach (a stroke unfinished)
+    return format_value(value) + ("" if flag else unit)
+
+
+def _margin_cell(r: dict[str, Any], flag: bool, unit: str) -> str:
+    margin = r["margin"]
+    if margin is None or flag:
+        return "-"
+    if not math.isfinite(margin):
+        return format_value(margin)
+    share = r.get("margin_share")
+    text = engineering(margin) + unit
+    return text + (f" ({100 * share:.2g}%)" if share is not None else "")
+
+
+def _pass_cell(r: dict[str, Any]) -> str:
+    if r["pass"] is None:
+        return "-"
+    if not r["pass"]:
+        return "FAIL"
+    return "at limit" if r.get("at_limit") else "pass"
 
 
 PARETO_COLUMNS = ("objective", "sense", "least", "greatest", "knee")

@@ -91,8 +91,9 @@ def test_verdict_leads_and_says_in_words_why_the_paper_optimum_fails(vcb_run):
 
 def test_json_keys_unchanged(vcb_run):
     doc = json.loads(invoke("show", vcb_run, "--format", "json").stdout)
-    assert list(doc) == ["verdict", "verdict_sentence", "requirements", "case", "solver",
-                         "best", "repeats", "table", "reference"]
+    assert list(doc) == ["verdict", "verdict_sentence", "requirements", "at_limit",
+                         "expected_yield", "next", "case", "solver", "best", "repeats",
+                         "table", "reference"]
     assert doc["best"]["metrics"]["initial_tau_max_mpa"] is None  # inf as null: valid JSON
 
 
