@@ -134,6 +134,10 @@ class CaseSpec:
     tolerance_classes: Mapping[str, ToleranceClass] = field(default_factory=dict)
     """Other classes the parts can be ordered to, by name (``case.tolerance_class`` or
     ``camopt tolerance --class``); each lists every input it tolerances."""
+    equivalence: float | None = None
+    """``compare``'s practical-equivalence threshold in the objective's unit: medians of
+    two runs closer than this are one result whatever the p-value; None: 0.1 % of the
+    larger median (:data:`camopt.core.stats.EQUIVALENCE_RTOL`)."""
     requirements: RequirementsOf | None = None
     """What a design must meet whatever the run optimised (:mod:`camopt.core.requirements`);
     ``show``, ``report``, ``compare`` and ``tolerance`` evaluate them."""

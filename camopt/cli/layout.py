@@ -261,8 +261,9 @@ def print_fitted(title: str, rows: list[dict[str, Any]], columns: list[str],
 
 
 def print_verdicts(doc: dict[str, Any], names: list[str]) -> None:
-    """Each run's verdict in words, then requirement | limit | one value per run (with
-    pass or FAIL)."""
+    """Each run's verdict in words, then requirement | limit | one value per run (3
+    significant digits, with pass, FAIL or at limit)."""
+    from camopt.core.requirements import engineering
     from camopt.reporting import report
 
     for name, judged, words in zip(names, doc["verdict"], doc["verdict_sentence"]):
@@ -270,18 +271,40 @@ def print_verdicts(doc: dict[str, Any], names: list[str]) -> None:
         out.print(f"{escape(name)}: [{style}]{escape(words)}[/]", highlight=False)
     rows: dict[str, list[str]] = {}
     for k, reqs in enumerate(doc["requirements"]):
-        for cells in report.verdict_rows(reqs):
+        for r, cells in zip(reqs, report.verdict_rows(reqs)):
             row = rows.setdefault(cells[0], [cells[0], cells[1], *("-" for _ in names)])
-            row[2 + k] = f"{cells[2]} {cells[4]}"
+            value = r["value"]
+            shown = (f"{engineering(value)} {r['unit']}".strip() if isinstance(value, float)
+                     and r["limit"] != "yes" and value == value else cells[2])
+            row[2 + k] = f"{shown} {cells[4]}"
     print_table("requirements", ["requirement", "limit", *names], list(rows.values()),
                 numeric=[False, True, *(True for _ in names)])
 
 
+NOISE = 1e-12  # camopt.reporting.report.NOISE: round-off, printed as 0
+COMPARE_METRIC_RTOL = 1e-3
+"""``compare``'s table lists a metric only where the runs differ by more than this share of
+its magnitude (every metric is in ``--format json``)."""
+
+
+def _differ(values: list[Any]) -> bool:
+    nums = [v for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)]
+    if len(nums) != len(values):
+        return any(v != values[0] for v in values)
+    finite = [float(v) if abs(v) >= NOISE else 0.0 for v in nums
+              if v == v and abs(v) != float("inf")]
+    if len(finite) != len(nums):
+        return any(repr(v) != repr(nums[0]) for v in nums)
+    scale = max(abs(v) for v in finite)
+    return max(finite) - min(finite) > COMPARE_METRIC_RTOL * scale
+
+
 def compare_rows(doc: dict[str, Any]) -> list[list[str]]:
     """The compare table's rows: config differences, objective, feasibility, variables,
-    metrics (without those already shown: a variable repeated as a metric, ``feasible``
-    as 1, the reference design's ``initial_*`` when equal in every run) and repeat
-    statistics; values as :func:`camopt.reporting.report.format_value` prints them."""
+    the metrics that differ between the runs (:data:`COMPARE_METRIC_RTOL`; not those
+    already shown: a variable repeated as a metric, ``feasible`` as 1, the reference
+    design's ``initial_*``), and the repeats' median and successes; values as
+    :func:`camopt.reporting.report.format_value` prints them."""
     from camopt.reporting import report
 
     def row(name: str, values: list[Any]) -> list[str]:
@@ -291,13 +314,19 @@ def compare_rows(doc: dict[str, Any]) -> list[list[str]]:
     rows += [row("objective", doc["objective"]), row("feasible", doc["feasible"])]
     rows += [row(k, v) for k, v in doc["x"].items()]
     shown = {"feasible", "objective", *doc["x"]}
+    same = 0
     for key, values in doc["metrics"].items():
-        same = all(v == values[0] for v in values)
-        if key in shown or (key.startswith(report.REFERENCE_PREFIXES) and same):
+        if key in shown or key.startswith(report.REFERENCE_PREFIXES):
+            continue
+        if not _differ(values):
+            same += 1
             continue
         rows.append(row(key, values))
-    for stat in ("runs", "best", "median", "worst", "feasible_fraction", "success_rate"):
-        rows.append(row(f"repeats: {stat}", [s[stat] for s in doc["statistics"]]))
+    if same:
+        rows.append([f"other metrics ({same})", *("same" for _ in doc["objective"])])
+    rows.append(row("repeats: median", [s["median"] for s in doc["statistics"]]))
+    rows.append(["repeats: successes", *(f"{s['successes']}/{s['runs']}"
+                                         for s in doc["statistics"])])
     return rows
 
 

@@ -417,18 +417,31 @@ def _finals(run: RunView) -> tuple[np.ndarray, int]:
 
 
 def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarray,
-                 k_b: int) -> dict[str, Any]:
-    """Mann-Whitney test, effect size, success rates with CIs and the verdict line."""
+                 k_b: int, equivalence: float | None = None, unit: str = ""
+                 ) -> dict[str, Any]:
+    """Mann-Whitney test of the final objectives with the medians' difference (``effect``,
+    B - A in ``unit``) beside the practical-equivalence ``threshold``
+    (:func:`camopt.core.stats.equivalence_threshold`; ``equivalence`` an absolute one),
+    success rates with Wilson intervals and Fisher's exact test on them
+    (``success_p_value``), ``decidable`` (whether these counts can give a p-value below
+    alpha at all) and the verdict line."""
     test = stats.compare_objectives(a, b)
+    test["threshold"] = stats.equivalence_threshold(test["median_a"], test["median_b"],
+                                                    equivalence)
     return {"a": name_a, "b": name_b, **test,
+            "decidable": stats.min_p_value(len(a), len(b)) < stats.ALPHA,
             "success_a": stats.success_rate(k_a, len(a)),
             "success_b": stats.success_rate(k_b, len(b)),
-            "verdict": stats.verdict(name_a, name_b, test)}
+            "success_p_value": stats.compare_success(k_a, len(a), k_b, len(b)),
+            "verdict": stats.verdict(name_a, name_b, test, unit=unit)}
 
 
-def compare(runs: list[RunView], raw: bool = False) -> dict[str, Any]:
+def compare(runs: list[RunView], raw: bool = False, equivalence: float | None = None
+            ) -> dict[str, Any]:
     """Config differences, best objectives, variables, metrics and repeat statistics;
-    for two runs with repeats, a significance test of their final objectives. Runs of
+    for two runs with repeats, a significance test of their final objectives (with the
+    practical-equivalence threshold ``equivalence`` in the objective's unit, else the
+    case's ``CaseSpec.equivalence``, else relative: :func:`significance`). Runs of
     different case kinds or objectives are not comparable (ConfigError against the second
     run's ``case_kind`` or ``objective_name``). ``raw`` keeps inf and NaN (for tables);
     else they are null (JSON)."""
@@ -457,6 +470,7 @@ def compare(runs: list[RunView], raw: bool = False) -> dict[str, Any]:
     judged = [verdict(run) for run in runs]
     doc = {
         "runs": [run.path for run in runs],
+        "objective_name": runs[0].objective_name,
         "verdict": [j["verdict"] for j in judged],
         "verdict_sentence": [j["sentence"] for j in judged],
         "requirements": [j["requirements"] for j in judged],
@@ -467,7 +481,8 @@ def compare(runs: list[RunView], raw: bool = False) -> dict[str, Any]:
         "metrics": side_by_side("metrics"),
         "same_objective_different_designs": same_objective_different_designs(runs),
         "statistics": [repeat_statistics(run).as_dict() for run in runs],
-        "tests": _pairwise(runs),
+        "labels": ["A", "B"] if len(runs) == 2 else [f"run {i + 1}" for i in range(len(runs))],
+        "tests": _pairwise(runs, equivalence),
         **({"hypervolume": hv} if (hv := pareto.compare_fronts(runs)) else {}),
     }
     return doc if raw else jsonable(doc)
@@ -505,11 +520,17 @@ def same_objective_different_designs(runs: list[RunView]) -> list[dict[str, Any]
     return found
 
 
-def _pairwise(runs: list[RunView]) -> list[dict[str, Any]]:
+def _pairwise(runs: list[RunView], equivalence: float | None) -> list[dict[str, Any]]:
+    from camopt.cases import get_case
+    from camopt.config.models import unit_of
+
     if len(runs) != 2 or min(len(r.repeats) for r in runs) < 2:
         return []
+    if equivalence is None:
+        equivalence = get_case(runs[0].kind).equivalence
     (fa, ka), (fb, kb) = _finals(runs[0]), _finals(runs[1])
-    return [significance("A", fa, ka, "B", fb, kb)]
+    return [significance("A", fa, ka, "B", fb, kb, equivalence,
+                         unit_of(runs[0].objective_name))]
 
 
 def rank_sweep(spec: Any, results: dict) -> dict[str, Any]:
