@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from camopt.config.models import CaseConfig
 from camopt.core.problem import Problem
 from camopt.core.requirements import Requirement
-from camopt.errors import ConfigError
+from camopt.errors import ConfigError, did_you_mean
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -249,7 +249,8 @@ def get_case(kind: str) -> CaseSpec:
     """The spec of ``kind``; an unknown kind lists the known ones."""
     known = cases()
     if kind not in known:
-        raise ConfigError("case", "kind", f"unknown case kind {kind!r}; known: "
+        raise ConfigError("case", "kind", f"unknown case kind {kind!r}"
+                          f"{did_you_mean(kind, known)}; known: "
                           f"{', '.join(known)}")
     return known[kind]
 
