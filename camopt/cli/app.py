@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import click
 import typer
+from typer.core import TyperGroup
 
 from camopt.engine import interrupts
 from camopt.errors import CamoptError
@@ -24,8 +25,38 @@ from camopt.errors import CamoptError
 if TYPE_CHECKING:
     from camopt.config import LoadedConfig
 
+WORKFLOW = ("init", "validate", "run", "show", "tolerance", "report", "export", "plot",
+            "compare", "sweep", "runs", "solvers")
+"""``camopt -h`` lists the commands in the order a first hour uses them (README)."""
+
+
+class WorkflowGroup(TyperGroup):
+    """The command group: commands in :data:`WORKFLOW` order (others after, by name), and
+    help text as paragraphs, not the docstrings' source line breaks (a terminal of any
+    width wraps them)."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        names = super().list_commands(ctx)
+        rank = {name: i for i, name in enumerate(WORKFLOW)}
+        return sorted(names, key=lambda n: (rank.get(n, len(WORKFLOW)), n))
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        command = super().get_command(ctx, cmd_name)
+        if command is not None and command.help:
+            command.help = unwrap(command.help)
+        return command
+
+
+def unwrap(text: str) -> str:
+    """``text`` with each paragraph's line breaks replaced by spaces."""
+    import inspect
+
+    return "\n\n".join(" ".join(p.split()) for p in inspect.cleandoc(text).split("\n\n"))
+
+
 # -h as --help on every command; typer's --install-completion / --show-completion
-app = typer.Typer(rich_markup_mode="rich", no_args_is_help=True, add_completion=True,
+app = typer.Typer(cls=WorkflowGroup, rich_markup_mode="rich", no_args_is_help=True,
+                  add_completion=True,
                   context_settings={"help_option_names": ["-h", "--help"]},
                   help="Batch optimiser for spring-actuated mechanisms.")
 
