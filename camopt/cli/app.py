@@ -13,7 +13,7 @@ import enum
 import sys
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import click
 import typer
@@ -35,12 +35,13 @@ class WorkflowGroup(TyperGroup):
     help text as paragraphs, not the docstrings' source line breaks (a terminal of any
     width wraps them)."""
 
-    def list_commands(self, ctx: click.Context) -> list[str]:
+    # typer vendors its own click: its Context and Command types, not click's
+    def list_commands(self, ctx: Any) -> list[str]:
         names = super().list_commands(ctx)
         rank = {name: i for i, name in enumerate(WORKFLOW)}
         return sorted(names, key=lambda n: (rank.get(n, len(WORKFLOW)), n))
 
-    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+    def get_command(self, ctx: Any, cmd_name: str) -> Any:
         command = super().get_command(ctx, cmd_name)
         if command is not None and command.help:
             command.help = unwrap(command.help)

@@ -12,7 +12,6 @@ from rich.markup import escape
 
 from camopt.cli.app import Format, app, errors
 from camopt.cli.console import out
-from camopt.config.models import unit_of
 from camopt.cli.layout import (
     compare_rows,
     print_hypervolume,
@@ -21,6 +20,7 @@ from camopt.cli.layout import (
     print_verdicts,
     success_rate_text,
 )
+from camopt.config.models import unit_of
 from camopt.errors import CamoptError
 
 

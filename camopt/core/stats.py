@@ -93,7 +93,7 @@ def success_rate(successes: int, runs: int, confidence: float = 0.95) -> dict[st
     return {"rate": successes / runs, "ci_low": float(low), "ci_high": float(high)}
 
 
-def compare_objectives(a: ArrayLike, b: ArrayLike) -> dict[str, float]:
+def compare_objectives(a: ArrayLike, b: ArrayLike) -> dict[str, Any]:
     """Two-sided Mann-Whitney U on final objectives (lower is better) and effect sizes.
 
     ``p_a_better`` is P(A < B) + P(A = B)/2 (the common-language effect size); the
@@ -175,21 +175,21 @@ def verdict(name_a: str, name_b: str, test: dict[str, Any], alpha: float = ALPHA
         return (f"too few repeats to decide: {n_a} against {n_b} can give no p-value below "
                 f"{min_p_value(n_a, n_b):.3g} (alpha {alpha:g}); run at least "
                 f"{min_repeats(alpha)} each")
-    effect, threshold = test.get("effect"), test.get("threshold")
+    effect = test.get("effect")
+    size = abs(float(effect)) if effect is not None and np.isfinite(effect) else None
+    threshold = test.get("threshold")
     u = f" {unit}" if unit else ""
-    equivalent = (effect is not None and threshold is not None and np.isfinite(effect)
-                  and abs(effect) < threshold)
+    equivalent = size is not None and threshold is not None and size < threshold
     if p >= alpha:
-        tail = (f"; equivalent in practice (medians {_num(abs(effect))}{u} apart, below the "
-                f"threshold {_num(threshold)}{u})" if equivalent else "")
+        tail = (f"; equivalent in practice (medians {_num(size or 0.0)}{u} apart, below the "
+                f"threshold {_num(threshold or 0.0)}{u})" if equivalent else "")
         return f"no significant difference between {name_a} and {name_b} (p = {p:.3g}){tail}"
     better, worse = (name_a, name_b) if test["p_a_better"] > 0.5 else (name_b, name_a)
     if equivalent:
         return (f"{better} ranks lower than {worse} at p = {p:.3g}, but the medians differ by "
-                f"{_num(abs(effect))}{u}, below the practical-equivalence threshold "
-                f"{_num(threshold)}{u}: equivalent in practice")
-    by = (f", by {_num(abs(effect))}{u} (medians)" if effect is not None
-          and np.isfinite(effect) else "")
+                f"{_num(size or 0.0)}{u}, below the practical-equivalence threshold "
+                f"{_num(threshold or 0.0)}{u}: equivalent in practice")
+    by = f", by {_num(size)}{u} (medians)" if size is not None else ""
     return f"{better} is better than {worse} at p = {p:.3g}{by}"
 
 

@@ -76,8 +76,9 @@ def show(run: RunView) -> dict[str, Any]:
     doc = {"verdict": judged["verdict"], "verdict_sentence": judged["sentence"],
            "requirements": judged["requirements"],
            "at_limit": [r["name"] for r in judged["requirements"] if r["at_limit"]],
-           "expected_yield": expected(run), "next": next_step(run, judged), "case": run.case, "solver": run.solver,
-           "best": best, "repeats": repeats, "table": run.table}
+           "expected_yield": expected(run), "next": next_step(run, judged),
+           "case": run.case, "solver": run.solver, "best": best, "repeats": repeats,
+           "table": run.table}
     if label:
         ref_judged = verdict(run, ref)
         doc["reference"] = {"label": label, "values": ref, "verdict": ref_judged["verdict"],
