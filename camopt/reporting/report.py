@@ -71,6 +71,7 @@ def show(run: RunView) -> dict[str, Any]:
     on; the two-column view is :func:`summary`."""
     repeats = [{k: getattr(r, attr) for k, attr in REPEAT_KEYS.items()} for r in run.repeats]
     best = {k: v for k, v in asdict(run.best).items() if k != "repeat"}
+    expected(run)  # an older archive's estimate, made once: the verdict's spreads read it
     judged = verdict(run)
     label, ref = reference(run)
     doc = {"verdict": judged["verdict"], "verdict_sentence": judged["sentence"],
@@ -181,10 +182,13 @@ def expected(run: RunView) -> dict[str, Any]:
 
 
 def spreads(run: RunView) -> dict[str, Spread]:
-    """Per requirement name, its quantity's spread under the default tolerances (from
-    :func:`expected`), what decides which passing requirement is at its limit."""
+    """Per requirement name, its quantity's spread under the default tolerances (the
+    stored estimate, or the one :func:`expected` made for an older archive; never a new
+    one: ``camopt runs`` lists verdicts of many archives), what decides which passing
+    requirement is at its limit."""
+    estimate = run.expected_yield or _ESTIMATED.get(run.path, {})
     return {r["name"]: Spread(r.get("half_spread"), r["yield"])
-            for r in expected(run).get("requirements", [])}
+            for r in estimate.get("requirements", [])}
 
 
 def robust_yield(run: RunView) -> dict[str, Any] | None:
@@ -256,15 +260,19 @@ def next_step(run: RunView, judged: dict[str, Any]) -> str:
 
 
 def robust_sibling(run: RunView) -> str:
-    """The shipped robust config of the run's case file (``configs/vcb_velocity.toml`` ->
-    ``configs/vcb_velocity_robust.toml``) when it exists, else ''."""
+    """The robust config beside the run's case file (``configs/vcb_velocity.toml`` ->
+    ``configs/vcb_velocity_robust.toml``, else ``<kind>_robust.toml``) when it exists,
+    else ''."""
     from pathlib import Path
 
     if not run.config_path:
         return ""
     p = Path(run.config_path)
-    sibling = p.with_name(f"{p.stem}_robust.toml")
-    return str(sibling) if sibling.is_file() else ""
+    for stem in (p.stem, run.kind):  # fast_switch_de.toml -> fast_switch_robust.toml
+        sibling = p.with_name(f"{stem}_robust.toml")
+        if sibling.is_file():
+            return str(sibling)
+    return ""
 
 
 def verdict(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -468,6 +476,8 @@ def compare(runs: list[RunView], raw: bool = False, equivalence: float | None = 
             names += [n for n in getattr(run.best, section) if n not in names]
         return {n: [getattr(run.best, section).get(n) for run in runs] for n in names}
 
+    for run in runs:
+        expected(run)  # as show: at limit judged against the tolerance spread
     judged = [verdict(run) for run in runs]
     doc = {
         "runs": [run.path for run in runs],
