@@ -52,9 +52,9 @@ def run(
             tune_allocator()
             with progress(quiet) as (callback, check):
                 record = execute(config, callback=callback, jobs=jobs, check_progress=check)
-            if record.repeats and not record.failure:  # stored: show and report read it
-                record.expected_yield = expected_yield(record_view(record, str(path)))
             with deferred() as signals:  # a Ctrl-C now must not discard finished work
+                if record.repeats and not record.failure:  # stored: show, report read it
+                    record.expected_yield = expected_yield(record_view(record, str(path)))
                 archive.write_run(record, path, force=force)
     if quiet:
         print(str(path))  # plain print: a script reads exactly the path, never wrapped
