@@ -307,7 +307,7 @@ a sharper one)."""
 def expected_yield(run: RunView, samples: int = EXPECTED_YIELD_SAMPLES) -> dict[str, Any]:
     """The quick expected yield of a run's best design: the share of ``samples`` draws of
     the case's default tolerances (:func:`default_varies`, uniform) whose design meets every
-    requirement of the run (the run's constraints included), with its Wilson 95 % interval,
+    requirement of the run (the run's constraints included), with its Clopper-Pearson 95 % interval,
     and per requirement the share that meets it and half the 5-95 % spread of its quantity
     (what :meth:`~camopt.core.requirements.Requirement.at_limit` reads).
 

@@ -431,7 +431,7 @@ def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarra
     """Mann-Whitney test of the final objectives with the medians' difference (``effect``,
     B - A in ``unit``) beside the practical-equivalence ``threshold``
     (:func:`camopt.core.stats.equivalence_threshold`; ``equivalence`` an absolute one),
-    success rates with Wilson intervals and Fisher's exact test on them
+    success rates with Clopper-Pearson intervals and Fisher's exact test on them
     (``success_p_value``), ``decidable`` (whether these counts can give a p-value below
     alpha at all) and the verdict line."""
     test = stats.compare_objectives(a, b)

@@ -20,6 +20,7 @@ from camopt.cases import build_problem, get_case
 from camopt.cli import app
 from camopt.core.problem import FEASIBILITY_TOL
 from camopt.core.requirements import Requirement
+from camopt.core.runview import record_view
 from tests.conftest import CONFIGS
 from tests.helpers import load
 
@@ -102,7 +103,7 @@ def test_fast_switch_de_seed_3_verdict_feasibility_and_check_agree(tmp_path):
     from camopt.reporting import report
 
     record = execute(load(CONFIGS / "fast_switch_de.toml", "run.seed=3", "run.repeats=10"))
-    view = record.view(str(tmp_path / "fs3.h5"))
+    view = record_view(record, str(tmp_path / "fs3.h5"))
     judged = report.verdict(view)
     assert view.best.feasible and record.best.success
     assert judged["verdict"] == "pass", judged["sentence"]
