@@ -55,7 +55,7 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
         return
     labels = doc["labels"]
     for label, path in zip(labels, doc["runs"]):
-        out.print(f"[bold]{label}[/] = {escape(str(path))}", highlight=False)
+        out.print(f"[bold]{label}[/] = {escape(str(path))}", highlight=False, soft_wrap=True)
     print_verdicts(doc, labels)
     print_table("compare", ["", *labels], compare_rows(doc),
                 numeric=[False, *(True for _ in labels)])

@@ -54,7 +54,8 @@ def test_compare_leads_with_verdicts_and_repeats_no_row(tmp_path):
     r = runner.invoke(app, ["compare", a, b], env={"COLUMNS": "80"})
     assert r.exit_code == 0, r.output
     lines = r.stdout.splitlines()
-    assert lines[0] == f"A = {a}" and lines[1] == f"B = {b}"  # labelled once, at the top
+    # labelled once, at the top; a path is one word, never wrapped
+    assert lines[0] == f"A = {a}" and lines[1] == f"B = {b}"
     assert lines[2].startswith("A: ") and "requirement" in r.stdout.split("\ncompare\n")[0]
     assert sum(a in line or b in line for line in lines) == 2
     names = [line.strip("│").split("│")[0].strip() for line in lines if line.startswith("│")]
