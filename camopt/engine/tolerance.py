@@ -287,15 +287,6 @@ def spearman_columns(inputs: NDArray, columns: dict[str, NDArray]
             out[name] = [None if constant[j] else _finite_or_none(float(rho[j]))
                          for j in range(k)]
     return {name: out[name] for name in columns}
-def _spearman(a: NDArray, b: NDArray) -> float | None:
-    """Spearman's rank correlation of two columns (NaN rows dropped); None where either
-    is constant (an input at +-0, a metric the inputs do not move)."""
-    ok = ~(np.isnan(a) | np.isnan(b))
-    a, b = a[ok], b[ok]
-    if a.size < 3 or np.all(a == a[0]) or np.all(b == b[0]):
-        return None
-    rho = stats.spearmanr(a, b).statistic
-    return _finite_or_none(rho)
 
 
 EXPECTED_YIELD_SAMPLES = 300
