@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 
 class CamoptError(Exception):
     """Base of every error camopt raises on purpose."""
@@ -21,3 +23,16 @@ class SolverError(CamoptError, RuntimeError):
 
 class ArchiveError(CamoptError, OSError):
     """A run archive cannot be written or is not a camopt archive."""
+
+
+def did_you_mean(word: str, known: Iterable[str]) -> str:
+    """``" (did you mean 'vcb'?)"`` for the known name closest to a mistyped ``word``
+    (difflib's ratio at least 0.6, or the same name in another case: ``L1_mm``), else
+    ''. A unit typed wrong (``l1_m`` for ``l1_mm``) is one such near name."""
+    import difflib
+
+    names = list(known)
+    match = difflib.get_close_matches(word, names, n=1, cutoff=0.6)
+    if not match:
+        match = [n for n in names if n.lower() == word.lower()][:1]
+    return f" (did you mean {match[0]!r}?)" if match else ""

@@ -77,6 +77,7 @@ def _write(f: h5py.File, rec: RunRecord) -> None:
         "interrupted": rec.interrupted, "repeats_done": len(rec.repeats),
         **({"robust_check": json.dumps(rec.robust_check)} if rec.robust_check else {}),
         **({"findings": json.dumps(rec.findings)} if rec.findings else {}),
+        **({"expected_yield": json.dumps(rec.expected_yield)} if rec.expected_yield else {}),
     }
     scale = rec.scale  # x in the units the variable names say
     f.attrs.update(attrs)
@@ -269,6 +270,16 @@ def _success(attrs: Any, fun: float, feasible: bool, target: float | None) -> bo
     return bool(succeeded([fun], [feasible], target)[0])
 
 
+def _json_dict(text: object) -> dict[str, Any]:
+    """An optional JSON object attribute ({} when absent: archives before issue #34)."""
+    if text is None:
+        return {}
+    value = json.loads(str(text))
+    if not isinstance(value, dict):
+        raise ArchiveError("expected_yield: expected a JSON object")
+    return value
+
+
 def _read_layout(f: h5py.File) -> _Layout:
     names = tuple(str(n) for n in _json_list(f.attrs["variables"], "variables"))
     constraints = tuple(str(c) for c in _json_list(f.attrs["constraints"], "constraints"))
@@ -355,6 +366,8 @@ def _load(f: h5py.File, path: str | Path) -> RunView:
         robust=config.get("robust") or {},
         robust_check=json.loads(attrs["robust_check"]) if "robust_check" in attrs else {},
         findings=json.loads(attrs["findings"]) if "findings" in attrs else {},
+        expected_yield=_json_dict(attrs.get("expected_yield")),
+        config_path=str(attrs.get("config_path", "")),
         versions={k: str(v) for k, v in attrs.items()
                   if k.endswith("_version") and k != "schema_version"},
     )

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from camopt.config.models import CaseConfig
 from camopt.core.problem import Problem
 from camopt.core.requirements import Requirement
-from camopt.errors import ConfigError
+from camopt.errors import ConfigError, did_you_mean
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -134,6 +134,10 @@ class CaseSpec:
     tolerance_classes: Mapping[str, ToleranceClass] = field(default_factory=dict)
     """Other classes the parts can be ordered to, by name (``case.tolerance_class`` or
     ``camopt tolerance --class``); each lists every input it tolerances."""
+    equivalence: float | None = None
+    """``compare``'s practical-equivalence threshold in the objective's unit: medians of
+    two runs closer than this are one result whatever the p-value; None: 0.1 % of the
+    larger median (:data:`camopt.core.stats.EQUIVALENCE_RTOL`)."""
     requirements: RequirementsOf | None = None
     """What a design must meet whatever the run optimised (:mod:`camopt.core.requirements`);
     ``show``, ``report``, ``compare`` and ``tolerance`` evaluate them."""
@@ -245,7 +249,8 @@ def get_case(kind: str) -> CaseSpec:
     """The spec of ``kind``; an unknown kind lists the known ones."""
     known = cases()
     if kind not in known:
-        raise ConfigError("case", "kind", f"unknown case kind {kind!r}; known: "
+        raise ConfigError("case", "kind", f"unknown case kind {kind!r}"
+                          f"{did_you_mean(kind, known)}; known: "
                           f"{', '.join(known)}")
     return known[kind]
 

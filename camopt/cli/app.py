@@ -25,6 +25,7 @@ from camopt.errors import CamoptError
 if TYPE_CHECKING:
     from camopt.config import LoadedConfig
 
+
 def non_utf8_argument(args: Sequence[str]) -> str | None:
     """The first argument that is not valid UTF-8 (Python holds its bytes as surrogate
     escapes), shown with those bytes as ``\\xNN``; None when all are valid."""
@@ -36,11 +37,18 @@ def non_utf8_argument(args: Sequence[str]) -> str | None:
     return None
 
 
-class _Group(TyperGroup):
-    """camopt's command group: refuses, before any work, an argument that is not valid
-    UTF-8 (a path under a folder so named). Archives, reports and exports store paths as
-    UTF-8 text (HDF5 attributes, HTML, JSON), and a run that did all its work and then
-    could not record its own path would lose it; docs/reliability.md."""
+WORKFLOW = ("init", "validate", "calibrate", "run", "show", "tolerance", "report", "export",
+            "plot", "compare", "sweep", "runs", "dashboard", "solvers")
+"""``camopt -h`` lists the commands in the order a first hour uses them (README)."""
+
+
+class WorkflowGroup(TyperGroup):
+    """The command group: commands in :data:`WORKFLOW` order (others after, by name), and
+    help text as paragraphs, not the docstrings' source line breaks (a terminal of any
+    width wraps them). It refuses, before any work, an argument that is not valid UTF-8
+    (a path under a folder so named): archives, reports and exports store paths as UTF-8
+    text (HDF5 attributes, HTML, JSON), and a run that did all its work and then could
+    not record its own path would lose it; docs/reliability.md."""
 
     def parse_args(self, ctx: Any, args: list[str]) -> list[str]:  # typer's own click Context
         bad = non_utf8_argument(args)
@@ -51,9 +59,28 @@ class _Group(TyperGroup):
             raise SystemExit(2)  # typer's Exit escapes argument parsing as a bug
         return super().parse_args(ctx, args)
 
+    # typer vendors its own click: its Context and Command types, not click's
+    def list_commands(self, ctx: Any) -> list[str]:
+        names = super().list_commands(ctx)
+        rank = {name: i for i, name in enumerate(WORKFLOW)}
+        return sorted(names, key=lambda n: (rank.get(n, len(WORKFLOW)), n))
+
+    def get_command(self, ctx: Any, cmd_name: str) -> Any:
+        command = super().get_command(ctx, cmd_name)
+        if command is not None and command.help:
+            command.help = unwrap(command.help)
+        return command
+
+
+def unwrap(text: str) -> str:
+    """``text`` with each paragraph's line breaks replaced by spaces."""
+    import inspect
+
+    return "\n\n".join(" ".join(p.split()) for p in inspect.cleandoc(text).split("\n\n"))
+
 
 # -h as --help on every command; typer's --install-completion / --show-completion
-app = typer.Typer(cls=_Group, rich_markup_mode="rich", no_args_is_help=True,
+app = typer.Typer(cls=WorkflowGroup, rich_markup_mode="rich", no_args_is_help=True,
                   add_completion=True,
                   context_settings={"help_option_names": ["-h", "--help"]},
                   help="Batch optimiser for spring-actuated mechanisms.")

@@ -20,6 +20,7 @@ from camopt.cli.layout import (
     print_verdicts,
     success_rate_text,
 )
+from camopt.config.models import unit_of
 from camopt.errors import CamoptError
 
 
@@ -27,6 +28,9 @@ from camopt.errors import CamoptError
 def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
                                                        help="run archives, or one sweep")],
             format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
+            equivalence: Annotated[float | None, typer.Option(
+                min=0, help="practical-equivalence threshold in the objective's unit "
+                "(default: the case's, else 0.1% of the larger median)")] = None,
             ) -> None:
     """Compare runs (config differences, designs, statistics, a significance test for two)
     or rank the grid points of a sweep."""
@@ -44,28 +48,34 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
             return
         if len(runs) < 2:
             raise CamoptError("compare: RUN: give at least two run archives, or one sweep")
-        doc = report.compare([archive.load_run(p) for p in runs], raw=True)
+        doc = report.compare([archive.load_run(p) for p in runs], raw=True,
+                             equivalence=equivalence)
     if format is Format.json:
         sys.stdout.write(json.dumps(report.jsonable(doc), indent=2) + "\n")
         return
-    names = [Path(p).name for p in doc["runs"]]
-    print_verdicts(doc, names)
-    print_table("compare", ["", *names], compare_rows(doc),
-                numeric=[False, *(True for _ in names)])
+    labels = doc["labels"]
+    for label, path in zip(labels, doc["runs"]):
+        out.print(f"[bold]{label}[/] = {escape(str(path))}", highlight=False, soft_wrap=True)
+    print_verdicts(doc, labels)
+    print_table("compare", ["", *labels], compare_rows(doc),
+                numeric=[False, *(True for _ in labels)])
     for same in doc["same_objective_different_designs"]:
         i, j = same["runs"]
-        out.print(f"[bold]note[/]: {escape(names[i])} and {escape(names[j])} reach one "
-                  f"objective ({report.format_value(same['objective'])}) with different "
-                  f"designs (differing in {escape(', '.join(same['differ']))}): the "
-                  "objective is flat there or has several optima", highlight=False)
+        out.print(f"[bold]note[/]: {labels[i]} and {labels[j]} reach one objective "
+                  f"({report.format_value(same['objective'])}) with different designs "
+                  f"(differing in {escape(', '.join(same['differ']))}): the objective is "
+                  "flat there or has several optima", highlight=False)
     if "hypervolume" in doc:
-        print_hypervolume(doc["hypervolume"], names)
+        print_hypervolume(doc["hypervolume"], labels)
     for test in doc["tests"]:
-        a, b = escape(names[0]), escape(names[1])
-        out.print(f"A = {a}, B = {b}: Mann-Whitney p = {test['p_value']:.3g}, "
-                  f"P(A better) = {test['p_a_better']:.2f}; success A "
-                  f"{success_rate_text(test['success_a'])}, "
-                  f"B {success_rate_text(test['success_b'])}")
-        out.print(f"[bold]{escape(test['verdict'])}[/]")
-
-
+        unit = unit_of(doc["objective_name"])
+        effect = ("-" if test["effect"] is None else f"{test['effect']:.3g} {unit}".strip())
+        threshold = ("-" if test["threshold"] is None
+                     else f"{test['threshold']:.3g} {unit}".strip())
+        out.print(f"medians B - A = {effect} (equivalence threshold {threshold}); "
+                  f"Mann-Whitney p = {test['p_value']:.3g}, P(A better) = "
+                  f"{test['p_a_better']:.2f}", highlight=False)
+        out.print(f"success A {success_rate_text(test['success_a'])}, B "
+                  f"{success_rate_text(test['success_b'])}: Fisher exact p = "
+                  f"{test['success_p_value']:.3g}", highlight=False)
+        out.print(f"[bold]{escape(test['verdict'])}[/]", highlight=False)

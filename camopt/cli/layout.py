@@ -27,12 +27,17 @@ def _longest_word(text: str) -> int:
     return max((len(w) for w in text.split()), default=0)
 
 
-def fits(columns: Sequence[str], rows: Sequence[Sequence[str]], width: int) -> bool:
+def fits(columns: Sequence[str], rows: Sequence[Sequence[str]], width: int,
+         numeric: Sequence[bool] = ()) -> bool:
     """Whether the columns fit ``width`` with every column as wide as its longest word
-    (header included; a cell of a right-justified number is one word)."""
-    need = 1 + sum(BORDER + max(_longest_word(c), *(_longest_word(r[i]) for r in rows))
-                   for i, c in enumerate(columns)) if rows else 0
-    return need <= width
+    (header included), or its longest cell for a ``numeric`` column (printed unwrapped)."""
+    def need(i: int, c: str) -> int:
+        whole = i < len(numeric) and numeric[i]
+        cells = [len(r[i]) if whole else _longest_word(r[i]) for r in rows]
+        return BORDER + max(_longest_word(c), *cells)
+
+    total = 1 + sum(need(i, c) for i, c in enumerate(columns)) if rows else 0
+    return total <= width
 
 
 def print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]],
@@ -47,7 +52,7 @@ def print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]
     styles = list(styles) + [None] * (len(rows) - len(styles))
     if title:  # a line of its own: a table's title wraps at the table's width
         out.print(f"[italic]{escape(title)}[/]", highlight=False)
-    if fits(columns, rows, out.width):
+    if fits(columns, rows, out.width, numeric):
         table = Table()
         for c, num in zip(columns, numeric):
             table.add_column(escape(c), justify="right" if num else "left",
@@ -124,20 +129,32 @@ def print_show(view: RunView, rows: int | None = None) -> None:
         best = doc["best"]
         columns = ["label", *best["x"], view.objective_name, "feasible", "active", "violated"]
         print_fitted("solver's table", doc["table"], columns, rows)
+    out.print(f"[bold]{escape(doc['next'])}[/]", highlight=False)
 
 
 def print_verdict(doc: dict[str, Any], title: str = "best design") -> None:
-    """The overall verdict in words, the requirement | limit | value | margin | pass table
+    """The answer first: a robust run's yield against its target, the overall verdict in
+    words, the expected yield, then the requirement | limit | value | margin | pass table
     of ``doc`` (``report.show``'s), and the reference design's verdict in one line."""
     from camopt.reporting import report
 
-    style = "bold green" if doc["verdict"] == "pass" else "bold red"
+    if doc.get("robust_yield"):
+        met = doc["robust_yield"]["meets_target"]
+        style = "bold green" if met else "bold red" if met is False else "bold"
+        out.print(f"[{style}]{escape(report.robust_text(doc['robust_yield']))}[/]",
+                  highlight=False)
+    plain_pass = doc["verdict"] == "pass" and not doc.get("at_limit")
+    style = ("bold green" if plain_pass else "bold yellow" if doc["verdict"] == "pass"
+             else "bold red")
     out.print(f"[{style}]{escape(doc['verdict_sentence'])}[/]", highlight=False)
+    if doc.get("expected_yield"):
+        out.print(escape(report.yield_text(doc["expected_yield"])), highlight=False)
     rows = report.verdict_rows(doc["requirements"])
-    styles = ["red" if r["pass"] is False else None for r in doc["requirements"]]
+    styles = ["red" if r["pass"] is False else "yellow" if r.get("at_limit") else None
+              for r in doc["requirements"]]
     if rows:
         print_table(f"requirements of the {title}", report.VERDICT_COLUMNS, rows,
-                    numeric=[False, True, True, True, True], styles=styles)
+                    numeric=[False, True, True, False, True], styles=styles)
     ref = doc.get("reference")
     if ref:
         judged = {"pass": "[green]PASS[/]", "fail": "[red]FAIL[/]"}.get(ref["verdict"] or "",
@@ -244,8 +261,9 @@ def print_fitted(title: str, rows: list[dict[str, Any]], columns: list[str],
 
 
 def print_verdicts(doc: dict[str, Any], names: list[str]) -> None:
-    """Each run's verdict in words, then requirement | limit | one value per run (with
-    pass or FAIL)."""
+    """Each run's verdict in words, then requirement | limit | one value per run (3
+    significant digits, with pass, FAIL or at limit)."""
+    from camopt.core.requirements import engineering
     from camopt.reporting import report
 
     for name, judged, words in zip(names, doc["verdict"], doc["verdict_sentence"]):
@@ -253,18 +271,40 @@ def print_verdicts(doc: dict[str, Any], names: list[str]) -> None:
         out.print(f"{escape(name)}: [{style}]{escape(words)}[/]", highlight=False)
     rows: dict[str, list[str]] = {}
     for k, reqs in enumerate(doc["requirements"]):
-        for cells in report.verdict_rows(reqs):
+        for r, cells in zip(reqs, report.verdict_rows(reqs)):
             row = rows.setdefault(cells[0], [cells[0], cells[1], *("-" for _ in names)])
-            row[2 + k] = f"{cells[2]} {cells[4]}"
+            value = r["value"]
+            shown = (f"{engineering(value)} {r['unit']}".strip() if isinstance(value, float)
+                     and r["limit"] != "yes" and value == value else cells[2])
+            row[2 + k] = f"{shown} {cells[4]}"
     print_table("requirements", ["requirement", "limit", *names], list(rows.values()),
                 numeric=[False, True, *(True for _ in names)])
 
 
+NOISE = 1e-12  # camopt.reporting.report.NOISE: round-off, printed as 0
+COMPARE_METRIC_RTOL = 1e-3
+"""``compare``'s table lists a metric only where the runs differ by more than this share of
+its magnitude (every metric is in ``--format json``)."""
+
+
+def _differ(values: list[Any]) -> bool:
+    nums = [v for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)]
+    if len(nums) != len(values):
+        return any(v != values[0] for v in values)
+    finite = [float(v) if abs(v) >= NOISE else 0.0 for v in nums
+              if v == v and abs(v) != float("inf")]
+    if len(finite) != len(nums):
+        return any(repr(v) != repr(nums[0]) for v in nums)
+    scale = max(abs(v) for v in finite)
+    return max(finite) - min(finite) > COMPARE_METRIC_RTOL * scale
+
+
 def compare_rows(doc: dict[str, Any]) -> list[list[str]]:
     """The compare table's rows: config differences, objective, feasibility, variables,
-    metrics (without those already shown: a variable repeated as a metric, ``feasible``
-    as 1, the reference design's ``initial_*`` when equal in every run) and repeat
-    statistics; values as :func:`camopt.reporting.report.format_value` prints them."""
+    the metrics that differ between the runs (:data:`COMPARE_METRIC_RTOL`; not those
+    already shown: a variable repeated as a metric, ``feasible`` as 1, the reference
+    design's ``initial_*``), and the repeats' median and successes; values as
+    :func:`camopt.reporting.report.format_value` prints them."""
     from camopt.reporting import report
 
     def row(name: str, values: list[Any]) -> list[str]:
@@ -274,13 +314,19 @@ def compare_rows(doc: dict[str, Any]) -> list[list[str]]:
     rows += [row("objective", doc["objective"]), row("feasible", doc["feasible"])]
     rows += [row(k, v) for k, v in doc["x"].items()]
     shown = {"feasible", "objective", *doc["x"]}
+    same = 0
     for key, values in doc["metrics"].items():
-        same = all(v == values[0] for v in values)
-        if key in shown or (key.startswith(report.REFERENCE_PREFIXES) and same):
+        if key in shown or key.startswith(report.REFERENCE_PREFIXES):
+            continue
+        if not _differ(values):
+            same += 1
             continue
         rows.append(row(key, values))
-    for stat in ("runs", "best", "median", "worst", "feasible_fraction", "success_rate"):
-        rows.append(row(f"repeats: {stat}", [s[stat] for s in doc["statistics"]]))
+    if same:
+        rows.append([f"other metrics ({same})", *("same" for _ in doc["objective"])])
+    rows.append(row("repeats: median", [s["median"] for s in doc["statistics"]]))
+    rows.append(["repeats: successes", *(f"{s['successes']}/{s['runs']}"
+                                         for s in doc["statistics"])])
     return rows
 
 

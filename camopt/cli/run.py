@@ -35,7 +35,9 @@ def run(
     from camopt import archive
     from camopt.cli.layout import print_show
     from camopt.core.perf import tune_allocator
+    from camopt.core.runview import record_view
     from camopt.engine.driver import execute, prepare
+    from camopt.engine.tolerance import expected_yield
 
     overrides = list(set_ or [])
     if seed is not None:  # recorded in the archive's config like any override
@@ -51,6 +53,8 @@ def run(
             with progress(quiet) as (callback, check):
                 record = execute(config, callback=callback, jobs=jobs, check_progress=check)
             with deferred() as signals:  # a Ctrl-C now must not discard finished work
+                if record.repeats and not record.failure:  # stored: show, report read it
+                    record.expected_yield = expected_yield(record_view(record, str(path)))
                 archive.write_run(record, path, force=force)
     if quiet:
         print(str(path))  # plain print: a script reads exactly the path, never wrapped

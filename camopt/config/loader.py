@@ -20,7 +20,7 @@ from camopt.config.models import (
     RunSection,
     SolverOptions,
 )
-from camopt.errors import ConfigError
+from camopt.errors import ConfigError, did_you_mean
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -186,7 +186,8 @@ def _validate(
         error = exc.errors()[0]
         loc = ".".join(str(p) for p in (section, *error["loc"]))
         if error["type"] == "extra_forbidden":
-            what = "unknown key"
+            what = "unknown key" + did_you_mean(str(error["loc"][-1]),
+                                                _keys_at(model, error["loc"][:-1]))
         elif error["type"] == "missing":
             what = "missing required key"
         else:
@@ -198,6 +199,18 @@ def _validate(
                 what += f" (got {shown})"
         origin = "--set" if any(loc == k or loc.startswith(k + ".") for k in overridden) else source
         raise ConfigError(origin, loc, what) from None
+
+
+def _keys_at(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
+    """The keys a model accepts at ``loc`` (a nested table's, following its fields' model
+    types), for "did you mean"; [] where the path leaves the models."""
+    for part in loc:
+        field = model.model_fields.get(str(part))
+        kind = field.annotation if field is not None else None
+        if not (isinstance(kind, type) and issubclass(kind, BaseModel)):
+            return []
+        model = kind
+    return [f.alias or name for name, f in model.model_fields.items()]
 
 
 def _select(
@@ -213,7 +226,8 @@ def _select(
         raise ConfigError(source, f"{section}.{tag}", f"must be a string; known {noun}s: "
                           f"{names}")
     if value not in known:
-        raise ConfigError(source, f"{section}.{tag}", f"unknown {noun} {value!r}; known: {names}")
+        raise ConfigError(source, f"{section}.{tag}", f"unknown {noun} {value!r}"
+                          f"{did_you_mean(value, known)}; known: {names}")
     return known[value]
 
 
@@ -292,7 +306,8 @@ def load_config(
     for key, value in parsed:
         if key.split(".")[0] not in SECTIONS:
             expected = ", ".join(SECTIONS)
-            raise ConfigError("--set", key, f"unknown section; expected one of {expected}")
+            hint = did_you_mean(key.split(".")[0], SECTIONS)
+            raise ConfigError("--set", key, f"unknown section{hint}; expected one of {expected}")
         apply_override(data, key, value)
     loaded = validate_data(data, solvers, cases, source, text, tuple(overrides),
                            {key for key, _ in parsed})
@@ -312,7 +327,8 @@ def validate_data(
     overridden = overridden or set()
     for key in data:
         if key not in SECTIONS:
-            raise ConfigError(source, key, f"unknown key; expected {', '.join(SECTIONS)}")
+            raise ConfigError(source, key, f"unknown key{did_you_mean(key, SECTIONS)}; "
+                              f"expected {', '.join(SECTIONS)}")
     for key in ("case", "solver"):
         if key not in data:
             raise ConfigError(source, key, f"missing [{key}] table")

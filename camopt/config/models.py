@@ -71,15 +71,20 @@ class Strict(BaseModel):
         if big is not None:
             raise ValueError(f"{big:g} is beyond {MAX_MAGNITUDE:g} in size: no quantity of a "
                              "mechanism in this field's unit is that large")
-        if not isinstance(value, (int, float)) or isinstance(value, bool):
-            return value
         if (info.context or {}).get(PLAUSIBILITY_KEY) is False or info.field_name is None:
             return value
+        # one number, or each number of a pair (closing_velocity_m_s = [0.7, 1.1])
+        numbers = [value] if isinstance(value, (int, float)) else list(
+            value) if isinstance(value, (tuple, list)) else []
+        numbers = [v for v in numbers if isinstance(v, (int, float))
+                   and not isinstance(v, bool)]
         for meta in cls.model_fields[info.field_name].metadata:
-            if isinstance(meta, Plausible) and not meta.lower <= value <= meta.upper:
+            bad = [v for v in numbers if isinstance(meta, Plausible)
+                   and not meta.lower <= v <= meta.upper]
+            if bad and isinstance(meta, Plausible):
                 unit = _unit(info.field_name)
                 raise ValueError(
-                    f"{value:g} is outside the physical range [{meta.lower:g}, "
+                    f"{bad[0]:g} is outside the physical range [{meta.lower:g}, "
                     f"{meta.upper:g}]{unit} of this mechanism (a value in another unit?); "
                     f"set run.{PLAUSIBILITY_KEY} = false to accept it")
         return value

@@ -122,6 +122,9 @@ class RunRecord:
     findings: dict[str, Any] = field(default_factory=dict)
     """:meth:`Problem.findings` of the best design (JSON-able): what the archive stores as
     ``findings`` and ``show`` reports under its own names."""
+    expected_yield: dict[str, Any] | None = None
+    """The quick default-tolerance yield estimate of the best design
+    (:func:`camopt.engine.tolerance.expected_yield`), set by ``camopt run`` before writing."""
 
 
 def seed_id(seq: np.random.SeedSequence) -> int:

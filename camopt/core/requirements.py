@@ -10,6 +10,21 @@ and per sample by ``tolerance`` (yield per requirement), vectorised.
 The requirements are not the run's constraints: a run may leave a requirement out of its
 search (the paper's VCB problem does not ask the cam to latch) and then its optimum fails
 the requirement; the verdict says so in words.
+
+**One feasibility rule** (docs/design.md, "Feasibility"): a quantity meets its limit when it
+lies beyond it by no more than :data:`~camopt.core.problem.FEASIBILITY_TOL` times its scale
+(:attr:`Requirement.tol_scale`: the unit the run's normalised constraint divides by, by
+default the limit's magnitude and at least 1). The run's constraints are normalised so that
+their scale is 1 (``g <= FEASIBILITY_TOL``), and success (``sweep --check``) is built on the
+same feasibility, so a requirement that mirrors a constraint passes exactly when the
+constraint holds. A quantity the design does not reach (NaN: a stroke never finished) is
+"n/a" and fails.
+
+**At limit**: a passing requirement whose margin is smaller than half the 5-95 % spread of
+its quantity under the case's default tolerances (the run's expected-yield estimate), or,
+without that spread, smaller than :data:`AT_LIMIT_SHARE` of its allowed band (a two-sided
+limit) or of its scale (a one-sided one), is flagged "at limit": met at nominal, not by
+parts made to tolerance.
 """
 
 from __future__ import annotations
@@ -22,13 +37,29 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-PASS_TOL = 1e-9
-"""Round-off allowance relative to the limit: a design exactly at its limit (an active
-constraint, solved to machine precision) passes."""
+from camopt.core.problem import FEASIBILITY_TOL
+
+PASS_TOL = FEASIBILITY_TOL
+"""Round-off allowance relative to the requirement's scale: a design exactly at its limit
+(an active constraint, solved to machine precision) passes; the run's constraints' rule."""
+AT_LIMIT_SHARE = 0.01
+"""Without a tolerance spread, a margin below 1 % of the allowed band (or of the scale of a
+one-sided limit) counts as at the limit: nothing a workshop can hold is that fine."""
+AT_LIMIT_YIELD = 0.95
+"""A flag (latches, meets the full model) is at its limit when fewer than this share of the
+tolerance draws keep it."""
 
 
 def _fmt(value: float) -> str:
     return f"{value:.6g}"
+
+
+def engineering(value: float) -> str:
+    """A margin as an engineer reads it: 3 significant digits, positional between 1e-3 and
+    1e6 (``825``, ``1250``, ``0.974``), else with an exponent (``3.98e-06``)."""
+    if value == 0 or not math.isfinite(value) or not 1e-3 <= abs(value) < 1e6:
+        return f"{value:.3g}"
+    return f"{float(f'{value:.3g}'):g}" if abs(value) < 1e5 else f"{float(f'{value:.3g}'):.0f}"
 
 
 @dataclass(frozen=True)
@@ -45,6 +76,23 @@ class Requirement:
     source: str = ""
     flag: bool = False
     failing: str = ""
+    scale: float | None = None
+    """The quantity's scale in ``unit`` (what the run's normalised constraint on it divides
+    by: 100 for a percentage); None: the limit's magnitude, at least 1."""
+
+    @property
+    def tol_scale(self) -> float:
+        """The scale :data:`PASS_TOL` is relative to (see :attr:`scale`)."""
+        if self.scale is not None:
+            return float(self.scale)
+        return max([1.0, *(abs(b) for b in (self.lower, self.upper) if math.isfinite(b))])
+
+    @property
+    def band(self) -> float | None:
+        """Width of a two-sided limit (``18 ± 0.2 mm``: 0.4 mm), else None."""
+        if self.flag or not (math.isfinite(self.lower) and math.isfinite(self.upper)):
+            return None
+        return self.upper - self.lower
 
     @property
     def limit(self) -> str:
@@ -76,9 +124,21 @@ class Requirement:
     def passes(self, value: NDArray | float) -> NDArray:
         """Bool array: the value meets the requirement (NaN fails)."""
         m = self.margin(value)
-        scale = max([1.0, *(abs(b) for b in (self.lower, self.upper) if math.isfinite(b))])
         with np.errstate(invalid="ignore"):
-            return m >= -PASS_TOL * scale
+            return m >= -PASS_TOL * self.tol_scale
+
+    def at_limit(self, margin: float, spread: float | None = None,
+                 sampled_yield: float | None = None) -> bool:
+        """Whether a passing ``margin`` is too small to survive manufacture (module
+        docstring): below ``spread`` (half the 5-95 % spread of the quantity under the
+        default tolerances) when given, else below :data:`AT_LIMIT_SHARE` of the band or
+        scale. A flag is at its limit when ``sampled_yield`` is below
+        :data:`AT_LIMIT_YIELD`."""
+        if self.flag:
+            return sampled_yield is not None and sampled_yield < AT_LIMIT_YIELD
+        if spread is not None and math.isfinite(spread) and spread > 0:
+            return margin < spread
+        return margin < AT_LIMIT_SHARE * (self.band or self.tol_scale)
 
 
 @dataclass(frozen=True)
@@ -90,13 +150,19 @@ class Check:
     value: float | None
     margin: float | None
     passed: bool | None
+    at_limit: bool = False
+    """Passes, with a margin too small for parts made to tolerance
+    (:meth:`Requirement.at_limit`)."""
 
     def as_dict(self) -> dict[str, Any]:
-        """The JSON form: name, limit, value, margin, pass (and unit, source, quantity)."""
+        """The JSON form: name, limit, value, margin, pass, at_limit, margin_share (the
+        margin as a share of a two-sided band, else None), unit, source, quantity."""
         r = self.requirement
+        share = (self.margin / r.band if r.band and self.margin is not None
+                 and math.isfinite(self.margin) else None)
         return {"name": r.name, "limit": r.limit, "value": self.value, "margin": self.margin,
-                "pass": self.passed, "unit": r.unit, "source": r.source,
-                "quantity": r.quantity}
+                "pass": self.passed, "at_limit": self.at_limit, "margin_share": share,
+                "unit": r.unit, "source": r.source, "quantity": r.quantity}
 
     @property
     def words(self) -> str:
@@ -112,8 +178,19 @@ class Check:
         return f"{r.failing}: {text}" if r.failing else text
 
 
-def check(requirements: Sequence[Requirement], values: Mapping[str, Any]) -> list[Check]:
-    """Each requirement evaluated on one design's ``{quantity: value}``."""
+@dataclass(frozen=True)
+class Spread:
+    """A requirement's quantity under the default tolerances: half its 5-95 % spread (in
+    the unit; None for a flag) and the share of draws meeting it."""
+
+    half_spread: float | None
+    sampled_yield: float
+
+
+def check(requirements: Sequence[Requirement], values: Mapping[str, Any],
+          spreads: Mapping[str, Spread] | None = None) -> list[Check]:
+    """Each requirement evaluated on one design's ``{quantity: value}``; ``spreads`` (by
+    requirement name) decide which passing ones are at their limit."""
     out = []
     for r in requirements:
         raw = values.get(r.quantity)
@@ -122,7 +199,11 @@ def check(requirements: Sequence[Requirement], values: Mapping[str, Any]) -> lis
             continue
         v = float(raw)
         margin = float(r.margin(v))
-        out.append(Check(r, v, None if math.isnan(margin) else margin, bool(r.passes(v))))
+        passed = bool(r.passes(v))
+        spread = (spreads or {}).get(r.name)
+        limit = passed and r.at_limit(margin, spread.half_spread if spread else None,
+                                      spread.sampled_yield if spread else None)
+        out.append(Check(r, v, None if math.isnan(margin) else margin, passed, limit))
     return out
 
 
@@ -141,6 +222,10 @@ def sentence(checks: Sequence[Check]) -> str:
     if not evaluated:
         return "FAIL: no requirement could be evaluated"
     if not failed:
+        close = [c.requirement.name for c in checks if c.at_limit]
+        if close:
+            return (f"PASS at nominal: {len(close)} requirement{'s' if len(close) > 1 else ''}"
+                    f" at {'their' if len(close) > 1 else 'its'} limit ({', '.join(close)})")
         return f"PASS: meets all {evaluated} requirements"
     return "FAIL: " + "; ".join(c.words for c in failed)
 
@@ -158,9 +243,23 @@ def yields(requirements: Sequence[Requirement], samples: Mapping[str, NDArray],
         m = r.margin(v)
         finite = m[np.isfinite(m)]
         pct = (np.percentile(finite, [5, 50]).tolist() if finite.size else [None, None])
+        values = v[np.isfinite(v)]
+        ends = np.percentile(values, [5, 95]) if values.size and not r.flag else None
         out.append({"name": r.name, "quantity": r.quantity, "limit": r.limit,
                     "lower": r.lower if math.isfinite(r.lower) else None,
                     "upper": r.upper if math.isfinite(r.upper) else None, "flag": r.flag,
                     "unit": r.unit, "yield": float(np.mean(r.passes(v))),
-                    "margin_p5": pct[0], "margin_p50": pct[1]})
+                    "margin_p5": pct[0], "margin_p50": pct[1],
+                    "half_spread": None if ends is None else float(ends[1] - ends[0]) / 2})
     return out
+
+
+def all_pass(requirements: Sequence[Requirement], samples: Mapping[str, NDArray]) -> NDArray:
+    """(n,) bool: each sample meets every requirement whose quantity ``samples`` holds (an
+    all-true column when none is sampled)."""
+    n = len(next(iter(samples.values()))) if samples else 0
+    ok = np.ones(n, dtype=bool)
+    for r in requirements:
+        if r.quantity in samples:
+            ok &= r.passes(np.asarray(samples[r.quantity], dtype=float))
+    return ok

@@ -9,7 +9,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.core.record import Repeat
+from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
+from camopt.core.record import Repeat, RunRecord
 
 
 @dataclass(frozen=True)
@@ -67,6 +68,11 @@ class RunView:
     findings: dict[str, Any] = field(default_factory=dict)
     """What the run found beyond the best design's metrics (``Problem.findings``: an
     identification's ``model_forms`` and ``identifiability``)."""
+    config_path: str = ""
+    """The case file the run read (as given on the command line)."""
+    expected_yield: dict[str, Any] = field(default_factory=dict)
+    """The quick default-tolerance yield estimate ``run`` stored
+    (:func:`camopt.engine.tolerance.expected_yield`); {} in archives made before it."""
 
     @property
     def solver_name(self) -> str:
@@ -85,3 +91,28 @@ def design_values(run: RunView, values: dict[str, Any] | None = None) -> dict[st
     best = run.best
     return {**best.metrics, **best.x, run.objective_name: best.objective,
             "feasible": float(best.feasible)}
+
+
+def record_view(rec: RunRecord, path: str = "") -> RunView:
+    """A run record as its archive will load (what the expected-yield estimate and the
+    requirements read before the archive is written): variables in display units, the
+    best design's metrics, its active and violated constraints."""
+    cfg = rec.config
+    effective = cfg.effective()
+    g = np.asarray(rec.best.g, dtype=float)
+    names = rec.constraint_names
+    best = BestView(
+        objective=float(rec.best.fun), feasible=bool(rec.best.feasible),
+        x=dict(zip(rec.names, (np.asarray(rec.best.x) * rec.scale).tolist())),
+        metrics=dict(rec.metrics),
+        active=[c for c, gi in zip(names, g) if abs(gi) <= ACTIVE_TOL],
+        violated=[c for c, gi in zip(names, g) if not gi <= FEASIBILITY_TOL],
+        repeat=rec.best.index)
+    return RunView(
+        path=path or cfg.path, kind=cfg.case.kind,
+        case={"kind": cfg.case.kind, **effective["case"]}, solver=effective["solver"],
+        run=effective["run"], objective_name=rec.objective_name,
+        variables=tuple(rec.names), constraints=tuple(names), best=best,
+        repeats=list(rec.repeats), table=list(rec.best.table),
+        robust=effective.get("robust") or {}, robust_check=rec.robust_check or {},
+        config_path=str(cfg.path), expected_yield=rec.expected_yield or {})

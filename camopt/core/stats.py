@@ -15,6 +15,10 @@ if TYPE_CHECKING:
     from camopt.core.record import Repeat
 
 ALPHA = 0.05
+EQUIVALENCE_RTOL = 1e-3
+"""Default practical-equivalence threshold of ``compare``: medians closer than 0.1 % of the
+larger one's magnitude are the same objective in practice (a case may set an absolute one,
+``CaseSpec.equivalence``; ``compare --equivalence`` overrides both)."""
 
 
 def ranked(objectives: ArrayLike, feasible: ArrayLike) -> NDArray:
@@ -89,34 +93,104 @@ def success_rate(successes: int, runs: int, confidence: float = 0.95) -> dict[st
     return {"rate": successes / runs, "ci_low": float(low), "ci_high": float(high)}
 
 
-def compare_objectives(a: ArrayLike, b: ArrayLike) -> dict[str, float]:
+def compare_objectives(a: ArrayLike, b: ArrayLike) -> dict[str, Any]:
     """Two-sided Mann-Whitney U on final objectives (lower is better) and effect sizes.
 
     ``p_a_better`` is P(A < B) + P(A = B)/2 (the common-language effect size); the
-    rank-biserial correlation 2 p_a_better - 1 is positive when A tends to be lower.
-    Infeasible or failed runs should be passed as +inf (they rank last).
+    rank-biserial correlation 2 p_a_better - 1 is positive when A tends to be lower;
+    ``effect`` is median B - median A in the objective's unit (None unless both are
+    finite); ``n_a``, ``n_b`` the counts. Infeasible or failed runs should be passed as
+    +inf (they rank last).
     """
     a = np.where(np.isnan(a), np.inf, np.asarray(a, dtype=float))
     b = np.where(np.isnan(b), np.inf, np.asarray(b, dtype=float))
+    ma, mb = float(np.median(a)), float(np.median(b))
+    with np.errstate(invalid="ignore"):
+        effect = mb - ma if np.isfinite(ma) and np.isfinite(mb) else None
+    sizes = {"n_a": int(a.size), "n_b": int(b.size), "effect": effect}
     if a.size < 2 or b.size < 2 or np.all(np.concatenate([a, b]) == a[0]):
         return {"p_value": 1.0, "p_a_better": 0.5, "rank_biserial": 0.0,
-                "median_a": float(np.median(a)), "median_b": float(np.median(b))}
+                "median_a": ma, "median_b": mb, **sizes}
     from scipy import stats
 
     res = stats.mannwhitneyu(a, b, alternative="two-sided")
     p_a_better = 1.0 - float(res.statistic) / (a.size * b.size)
     return {"p_value": float(res.pvalue), "p_a_better": p_a_better,
-            "rank_biserial": 2 * p_a_better - 1,
-            "median_a": float(np.median(a)), "median_b": float(np.median(b))}
+            "rank_biserial": 2 * p_a_better - 1, "median_a": ma, "median_b": mb, **sizes}
 
 
-def verdict(name_a: str, name_b: str, test: dict[str, Any], alpha: float = ALPHA) -> str:
-    """A plain-language line for a comparison."""
+def min_p_value(n_a: int, n_b: int) -> float:
+    """The smallest two-sided p-value an exact Mann-Whitney test of ``n_a`` against ``n_b``
+    runs can give (complete separation): 2 / C(n_a + n_b, n_a), at most 1. Below
+    :data:`ALPHA` only from 4 against 4 (2/70); 3 against 3 gives 0.1 at best."""
+    from math import comb
+
+    if n_a < 1 or n_b < 1:
+        return 1.0
+    return min(1.0, 2.0 / comb(n_a + n_b, n_a))
+
+
+def min_repeats(alpha: float = ALPHA) -> int:
+    """The fewest runs each side for which :func:`min_p_value` can fall below ``alpha``."""
+    n = 1
+    while min_p_value(n, n) >= alpha:
+        n += 1
+    return n
+
+
+def compare_success(k_a: int, n_a: int, k_b: int, n_b: int) -> float:
+    """Two-sided p-value of Fisher's exact test on two success counts (``k`` of ``n``):
+    the success rates' own test, exact at any number of repeats (scipy.stats)."""
+    from scipy import stats
+
+    if n_a == 0 or n_b == 0:
+        return 1.0
+    return float(stats.fisher_exact([[k_a, n_a - k_a], [k_b, n_b - k_b]]).pvalue)
+
+
+def equivalence_threshold(median_a: float, median_b: float,
+                          absolute: float | None = None) -> float | None:
+    """The practical-equivalence threshold in the objective's unit: ``absolute`` when
+    given, else :data:`EQUIVALENCE_RTOL` of the larger finite median's magnitude (None
+    when neither median is finite)."""
+    if absolute is not None:
+        return float(absolute)
+    finite = [abs(m) for m in (median_a, median_b) if np.isfinite(m)]
+    return EQUIVALENCE_RTOL * max(finite) if finite else None
+
+
+def _num(x: float) -> str:
+    return f"{x:.3g}"
+
+
+def verdict(name_a: str, name_b: str, test: dict[str, Any], alpha: float = ALPHA,
+            unit: str = "") -> str:
+    """A plain-language line for a comparison: too few runs to decide (when no p-value
+    below ``alpha`` is possible: :func:`min_p_value`), no significant difference, or which
+    is better and by how much (the medians' difference in ``unit``), saying when that
+    difference is below the practical-equivalence threshold (``test["threshold"]``)."""
     p = test["p_value"]
+    n_a, n_b = test.get("n_a"), test.get("n_b")
+    if n_a is not None and n_b is not None and min_p_value(n_a, n_b) >= alpha:
+        return (f"too few repeats to decide: {n_a} against {n_b} can give no p-value below "
+                f"{min_p_value(n_a, n_b):.3g} (alpha {alpha:g}); run at least "
+                f"{min_repeats(alpha)} each")
+    effect = test.get("effect")
+    size = abs(float(effect)) if effect is not None and np.isfinite(effect) else None
+    threshold = test.get("threshold")
+    u = f" {unit}" if unit else ""
+    equivalent = size is not None and threshold is not None and size < threshold
     if p >= alpha:
-        return f"no significant difference between {name_a} and {name_b} (p = {p:.3g})"
+        tail = (f"; equivalent in practice (medians {_num(size or 0.0)}{u} apart, below the "
+                f"threshold {_num(threshold or 0.0)}{u})" if equivalent else "")
+        return f"no significant difference between {name_a} and {name_b} (p = {p:.3g}){tail}"
     better, worse = (name_a, name_b) if test["p_a_better"] > 0.5 else (name_b, name_a)
-    return f"{better} is better than {worse} at p = {p:.3g}"
+    if equivalent:
+        return (f"{better} ranks lower than {worse} at p = {p:.3g}, but the medians differ by "
+                f"{_num(size or 0.0)}{u}, below the practical-equivalence threshold "
+                f"{_num(threshold or 0.0)}{u}: equivalent in practice")
+    by = f", by {_num(size)}{u} (medians)" if size is not None else ""
+    return f"{better} is better than {worse} at p = {p:.3g}{by}"
 
 
 def sweep_summary(spec: SweepSpec, results: Iterable[Repeat]) -> list[dict[str, Any]]:

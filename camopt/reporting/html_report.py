@@ -89,12 +89,22 @@ def run_context(view: RunView) -> dict[str, Any]:
 
 
 def verdict_context(doc: dict[str, Any]) -> dict[str, Any]:
-    """The verdict the page leads with: sentence, pass/fail, the table's cells and which
-    rows fail (``doc``: ``report.show``'s or ``report.rank_sweep``'s)."""
+    """The verdict the page leads with: a robust run's yield against its target, the
+    sentence, pass/fail, the expected yield, the table's cells with each row's class
+    (``bad``: fails, ``at-limit``: passes at its limit, else '') and the next step
+    (``doc``: ``report.show``'s or ``report.rank_sweep``'s)."""
+    classes = ["bad" if r["pass"] is False else "at-limit" if r.get("at_limit") else ""
+               for r in doc["requirements"]]
+    robust = doc.get("robust_yield")
+    expected = doc.get("expected_yield")
     return {"verdict": doc["verdict"], "verdict_sentence": doc["verdict_sentence"],
+            "at_limit": doc.get("at_limit", []),
+            "robust_yield": report.robust_text(robust) if robust else "",
+            "robust_met": robust.get("meets_target") if robust else None,
+            "expected_yield": report.yield_text(expected) if expected else "",
+            "next_step": doc.get("next", ""),
             "verdict_columns": report.VERDICT_COLUMNS,
-            "verdict_rows": list(zip(report.verdict_rows(doc["requirements"]),
-                                     [r["pass"] is False for r in doc["requirements"]]))}
+            "verdict_rows": list(zip(report.verdict_rows(doc["requirements"]), classes))}
 
 
 def sweep_context(path: Path) -> dict[str, Any]:

@@ -10,7 +10,7 @@ import numpy as np
 
 from camopt.cases import run_requirements
 from camopt.core import pareto, stats
-from camopt.core.requirements import Requirement, check, sentence
+from camopt.core.requirements import Requirement, Spread, check, engineering, sentence
 from camopt.core.requirements import verdict as verdict_of
 from camopt.core.runview import RunView, design_values
 from camopt.errors import ConfigError
@@ -71,11 +71,15 @@ def show(run: RunView) -> dict[str, Any]:
     on; the two-column view is :func:`summary`."""
     repeats = [{k: getattr(r, attr) for k, attr in REPEAT_KEYS.items()} for r in run.repeats]
     best = {k: v for k, v in asdict(run.best).items() if k != "repeat"}
+    expected(run)  # an older archive's estimate, made once: the verdict's spreads read it
     judged = verdict(run)
     label, ref = reference(run)
     doc = {"verdict": judged["verdict"], "verdict_sentence": judged["sentence"],
-           "requirements": judged["requirements"], "case": run.case, "solver": run.solver,
-           "best": best, "repeats": repeats, "table": run.table}
+           "requirements": judged["requirements"],
+           "at_limit": [r["name"] for r in judged["requirements"] if r["at_limit"]],
+           "expected_yield": expected(run), "next": next_step(run, judged),
+           "case": run.case, "solver": run.solver, "best": best, "repeats": repeats,
+           "table": run.table}
     if label:
         ref_judged = verdict(run, ref)
         doc["reference"] = {"label": label, "values": ref, "verdict": ref_judged["verdict"],
@@ -87,6 +91,7 @@ def show(run: RunView) -> dict[str, Any]:
         doc["pareto_summary"] = pareto.summary(run)
     if run.robust:
         doc["robust"] = {"settings": run.robust, "check": run.robust_check}
+        doc["robust_yield"] = robust_yield(run)
     # a case's findings under their own names, never over the contract's keys
     doc.update({k: v for k, v in run.findings.items() if k not in doc})
     return jsonable(doc)
@@ -156,11 +161,127 @@ def reference(run: RunView) -> tuple[str, dict[str, Any]]:
     return f"reference: {spec.reference or 'paper'}", values
 
 
+_ESTIMATED: dict[str, dict[str, Any]] = {}
+"""Expected yields estimated at show time for archives that lack one, by path (a process
+shows an old archive's estimate once)."""
+
+
+def expected(run: RunView) -> dict[str, Any]:
+    """The best design's quick expected yield (``value``, ``low``, ``high``, ``samples``,
+    per-requirement spreads): as ``camopt run`` stored it, else (an archive older than the
+    estimate) estimated now, the same way (:func:`camopt.engine.tolerance.expected_yield`,
+    a few seconds), and marked ``"estimated": "at show time"``."""
+    if run.expected_yield:
+        return run.expected_yield
+    if run.path not in _ESTIMATED:
+        from camopt.engine.tolerance import expected_yield
+
+        with np.errstate(all="ignore"):
+            _ESTIMATED[run.path] = {**expected_yield(run), "estimated": "at show time"}
+    return _ESTIMATED[run.path]
+
+
+def spreads(run: RunView) -> dict[str, Spread]:
+    """Per requirement name, its quantity's spread under the default tolerances (the
+    stored estimate, or the one :func:`expected` made for an older archive; never a new
+    one: ``camopt runs`` lists verdicts of many archives), what decides which passing
+    requirement is at its limit."""
+    estimate = run.expected_yield or _ESTIMATED.get(run.path, {})
+    return {r["name"]: Spread(r.get("half_spread"), r["yield"])
+            for r in estimate.get("requirements", [])}
+
+
+def robust_yield(run: RunView) -> dict[str, Any] | None:
+    """A robust run's answer: the final check's yield of the robust optimum with its
+    interval, samples and the target (``value``, ``low``, ``high``, ``samples``,
+    ``target``, ``meets_target``: the interval's low end at or above the target); None for
+    a nominal run."""
+    checked = (run.robust_check or {}).get("robust")
+    if not checked:
+        return None
+    target = run.robust.get("yield_target")
+    low = checked.get("yield_low")
+    return {"value": checked.get("yield"), "low": low, "high": checked.get("yield_high"),
+            "samples": checked.get("samples"), "target": target,
+            "meets_target": None if target is None or low is None else low >= target}
+
+
+def yield_text(y: dict[str, Any]) -> str:
+    """``expected yield 0.0 % [0.0, 1.3] (300 draws of the case's tolerances)``, or why
+    there is none."""
+    if y.get("value") is None:
+        return f"expected yield: not estimated ({y.get('reason', 'no estimate')})"
+    when = ", estimated at show time" if y.get("estimated") else ""
+    return (f"expected yield {100 * y['value']:.1f} % [{100 * y['low']:.1f}, "
+            f"{100 * y['high']:.1f}] ({y['samples']} draws of the case's default "
+            f"tolerances{when})")
+
+
+def robust_text(y: dict[str, Any]) -> str:
+    """``robust: yield 96.5 % [95.8, 97.0] against a 95 % target (20000 fresh draws)``."""
+    target = "" if y["target"] is None else f" against a {100 * y['target']:.3g} % target"
+    met = {True: ": meets it", False: ": below it", None: ""}[y["meets_target"]]
+    return (f"robust: yield {100 * y['value']:.1f} % [{100 * y['low']:.1f}, "
+            f"{100 * y['high']:.1f}]{target}{met if target else ''} "
+            f"({y['samples']} fresh draws)")
+
+
+LOW_YIELD = 0.9
+"""Below this expected yield a passing design is not ready to build: ``next`` points to
+tolerance analysis and a robust run."""
+
+
+def next_step(run: RunView, judged: dict[str, Any]) -> str:
+    """One line saying what to do next, fitting the result: a robust config (a sibling
+    ``*_robust.toml`` of the run's case file when there is one), tolerance analysis, more
+    budget, or the report."""
+    path = run.path
+    robust_yield_doc = robust_yield(run)
+    if robust_yield_doc is not None:
+        if robust_yield_doc["meets_target"] is False:
+            return ("next: the robust yield is below its target: more generations "
+                    "(--set solver.generations=...) or more check draws, or a lower "
+                    "robust.yield_target")
+        return f"next: camopt report {path} (or camopt export {path} --format dxf)"
+    if not run.best.feasible:
+        return ("next: no feasible design: more budget (--set solver.generations=... or "
+                "--repeats) or a wider bound on the variables the constraints push against")
+    if judged["verdict"] != "pass":
+        return ("next: the run's search leaves out the requirements it fails: run a case "
+                "file that requires them (a config of this kind with them as constraints)")
+    y = expected(run)
+    at_limit = [r for r in judged["requirements"] if r.get("at_limit")]
+    if at_limit or (y.get("value") is not None and y["value"] < LOW_YIELD):
+        robust_cfg = robust_sibling(run)
+        then = (f"camopt run {robust_cfg}" if robust_cfg
+                else "a [robust] table in the case file (docs/tolerance.md)")
+        return f"next: camopt tolerance {path} --samples 2000; for parts made to tolerance: {then}"
+    return f"next: camopt report {path} (or camopt export {path} --format dxf)"
+
+
+def robust_sibling(run: RunView) -> str:
+    """The robust config beside the run's case file (``configs/vcb_velocity.toml`` ->
+    ``configs/vcb_velocity_robust.toml``, else ``<kind>_robust.toml``) when it exists,
+    else ''."""
+    from pathlib import Path
+
+    if not run.config_path:
+        return ""
+    p = Path(run.config_path)
+    for stem in (p.stem, run.kind):  # fast_switch_de.toml -> fast_switch_robust.toml
+        sibling = p.with_name(f"{stem}_robust.toml")
+        if sibling.is_file():
+            return str(sibling)
+    return ""
+
+
 def verdict(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any]:
     """Requirements evaluated on the best design (or on ``values``, the reference's):
-    ``{"requirements": [...], "verdict": "pass"/"fail", "sentence": words}``."""
+    ``{"requirements": [...], "verdict": "pass"/"fail", "sentence": words}``; the best
+    design's passing requirements are judged at their limit against the spread of the
+    expected-yield estimate (:func:`spreads`), the reference's against its band."""
     reqs = run_requirements(run, run.best.violated if values is None else None)
-    checks = check(reqs, design_values(run, values))
+    checks = check(reqs, design_values(run, values), spreads(run) if values is None else None)
     if values is None:
         return {"requirements": [c.as_dict() for c in checks], "verdict": verdict_of(checks),
                 "sentence": sentence(checks)}
@@ -177,24 +298,47 @@ def verdict(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any
             "sentence": words}
 
 
-VERDICT_COLUMNS = ("requirement", "limit", "value", "margin", "pass")
+VERDICT_COLUMNS = ("requirement", "limit", "value", "margin (% of band)", "pass")
 
 
 def verdict_rows(requirements: list[dict[str, Any]]) -> list[list[str]]:
     """The verdict table's cells (:data:`VERDICT_COLUMNS`) of requirements as
-    :func:`verdict` gives them: values and margins with their unit, flags as yes/no."""
+    :func:`verdict` gives them: values with their unit (6 significant digits), margins in
+    3 with their unit and, for a two-sided limit, as a share of its band; flags as yes/no;
+    pass, FAIL or "at limit"; a quantity the design does not reach is "n/a" and fails."""
     rows = []
     for r in requirements:
         flag = r["limit"] == "yes"
         unit = f" {r['unit']}" if r["unit"] and r["value"] is not None else ""
         value = (None if r["value"] is None else bool(r["value"]) if flag else r["value"])
-        margin = "-" if r["margin"] is None or flag else format_value(r["margin"]) + unit
-        shown = format_value(value) + ("" if flag else unit)
-        if value is None and r["pass"] is False:
-            shown = "n/a"  # NaN: a quantity the design does not reach (a stroke unfinished)
-        rows.append([r["name"], r["limit"], shown,
-                     margin, {True: "pass", False: "FAIL", None: "-"}[r["pass"]]])
+        rows.append([r["name"], r["limit"], _value_cell(value, flag, unit, r["pass"]),
+                     _margin_cell(r, flag, unit), _pass_cell(r)])
     return rows
+
+
+def _value_cell(value: Any, flag: bool, unit: str, passed: bool | None) -> str:
+    if value is None and passed is False:
+        return "n/a"  # NaN: a quantity the design does not reach (a stroke unfinished)
+    return format_value(value) + ("" if flag else unit)
+
+
+def _margin_cell(r: dict[str, Any], flag: bool, unit: str) -> str:
+    margin = r["margin"]
+    if margin is None or flag:
+        return "-"
+    if not math.isfinite(margin):
+        return format_value(margin)
+    share = r.get("margin_share")
+    text = engineering(margin) + unit
+    return text + (f" ({100 * share:.2g}%)" if share is not None else "")
+
+
+def _pass_cell(r: dict[str, Any]) -> str:
+    if r["pass"] is None:
+        return "-"
+    if not r["pass"]:
+        return "FAIL"
+    return "at limit" if r.get("at_limit") else "pass"
 
 
 PARETO_COLUMNS = ("objective", "sense", "least", "greatest", "knee")
@@ -282,18 +426,31 @@ def _finals(run: RunView) -> tuple[np.ndarray, int]:
 
 
 def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarray,
-                 k_b: int) -> dict[str, Any]:
-    """Mann-Whitney test, effect size, success rates with CIs and the verdict line."""
+                 k_b: int, equivalence: float | None = None, unit: str = ""
+                 ) -> dict[str, Any]:
+    """Mann-Whitney test of the final objectives with the medians' difference (``effect``,
+    B - A in ``unit``) beside the practical-equivalence ``threshold``
+    (:func:`camopt.core.stats.equivalence_threshold`; ``equivalence`` an absolute one),
+    success rates with Clopper-Pearson intervals and Fisher's exact test on them
+    (``success_p_value``), ``decidable`` (whether these counts can give a p-value below
+    alpha at all) and the verdict line."""
     test = stats.compare_objectives(a, b)
+    test["threshold"] = stats.equivalence_threshold(test["median_a"], test["median_b"],
+                                                    equivalence)
     return {"a": name_a, "b": name_b, **test,
+            "decidable": stats.min_p_value(len(a), len(b)) < stats.ALPHA,
             "success_a": stats.success_rate(k_a, len(a)),
             "success_b": stats.success_rate(k_b, len(b)),
-            "verdict": stats.verdict(name_a, name_b, test)}
+            "success_p_value": stats.compare_success(k_a, len(a), k_b, len(b)),
+            "verdict": stats.verdict(name_a, name_b, test, unit=unit)}
 
 
-def compare(runs: list[RunView], raw: bool = False) -> dict[str, Any]:
+def compare(runs: list[RunView], raw: bool = False, equivalence: float | None = None
+            ) -> dict[str, Any]:
     """Config differences, best objectives, variables, metrics and repeat statistics;
-    for two runs with repeats, a significance test of their final objectives. Runs of
+    for two runs with repeats, a significance test of their final objectives (with the
+    practical-equivalence threshold ``equivalence`` in the objective's unit, else the
+    case's ``CaseSpec.equivalence``, else relative: :func:`significance`). Runs of
     different case kinds or objectives are not comparable (ConfigError against the second
     run's ``case_kind`` or ``objective_name``). ``raw`` keeps inf and NaN (for tables);
     else they are null (JSON)."""
@@ -319,9 +476,12 @@ def compare(runs: list[RunView], raw: bool = False) -> dict[str, Any]:
             names += [n for n in getattr(run.best, section) if n not in names]
         return {n: [getattr(run.best, section).get(n) for run in runs] for n in names}
 
+    for run in runs:
+        expected(run)  # as show: at limit judged against the tolerance spread
     judged = [verdict(run) for run in runs]
     doc = {
         "runs": [run.path for run in runs],
+        "objective_name": runs[0].objective_name,
         "verdict": [j["verdict"] for j in judged],
         "verdict_sentence": [j["sentence"] for j in judged],
         "requirements": [j["requirements"] for j in judged],
@@ -332,7 +492,8 @@ def compare(runs: list[RunView], raw: bool = False) -> dict[str, Any]:
         "metrics": side_by_side("metrics"),
         "same_objective_different_designs": same_objective_different_designs(runs),
         "statistics": [repeat_statistics(run).as_dict() for run in runs],
-        "tests": _pairwise(runs),
+        "labels": ["A", "B"] if len(runs) == 2 else [f"run {i + 1}" for i in range(len(runs))],
+        "tests": _pairwise(runs, equivalence),
         **({"hypervolume": hv} if (hv := pareto.compare_fronts(runs)) else {}),
     }
     return doc if raw else jsonable(doc)
@@ -370,11 +531,17 @@ def same_objective_different_designs(runs: list[RunView]) -> list[dict[str, Any]
     return found
 
 
-def _pairwise(runs: list[RunView]) -> list[dict[str, Any]]:
+def _pairwise(runs: list[RunView], equivalence: float | None) -> list[dict[str, Any]]:
+    from camopt.cases import get_case
+    from camopt.config.models import unit_of
+
     if len(runs) != 2 or min(len(r.repeats) for r in runs) < 2:
         return []
+    if equivalence is None:
+        equivalence = get_case(runs[0].kind).equivalence
     (fa, ka), (fb, kb) = _finals(runs[0]), _finals(runs[1])
-    return [significance("A", fa, ka, "B", fb, kb)]
+    return [significance("A", fa, ka, "B", fb, kb, equivalence,
+                         unit_of(runs[0].objective_name))]
 
 
 def rank_sweep(spec: Any, results: dict) -> dict[str, Any]:

@@ -14,7 +14,7 @@ import pkgutil
 from importlib.metadata import entry_points
 from typing import TYPE_CHECKING
 
-from camopt.errors import SolverError
+from camopt.errors import SolverError, did_you_mean
 
 if TYPE_CHECKING:
     from camopt.solvers.base import Solver
@@ -62,5 +62,6 @@ def get_solver(name: str) -> type[Solver]:
     """The solver class named ``name``; an unknown name lists the known ones."""
     known = solvers()
     if name not in known:
-        raise SolverError(f"unknown solver '{name}'; known: {', '.join(known)}")
+        raise SolverError(f"unknown solver '{name}'{did_you_mean(name, known)}; known: "
+                          f"{', '.join(known)}")
     return known[name]

@@ -77,6 +77,28 @@ def test_dash_h_is_help(command):
     assert short.stdout == long.stdout and "Usage: " in short.stdout
 
 
+def test_help_lists_commands_in_workflow_order_as_paragraphs():
+    """Issue #34: init -> validate -> run -> show -> tolerance -> report -> export ...;
+    each command's text wraps at the terminal's width, never at the docstring's lines
+    (at 200 columns every command's help is one line)."""
+    from camopt.cli.app import WORKFLOW
+
+    r = runner.invoke(app, ["--help"], env={"COLUMNS": "200"})
+    rows = [line.strip("│ ").split() for line in r.stdout.splitlines()
+            if line.startswith("│ ") and "─" not in line]
+    listed = [row[0] for row in rows if row and row[0] in WORKFLOW]
+    assert listed == list(WORKFLOW)
+    import click
+    import typer
+
+    group = typer.main.get_command(app)
+    ctx = click.Context(group)
+    for name in WORKFLOW:
+        text = group.get_command(ctx, name).help  # type: ignore[union-attr]
+        assert text and "\n" not in text.replace("\n\n", ""), name
+    assert "run.target no design can reach" in r.stdout  # was broken after "no"
+
+
 def test_shell_completion_is_offered():
     r = runner.invoke(app, ["--help"], env={"COLUMNS": "80"})
     assert "--install-completion" in r.stdout and "--show-completion" in r.stdout

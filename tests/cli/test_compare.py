@@ -54,7 +54,10 @@ def test_compare_leads_with_verdicts_and_repeats_no_row(tmp_path):
     r = runner.invoke(app, ["compare", a, b], env={"COLUMNS": "80"})
     assert r.exit_code == 0, r.output
     lines = r.stdout.splitlines()
-    assert lines[0].startswith("a.h5: ") and "requirement" in r.stdout.split("compare")[0]
+    # labelled once, at the top; a path is one word, never wrapped
+    assert lines[0] == f"A = {a}" and lines[1] == f"B = {b}"
+    assert lines[2].startswith("A: ") and "requirement" in r.stdout.split("\ncompare\n")[0]
+    assert sum(a in line or b in line for line in lines) == 2
     names = [line.strip("│").split("│")[0].strip() for line in lines if line.startswith("│")]
     names = [n for n in names if n]
     for name in ("a1", "a2", "a3", "feasible"):
@@ -71,3 +74,28 @@ def test_compare_leads_with_verdicts_and_repeats_no_row(tmp_path):
     (same,) = report.same_objective_different_designs([va, vb])
     assert same["runs"] == [0, 1] and "a1" in same["differ"]
     assert report.same_objective_different_designs([va, va]) == []
+
+
+def test_three_repeats_each_are_too_few_to_decide(tmp_path):
+    """Issue #34: 3 against 3 repeats cannot give a Mann-Whitney p below 0.05 (at best
+    2 / C(6, 3) = 0.1), so compare says the test cannot decide, whatever the medians; the
+    success rates get Fisher's exact test; two runs fit about 40 lines at 80 columns."""
+    small = ["--set", "solver.generations=10", "--set", "solver.population=20",
+             "--repeats", "3"]
+    fs = str(CONFIGS / "fast_switch_de.toml")
+    a = run(tmp_path, "a.h5", fs, "--seed", "1", *small)
+    b = run(tmp_path, "b.h5", fs, "--seed", "2", *small)
+    r = runner.invoke(app, ["compare", a, b], env={"COLUMNS": "80"})
+    assert r.exit_code == 0, r.output
+    assert "too few repeats to decide: 3 against 3 can give no p-value below 0.1" in r.stdout
+    assert "run at least 4 each" in r.stdout and "Fisher exact p" in r.stdout
+    assert len(r.stdout.splitlines()) <= 50
+    assert max(len(line) for line in r.stdout.splitlines()[2:]) <= 80
+    doc = json.loads(runner.invoke(app, ["compare", a, b, "--format", "json"]).stdout)
+    (test,) = doc["tests"]
+    assert test["decidable"] is False and test["verdict"].startswith("too few repeats")
+    assert doc["labels"] == ["A", "B"]
+    # --equivalence sets the threshold, in the objective's unit (ms)
+    doc = json.loads(runner.invoke(app, ["compare", a, b, "--format", "json",
+                                         "--equivalence", "0.5"]).stdout)
+    assert doc["tests"][0]["threshold"] == 0.5

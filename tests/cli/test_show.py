@@ -91,8 +91,9 @@ def test_verdict_leads_and_says_in_words_why_the_paper_optimum_fails(vcb_run):
 
 def test_json_keys_unchanged(vcb_run):
     doc = json.loads(invoke("show", vcb_run, "--format", "json").stdout)
-    assert list(doc) == ["verdict", "verdict_sentence", "requirements", "case", "solver",
-                         "best", "repeats", "table", "reference"]
+    assert list(doc) == ["verdict", "verdict_sentence", "requirements", "at_limit",
+                         "expected_yield", "next", "case", "solver", "best", "repeats",
+                         "table", "reference"]
     assert doc["best"]["metrics"]["initial_tau_max_mpa"] is None  # inf as null: valid JSON
 
 
@@ -147,3 +148,51 @@ def test_show_of_a_glob_matching_two_archives_shows_each(vcb_run, tmp_path):
     (tmp_path / "bad.h5").write_text("x")
     r = invoke("show", vcb_run, tmp_path / "bad.h5")
     assert r.exit_code == 2 and r.stdout == "" and r.stderr.startswith("error: ")
+
+
+# ---- issue #34: at_limit per requirement and the expected yield, for every case kind
+
+EVERY_KIND = {  # a cheap run of each case kind: (config, overrides)
+    "vcb": ("vcb.toml", SMALL_VCB),
+    "fast_switch": ("fast_switch.toml", []),
+    "opening_spring": ("opening_spring_pp3.toml", []),
+    "emb_cam": ("emb.toml", ["--set", "solver.iterations=10", "--set", "solver.particles=10",
+                             "--repeats", "1"]),
+    "vcb_identify": ("vcb_identify.toml", ["--set", "solver.generations=5", "--set",
+                                           "solver.population=10", "--repeats", "1"]),
+}
+
+
+@pytest.mark.parametrize("kind", list(EVERY_KIND))
+def test_show_json_has_at_limit_and_expected_yield_for_every_kind(kind, tmp_path):
+    """``run`` stores the estimate (300 draws of the case's default tolerances from
+    SeedSequence(run.seed)); ``show`` reads it: value within its Wilson interval, and
+    per requirement the yield ``camopt tolerance --samples 300 --seed <run.seed>`` gives
+    on the same draws. A case without tolerances for its inputs says why."""
+    config, extra = EVERY_KIND[kind]
+    out = tmp_path / "run.h5"
+    r = invoke("run", CONFIGS / config, "--out", out, "--quiet", *extra)
+    assert r.exit_code == 0, r.output
+    assert archive.load_run(out).expected_yield  # stored by run, not estimated by show
+    doc = json.loads(invoke("show", out, "--format", "json").stdout)
+    assert all(isinstance(q["at_limit"], bool) for q in doc["requirements"])
+    assert doc["at_limit"] == [q["name"] for q in doc["requirements"] if q["at_limit"]]
+    y = doc["expected_yield"]
+    assert {"value", "low", "high"} <= set(y) and doc["next"].startswith("next: ")
+    if y["value"] is None:
+        assert y["reason"] and kind == "vcb_identify"
+        return
+    assert 0 <= y["low"] <= y["value"] <= y["high"] <= 1 and y["samples"] == 300
+    seed = archive.load_run(out).run["seed"]
+    tol = json.loads(invoke("tolerance", out, "--samples", 300, "--seed", seed,
+                            "--format", "json").stdout)
+    assert {q["name"]: q["yield"] for q in tol["requirements"]} == {
+        q["name"]: q["yield"] for q in y["requirements"]}  # the same parts, bit for bit
+
+
+def test_an_archive_older_than_the_estimate_is_estimated_at_show_time():
+    from tests.core.test_record import OLD_RUN
+
+    doc = json.loads(invoke("show", OLD_RUN, "--format", "json").stdout)
+    assert doc["expected_yield"].get("estimated") == "at show time"
+    assert "at_limit" in doc["requirements"][0]

@@ -117,3 +117,53 @@ def test_extends_through_a_symlink_loop_or_itself(tmp_path):
     case.write_text('extends = "c.toml"\n')
     with pytest.raises(ConfigError, match="extends: circular"):
         load(case)
+
+
+# ---- did you mean (issue #34): a near name is offered for every unknown name
+
+
+@pytest.mark.parametrize("override, where, hint", [
+    ("case.link2_length_m=0.2", "case.link2_length_m", "did you mean 'link2_length_mm'?"),
+    ("solver.populaton=20", "solver.populaton", "did you mean 'population'?"),
+    ("solver.name=de_g", "solver.name", "did you mean 'de_gr'?"),
+    ("case.kind=fast_swich", "case.kind", "did you mean 'fast_switch'?"),
+    ("run.repeat=2", "run.repeat", "did you mean 'repeats'?"),
+])
+def test_unknown_names_get_the_nearest_known_one(override, where, hint):
+    with pytest.raises(ConfigError) as info:
+        load(DE, override)
+    assert info.value.where == where and hint in info.value.what
+
+
+def test_a_name_far_from_every_known_one_gets_no_guess():
+    with pytest.raises(ConfigError) as info:
+        load(DE, "case.zzzzqqq=1")
+    assert info.value.what == "unknown key"
+
+
+def test_init_of_a_mistyped_kind_offers_the_kind():
+    from camopt.cases import get_case
+
+    with pytest.raises(ConfigError, match=r"unknown case kind 'vbc' \(did you mean 'vcb'\?\)"):
+        get_case("vbc")
+
+
+def test_plausible_pairs_are_checked_number_by_number():
+    """A pair field with a physical range (a velocity band in m/s) refuses mm/s typed into
+    it, naming the first number outside, unless plausibility is switched off."""
+    from typing import Annotated
+
+    from pydantic import ValidationError
+
+    from camopt.config.models import Pair, Plausible, Strict
+
+    class Band(Strict):
+        closing_velocity_m_s: Annotated[Pair, Plausible(0.0, 20.0)] = (0.7, 1.1)
+
+    assert Band(closing_velocity_m_s=(0.7, 1.1)).closing_velocity_m_s == (0.7, 1.1)
+    with pytest.raises(ValidationError, match=r"900 is outside the physical range \[0, 20\] "
+                       "m/s"):
+        Band(closing_velocity_m_s=(900.0, 1100.0))
+    off = Band.model_validate({"closing_velocity_m_s": (900.0, 1100.0)},
+                              context={"check_plausibility": False})
+    assert off.closing_velocity_m_s == (900.0, 1100.0)

@@ -49,8 +49,9 @@ def test_show_json_has_pareto_rows_of_objectives_and_feasible(fronts):
     r = runner.invoke(app, ["show", str(fronts[1]), "--format", "json"])
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)
-    assert list(doc) == ["verdict", "verdict_sentence", "requirements", "case", "solver",
-                         "best", "repeats", "table", "pareto", "pareto_summary"]
+    assert list(doc) == ["verdict", "verdict_sentence", "requirements", "at_limit",
+                         "expected_yield", "next", "case", "solver", "best", "repeats",
+                         "table", "pareto", "pareto_summary"]
     assert len(doc["pareto"]) == 20
     assert all(list(row) == ["f", "norm", "feasible"] for row in doc["pareto"])
     assert [row["f"] for row in doc["pareto"]] == [row["f"] for row in doc["table"]]

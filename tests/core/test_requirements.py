@@ -8,7 +8,16 @@ import math
 import numpy as np
 import pytest
 
-from camopt.core.requirements import Requirement, check, sentence, verdict, yields
+from camopt.core.requirements import (
+    Requirement,
+    Spread,
+    all_pass,
+    check,
+    engineering,
+    sentence,
+    verdict,
+    yields,
+)
 
 TRAVEL = Requirement("rod travel", "rod_travel_mm", "mm", 17.8, 18.2, source="Sec 3.2")
 STRESS = Requirement("shear stress", "tau_max_mpa", "MPa", upper=1194.0, source="Table 1")
@@ -54,3 +63,46 @@ def test_yield_per_requirement():
                "tau_max_mpa": np.full(5, 100.0)}
     (travel, stress) = yields([TRAVEL, STRESS, LATCH], samples)  # latched not sampled
     assert travel["yield"] == pytest.approx(3 / 5) and stress["yield"] == 1.0
+
+
+# ---- issue #34: at limit, the headline, engineering margins
+
+
+def test_at_limit_against_the_tolerance_spread_or_the_band():
+    """With draws: at limit when the margin is below half the quantity's 5-95 % spread;
+    without: below 1 % of the band (two-sided) or of the scale (one-sided)."""
+    assert TRAVEL.at_limit(4e-6)  # 4e-6 mm of a 0.4 mm band
+    assert not TRAVEL.at_limit(0.15)
+    assert TRAVEL.at_limit(0.15, spread=0.2) and not TRAVEL.at_limit(0.15, spread=0.1)
+    assert STRESS.at_limit(11.0) and not STRESS.at_limit(12.0)  # 1 % of 1194 MPa
+    assert LATCH.at_limit(1.0, sampled_yield=0.9) and not LATCH.at_limit(1.0)
+
+
+def test_the_headline_names_what_is_at_its_limit():
+    spreads = {"rod travel": Spread(0.05, 0.4)}
+    checks = check([TRAVEL, STRESS], {"rod_travel_mm": 17.8 + 4e-6, "tau_max_mpa": 369.0},
+                   spreads)
+    assert [c.at_limit for c in checks] == [True, False]
+    assert verdict(checks) == "pass"
+    assert sentence(checks) == "PASS at nominal: 1 requirement at its limit (rod travel)"
+    doc = checks[0].as_dict()
+    assert doc["at_limit"] is True and doc["margin_share"] == pytest.approx(1e-5, rel=1e-3)
+    assert checks[1].as_dict()["margin_share"] is None  # one-sided: no band
+    failing = check([TRAVEL], {"rod_travel_mm": 18.3})
+    assert not failing[0].at_limit  # a failing requirement is FAIL, not at limit
+
+
+def test_a_quantity_the_design_does_not_reach_fails_as_n_a():
+    (c,) = check([TRAVEL], {"rod_travel_mm": math.nan})
+    assert c.passed is False and "n/a" in c.words
+
+
+def test_margins_in_three_significant_digits():
+    assert [engineering(x) for x in (3.984e-6, 825.3, 1248.02, 0.974311, 123456.0)] == [
+        "3.98e-06", "825", "1250", "0.974", "123000"]
+
+
+def test_all_pass_joins_the_sampled_requirements():
+    samples = {"rod_travel_mm": np.array([18.0, 18.3, 18.1]),
+               "tau_max_mpa": np.array([100.0, 100.0, 1300.0])}
+    assert all_pass([TRAVEL, STRESS, LATCH], samples).tolist() == [True, False, False]

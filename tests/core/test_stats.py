@@ -6,7 +6,16 @@ import numpy as np
 import pytest
 from scipy.stats import binom, binomtest
 
-from camopt.core.stats import compare_objectives, share_interval, succeeded, verdict
+from camopt.core.stats import (
+    compare_objectives,
+    compare_success,
+    equivalence_threshold,
+    min_p_value,
+    min_repeats,
+    share_interval,
+    succeeded,
+    verdict,
+)
 
 
 def test_mann_whitney_direction_and_exact_p():
@@ -106,3 +115,31 @@ def test_the_vectorised_interval_is_scipys_exact_binomial_interval():
         low, high = share_interval(passed, n, 0.95)
         assert float(low) == pytest.approx(ci.low, rel=1e-9, abs=1e-12)
         assert float(high) == pytest.approx(ci.high, rel=1e-9, abs=1e-12)
+
+
+def test_too_few_runs_cannot_decide():
+    """The exact two-sided Mann-Whitney p of complete separation is 2 / C(n_a + n_b, n_a):
+    0.1 at 3 against 3, 2/70 = 0.0286 at 4 against 4; 100 % against 0 % success at 3
+    against 3 (issue #34) is therefore undecidable, whatever scipy's asymptotic p says."""
+    assert min_p_value(3, 3) == pytest.approx(0.1)
+    assert min_p_value(4, 4) == pytest.approx(2 / 70)
+    assert min_repeats() == 4
+    t = compare_objectives([1.0, 1.0, 1.0], [float("inf")] * 3)
+    assert verdict("A", "B", t).startswith("too few repeats to decide: 3 against 3")
+    # Fisher's exact test on 3/3 against 0/3: p = 2 / C(6, 3) = 0.1 (hypergeometric)
+    assert compare_success(3, 3, 0, 3) == pytest.approx(0.1)
+
+
+def test_a_significant_but_tiny_difference_is_equivalent_in_practice():
+    """Medians 3e-9 ms apart at p < 0.05 (issue #34): below the default threshold of 0.1 %
+    of the larger median, so equivalent in practice; a real difference names its size."""
+    a = [18.0 + 1e-9 * i for i in range(8)]
+    b = [18.0 + 3e-9 + 1e-9 * i + 1e-8 for i in range(8)]
+    t = compare_objectives(a, b)
+    t["threshold"] = equivalence_threshold(t["median_a"], t["median_b"])
+    assert t["p_value"] < 0.05 and t["threshold"] == pytest.approx(0.018, rel=1e-6)
+    assert verdict("A", "B", t, unit="ms").endswith("equivalent in practice")
+    far = compare_objectives(a, [19.0 + 0.1 * i for i in range(8)])
+    far["threshold"] = equivalence_threshold(far["median_a"], far["median_b"])
+    assert verdict("A", "B", far, unit="ms").startswith("A is better than B at p = ")
+    assert "by 1.35 ms (medians)" in verdict("A", "B", far, unit="ms")

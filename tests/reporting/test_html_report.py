@@ -4,6 +4,7 @@ a screenshot that is not blank."""
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
@@ -157,6 +158,11 @@ FIRST_SCREEN = """<script>window.addEventListener("load", () => {
   document.body.dataset.verdicttop = Math.round(r.top);
   document.body.dataset.verdictbottom = Math.round(r.bottom);
   document.body.dataset.verdictrows = t.querySelectorAll("tbody tr").length;
+  document.body.dataset.atlimit = t.querySelectorAll("tbody tr.at-limit").length;
+  const y = document.getElementById("expected-yield") || document.getElementById(
+    "robust-yield");
+  document.body.dataset.yieldbottom = y ? Math.round(y.getBoundingClientRect().bottom) : -1;
+  document.body.dataset.yieldtext = y ? y.textContent : "";
   document.body.dataset.innerheight = window.innerHeight;
   document.body.dataset.innerwidth = window.innerWidth;
   document.body.dataset.scrollwidth = document.documentElement.scrollWidth;
@@ -178,6 +184,8 @@ SMALL = {  # small runs of every kind of report: (config, overrides)
                                            "solver.population=10", "--repeats", "1"]),
     "pareto": ("fast_switch_pareto.toml", ["--set", "solver.generations=10", "--set",
                                            "solver.population=20"]),
+    "fast_switch_de": ("fast_switch_de.toml", ["--set", "solver.generations=30",
+                                               "--repeats", "1"]),
 }
 
 
@@ -185,7 +193,9 @@ SMALL = {  # small runs of every kind of report: (config, overrides)
 def every_report(tmp_path_factory, emb_report):
     """HTML reports of small VCB, vcb_velocity, EMB, Pareto runs and a sweep."""
     folder = tmp_path_factory.mktemp("every")
-    pages = {"emb": emb_report[1]}
+    pages = {"emb": folder / "emb.html"}  # beside its archive, as the others
+    shutil.copy(emb_report[0].path, folder / "emb.h5")
+    shutil.copy(emb_report[1], pages["emb"])
     for name, (config, extra) in SMALL.items():
         run = folder / f"{name}.h5"
         r = runner.invoke(app, ["run", str(CONFIGS / config), "--out", str(run), "--quiet",
@@ -206,7 +216,8 @@ def every_report(tmp_path_factory, emb_report):
 
 
 @needs_browser
-@pytest.mark.parametrize("name", ["vcb", "vcb_velocity", "emb", "pareto", "sweep"])
+@pytest.mark.parametrize("name", ["vcb", "vcb_velocity", "emb", "pareto", "fast_switch_de",
+                                  "sweep"])
 def test_verdict_table_is_on_the_first_screen(every_report, name, tmp_path):
     """Screenshots of every kind of report: the verdict table ends inside the first
     1100 x 800 screen, the page never runs off to the right (the Pareto front's table
@@ -219,6 +230,20 @@ def test_verdict_table_is_on_the_first_screen(every_report, name, tmp_path):
     html = every_report[name].read_text()
     assert re.search(r'id="verdict-sentence">(PASS|FAIL|not judged)', html)
     assert int(attrs["verdictrows"]) >= 1  # a table, not only the sentence
+    if name == "sweep":
+        return
+    # issue #34: the expected yield and the at-limit flags are on the first screen, as
+    # show --format json has them
+    doc = json.loads(runner.invoke(app, ["show", str(every_report[name].with_suffix(".h5")),
+                                         "--format", "json"]).stdout)
+    assert 0 < int(attrs["yieldbottom"]) <= screen, attrs
+    y = doc["expected_yield"]
+    assert attrs["yieldtext"].startswith(f"expected yield {100 * y['value']:.1f} % "
+                                         f"[{100 * y['low']:.1f}, {100 * y['high']:.1f}]")
+    assert int(attrs["atlimit"]) == len(doc["at_limit"]), (attrs, doc["at_limit"])
+    if name == "fast_switch_de":  # the optimum sits on the arcing limit R4 (30 deg)
+        assert "initial crank angle (arcing limit)" in doc["at_limit"]
+        assert int(attrs["atlimit"]) >= 1
 
 
 # after load on a phone: the verdict table's pass column and the page's right edge
@@ -243,5 +268,5 @@ def test_verdict_columns_fit_a_phone(every_report, name, tmp_path):
     assert 0 <= int(attrs["passleft"]) < int(attrs["passright"]) <= width, attrs
     assert int(attrs["scrollwidth"]) <= width, attrs
     passes = attrs["passtext"].split(",")
-    assert passes[0] == "pass" and set(passes[1:]) <= {"pass", "FAIL", "-"}, passes
+    assert passes[0] == "pass" and set(passes[1:]) <= {"pass", "FAIL", "at limit", "-"}, passes
     assert not_blank(shot) > 0.02

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from camopt.cases.fast_switch.config import FastSwitchConfig
 from camopt.core.capabilities import HasFamily, VariesCase
-from camopt.core.problem import Evaluation, Problem, Variable
+from camopt.core.problem import FEASIBILITY_TOL, Evaluation, Problem, Variable
 from camopt.errors import ConfigError
 from camopt.mechanics import dynamics, springs
 from camopt.mechanics.slider_crank import coupler_angle, coupler_derivatives, crank_angle_for_span
@@ -384,7 +384,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
             out["closure_time_exact_ms"] = exact.time * TO_MS
             out["closure_speed_rad_s"] = exact.speed
         g_full, _ = self.full_model(self.complete(np.atleast_2d(x)))
-        out["full_model_feasible"] = float(all(v[0] <= 1e-9 for v in g_full.values()))
+        out["full_model_feasible"] = float(all(v[0] <= FEASIBILITY_TOL for v in g_full.values()))
         out["joint_load_n"] = float((g_full["R20"][0] + 1.0) * self.p.F_rated)  # R20, Eq 41
         return out
 

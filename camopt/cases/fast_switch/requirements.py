@@ -15,7 +15,8 @@ def requirements(case: Mapping[str, Any], names: Collection[str]) -> tuple[Requi
     """The requirements of a ``fast_switch`` run's designs."""
     return (
         Requirement("spring stress margin below wire strength", "spring_stress_margin_pct",
-                    "%", lower=0.0, source="R14/R15, Eqs 22-23 (A d^-m)"),
+                    "%", lower=0.0, source="R14/R15, Eqs 22-23 (A d^-m)",
+                    scale=100.0),  # the margin is -100 R14/R15: the constraints' scale
         Requirement("initial crank angle (arcing limit)", "theta20_deg", "deg",
                     upper=float(case["max_initial_angle_deg"]),
                     source="R4, Eq 9 (config max_initial_angle_deg)"),
