@@ -167,3 +167,19 @@ def test_plausible_pairs_are_checked_number_by_number():
     off = Band.model_validate({"closing_velocity_m_s": (900.0, 1100.0)},
                               context={"check_plausibility": False})
     assert off.closing_velocity_m_s == (900.0, 1100.0)
+
+
+VCB = CONFIGS / "vcb_velocity.toml"
+
+
+@pytest.mark.parametrize("override, where, what", [
+    # issue #34: a link typed in cm, a velocity band typed in mm/s
+    ("case.l1_mm=14.8", "case.l1_mm", "14.8 is outside the physical range [20, 2000] mm"),
+    ("case.closing_velocity_m_s=[900, 1100]", "case.closing_velocity_m_s",
+     "900 is outside the physical range [0, 20] m/s"),
+])
+def test_the_vcb_refuses_centimetres_and_millimetres_per_second(override, where, what):
+    with pytest.raises(ConfigError) as info:
+        load(VCB, override)
+    assert info.value.where == where and what in info.value.what
+    assert load(VCB, override, "run.check_plausibility=false").case.kind == "vcb"

@@ -11,6 +11,11 @@ from camopt.config.models import Bounds, CaseConfig, Pair, Plausible, Positive, 
 # Physical ranges of a medium-voltage breaker mechanism of this family: a value outside is a
 # unit slip (metres into mm) or a typo; run.check_plausibility = false accepts it.
 Length = Annotated[Positive, Plausible(1.0, 2000.0)]  # mm
+# a link of a 12 kV breaker mechanism: tens to hundreds of mm (Sec 2.3: 70-140 mm; Eq 42
+# searches 70-150 mm); below 20 mm it is a length typed in cm (14.8 for 148 mm)
+LinkLength = Annotated[Positive, Plausible(20.0, 2000.0)]  # mm
+# a closing velocity in m/s: a vacuum interrupter closes at 0.5-2 m/s; 900 is mm/s typed
+VelocityBand = Annotated[Pair | None, Plausible(0.0, 20.0)]  # m/s
 Stroke = Annotated[Positive, Plausible(0.1, 500.0)]  # mm: strokes, compressions, clearances
 Rate = Annotated[Positive, Plausible(0.01, 10_000.0)]  # N/mm
 Modulus = Annotated[Positive, Plausible(1.0, 1000.0)]  # GPa
@@ -75,11 +80,11 @@ class VcbConfig(CaseConfig):
         "cam", description="cam: a1, a2, a3, kc1, kc2 (Eq 37); fourbar: l1, l3, l4, l5, "
         "theta1 (Eq 41)")
     # four-bar and pivots (Sec 2.3)
-    l1_mm: Length = Field(139.79, description="fixed link BE (Sec 2.3)")
-    l2_mm: Length = Field(70.0, description="follower (input) link BD (Sec 2.3)")
-    l3_mm: Length = Field(124.7, description="coupler DL (Sec 2.3)")
-    l4_mm: Length = Field(140.0, description="output arm EL (Sec 2.3)")
-    l5_mm: Length = Field(90.0, description="output arm EM to the insulated rod (Sec 2.3)")
+    l1_mm: LinkLength = Field(139.79, description="fixed link BE (Sec 2.3)")
+    l2_mm: LinkLength = Field(70.0, description="follower (input) link BD (Sec 2.3)")
+    l3_mm: LinkLength = Field(124.7, description="coupler DL (Sec 2.3)")
+    l4_mm: LinkLength = Field(140.0, description="output arm EL (Sec 2.3)")
+    l5_mm: LinkLength = Field(90.0, description="output arm EM to the insulated rod (Sec 2.3)")
     theta1_deg: float = Field(-121.98, description="fixed-link angle (Table 7 initial)")
     pivot_b_mm: Pair = Field((-72.0, -55.0), description="follower pivot B (cam pivot O at 0,0) "
                                                          "(Sec 2.3)")
@@ -153,7 +158,7 @@ class VcbConfig(CaseConfig):
     dynamics_steps: int = Field(
         400, ge=50, le=100_000, description="graded cam-angle intervals of the work-energy "
         "integration (independent of positions) (camopt option)")
-    closing_velocity_m_s: Pair | None = Field(
+    closing_velocity_m_s: VelocityBand = Field(
         None, description="bounds on the average closing velocity (constraint; Sec 2.1 asks "
         "0.9 +- 0.2 m/s); none: reported only")
     require_latch: bool = Field(
