@@ -26,7 +26,7 @@ class ArchiveError(CamoptError, OSError):
 
 
 def did_you_mean(word: str, known: Iterable[str]) -> str:
-    """``" (did you mean 'vcb'?)"`` for the known name closest to a mistyped ``word``
+    """``" (did you mean 'l1_mm'?)"`` for the known name closest to a mistyped ``word``
     (difflib's ratio at least 0.6, or the same name in another case: ``L1_mm``), else
     ''. A unit typed wrong (``l1_m`` for ``l1_mm``) is one such near name."""
     import difflib

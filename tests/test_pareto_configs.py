@@ -19,7 +19,11 @@ runner = CliRunner()
 @pytest.mark.parametrize(("config", "span"), [
     # tau (MPa, minimised) vs closing velocity (m/s, maximised): the identified friction
     # leaves ~0.03 m/s between the slowest design that latches and 1.1 m/s; >= 0.02 covered
-    ("vcb_pareto.toml", 0.02),
+    pytest.param("vcb_pareto.toml", 0.02, marks=pytest.mark.xfail(
+        strict=True, reason="issue #31's margins (release torque >= 1.2 x friction in every "
+        "kept model form, lift-off >= 5 % of the mean drive) leave vcb_pareto's search no "
+        "feasible design: the config needs the latch as a design variable, as "
+        "vcb_velocity_robust has (open; docs/assumptions.md)")),
     # closure time (ms) vs spring stress margin (%): >= 50 % of margin covered
     ("fast_switch_pareto.toml", 50.0),
 ])
