@@ -48,3 +48,23 @@ def test_lift_off_share_reads_the_least_cam_torque_over_the_mean_driving_torque(
     np.testing.assert_allclose(e["lift_off_torque_ratio"], share, rtol=1e-12)
     g = ev.g[:, p.constraint_names.index("lift_off")]
     np.testing.assert_allclose(g, p.config.lift_off_fraction_min - share, rtol=1e-12)
+
+
+def test_a_design_that_never_closes_fails_its_velocity_requirements_as_n_a():
+    """Issue #34: a breaker whose contacts never meet (friction far above the springs'
+    torque) has no closing velocity: its band's ends are NaN, and the requirements on them
+    read "n/a" and fail (they read 0 m/s and passed the upper limit before)."""
+    from camopt.cases.vcb.requirements import requirements
+    from camopt.core.requirements import check
+
+    cfg = load(CONFIGS / "vcb_velocity.toml", "case.cam_friction_nm=60")
+    p = VcbProblem(cfg.case)
+    ev = p.describe(p.vendor_x()[None, :])
+    values = {k: float(v[0]) for k, v in ev.extras.items()}
+    assert np.isinf(values["touch_time_high_ms"])
+    reqs = requirements(cfg.case.model_dump(), set(values))
+    checks = {c.requirement.quantity: c for c in check(reqs, values)
+              if c.requirement.quantity.startswith("closing_velocity")}
+    assert {"closing_velocity_low_m_s", "closing_velocity_high_m_s"} <= set(checks)
+    for c in checks.values():
+        assert np.isnan(c.value) and c.passed is False and "n/a" in c.words

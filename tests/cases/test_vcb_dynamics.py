@@ -348,7 +348,8 @@ def test_band_is_the_extremes_over_the_parameter_sets():
     the identified set and every set of dynamics_band, each simulated on its own (the band
     reuses one kinematics per design for all sets; a set's efficiency is the case's in a
     run of its own, its free rotation's friction the same as the driven closing's);
-    contacts that never meet count as 0."""
+    where the contacts never meet in some set the band's velocities are undefined (NaN:
+    "n/a, fails" in the verdict, issue #34)."""
     assert all(row[6] == row[5] for row in load(CONFIGS / "vcb.toml").case.dynamics_band)
     p = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
     rng = np.random.default_rng(5)
@@ -362,15 +363,19 @@ def test_band_is_the_extremes_over_the_parameter_sets():
             f"case.contacts_mass_kg={row[3]}", f"case.release_offset_deg={row[4]}",
             f"case.cam_friction_nm={row[5]}", f"case.efficiency={row[7]}")
         one = VcbProblem(load(CONFIGS / "vcb_velocity.toml", *sets).case).motion(X)
-        v.append(np.nan_to_num(one.closing_velocity_avg, nan=0.0))
+        v.append(one.closing_velocity_avg)
         latched.append(one.latched)
         closed.append(one.closing_time)
         touched.append(one.touch_time)
     # two computations (one kinematics shared by the band vs one per set): to rounding
-    np.testing.assert_allclose(ev.extras["closing_velocity_low_m_s"], np.min(v, axis=0),
-                               rtol=1e-12, atol=1e-15)
-    np.testing.assert_allclose(ev.extras["closing_velocity_high_m_s"], np.max(v, axis=0),
-                               rtol=1e-12, atol=1e-15)
+    every = np.isfinite(touched).all(axis=0)
+    assert every.any() and not every.all()  # both kinds of design are exercised
+    with np.errstate(invalid="ignore"):
+        low, high = np.min(v, axis=0), np.max(v, axis=0)
+    np.testing.assert_allclose(ev.extras["closing_velocity_low_m_s"],
+                               np.where(every, low, np.nan), rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(ev.extras["closing_velocity_high_m_s"],
+                               np.where(every, high, np.nan), rtol=1e-12, atol=1e-15)
     np.testing.assert_array_equal(ev.extras["latched"], np.all(latched, axis=0))
     np.testing.assert_array_equal(ev.extras["band_sets_not_latched"],
                                   np.sum(~np.array(latched), axis=0))
@@ -382,7 +387,7 @@ def test_band_is_the_extremes_over_the_parameter_sets():
         np.testing.assert_allclose(ev.extras[f"{name}_high_ms"], np.max(values, axis=0) / MS,
                                    rtol=1e-12, atol=1e-12)
     assert np.isfinite(closed).any()  # some designs close: the times are exercised
-    assert np.ptp(v, axis=0)[0] > 0  # the vendor's band has a width
+    assert np.ptp(np.array(v)[:, 0]) > 0  # the vendor's band has a width
 
 
 def test_a_cam_the_springs_cannot_release_never_closes():

@@ -224,12 +224,16 @@ class VcbProblem(Problem, VariesCase):
         }
         if motion is not None:
             spread = q.spread
+            closes = np.isfinite(spread.high["touch_time"])  # every set touches
             extras.update({
                 # the identified parameters, and the band over the sets equally
                 # consistent with the ADAMS data (dynamics_band): every velocity and time
                 "closing_velocity_avg_m_s": motion.closing_velocity_avg,
-                "closing_velocity_low_m_s": spread.velocity_low,
-                "closing_velocity_high_m_s": spread.velocity_high,
+                # undefined (NaN: "n/a, fails") where a set never brings the contacts
+                # together; the constraints keep the band's finite stand-in (0 m/s) so a
+                # search among stalling designs still sees how far it is
+                "closing_velocity_low_m_s": np.where(closes, spread.velocity_low, np.nan),
+                "closing_velocity_high_m_s": np.where(closes, spread.velocity_high, np.nan),
             })
             for name, (field, unit, scale) in BANDED.items():
                 extras[name] = getattr(motion, field) / scale
