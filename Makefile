@@ -20,7 +20,7 @@ run: install
 
 # one pytest worker per core (pytest-xdist): the suite is ~6 CPU-minutes, ~3 minutes on 2 cores
 test: install
-	$(BIN)/python -m pytest -q -n auto
+	$(BIN)/python -m pytest -q -n auto --durations=20
 
 lint: typecheck
 	$(BIN)/ruff check camopt tests bench scripts/mutants.py scripts/vcb_release_margin.py
