@@ -6,6 +6,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from camopt.cases.vcb import VcbProblem
 from camopt.cases.vcb.constraints import CONSTRAINTS
@@ -68,3 +69,32 @@ def test_a_design_that_never_closes_fails_its_velocity_requirements_as_n_a():
     assert {"closing_velocity_low_m_s", "closing_velocity_high_m_s"} <= set(checks)
     for c in checks.values():
         assert np.isnan(c.value) and c.passed is False and "n/a" in c.words
+
+
+def test_pickup_impact_is_met_below_the_shear_yield_and_violated_above():
+    q = SimpleNamespace(config=SimpleNamespace(shear_yield_mpa=1000.0),
+                        pickup_tau=np.array([500e6, 1000e6, 1500e6]))
+    np.testing.assert_allclose(ROW["pickup_impact"].g(q), [-0.5, 0.0, 0.5])
+
+
+def test_pickup_shear_is_the_hertz_stress_of_the_bands_hardest_blow():
+    """The vendor's pick-up (vcb_velocity's case): the reported shear stress is Eq 31 at
+    the force that stores the band's greatest impact energy in the line contact of the
+    cam profile where it meets the roller (its curvature from the contact's own path,
+    ``VcbModel.contact``) and the roller; within the shear yield (about 0.55 of it)."""
+    from camopt.mechanics import hertz
+
+    p = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
+    x = p.vendor_x()[None, :]
+    ev = p.describe(x)
+    m, c = p.model, p.config
+    A, kc, link = p.designs(x)
+    kin = m.kinematics(A, link, p.rod_offset)
+    rho = m.contact(kin.follower, m.closing_torque(kc)).curvature[0, 0]
+    e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * 1e9, c.poisson,
+                                    c.cam_modulus_gpa * 1e9, c.poisson)
+    force = hertz.line_impact_force(ev.extras["pickup_impact_energy_high_j"][0], rho, m.rf,
+                                    c.contact_length_mm * 1e-3, e_eq)
+    tau = hertz.line_contact(force, rho, m.rf, c.contact_length_mm * 1e-3, e_eq)[2] / 1e6
+    assert ev.extras["pickup_tau_mpa"][0] == pytest.approx(tau, rel=1e-9)
+    assert 0.4 < ev.extras["pickup_tau_mpa"][0] / c.shear_yield_mpa < 0.7

@@ -125,6 +125,9 @@ def test_free_rotation_matches_an_ode_integration(problem):
     j0 = (c.cam_inertia_kg_m2 + c.follower_inertia_kg_m2 * (problem.model.vendor_a[1]) ** 2
           + (c.rod_mass_kg + c.contacts_mass_kg) * (mo.rod_velocity[0, 0] / mo.omega[0, 0]) ** 2)
     assert mo.omega[0, 0] == pytest.approx(c.cam_inertia_kg_m2 * omega_free / j0, rel=1e-4)
+    # and the impact takes the relative motion's energy, 1/2 J* omega^2 (Carnot)
+    j_star = c.cam_inertia_kg_m2 * (j0 - c.cam_inertia_kg_m2) / j0
+    assert mo.pickup_loss[0] == pytest.approx(0.5 * j_star * omega_free**2, rel=2e-4)
 
 
 def test_opening_matches_an_ode_integration():

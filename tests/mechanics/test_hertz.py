@@ -76,3 +76,23 @@ def test_concave_surface_and_no_contact():
     assert 0 < conformal < convex
     _, none, _ = hertz.line_contact(1000.0, -0.010, 0.015, 0.01, e_eq)
     assert np.isnan(none)
+
+
+@pytest.mark.parametrize("rho_cam", [0.03, -0.08, 0.2])
+@pytest.mark.parametrize("energy", [0.01, 0.3, 5.0])
+def test_impact_force_stores_the_energy_in_the_cylinders_approach(rho_cam, energy):
+    """The peak force of an impact stores ``energy`` in the contact: the integral of F over
+    the approach of two cylinders' axes (Johnson, Contact Mechanics, Sec 5.6: delta = F /
+    (pi l E*) (ln(4 R1 / b) + ln(4 R2 / b) - 1)), taken here by the trapezoidal rule on a
+    fine grid of forces, equals ``energy`` to 1e-6; a convex, a concave and a flat cam."""
+    rf, length = 0.015, 0.015
+    e_eq = hertz.equivalent_modulus(210e9, 0.3, 210e9, 0.3)
+    force = float(hertz.line_impact_force(energy, rho_cam, rf, length, e_eq))
+    rho_e = 1 / (1 / rho_cam + 1 / rf)
+    grid = np.geomspace(force * 1e-12, force, 400_001)
+    b = np.sqrt(4 * grid * rho_e / (np.pi * length * e_eq / 2))
+    delta = grid / (np.pi * length * e_eq / 2) * (np.log(4 * abs(rho_cam) / b)
+                                                 + np.log(4 * rf / b) - 1)
+    stored = np.sum(0.5 * (grid[1:] + grid[:-1]) * np.diff(delta))
+    assert stored == pytest.approx(energy, rel=1e-6)
+    assert hertz.line_impact_force(0.0, rho_cam, rf, length, e_eq) == 0.0

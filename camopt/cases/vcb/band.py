@@ -65,6 +65,7 @@ BANDED = {
     "cam_contact_time_ms": ("cam_contact_time", "_ms", MS),
     "touch_time_ms": ("touch_time", "_ms", MS),
     "closing_time_ms": ("closing_time", "_ms", MS),
+    "pickup_impact_energy_j": ("pickup_loss", "_j", 1.0),
 }
 """Reported with their band: extra name -> (ClosingMotion field, the name's unit suffix,
 SI factor); the band's extras insert low/high before the unit (``touch_time_low_ms``)."""

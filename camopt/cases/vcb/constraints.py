@@ -16,8 +16,8 @@ from camopt.cases.vcb.band import MotionBand
 from camopt.cases.vcb.config import VcbConfig
 from camopt.cases.vcb.dynamics import ClosingMotion
 from camopt.cases.vcb.model import ForceBalance, Kinematics, VcbModel, unassembled
-from camopt.mechanics import cam, fourbar
-from camopt.units import DEG, MM, MPA
+from camopt.mechanics import cam, fourbar, hertz
+from camopt.units import DEG, GPA, MM, MPA
 
 
 @dataclass
@@ -67,6 +67,25 @@ class Terms:
         """:attr:`cam_torque_min` as a share of the closing springs' mean driving torque
         over the stroke (driving work / stroke angle), (n,): 0 is the lift-off limit."""
         return self.cam_torque_min * self.model.theta_c[-1] / self.bal.driving
+
+    @cached_property
+    def pickup_tau(self) -> NDArray:
+        """Largest shear stress beneath the cam-roller contact at the pick-up impact (Pa),
+        (n,): the band's greatest impact loss stored elastically in the Hertz line contact
+        of the profile's radius where the cam meets the roller (theta_c = 0) and the roller
+        (:func:`camopt.mechanics.hertz.line_impact_force`), Eq 31 at that force. The
+        contact is the only compliance counted (shafts and arms are softer and spread the
+        impact): an upper estimate of the peak load, not a contact simulation."""
+        c, m, f = self.config, self.model, self.kin.follower
+        first = cam.Follower(f.theta_c[:, :1], f.xi, f.angle[:, :1], f.dphi[:, :1],
+                             f.ddphi[:, :1], f.cos_a[:, :1], f.sin_a[:, :1])
+        rho = cam.curvature_radius(m.l2, m.l6, first, m.rf)[:, 0]
+        e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * GPA, c.poisson,
+                                        c.cam_modulus_gpa * GPA, c.poisson)
+        length = c.contact_length_mm * MM
+        force = hertz.line_impact_force(self.spread.high["pickup_loss"], rho, m.rf, length,
+                                        e_eq)
+        return hertz.line_contact(force, rho, m.rf, length, e_eq)[2]
 
     @cached_property
     def psi_max(self) -> NDArray:
@@ -121,6 +140,10 @@ CONSTRAINTS = (
     # what the prop and stop must absorb: the band's greatest energy left at the latch
     Constraint("latch_energy_high", lambda c: c.require_latch,
                lambda q: q.spread.kinetic_high / q.config.latch_energy_max_j - 1),
+    # the cam's blow on the resting roller at the pick-up, in every set of the band, within
+    # the contact's shear yield (Eq 31 at the impact's peak force)
+    Constraint("pickup_impact", lambda c: c.require_latch,
+               lambda q: q.pickup_tau / (q.config.shear_yield_mpa * MPA) - 1),
     # the cam must start in every set of the band, with the assumed margin on the
     # springs' torque against the friction at the release (a latch needs a release)
     Constraint("release_torque", lambda c: c.require_latch,

@@ -131,9 +131,12 @@ class ClosingEvents:
     ``closing_time`` (s, to theta_end; inf if stalled), ``final_kinetic`` (J, at
     theta_end), ``touch_loss`` (J), ``latched``, ``reach``, the fraction of theta_end
     the cam turns before its kinetic energy first reaches zero (1 if latched; 0 if it
-    never meets the roller), and ``release_torque_ratio``, eps T_s / T_f at the release
+    never meets the roller), ``release_torque_ratio``, eps T_s / T_f at the release
     crank angle (the cam starts iff it exceeds 1; inf without friction in the free
-    rotation). What a band member contributes (:func:`closing_events`)."""
+    rotation), and ``pickup_loss`` (J), the kinetic energy the plastic impact of the cam on
+    the resting roller takes (1/2 J* omega^2 of the relative motion, what the contact
+    stores at its peak; 0 if the cam never gets there). What a band member contributes
+    (:func:`closing_events`)."""
 
     cam_contact_time: NDArray
     touch_time: NDArray
@@ -145,6 +148,7 @@ class ClosingEvents:
     latched: NDArray
     reach: NDArray
     release_torque_ratio: NDArray
+    pickup_loss: NDArray
 
 
 @dataclass(frozen=True)
@@ -356,7 +360,8 @@ class ClosingState:
     contacts' touch (n, m); the touch interval ``k``, fraction ``w`` and instant
     (``theta_touch``, ``t_touch``, ``t_k`` the first node after it); ``stall_theta`` where
     the kinetic energy first reaches zero (nan: never) and ``stalled_at``, the first node
-    at or beyond it (m if none). Built by :func:`closing_state`; read by the pure
+    at or beyond it (m if none); ``pickup_loss`` the pick-up impact's loss (J, (n,)).
+    Built by :func:`closing_state`; read by the pure
     :func:`events_of` and :func:`curves_of`."""
 
     theta: NDArray
@@ -383,6 +388,7 @@ class ClosingState:
     cells: NDArray
     stall_theta: NDArray
     stalled_at: NDArray
+    pickup_loss: NDArray
 
     @property
     def latched(self) -> NDArray:
@@ -423,6 +429,8 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     j_before = p.cam_kg_m2 + follower + moving * ds1 * ds1
     omega0 = np.ravel(p.cam_kg_m2 * omega_free[:, None] / j_before[:, :1])
     kinetic0 = 0.5 * j_before[:, 0] * omega0**2
+    # Carnot: what the impact takes is the relative motion's energy, 1/2 J* omega_free^2
+    pickup_loss = 0.5 * p.cam_kg_m2[:, 0] * omega_free**2 - kinetic0
     # 2. work-energy equation up to the touch
     ke_before = kinetic0[:, None] + eps * (spring[:, :1] - spring) - resisting
     ke_before -= friction * theta
@@ -484,7 +492,7 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
         omega_before=omega_before, omega_after=omega_after, kinetic=kinetic, after=after,
         k=k, touched=reached, v_touch=v_touch, loss=loss, t_before=t_before,
         t_touch=t_touch, t_k=t_touch + first_cell, cells=cells, stall_theta=stall_theta,
-        stalled_at=stalled_at)
+        stalled_at=stalled_at, pickup_loss=pickup_loss)
 
 
 def events_of(s: ClosingState) -> ClosingEvents:
@@ -510,7 +518,7 @@ def _events(s: ClosingState) -> dict[str, NDArray]:
         touch_velocity=s.v_touch, closing_velocity_avg=v_avg,
         final_kinetic=np.where(latched, s.kinetic[:, -1], 0.0), touch_loss=s.loss,
         latched=latched, reach=np.where(latched, 1.0, np.nan_to_num(s.stall_theta) / end),
-        release_torque_ratio=s.release_ratio)
+        release_torque_ratio=s.release_ratio, pickup_loss=s.pickup_loss)
 
 
 def curves_of(s: ClosingState) -> ClosingMotion:

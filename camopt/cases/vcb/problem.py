@@ -29,7 +29,7 @@ from camopt.core.capabilities import VariesCase
 from camopt.core.problem import Evaluation, ObjectiveFloor, Problem, Variable
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, hertz
-from camopt.units import DEG, MM
+from camopt.units import DEG, MM, MPA
 
 LINK_FIELDS = ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
 """The linkage fields of ``[case]`` in the order of a linkage row (``designs``)."""
@@ -249,6 +249,8 @@ class VcbProblem(Problem, VariesCase):
                 "lift_off_torque_ratio": q.lift_off_ratio,
                 "release_torque_margin": motion.release_torque_ratio,
                 "release_torque_margin_low": spread.release_ratio_low,
+                # the cam's blow on the resting roller, the band's worst (Hertz estimate)
+                "pickup_tau_mpa": q.pickup_tau / MPA,
                 "latched": spread.latched.astype(float),  # at every end of the band
             })
         if detail:

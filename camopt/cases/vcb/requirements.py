@@ -98,6 +98,12 @@ def dynamic_requirements(case: Mapping[str, Any], names: Collection[str]
             lower=float(case.get("release_torque_margin_min", RELEASE_TORQUE_MARGIN_MIN)),
             source="config release_torque_margin_min (assumed)",
             failing="a slightly soft spring or stiff bearing keeps the cam at its release"))
+    if "pickup_tau_mpa" in names:
+        reqs.append(Requirement(
+            "pick-up impact shear stress (cam on roller)", "pickup_tau_mpa", "MPa",
+            upper=float(case["shear_yield_mpa"]),
+            source="Eq 31 at the impact's Hertz peak force, band's worst (docs/assumptions.md)",
+            failing="the cam's blow on the resting roller yields the contact"))
     if "lift_off_torque_ratio" in names:
         reqs.append(Requirement(
             "least cam torque / mean drive (lift-off)", "lift_off_torque_ratio",
