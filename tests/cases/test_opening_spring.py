@@ -163,3 +163,31 @@ def test_lean_evaluation_equals_the_energy_equations(name):
     l0 = params["l0_mm"][:, 0]
     np.testing.assert_allclose(ev.g[:, 0], (l0 - length.min(axis=1)) / l0, atol=1e-12)
     np.testing.assert_allclose(ev.g[:, 1], -rate.min(axis=1) / p.rate0, atol=1e-12)
+
+
+def test_tracking_of_many_designs_is_each_ones_ode():
+    """tracking_rows (work-energy, one vectorised call for n designs) against solve_ivp of
+    the equation of motion per design (``simulate``, DOP853, rtol 1e-10): the 9 and 10 mm
+    travel times to 1e-8, the largest velocity error to 1e-6 (the ODE's rate sampled at
+    its own steps: the rms differs by its linear interpolation, < 1e-3); a spring too weak
+    to open the breaker gets NaN times in both."""
+    p = OpeningSpringProblem(OpeningSpringConfig(k_n_per_mm=26.44, l0_mm=186.0))
+    x = p.initial_x()
+    X = x * (1 + 0.1 * np.random.default_rng(1).standard_normal((6, len(x))))
+    weak = p.x_of({"k_n_per_mm": 30.0, "l0_mm": 250.0})  # stops short of 9 mm
+    X = np.vstack([X, weak])
+    rows = p.tracking_rows(X)
+    for i, design in enumerate(X):
+        motion = p.simulate(design)
+        assert np.allclose(rows["travel_time_9mm_ms"][i], motion.time_9mm * 1e3, rtol=1e-8,
+                           equal_nan=True)
+        assert np.allclose(rows["travel_time_10mm_ms"][i], motion.time_10mm * 1e3, rtol=1e-8,
+                           equal_nan=True)
+        if np.isnan(motion.time_10mm):  # the ODE turns back: its angle is no abscissa
+            continue
+        th_d, rate_d = p.desired(np.linspace(p.t0, p.ts, 400))
+        err = np.interp(th_d, motion.theta, motion.rate) - rate_d
+        assert rows["max_velocity_error_rad_s"][i] == pytest.approx(np.abs(err).max(), rel=1e-6)
+        assert rows["rms_velocity_error_rad_s"][i] == pytest.approx(np.sqrt(np.mean(err**2)),
+                                                                    rel=1e-3)
+    assert np.isnan(rows["travel_time_9mm_ms"][-1])

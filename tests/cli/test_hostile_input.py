@@ -56,6 +56,8 @@ def _base(name: str) -> dict[str, Any]:
     data = tomllib.loads((CONFIGS / name).read_text())
     data.setdefault("run", {})["repeats"] = 1
     data["solver"].update(SMALL.get(data["solver"]["name"], {}))
+    if isinstance(data["solver"].get("polish"), dict):  # the polish's own budget, small too
+        data["solver"]["polish"].update(evaluations=120, maxiter=20)
     return data
 
 
