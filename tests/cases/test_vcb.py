@@ -251,3 +251,25 @@ def test_peak_stress_fast_path_equals_the_full_contact_analysis(problem):
     assert np.all(np.isinf(fast[~np.isfinite(full)]))  # no Hertz contact: infinite, not NaN
     ev = problem.describe(X[:1])
     assert ev.extras["tau_max_mpa"][0] == pytest.approx(0.304 * ev.extras["sigma_max_mpa"][0])
+
+
+def test_a_concave_flank_is_no_undercut():
+    """The no-undercut requirement reads the convex part of the profile only: a quintic
+    law whose profile turns concave (radius about -4.2 m there: the roller rides inside a
+    near-flat hollow) reports its least convex radius, not the concave one; the profile
+    radius rho_p - rf of a concave pitch curve is below -rf, never an undercut."""
+    from camopt.engine.driver import prepare
+
+    config = load(CONFIGS / "vcb_velocity.toml", "case.a4_bounds=[-0.03, 0.03]",
+                  "case.a5_bounds=[-0.006, 0.006]", "case.release_offset_bounds_deg=[14, 19]")
+    p, _ = prepare(config)
+    x = np.array([0.388283, -0.085336, -0.047605, 8094.84, 5926.71, 0.00394, 0.005922,
+                  np.radians(19.0)])
+    A, kc, link = p.designs(x[None, :])
+    kin = p.model.kinematics(A, link, p.rod_offset)
+    radius = p.model.contact(kin.follower, p.model.closing_torque(kc)).curvature[0] * 1e3
+    rf = p.config.rf_mm
+    assert radius.min() < -rf  # a concave stretch
+    convex = radius[radius > -rf]
+    reported = p.describe(x[None, :]).extras["curvature_min_mm"][0]
+    assert reported == pytest.approx(convex.min(), rel=1e-12) and reported > rf

@@ -261,7 +261,11 @@ class VcbProblem(Problem, VariesCase):
             extras.update({
                 **{f"a{k}": A[:, k] for k in range(A.shape[1])},
                 "pressure_angle_max_deg": q.psi_max,
-                "curvature_min_mm": np.min(con.curvature, axis=1) / MM,
+                # the least radius of the convex part, where a roller can undercut (the
+                # profile radius is rho_p - rf: a concave pitch curve gives < -rf, never
+                # an undercut, whatever its size); inf for a wholly concave profile
+                "curvature_min_mm": np.min(np.where(con.curvature > -m.rf, con.curvature,
+                                                    np.inf), axis=1) / MM,
                 # unbounded where the follower dwells (Fn = T / arm, arm = 0 there)
                 "normal_force_max_n": np.where(np.isfinite(dwell), np.inf,
                                                row_max(con.normal_force)),

@@ -55,7 +55,8 @@ def requirements(case: Mapping[str, Any], names: Collection[str]) -> tuple[Requi
                     upper=float(psi if psi is not None else PRESSURE_ANGLE_MAX_DEG),
                     source="config pressure_angle_max_deg" if psi is not None
                     else "Sec 2.3: allowable 45 deg"),
-        Requirement("cam curvature radius (no undercut)", "curvature_min_mm", "mm",
+        Requirement("cam curvature radius, convex part (no undercut)", "curvature_min_mm",
+                    "mm",
                     lower=float(case["rf_mm"]), source="Sec 2.3: > roller radius rf_mm"),
     ]
     if case.get("require_latch") and case.get("latch_energy_min_j"):
