@@ -118,13 +118,16 @@ def progress(quiet: bool) -> Iterator[Any]:
 
     columns = (rp.TextColumn("{task.description}"), rp.BarColumn(), rp.MofNCompleteColumn(),
                rp.TextColumn("best {task.fields[best]}"), rp.TimeElapsedColumn())
+    # the objective named: a robust run's is the normalised yield margin (<= 0 met), not
+    # the case's quantity
     with rp.Progress(*columns, console=err, transient=True) as bar:
         task = bar.add_task("solving", total=None, best="-")
 
         def callback(p: Any) -> None:
             total = p.repeats * (p.max_iterations or 1)
             done = p.repeat * (p.max_iterations or 1) + p.iteration
-            bar.update(task, total=total, completed=done, best=f"{p.best_objective:.6g}",
+            bar.update(task, total=total, completed=done,
+                       best=f"{p.objective_name} {p.best_objective:.6g}",
                        description=f"repeat {p.repeat + 1}/{p.repeats}")
 
         def check(done: int, total: int) -> None:

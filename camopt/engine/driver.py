@@ -41,6 +41,7 @@ class Progress:
     iteration: int
     max_iterations: int | None
     best_objective: float
+    objective_name: str = "objective"  # the problem's (a robust run's: yield_margin)
 
 
 def solver_options() -> dict[str, Any]:
@@ -140,7 +141,8 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
         best_v.append(float(bev.violation[0]))
         mean_f.append(float(finite.mean()) if finite.size else np.inf)
         if callback:
-            callback(Progress(index, repeats, solver.nit, solver.max_iterations(), best_f[-1]))
+            callback(Progress(index, repeats, solver.nit, solver.max_iterations(), best_f[-1],
+                              problem.objective_name))
     x, bev = solver.best()
     if stochastic is not None:  # the solver's best and the finalists on fresh draws
         x, bev = stochastic.select(x, robust.repeat_seed(child, 1))
@@ -220,7 +222,8 @@ def _parallel_repeats(problem: Problem, solver_cls: type[Solver], config: Loaded
             rec = fut.result()
             finished.append(rec)
             if callback:
-                callback(Progress(len(finished) - 1, len(children), rec.nit, rec.nit, rec.fun))
+                callback(Progress(len(finished) - 1, len(children), rec.nit, rec.nit, rec.fun,
+                                  problem.objective_name))
     except BrokenProcessPool:  # a worker was killed (OOM killer, kill): keep what finished
         kept = {r.index for r in finished}
         for fut in futures:

@@ -51,6 +51,20 @@ def test_execute_is_reproducible_and_reports_progress():
     assert np.array_equal(a.best.x, b.best.x)
     assert len(seen) == 3 * 40 and seen[-1].repeat == 2 and seen[-1].iteration == 40
     assert a.repeats[1].spawn_key == (1,)
+    assert {p.objective_name for p in seen} == {a.problem.objective_name}
+
+
+def test_a_robust_runs_progress_names_its_yield_margin():
+    """The progress a robust run with ``objective = "margin"`` reports is its normalised
+    yield margin, named so (the bar shows the name with the value: it is not the case's
+    quantity)."""
+    seen = []
+    execute(load(CONFIGS / "fast_switch_robust.toml", "solver.generations=2",
+                 "solver.population=8", "robust.samples=8", "robust.finalists=2",
+                 "robust.check_samples=100", "solver.polish.evaluations=10",
+                 "robust.objective=margin"),
+            callback=seen.append)
+    assert seen and {p.objective_name for p in seen} == {"yield_margin"}
 
 
 def test_max_seconds_stops_every_repeat_between_iterations():
