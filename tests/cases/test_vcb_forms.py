@@ -82,9 +82,9 @@ def test_an_unknown_form_names_the_known_ones():
 
 
 def test_every_dynamic_requirement_is_judged_with_its_limit(problem):
-    """The release margin, the lift-off share, the latch energy's upper limit and the
-    count of band sets that do not close are requirements whenever the dynamics report
-    them, with the case's limits."""
+    """The release margin, the lift-off share, the latch energy's upper limit, the pick-up
+    impact's shear stress and the count of band sets that do not close are requirements
+    whenever the dynamics report them, with the case's limits."""
     ev = problem.describe(problem.vendor_x()[None, :])
     case = problem.config.model_dump()
     case = {**case, "release_torque_margin_min": 1.3}
@@ -93,6 +93,7 @@ def test_every_dynamic_requirement_is_judged_with_its_limit(problem):
     assert reqs["lift_off_torque_ratio"].lower == problem.config.lift_off_fraction_min
     assert reqs["latch_kinetic_energy_high_j"].upper == problem.config.latch_energy_max_j
     assert reqs["band_sets_not_latched"].upper == 0
+    assert reqs["pickup_tau_mpa"].upper == problem.config.shear_yield_mpa
     # the vendor: it releases under every set, but with less than the margin
     low = ev.extras["release_torque_margin_low"][0]
     assert 1.0 < low < 1.3 and not reqs["release_torque_margin_low"].passes(low)
