@@ -7,6 +7,7 @@ import json
 import pytest
 from typer.testing import CliRunner
 
+from camopt.cases.vcb.forms import FORM_NAMES, get_form
 from camopt.cli import app
 from camopt.cli.calibrate import pair_sets
 from tests.cases.vcb_ode import CURVES, LATCH_DELAY_S, SPRING_SETS, TRUTH
@@ -40,10 +41,31 @@ def two(tmp_path_factory):
     return json.loads(result.stdout), out
 
 
+def test_every_model_form_is_fitted_and_reported_with_which_are_kept(two):
+    """Each form of camopt/cases/vcb/forms.py has its RMS misfit, parameters with value,
+    low and high, and whether it is kept. The synthetic curves are made with the
+    efficiency and Coulomb friction everywhere: that form fits at the noise and is kept;
+    friction only in the driven closing misfits the two spring sets by over ten noise
+    levels and is not."""
+    data, _ = two
+    forms = {f["form"]: f for f in data["forms"]}
+    assert list(forms) == list(FORM_NAMES)
+    for name, f in forms.items():
+        assert f["rms_mm"] > 0 and isinstance(f["kept"], bool), name
+        params = {p["name"] for p in f["parameters"]}
+        assert params == set(get_form(name).parameters) | {"latch_delay_ms"}, name
+        for p in f["parameters"]:
+            assert p["low"] <= p["value"] <= p["high"], (name, p)
+    assert data["kept_forms"] == [n for n, f in forms.items() if f["kept"]]
+    assert forms["efficiency_coulomb"]["kept"]
+    assert not forms["driven_coulomb"]["kept"]
+    assert not forms["efficiency_driven_coulomb"]["kept"]
+    assert forms["driven_coulomb"]["rms_mm"] > 10 * forms["efficiency_coulomb"]["rms_mm"]
+
+
 def test_json_has_rms_parameters_and_predictions_with_intervals(two):
     data, _ = two
-    (form,) = data["forms"]
-    assert form["form"] == "efficiency_coulomb"
+    (form,) = [f for f in data["forms"] if f["form"] == "efficiency_coulomb"]
     assert form["rms_mm"] == pytest.approx(0.02, rel=0.1)
     params = {p["name"]: p for p in form["parameters"]}
     assert params["release_offset_deg"]["low"] <= TRUTH.release_offset_deg \
@@ -71,7 +93,8 @@ def test_the_residual_figure_is_written(two):
 
 def test_the_fragment_extends_the_case_with_the_calibrated_values(two, tmp_path):
     data, out = two
-    params = {p["name"]: p["value"] for p in data["forms"][0]["parameters"]}
+    (best,) = [f for f in data["forms"] if f["form"] == "efficiency_coulomb"]
+    params = {p["name"]: p["value"] for p in best["parameters"]}
     design = out.parent / "design.toml"
     design.write_text(f'extends = "{out.name}"\n[solver]\nname = "de_gr"\n')
     case = load(design).case
