@@ -36,7 +36,8 @@ def two(tmp_path_factory):
                                  f"kc2_n_per_mm={KC[1]}", "--set", "label=stiff",
                                  "--predict", "kc1_n_per_mm=8.5,kc2_n_per_mm=8.5,label=mid",
                                  "--format", "json", "--out", str(out),
-                                 "--plot", str(out.parent / "figs")])
+                                 "--plot", str(out.parent / "figs"),
+                                 "--archive", str(out.parent / "cal.h5")])
     assert result.exit_code == 0, result.output
     return json.loads(result.stdout), out
 
@@ -140,3 +141,39 @@ def test_a_case_without_calibration_says_so(tmp_path):
     result = runner.invoke(app, ["calibrate", str(CONFIGS / "emb.toml"), "--curve", VENDOR])
     assert result.exit_code == 2
     assert "has no calibration on measured curves" in result.stderr
+
+
+def test_show_and_report_of_the_calibration_archive(two):
+    """show prints the report calibrate printed (form table, parameters with intervals,
+    analyser quantities measured beside fitted); --format json the same document as
+    calibrate's; report writes one HTML page with each form's parameter table, analyser
+    quantities and its fit figure; plot writes one PNG per form."""
+    data, out = two
+    path = out.parent / "cal.h5"
+    shown = runner.invoke(app, ["show", str(path)])
+    assert shown.exit_code == 0, shown.output
+    for name in FORM_NAMES:
+        assert name in shown.stdout
+    assert "analyser quantity" in shown.stdout and "latch_delay_ms" in shown.stdout
+    doc = json.loads(runner.invoke(app, ["show", str(path), "--format", "json"]).stdout)
+    assert doc["archive_kind"] == "calibration" and doc["case_kind"] == "vcb"
+    assert doc["forms"] == json.loads(json.dumps(data["forms"]))
+    html = out.parent / "cal.html"
+    result = runner.invoke(app, ["report", str(path), "--out", str(html)])
+    assert result.exit_code == 0, result.output
+    page = html.read_text()
+    for name in FORM_NAMES:
+        assert f'id="form-{name}"' in page and f'id="figure-fit-{name}"' in page
+    assert "contact_velocity_m_s" in page and "release_offset_deg" in page
+    result = runner.invoke(app, ["plot", str(path), "--out", str(out.parent / "png")])
+    assert result.exit_code == 0, result.output
+    assert len(list((out.parent / "png").glob("*.png"))) == len(FORM_NAMES)
+
+
+def test_an_existing_archive_is_refused_before_the_fit(tmp_path):
+    path = tmp_path / "cal.h5"
+    path.write_text("keep")
+    result = runner.invoke(app, ["calibrate", VCB, "--curve", VENDOR, "--archive", str(path)])
+    assert result.exit_code == 2
+    assert result.stderr == f"error: {path}: --archive: exists; pass --force to overwrite\n"
+    assert path.read_text() == "keep"

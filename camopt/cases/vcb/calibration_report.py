@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -33,12 +33,9 @@ from camopt.cases.vcb.curves import AnalyserQuantities, VelocityPoints, read_cur
 from camopt.cases.vcb.forms import BAND_COLUMNS, FORM_NAMES, FORMS, get_form
 from camopt.cases.vcb.model import VcbModel
 from camopt.config.models import CaseConfig
-from camopt.core.calibration import CalibrationRequest
+from camopt.core.calibration import CalibrationRequest, FittedCurve
 from camopt.errors import ConfigError
 from camopt.units import MM, MS, N_PER_MM
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
 
 DESIGN_KEYS = ("kc1_n_per_mm", "kc2_n_per_mm", "a1", "a2", "a3", "cam_points", "label")
 CURVE_KEYS = (*DESIGN_KEYS, "latch_delay_ms")
@@ -221,10 +218,9 @@ class VcbCalibrationReport:
                            f"{d.touch_time_high / MS:>8.3f}")
         return out
 
-    def figures(self) -> dict[str, Figure]:
-        from camopt.cases.vcb.calibration_figures import figures
-
-        return figures(self.fits)
+    def curves(self) -> tuple[FittedCurve, ...]:
+        return tuple(FittedCurve(f.form, c.source, c.design, c.time, c.measured, c.fitted)
+                     for f in self.fits for c in f.curves)
 
     def fragment(self, extends: str) -> str:
         kept = [f for f in self.fits if f.kept] or list(self.fits)
