@@ -325,7 +325,7 @@ def template(case_model: type[CaseConfig], solver: SolverOptions) -> str:
     kind = case.kind
     lines = [f"# camopt case file for '{kind}'. Units are in the field names; others are SI.", ""]
     if case_model.field_roles:
-        lines += ["# Each [case] field's role is in brackets at the end of its comment:"]
+        lines += ["# Each [case] field's role is in parentheses at the end of its comment:"]
         lines += [f"#   ({role}): {meaning}" for role, meaning in ROLES.items()
                   if role in set(case_model.field_roles.values())]
         lines += [""]
