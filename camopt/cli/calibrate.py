@@ -131,7 +131,7 @@ def calibrate(
                 check_not_input(target, (case, *curve), key)
         if out_path is not None and archive_path is not None and out_path.resolve() == \
                 archive_path.resolve():
-            raise ConfigError("--archive", str(archive_path), "the same file as --out")
+            raise ConfigError(str(archive_path), "--archive", "the same file as --out")
         if plot is not None:  # a --plot that is a file, or unwritable, before the work
             from camopt.archive.files import ensure_folder
 
