@@ -11,7 +11,8 @@ import time
 
 import numpy as np
 
-from camopt.cases.vcb.calibrate import FORMS, CurveCase, Design, calibrate
+from camopt.cases.vcb.calibrate import CurveCase, Design, calibrate
+from camopt.cases.vcb.forms import get_form
 from camopt.cases.vcb.curves import TravelCurve, noise_level
 from camopt.cases.vcb.problem import VcbProblem
 from camopt.units import MM, MS, N_PER_MM
@@ -50,7 +51,7 @@ def main() -> None:
                     s = s + hit * rng.uniform(-0.5e-3, 0.5e-3, t.size)
                 curves.append(CurveCase(_curve(t, s, name), designs[name]))
             t0 = time.perf_counter()
-            (fit,) = calibrate(problem.config, curves, [FORMS["efficiency_coulomb"]],
+            (fit,) = calibrate(problem.config, curves, [get_form("efficiency_coulomb")],
                                [designs["third"]])
             wall = time.perf_counter() - t0
             errors = []

@@ -67,32 +67,33 @@ def _folder(path: Path) -> Path:
     return path.parent if str(path.parent) else Path(".")
 
 
-def check_writable(path: Path, force: bool) -> None:
+def check_writable(path: Path, force: bool, key: str = "--out") -> None:
     """Fail before any work if ``path`` exists (without force), is not a regular file (even
-    with force), has an over-long name, or its folder is not writable."""
+    with force), has an over-long name, or its folder is not writable; ``key`` the option
+    the messages name."""
     if "\0" in str(path):
-        raise ArchiveError(f"{path!r}: --out: contains a NUL byte")
+        raise ArchiveError(f"{path!r}: {key}: contains a NUL byte")
     if len(path.name.encode()) > MAX_NAME_BYTES:
-        raise ArchiveError(f"{path}: --out: file name longer than {MAX_NAME_BYTES} bytes (its "
+        raise ArchiveError(f"{path}: {key}: file name longer than {MAX_NAME_BYTES} bytes (its "
                            "temporary file beside it must fit the 255-byte limit)")
     try:
         info = os.lstat(path)
     except FileNotFoundError:
         info = None
     except OSError as exc:
-        raise ArchiveError(f"{path}: --out: {exc.strerror}") from None
+        raise ArchiveError(f"{path}: {key}: {exc.strerror}") from None
     if info is not None:
         if stat.S_ISDIR(info.st_mode):
-            raise ArchiveError(f"{path}: --out: is a directory")
+            raise ArchiveError(f"{path}: {key}: is a directory")
         if not stat.S_ISREG(info.st_mode):
-            raise ArchiveError(f"{path}: --out: exists and is not a regular file (a link, "
-                               "device or FIFO); --out replaces only a regular file")
+            raise ArchiveError(f"{path}: {key}: exists and is not a regular file (a link, "
+                               f"device or FIFO); {key} replaces only a regular file")
         if not force:
-            raise ArchiveError(f"{path}: --out: exists; pass --force to overwrite")
+            raise ArchiveError(f"{path}: {key}: exists; pass --force to overwrite")
     folder = _folder(path)
     if not folder.is_dir():
-        raise ArchiveError(f"{path}: --out: folder {folder} does not exist")
-    _probe(folder, f"{path}: --out")
+        raise ArchiveError(f"{path}: {key}: folder {folder} does not exist")
+    _probe(folder, f"{path}: {key}")
 
 
 def _probe(folder: Path, where: str) -> None:
@@ -572,11 +573,11 @@ def check_not_input(target: Path, inputs: Sequence[Path], key: str = "--out") ->
                                "choose another name")
 
 
-KINDS = ("run", "sweep", "tolerance")
+KINDS = ("run", "sweep", "tolerance", "calibration")
 
 
 def archive_kind(path: str | Path) -> str:
-    """'run', 'sweep' or 'tolerance'."""
+    """'run', 'sweep', 'tolerance' or 'calibration'."""
     with open_archive(path) as f:
         try:
             kind = str(f.attrs.get("archive_kind", "run"))

@@ -31,6 +31,11 @@ def describe(path: Path) -> dict[str, Any]:
                            objective_name=str(attrs["objective_name"]))
                 if bool(attrs.get("interrupted", False)):
                     row["verdict"] += " (interrupted)"
+            elif kind == "calibration":
+                summary = json.loads(str(attrs["summary"]))
+                row.update(case=str(attrs["case_kind"]),
+                           verdict="kept: " + (", ".join(summary.get("kept_forms", [])) or
+                                               "none"))
             elif kind == "sweep":
                 spec = json.loads(str(attrs["spec"]))
                 row.update(case=str(spec["data"]["case"]["kind"]),

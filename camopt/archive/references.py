@@ -21,16 +21,34 @@ def resolve_references(config: LoadedConfig) -> LoadedConfig:
     if spec.resolve is None:
         return config
 
-    def load(key: str, ref: str) -> RunView:
+    case = spec.resolve(config.case, _Loader(config.path))
+    return config if case is config.case else dataclasses.replace(config, case=case)
+
+
+class _Loader:
+    """The :class:`~camopt.cases.registry.ArchiveLoader` of one case file: archives and
+    other input files relative to the working folder, else to the case file's folder."""
+
+    def __init__(self, case_path: str) -> None:
+        self.case_path = case_path
+
+    def _find(self, ref: str) -> Path:
+        path = Path(ref)
+        if not path.is_file() and (Path(self.case_path).parent / ref).is_file():
+            path = Path(self.case_path).parent / ref
+        return path
+
+    def __call__(self, key: str, ref: str) -> RunView:
         from camopt.archive.runs import load_run  # h5py only for a case that refers
 
-        path = Path(ref)
-        if not path.is_file() and (Path(config.path).parent / ref).is_file():
-            path = Path(config.path).parent / ref
         try:
-            return load_run(path)
+            return load_run(self._find(ref))
         except ArchiveError as exc:
-            raise ConfigError(config.path, key, str(exc)) from None
+            raise ConfigError(self.case_path, key, str(exc)) from None
 
-    case = spec.resolve(config.case, load)
-    return config if case is config.case else dataclasses.replace(config, case=case)
+    def locate(self, key: str, ref: str) -> Path:
+        path = self._find(ref)
+        if not path.is_file():
+            raise ConfigError(self.case_path, key, f"{ref}: no such file (looked in the "
+                              "working folder and beside the case file)")
+        return path

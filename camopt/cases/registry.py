@@ -15,6 +15,7 @@ import pkgutil
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from camopt.config.models import CaseConfig
@@ -45,6 +46,11 @@ class ArchiveLoader(Protocol):
     missing or damaged archive is a ConfigError against that key."""
 
     def __call__(self, key: str, path: str, /) -> RunView: ...
+
+    def locate(self, key: str, path: str, /) -> Path:
+        """Another input file named by a case-file key (``case.reference_cam_points``),
+        found as the archives are: in the working folder, else beside the case file; a
+        missing one is a ConfigError against that key."""
 
 
 @dataclass(frozen=True)

@@ -101,8 +101,12 @@ def calibrate(
     plot: Annotated[Path | None, typer.Option(
         help="write measured vs fitted curves and residuals (PNG per form) to this "
         "folder")] = None,
-    force: Annotated[bool, typer.Option(help="overwrite an existing --out and --plot's "
-                                        "PNGs")] = False,
+    archive_path: Annotated[Path | None, typer.Option(
+        "--archive", metavar="FILE.h5",
+        help="write a calibration archive (curves, fits, report) for camopt show, plot "
+        "and report")] = None,
+    force: Annotated[bool, typer.Option(help="overwrite an existing --out, --archive and "
+                                        "--plot's PNGs")] = False,
     format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
 ) -> None:
     """Calibrate a case's dynamics on measured travel curves (breaker analyser CSV)."""
@@ -119,29 +123,39 @@ def calibrate(
             curves=tuple(CurveRequest(Path(p), tuple(s)) for p, s in pairs),
             predict=tuple(predict or ()), velocity_points_mm=velocity_points(points),
             forms=tuple(form or ()))
-        if out_path is not None:  # refuse an existing --out before the work
-            from camopt.archive.files import check_not_input, check_writable
+        for target, key in ((out_path, "--out"), (archive_path, "--archive")):
+            if target is not None:  # refuse an existing output before the work
+                from camopt.archive.files import check_not_input, check_writable
 
-            check_writable(out_path, force)
-            check_not_input(out_path, (case, *curve))
+                check_writable(target, force, key)
+                check_not_input(target, (case, *curve), key)
+        if out_path is not None and archive_path is not None and out_path.resolve() == \
+                archive_path.resolve():
+            raise ConfigError(str(archive_path), "--archive", "the same file as --out")
         if plot is not None:  # a --plot that is a file, or unwritable, before the work
             from camopt.archive.files import ensure_folder
 
             ensure_folder(plot, "--plot")
         report = get_case(config.case.kind).calibrate(config.case, request)
         written = []
+        data: Any = report.to_json()
         if plot is not None:
             from camopt.cli.outputs import writing
+            from camopt.reporting.calibration_figures import figures, rms_of
             from camopt.reporting.plots import save
 
             with writing(plot):
-                written = save(report.figures(), plot, "calibration", force,
-                               (case, *curve), key="--plot")
+                written = save(figures(report.curves(), rms_of(data)), plot, "calibration",
+                               force, (case, *curve), key="--plot")
         if out_path is not None:
             extends = os.path.relpath(case.resolve(), out_path.resolve().parent)
             write_files({out_path: report.fragment(Path(extends).as_posix()).encode()},
                         force, inputs=(case, *curve))
-    data: Any = report.to_json()
+        if archive_path is not None:
+            from camopt.archive.calibrations import write_calibration
+
+            write_calibration(archive_path, jsonable(data), report.lines(), report.curves(),
+                              config.case.kind, config.text, force)
     if format == Format.json:
         print(json.dumps(jsonable(data), indent=2))
     else:
@@ -149,5 +163,7 @@ def calibrate(
     if format != Format.json:
         if out_path is not None:
             print(f"\ncalibrated values written to {out_path} (a case can extend it)")
+        if archive_path is not None:
+            print(f"calibration archive: {archive_path} (camopt show / plot / report)")
         for p in written:
             print(f"figure: {p}")

@@ -65,6 +65,13 @@ def plot(paths: Annotated[list[Path], typer.Argument(
             from camopt.reporting.tolerance_figures import figures as tolerance_figures
 
             figures = tolerance_figures(load_samples(path))
+        elif archive.archive_kind(path) == "calibration":
+            from camopt.archive.calibrations import load_calibration
+            from camopt.reporting.calibration_figures import figures as fit_figures
+            from camopt.reporting.calibration_figures import rms_of
+
+            view = load_calibration(path)
+            figures = fit_figures(view.curves, rms_of(view.summary))
         else:
             figures = plots.run_figures(archive.load_run(path))
         with writing(folder):
@@ -128,7 +135,8 @@ def report(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="ar
            force: Annotated[bool, typer.Option(help="overwrite --out")] = False) -> None:
     """Write one self-contained HTML report (figures inline, no network needed to view it):
     the case and solver, the best design beside the reference design, constraints, metrics,
-    figures, repeat statistics, notes, versions and seeds; for a sweep, its ranking."""
+    figures, repeat statistics, notes, versions and seeds; for a sweep, its ranking; for a
+    calibration, per model form the fits, residuals, parameters and analyser quantities."""
     from camopt import archive
     from camopt.cli.catalog import write_text
     from camopt.reporting.html_report import render

@@ -15,7 +15,21 @@ from camopt.cli.console import out
 from camopt.cli.layout import print_ranking, print_show
 
 if TYPE_CHECKING:
-    pass
+    from camopt.archive.calibrations import CalibrationView
+
+
+def calibration_doc(view: CalibrationView) -> dict[str, Any]:
+    """``show --format json`` of a calibration archive: ``calibrate --format json``'s
+    document with the archive's kind, path, case kind and time."""
+    return {"archive_kind": "calibration", "path": view.path, "case_kind": view.case_kind,
+            "created": view.created, **view.summary}
+
+
+def calibration_lines(view: CalibrationView) -> list[str]:
+    """``show`` of a calibration archive: a heading, then the report as calibrate printed
+    it."""
+    return [f"calibration archive {view.path} ({view.case_kind} case, written "
+            f"{view.created})", "", *view.lines]
 
 
 @app.command()
@@ -25,7 +39,10 @@ def show(run_paths: Annotated[list[Path], typer.Argument(
          ) -> None:
     """Show archives: a run's best design beside the reference design, its repeats and
     table; a sweep's grid points ranked (as compare SWEEP); a tolerance archive's yield
-    and spreads (as ``camopt tolerance`` printed them). Several archives (a glob such
+    and spreads (as ``camopt tolerance`` printed them); a calibration archive's report (as
+    ``camopt calibrate`` printed it: per model form the RMS misfit, kept or not, the
+    parameters with their intervals, each curve's analyser quantities measured beside
+    fitted, the predictions). Several archives (a glob such
     as runs/NAME-*.h5) are each shown, in the order given (a glob's order: oldest
     first, as the names carry the time); with --format json, as a JSON array."""
     from camopt import archive
@@ -43,10 +60,15 @@ def show(run_paths: Annotated[list[Path], typer.Argument(
                 from camopt.archive.samples import load_samples
 
                 loaded.append(("tolerance", jsonable(load_samples(path).summary)))
+            elif kind == "calibration":
+                from camopt.archive.calibrations import load_calibration
+
+                loaded.append(("calibration", load_calibration(path)))
             else:
                 loaded.append(("run", archive.load_run(path)))
     if format is Format.json:
-        docs = [item if kind != "run" else report.show(item) for kind, item in loaded]
+        docs = [report.show(item) if kind == "run" else calibration_doc(item)
+                if kind == "calibration" else item for kind, item in loaded]
         sys.stdout.write(json.dumps(docs[0] if len(docs) == 1 else docs, indent=2) + "\n")
         return
     for i, (kind, item) in enumerate(loaded):
@@ -58,6 +80,8 @@ def show(run_paths: Annotated[list[Path], typer.Argument(
             from camopt.cli.tolerance import print_tolerance
 
             print_tolerance(item)
+        elif kind == "calibration":
+            sys.stdout.write("\n".join(calibration_lines(item)) + "\n")
         else:
             print_show(item)
 

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
@@ -248,8 +249,28 @@ class SolverOptions(Strict):
     name: str
 
 
+FieldRole = Literal["hardware", "identified", "requirement", "solver setting",
+                    "measured data"]
+ROLES: dict[str, str] = {
+    "hardware": "describes the breaker as built or drawn (geometry, springs, materials, "
+    "loads, the reference design): change it with the hardware",
+    "identified": "fitted to measurements, not read off a drawing: re-identify it after a "
+    "geometry change (camopt calibrate on travel curves, or an identification case)",
+    "requirement": "what a design must meet (a constraint or a reported limit), from the "
+    "specification, a standard or an assumption",
+    "solver setting": "how camopt models, searches and reports (search bounds, grids, "
+    "penalties, seeds): no property of the breaker",
+    "measured data": "a measurement an identification fits (a datum and its reading error)",
+}
+"""What each field role means (``docs/cases``, ``camopt init``)."""
+
+
 class CaseConfig(Strict):
-    """Base of every case's parameters; ``kind`` selects the case."""
+    """Base of every case's parameters; ``kind`` selects the case. A case may mark each
+    field with its role (``field_roles``: field name -> :data:`FieldRole`); ``docs/cases``
+    and ``camopt init`` show it."""
+
+    field_roles: ClassVar[Mapping[str, FieldRole]] = {}
 
     kind: str
     tolerance_class: str | None = Field(
@@ -282,7 +303,9 @@ def _section(title: str, model: BaseModel) -> list[str]:
             continue
         if info.description:
             unit = unit_of(name)
-            lines.append(f"# {info.description}" + (f" [{unit}]" if unit else ""))
+            role = role_of(type(model), name)
+            lines.append(f"# {info.description}" + (f" [{unit}]" if unit else "")
+                         + (f" ({role})" if role else ""))
         if value is None:
             lines.append(f"# {name} =   (unset)")
         else:
@@ -290,11 +313,22 @@ def _section(title: str, model: BaseModel) -> list[str]:
     return lines
 
 
+def role_of(model: type[BaseModel], name: str) -> str | None:
+    """The role of a case field (``CaseConfig.field_roles``), None where it has none."""
+    roles: Mapping[str, str] = getattr(model, "field_roles", {})
+    return roles.get(name)
+
+
 def template(case_model: type[CaseConfig], solver: SolverOptions) -> str:
     """A commented case file for a case config model with every default written out."""
     case = case_model.model_validate({})
     kind = case.kind
     lines = [f"# camopt case file for '{kind}'. Units are in the field names; others are SI.", ""]
+    if case_model.field_roles:
+        lines += ["# Each [case] field's role is in parentheses at the end of its comment:"]
+        lines += [f"#   ({role}): {meaning}" for role, meaning in ROLES.items()
+                  if role in set(case_model.field_roles.values())]
+        lines += [""]
     lines += _section("case", case) + [""]
     lines += _section("solver", solver) + [""]
     lines += _section("run", RunSection(name=kind))

@@ -9,10 +9,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
+from numpy.typing import NDArray
 
 
 @dataclass(frozen=True)
@@ -36,9 +35,26 @@ class CalibrationRequest:
     forms: tuple[str, ...] = ()
 
 
+@dataclass(frozen=True)
+class FittedCurve:
+    """One measured curve and a model form's fit to it, as plain data (what the archive
+    stores and the figures draw): the ``form``, the curve file (``source``), its design's
+    label, the samples' time from the close command (s) and the measured and fitted
+    travel (m), each (m,)."""
+
+    form: str
+    source: str
+    design: str
+    time_s: NDArray
+    measured_m: NDArray
+    fitted_m: NDArray
+
+
 class CalibrationReport(Protocol):
-    """A finished calibration: JSON-ready data, the lines of its human report and the
-    case fragment with the calibrated values (``extends`` the case file)."""
+    """A finished calibration: JSON-ready data, the lines of its human report, the case
+    fragment with the calibrated values (``extends`` the case file) and the fitted
+    curves. ``to_json()["forms"]`` lists each form with its ``form`` name and
+    ``rms_mm`` (what the figures' titles and ``camopt report`` read)."""
 
     def to_json(self) -> dict[str, Any]:
         """Plain data (per form ``rms_mm``, parameters with ``value``/``low``/``high``,
@@ -50,5 +66,5 @@ class CalibrationReport(Protocol):
     def fragment(self, extends: str) -> str:
         """TOML text: ``extends = <extends>`` and a ``[case]`` of the calibrated values."""
 
-    def figures(self) -> dict[str, Figure]:
-        """Measured vs fitted curves and residuals, by name (imports matplotlib)."""
+    def curves(self) -> tuple[FittedCurve, ...]:
+        """Every form's fit of every curve (the figures' and the archive's data)."""

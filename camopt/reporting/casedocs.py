@@ -11,7 +11,7 @@ from pathlib import Path
 from pydantic import BaseModel
 
 from camopt.cases import CaseSpec, cases
-from camopt.config.models import Bounds, CaseConfig, unit_of
+from camopt.config.models import ROLES, Bounds, CaseConfig, role_of, unit_of
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "cases"
 
@@ -53,12 +53,20 @@ def render(spec: CaseSpec) -> str:
     if spec.paper_source:
         lines += [f"Source: {spec.paper_source}. Model: `{model.__module__}.{model.__name__}`; "
                   f"`camopt init {spec.kind}` prints these defaults as a case file.", ""]
-    lines += ["| field | default | unit | meaning (source) |", "|---|---|---|---|"]
+    roles = bool(model.field_roles)
+    if roles:
+        used = set(model.field_roles.values())
+        lines += ["Each field's role:", ""] + [f"- **{role}**: {meaning}."
+                                              for role, meaning in ROLES.items()
+                                              if role in used] + [""]
+    lines += ["| field | default | unit |" + (" role |" if roles else "")
+              + " meaning (source) |", "|---|---|---|" + ("---|" if roles else "") + "---|"]
     for name, info in model.model_fields.items():
         if name == "kind":
             continue
+        role = f" {role_of(model, name) or '-'} |" if roles else ""
         lines.append(f"| `{name}` | {_cell(_default(getattr(case, name)))} | "
-                     f"{unit_of(name) or '-'} | {_cell(info.description or '')} |")
+                     f"{unit_of(name) or '-'} |{role} {_cell(info.description or '')} |")
     return "\n".join(lines) + "\n"
 
 

@@ -124,7 +124,7 @@ def sweep_context(path: Path) -> dict[str, Any]:
 
 
 def render(path: Path) -> str:
-    """The HTML page of a run, sweep or tolerance archive."""
+    """The HTML page of a run, sweep, tolerance or calibration archive."""
     import jinja2
 
     env = jinja2.Environment(loader=jinja2.PackageLoader("camopt.reporting", "templates"),
@@ -134,6 +134,8 @@ def render(path: Path) -> str:
     kind = archive.archive_kind(path)
     if kind == "tolerance":
         return env.get_template("tolerance.html.j2").render(**tolerance_context(path))
+    if kind == "calibration":
+        return env.get_template("calibration.html.j2").render(**calibration_context(path))
     if kind == "sweep":
         context = sweep_context(path)
     else:
@@ -150,3 +152,17 @@ def tolerance_context(path: Path) -> dict[str, Any]:
     samples = load_samples(path)
     return {"title": path.name, "s": report.jsonable(samples.summary),
             "created": samples.created, "figures": _figures(figures(samples))}
+
+
+def calibration_context(path: Path) -> dict[str, Any]:
+    """What the page shows of a calibration archive: its summary (``s``, as ``calibrate
+    --format json`` printed it: per form the RMS misfit, kept, parameters with intervals,
+    each curve's analyser quantities measured and fitted, the predictions) and the fits'
+    figures drawn from the stored curves."""
+    from camopt.archive.calibrations import load_calibration
+    from camopt.reporting.calibration_figures import figures, rms_of
+
+    view = load_calibration(path)
+    return {"title": path.name, "s": report.jsonable(view.summary), "created": view.created,
+            "case_kind": view.case_kind, "config_toml": view.config_toml,
+            "figures": _figures(figures(view.curves, rms_of(view.summary)))}

@@ -132,7 +132,8 @@ REFERENCE_PREFIXES = ("initial_", "original_")
 
 def reference(run: RunView) -> tuple[str, dict[str, Any]]:
     """The reference design the optimum is shown beside, under one name everywhere
-    (``reference: vendor, Sec 2.3 and Table 2``: the case's ``CaseSpec.reference``):
+    (``reference: vendor, Sec 2.3 and Table 2``: the case file's ``reference_label`` when
+    it has one, else the case's ``CaseSpec.reference``):
     the metrics a case reports with a prefix of :data:`REFERENCE_PREFIXES`, completed by
     the ``[case]`` fields named as the design variables (the vendor's spring rates are
     the config's), else the case's ``reference_values`` (a paper's optimum), else the
@@ -143,13 +144,17 @@ def reference(run: RunView) -> tuple[str, dict[str, Any]]:
 
     spec = get_case(run.kind)
     metrics = run.best.metrics
+    # a case file may name its own reference design (``[case] reference_label``: another
+    # maker's current cam), else the case's paper reference
+    own = run.case.get("reference_label")
+    own = own if isinstance(own, str) and own.strip() else None
     for prefix in REFERENCE_PREFIXES:
         values = {k[len(prefix):]: v for k, v in metrics.items() if k.startswith(prefix)}
         if values:
             for name in run.best.x:
                 if name not in values and isinstance(run.case.get(name), (int, float)):
                     values[name] = run.case[name]
-            label = spec.reference or prefix.rstrip("_") + " design"
+            label = own or spec.reference or prefix.rstrip("_") + " design"
             return f"reference: {label}", values
     names = {run.objective_name, *run.best.x, *metrics}
     source = spec.reference_values or spec.paper

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from camopt.cases.vcb.calibrate import (
-    FORMS,
     Calibration,
     CurveCase,
     Design,
@@ -17,6 +16,7 @@ from camopt.cases.vcb.calibrate import (
     sample_travel,
 )
 from camopt.cases.vcb.curves import read_curve
+from camopt.cases.vcb.forms import get_form
 from camopt.cases.vcb.problem import VcbProblem
 from camopt.units import MM, MS, N_PER_MM
 from tests.cases import vcb_ode
@@ -28,7 +28,7 @@ TRUTH = {"cam_inertia_kg_m2": vcb_ode.TRUTH.cam_kg_m2, "rod_mass_kg": vcb_ode.TR
          "release_offset_deg": vcb_ode.TRUTH.release_offset_deg,
          "cam_friction_nm": vcb_ode.TRUTH.friction_nm,
          "latch_delay_ms": vcb_ode.LATCH_DELAY_S / MS}
-FORM = FORMS["efficiency_coulomb"]
+FORM = get_form("efficiency_coulomb")
 
 
 @pytest.fixture(scope="module")
@@ -129,7 +129,7 @@ def test_the_fit_does_not_depend_on_the_integration_grid(problem):
     by under 5 % of the noise (1 um; it is 0.45 um, the linear interpolation in time
     between the grid's nodes): the fit sees the model, not its grid."""
     curves = [_curve(problem, "vendor")]
-    q = np.r_[np.log([TRUTH[p.name] for p in FORM.parameters]), TRUTH["latch_delay_ms"]]
+    q = np.r_[np.log([TRUTH[name] for name in FORM.parameters]), TRUTH["latch_delay_ms"]]
     a = Calibration(problem.config, FORM, curves).simulate(q)[0]
     fine = Calibration(problem.config.model_copy(update={"dynamics_steps": 1600}), FORM,
                        curves).simulate(q)[0]
@@ -163,3 +163,53 @@ def test_remembered_kinematics_give_the_same_bits(problem):
     plain = [cal.residuals(q), cal.residuals(Q), cal.residuals(q)]
     for a, b in zip(memo, plain):
         assert np.array_equal(a, b)
+
+
+def test_fit_many_solves_fits_side_by_side_with_fixed_coordinates_and_bounds(problem):
+    """The profiles' batched Levenberg-Marquardt on a linear model r = A q - b reaches
+    scipy's robust least squares (soft-l1, f_scale 3, within bounds): a free row, a row
+    with coordinate 0 fixed, and a row whose optimum lies past a bound (it stops on it,
+    the rest re-fitted: the active set)."""
+    from scipy.optimize import least_squares
+
+    cal = Calibration(problem.config, FORM, [_curve(problem, "vendor")])
+    n = len(cal.lower)
+    rng = np.random.default_rng(1)
+    A = rng.normal(size=(40, n))
+    truth = 0.5 * (cal.lower + cal.upper)
+    b = A @ truth + 0.5 * rng.normal(size=40)
+    cal.residuals = lambda Q: np.atleast_2d(Q) @ A.T - b  # type: ignore[method-assign]
+
+    def scipy_fit(free, base, upper):
+        def fun(z):
+            q = base.copy()
+            q[free] = z
+            return A @ q - b
+        return least_squares(fun, base[free], bounds=(cal.lower[free], upper[free]),
+                             loss="soft_l1", f_scale=3.0, ftol=1e-12, xtol=1e-12,
+                             gtol=1e-12).x
+
+    q0 = truth + 0.1
+    fixed = np.r_[truth[0] + 0.3, q0[1:]]
+    Q, _ = cal.fit_many(np.vstack([q0, fixed]), np.array([-1, 0]), max_iter=200)
+    every = np.ones(n, dtype=bool)
+    np.testing.assert_allclose(Q[0], scipy_fit(every, q0, cal.upper), atol=1e-6)
+    np.testing.assert_allclose(Q[1, 1:], scipy_fit(every & (np.arange(n) > 0), fixed,
+                                                   cal.upper), atol=1e-6)
+    assert Q[1, 0] == fixed[0]
+    upper = cal.upper.copy()
+    upper[-1] = Q[0, -1] - 0.5  # the delay's bound below its optimum
+    cal.upper = upper
+    (q,), _ = cal.fit_many(q0[None, :] - 1.0, max_iter=200)
+    assert q[-1] == upper[-1]
+    np.testing.assert_allclose(q, scipy_fit(every, np.minimum(q0 - 1.0, upper), upper),
+                               atol=1e-6)
+
+
+def test_kept_forms_rule():
+    """Kept: RMS at most 1.5 x the larger of the best form's and the noise."""
+    from camopt.cases.vcb.calibrate import keep
+
+    assert keep([0.02, 0.029, 0.031, 0.4], noise=0.01) == [True, True, False, False]
+    assert keep([0.005, 0.014, 0.016], noise=0.01) == [True, True, False]
+    assert keep([], noise=0.01) == []

@@ -64,3 +64,58 @@ def test_a_design_from_points_is_the_design_from_coefficients(problem, tmp_path)
     assert reference.label == "reference" and "cam.csv" in from_points.label
     with pytest.raises(ConfigError, match="not both"):
         design_of(c, m, {"cam_points": str(path), "a1": "0.2"}, "x")
+
+
+def _case_with_points(tmp_path, problem, a=None, extra=""):
+    """A case file extending configs/vcb.toml whose reference cam is a points file beside
+    it (the vendor's law unless ``a``), named relative to the case file."""
+    a = problem.model.vendor_a if a is None else np.asarray(a)
+    theta = np.linspace(0, 140, 71)
+    _write(tmp_path / "current_cam.csv", theta,
+           np.polynomial.polynomial.polyval(theta * DEG, a) / DEG)
+    case = tmp_path / "mine.toml"
+    case.write_text(f'extends = "{CONFIGS / "vcb.toml"}"\n[case]\n'
+                    'reference_label = "my breaker, drawing 4711 rev B"\n'
+                    f'reference_cam_points = "current_cam.csv"\n{extra}')
+    return case
+
+
+def test_the_reference_cam_is_imported_from_a_points_file(problem, tmp_path, monkeypatch):
+    """reference_cam_points (relative to the case file) becomes the case's reference law:
+    the vendor's points give the vendor's reference design and metrics back; a cam with
+    a quartic term is the reference once the search's law reaches its degree."""
+    from camopt.cli.app import load_case
+
+    monkeypatch.chdir(tmp_path.parent)  # not the case file's folder
+    config = load_case(_case_with_points(tmp_path, problem)).case
+    np.testing.assert_allclose(config.reference_law, problem.model.vendor_a, atol=1e-9)
+    mine = VcbProblem(config)
+    np.testing.assert_allclose(mine.vendor_x(), problem.vendor_x(), rtol=1e-9, atol=1e-12)
+    quartic = np.r_[problem.model.vendor_a, 0.002]
+    path = _case_with_points(tmp_path, problem, quartic, "a4_bounds = [-0.01, 0.01]\n")
+    mine = VcbProblem(load_case(path).case)
+    np.testing.assert_allclose(mine.model.vendor_a, quartic, atol=1e-9)
+    assert mine.vendor_x()[5] == pytest.approx(0.002, abs=1e-9)  # a4 after kc1, kc2
+
+
+@pytest.mark.parametrize("a_change, extra, message", [
+    (np.r_[0.0, 0.0, 0.0, 0.0, 0.002], "", "has degree 4: set a4_bounds"),
+    (np.r_[1.0 * DEG, 0.0, 0.0, 0.0], "", "a cam of another geometry?"),
+])
+def test_a_reference_cam_the_case_cannot_use_is_one_line(problem, tmp_path, a_change, extra,
+                                                         message):
+    from typer.testing import CliRunner
+
+    from camopt.cli import app
+
+    a = np.r_[problem.model.vendor_a, 0.0][:len(a_change)] + a_change
+    path = _case_with_points(tmp_path, problem, a, extra)
+    result = CliRunner().invoke(app, ["validate", str(path)])
+    assert result.exit_code == 2, result.output
+    assert message in result.stderr and result.stderr.count("\n") == 1
+    missing = tmp_path / "missing.toml"
+    missing.write_text(f'extends = "{CONFIGS / "vcb.toml"}"\n[case]\n'
+                       'reference_cam_points = "nowhere.csv"\n')
+    result = CliRunner().invoke(app, ["validate", str(missing)])
+    assert result.exit_code == 2
+    assert "case.reference_cam_points: nowhere.csv: no such file" in result.stderr

@@ -7,6 +7,7 @@ import json
 import pytest
 from typer.testing import CliRunner
 
+from camopt.cases.vcb.forms import FORM_NAMES, get_form
 from camopt.cli import app
 from camopt.cli.calibrate import pair_sets
 from tests.cases.vcb_ode import CURVES, LATCH_DELAY_S, SPRING_SETS, TRUTH
@@ -35,15 +36,37 @@ def two(tmp_path_factory):
                                  f"kc2_n_per_mm={KC[1]}", "--set", "label=stiff",
                                  "--predict", "kc1_n_per_mm=8.5,kc2_n_per_mm=8.5,label=mid",
                                  "--format", "json", "--out", str(out),
-                                 "--plot", str(out.parent / "figs")])
+                                 "--plot", str(out.parent / "figs"),
+                                 "--archive", str(out.parent / "cal.h5")])
     assert result.exit_code == 0, result.output
     return json.loads(result.stdout), out
 
 
+def test_every_model_form_is_fitted_and_reported_with_which_are_kept(two):
+    """Each form of camopt/cases/vcb/forms.py has its RMS misfit, parameters with value,
+    low and high, and whether it is kept. The synthetic curves are made with the
+    efficiency and Coulomb friction everywhere: that form fits at the noise and is kept;
+    friction only in the driven closing misfits the two spring sets by over ten noise
+    levels and is not."""
+    data, _ = two
+    forms = {f["form"]: f for f in data["forms"]}
+    assert list(forms) == list(FORM_NAMES)
+    for name, f in forms.items():
+        assert f["rms_mm"] > 0 and isinstance(f["kept"], bool), name
+        params = {p["name"] for p in f["parameters"]}
+        assert params == set(get_form(name).parameters) | {"latch_delay_ms"}, name
+        for p in f["parameters"]:
+            assert p["low"] <= p["value"] <= p["high"], (name, p)
+    assert data["kept_forms"] == [n for n, f in forms.items() if f["kept"]]
+    assert forms["efficiency_coulomb"]["kept"]
+    assert not forms["driven_coulomb"]["kept"]
+    assert not forms["efficiency_driven_coulomb"]["kept"]
+    assert forms["driven_coulomb"]["rms_mm"] > 10 * forms["efficiency_coulomb"]["rms_mm"]
+
+
 def test_json_has_rms_parameters_and_predictions_with_intervals(two):
     data, _ = two
-    (form,) = data["forms"]
-    assert form["form"] == "efficiency_coulomb"
+    (form,) = [f for f in data["forms"] if f["form"] == "efficiency_coulomb"]
     assert form["rms_mm"] == pytest.approx(0.02, rel=0.1)
     params = {p["name"]: p for p in form["parameters"]}
     assert params["release_offset_deg"]["low"] <= TRUTH.release_offset_deg \
@@ -71,7 +94,8 @@ def test_the_residual_figure_is_written(two):
 
 def test_the_fragment_extends_the_case_with_the_calibrated_values(two, tmp_path):
     data, out = two
-    params = {p["name"]: p["value"] for p in data["forms"][0]["parameters"]}
+    (best,) = [f for f in data["forms"] if f["form"] == "efficiency_coulomb"]
+    params = {p["name"]: p["value"] for p in best["parameters"]}
     design = out.parent / "design.toml"
     design.write_text(f'extends = "{out.name}"\n[solver]\nname = "de_gr"\n')
     case = load(design).case
@@ -117,3 +141,39 @@ def test_a_case_without_calibration_says_so(tmp_path):
     result = runner.invoke(app, ["calibrate", str(CONFIGS / "emb.toml"), "--curve", VENDOR])
     assert result.exit_code == 2
     assert "has no calibration on measured curves" in result.stderr
+
+
+def test_show_and_report_of_the_calibration_archive(two):
+    """show prints the report calibrate printed (form table, parameters with intervals,
+    analyser quantities measured beside fitted); --format json the same document as
+    calibrate's; report writes one HTML page with each form's parameter table, analyser
+    quantities and its fit figure; plot writes one PNG per form."""
+    data, out = two
+    path = out.parent / "cal.h5"
+    shown = runner.invoke(app, ["show", str(path)])
+    assert shown.exit_code == 0, shown.output
+    for name in FORM_NAMES:
+        assert name in shown.stdout
+    assert "analyser quantity" in shown.stdout and "latch_delay_ms" in shown.stdout
+    doc = json.loads(runner.invoke(app, ["show", str(path), "--format", "json"]).stdout)
+    assert doc["archive_kind"] == "calibration" and doc["case_kind"] == "vcb"
+    assert doc["forms"] == json.loads(json.dumps(data["forms"]))
+    html = out.parent / "cal.html"
+    result = runner.invoke(app, ["report", str(path), "--out", str(html)])
+    assert result.exit_code == 0, result.output
+    page = html.read_text()
+    for name in FORM_NAMES:
+        assert f'id="form-{name}"' in page and f'id="figure-fit-{name}"' in page
+    assert "contact_velocity_m_s" in page and "release_offset_deg" in page
+    result = runner.invoke(app, ["plot", str(path), "--out", str(out.parent / "png")])
+    assert result.exit_code == 0, result.output
+    assert len(list((out.parent / "png").glob("*.png"))) == len(FORM_NAMES)
+
+
+def test_an_existing_archive_is_refused_before_the_fit(tmp_path):
+    path = tmp_path / "cal.h5"
+    path.write_text("keep")
+    result = runner.invoke(app, ["calibrate", VCB, "--curve", VENDOR, "--archive", str(path)])
+    assert result.exit_code == 2
+    assert result.stderr == f"error: {path}: --archive: exists; pass --force to overwrite\n"
+    assert path.read_text() == "keep"

@@ -196,3 +196,25 @@ def test_an_archive_older_than_the_estimate_is_estimated_at_show_time():
     doc = json.loads(invoke("show", OLD_RUN, "--format", "json").stdout)
     assert doc["expected_yield"].get("estimated") == "at show time"
     assert "at_limit" in doc["requirements"][0]
+
+
+def test_the_reference_label_comes_from_the_case_file(vcb_run, tmp_path):
+    """The reference design is named by the case file's reference_label (the paper's
+    vendor unless a maker names its own breaker), in show's table and its JSON; an
+    archive whose case lacks the field (written before it) keeps the case's name."""
+    view = archive.load_run(vcb_run)
+    assert report.reference(view)[0] == "reference: vendor, Sec 2.3 and Table 2"
+    mine = dataclasses.replace(view, case={**view.case,
+                                           "reference_label": "my breaker, drawing 4711"})
+    assert report.reference(mine)[0] == "reference: my breaker, drawing 4711"
+    old = dataclasses.replace(view, case={k: v for k, v in view.case.items()
+                                          if k != "reference_label"})
+    assert report.reference(old)[0] == "reference: vendor, Sec 2.3 and Table 2"
+    out = tmp_path / "mine.h5"
+    r = invoke("run", CONFIGS / "vcb.toml", "--out", out, "--quiet", "--set",
+               'case.reference_label="my breaker"', "--set", "solver.generations=2",
+               "--set", "solver.population=10")
+    assert r.exit_code == 0, r.output
+    shown = invoke("show", out, columns=120)
+    assert "reference: my breaker" in shown.stdout
+    assert "vendor, Sec 2.3" not in shown.stdout

@@ -45,5 +45,29 @@ def test_units_come_from_the_names():
 
 def test_a_page_lists_default_unit_and_source():
     page = casedocs.render(casedocs.built_in()["vcb"])
-    assert "| `rod_arm_offset_deg` | 7.46 | deg | angle of EM" in page
-    assert "| `kc1_n_per_mm` | 7.72 | N/mm | vendor closing spring 1 (Table 2) |" in page
+    assert "| `rod_arm_offset_deg` | 7.46 | deg | identified | angle of EM" in page
+    assert "| `kc1_n_per_mm` | 7.72 | N/mm | hardware | vendor closing spring 1 (Table 2) |" in page
+
+
+@pytest.mark.parametrize("kind", ["vcb", "vcb_identify", "vcb_identify_dynamics"])
+def test_every_vcb_field_has_a_role_shown_in_the_docs_and_init(kind):
+    """Each [case] field of the VCB cases is hardware, identified, requirement, solver
+    setting or measured data; docs/cases/<kind>.md has the role column and camopt init
+    the role at the end of each field's comment."""
+    from camopt.cases import get_case
+    from camopt.config import template
+    from camopt.config.models import ROLES
+    from camopt.reporting.casedocs import render
+    from camopt.solvers import solvers
+
+    spec = get_case(kind)
+    fields = set(spec.config.model_fields) - {"kind"}
+    assert set(spec.config.field_roles) == fields
+    assert set(spec.config.field_roles.values()) <= set(ROLES)
+    page = render(spec)
+    assert "| field | default | unit | role | meaning (source) |" in page
+    assert "| `rod_mass_kg` | 2.8807 | kg | identified |" in page
+    assert "| `l1_mm` | 139.79 | mm | hardware |" in page
+    text = template(spec.config, solvers()[spec.default_solver].Options.model_validate({}))
+    assert "fixed link BE (Sec 2.3) [mm] (hardware)" in text
+    assert "(identified): fitted to measurements" in text

@@ -25,6 +25,7 @@ from camopt.cases.vcb.problem import VcbProblem
 from camopt.cases.vcb.requirements import requirements
 from camopt.config.models import CaseConfig
 from camopt.errors import ConfigError
+from camopt.units import DEG
 
 SOURCE = "Kang, Huang & Yang (2023), Machines 11:150"
 TOLERANCES = {  # class "standard", docs/tolerance.md, "Tolerance classes"
@@ -43,6 +44,26 @@ TOLERANCE_CLASSES = {
         source="closing springs graded by force at a test length (sorted after coiling), "
         "±5 % on rate; the rest as the standard class", relative_cost=1.3),
 }
+
+
+def resolve(config: CaseConfig, load: ArchiveLoader) -> CaseConfig:
+    """The values a VCB case file takes from other files: the reference cam's law from
+    ``reference_cam_points`` and step 2's cam from ``cam_archive``."""
+    return resolve_cam_archive(resolve_reference_cam(config, load), load)
+
+
+def resolve_reference_cam(config: CaseConfig, load: ArchiveLoader) -> CaseConfig:
+    """``reference_cam_points`` read into ``reference_law`` (the follower law of the
+    points: :func:`camopt.cases.vcb.cam_points.read_cam_points`, over the stroke 0 to the
+    last node angle)."""
+    from camopt.cases.vcb.cam_points import read_cam_points
+
+    assert isinstance(config, VcbConfig)
+    if not config.reference_cam_points:
+        return config
+    path = load.locate("case.reference_cam_points", config.reference_cam_points)
+    a = read_cam_points(path, config.node_cam_deg[-1] * DEG)
+    return config.model_copy(update={"reference_law": [float(v) for v in a]})
 
 
 def resolve_cam_archive(config: CaseConfig, load: ArchiveLoader) -> CaseConfig:
@@ -79,7 +100,7 @@ VCB = register_case(CaseSpec(
                    ) + (OverlayCurve("rod_travel", "Rod travel along the stroke",
                                      "cam_angle_deg", "rod_travel_mm",
                                      "cam angle theta_c (deg)", "rod travel s1 (mm)"),),
-    resolve=resolve_cam_archive, tolerances=TOLERANCES,
+    resolve=resolve, tolerances=TOLERANCES,
     tolerance_classes=TOLERANCE_CLASSES, requirements=requirements,
     reference="vendor, Sec 2.3 and Table 2",
     calibration="camopt.cases.vcb.calibration_report:run",

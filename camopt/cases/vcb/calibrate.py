@@ -2,16 +2,19 @@
 
 Each curve belongs to a design (the case's reference cam and springs unless the curve
 names others) and is timed from the close command; the model's closing starts at the
-release of the closing springs, a latch delay later. For every model form
-(:class:`ModelForm`: the parameters it fits and the travel it simulates for a design and a
-parameter vector) the fit is
+release of the closing springs, a latch delay later. For every model form of
+:data:`camopt.cases.vcb.forms.FORMS` (the one seam the identification on the ADAMS data
+uses too: the parameters a form fits, their search bounds on curves and the closing it
+simulates for designs and parameter rows) the fit is
 
     min over (p, d)  sum_curves sum_samples  rho( ((s_model(t_i - d_c; p) - s_i) / sigma_c)^2 )
 
 robust least squares (scipy ``least_squares``, ``loss="soft_l1"``, ``f_scale`` 3: samples
 further than ~3 noise levels from the model, an analyser's spikes, count linearly, not
-quadratically) in the log of each positive parameter, with one latch delay d_c per curve
-unless given (a nuisance parameter), sigma_c each curve's noise (its second differences,
+quadratically; the profiles' re-fits by :meth:`Calibration.fit_many`, a Levenberg-Marquardt
+that runs them side by side in one vectorised simulation) in the log of each positive
+parameter, with one latch delay d_c per curve unless given (a nuisance parameter), sigma_c
+each curve's noise (its second differences,
 :func:`camopt.cases.vcb.curves.noise_level`). Samples before the motion are fitted too: the
 model holds the rod at rest until the cam meets the roller, so they fix the delay plus the
 free rotation's time; the curve's zero is the median of those samples.
@@ -28,13 +31,19 @@ the ones white noise would give; ``docs/calibration.md`` says so.
 Predictions (closing velocity over the case's window, touch time) for designs without a
 curve get the envelope of their values over every re-fitted parameter vector met on the
 profiles within the threshold.
+
+A form is **kept** (:func:`keep`) when its RMS misfit is at most 1.5 times the best
+form's, or 1.5 times the curves' noise, whichever is larger: the identification's rule
+(``form_keep_ratio`` times the best form's largest residual, or ``form_keep_pct``) with
+the RMS misfit for the largest residual and the noise for the absolute floor. A form
+not kept gets linearised intervals instead of profiles (:meth:`Calibration.fit`).
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -46,8 +55,9 @@ from camopt.cases.vcb.curves import (
     VelocityPoints,
     analyse,
 )
-from camopt.cases.vcb.dynamics import MotionParameters, closing_motion
-from camopt.cases.vcb.model import Kinematics, VcbModel
+from camopt.cases.vcb.dynamics import ClosingMotion
+from camopt.cases.vcb.forms import FORMS, ModelForm
+from camopt.cases.vcb.model import Kinematics, Loads, VcbModel
 from camopt.units import DEG, MM, MS
 
 CHI2_95_1DOF = 3.841458820694124
@@ -65,19 +75,6 @@ MAX_DELAY_S = 0.1
 
 
 @dataclass(frozen=True)
-class FitParameter:
-    """A parameter a model form fits: its name (a ``[case]`` field, so the fitted value
-    can be written back), unit, search bounds and whether it is fitted in its log (a
-    positive quantity). Values in the field's unit."""
-
-    name: str
-    unit: str
-    lower: float
-    upper: float
-    log: bool = True
-
-
-@dataclass(frozen=True)
 class Design:
     """The design a curve (or a prediction) belongs to: follower-law coefficients ``a``
     (d + 1,) rad/rad^k, spring rates ``kc`` (2,) N/m, and a label."""
@@ -87,87 +84,41 @@ class Design:
     kc: NDArray
 
 
-class ModelForm(Protocol):
-    """A model form of the VCB closing: the seam where the forms of
-    ``camopt/cases/vcb`` plug into the calibration."""
-
-    @property
-    def name(self) -> str:
-        """The form's name (``--form``)."""
-
-    @property
-    def description(self) -> str:
-        """One line: what the form's friction and losses are."""
-
-    @property
-    def parameters(self) -> tuple[FitParameter, ...]:
-        """The parameters it fits, in the order of a parameter row."""
-
-    def start(self, config: VcbConfig) -> NDArray:
-        """The case's values of the parameters (their units), (P,)."""
-
-    def travel(self, model: VcbModel, designs: Sequence[Design], P: NDArray, steps: int
-               ) -> tuple[NDArray, NDArray]:
-        """Time from the release (s) and rod travel (m) of each design under each
-        parameter row of ``P`` (k, P): arrays (k, n, m) on the form's own grid, time
-        increasing along m (inf after a stall)."""
-
-    def velocity(self, model: VcbModel, designs: Sequence[Design], P: NDArray, steps: int
-                 ) -> tuple[NDArray, NDArray]:
-        """The case's closing velocity (m/s) and the touch time from the release (s) of
-        each design under each parameter row, (k, n) each."""
+def closing(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: NDArray,
+            steps: int) -> ClosingMotion:
+    """The closing of every design under every parameter row of ``P`` (k, p) of
+    ``form`` (:meth:`~camopt.cases.vcb.forms.ModelForm.closing`): k x n rows,
+    parameter-major (row 0 for every design, then row 1, ...), the case's linkage and
+    resisting loads."""
+    P = np.atleast_2d(P)
+    k, n = len(P), len(designs)
+    degree = max(len(d.a) for d in designs)
+    A = np.array([np.pad(d.a, (0, degree - len(d.a))) for d in designs])
+    kc = np.array([d.kc for d in designs])
+    link = np.tile(model.vendor_link, (k * n, 1))
+    rod_offset = model.c.rod_arm_offset_deg * DEG
+    return form.closing(model, np.tile(A, (k, 1)), np.tile(kc, (k, 1)), link, rod_offset,
+                        _loads(model), np.repeat(P, n, axis=0),
+                        model.c.follower_inertia_kg_m2, steps)
 
 
-@dataclass(frozen=True)
-class EfficiencyCoulomb:
-    """Today's VCB dynamics (:mod:`camopt.cases.vcb.dynamics`): the mechanical efficiency
-    on the driving springs' work (Eq 26) and a Coulomb friction torque at the cam shaft;
-    fits J_cam, m_rod, m_c, the release offset and the friction torque (the follower's
-    inertia stays the case's: travel curves cannot separate it from m_rod either)."""
-
-    name: str = "efficiency_coulomb"
-    description: str = "efficiency (Eq 26) + Coulomb friction at the cam shaft"
-    parameters: tuple[FitParameter, ...] = (
-        FitParameter("cam_inertia_kg_m2", "kg m^2", 1e-5, 0.05),
-        FitParameter("rod_mass_kg", "kg", 0.05, 30.0),
-        FitParameter("contacts_mass_kg", "kg", 0.05, 15.0),
-        FitParameter("release_offset_deg", "deg", 0.5, 40.0),
-        FitParameter("cam_friction_nm", "N m", 0.01, 100.0),
-    )
-
-    def start(self, config: VcbConfig) -> NDArray:
-        c = config
-        return np.array([c.cam_inertia_kg_m2, c.rod_mass_kg, c.contacts_mass_kg,
-                         c.release_offset_deg, max(c.cam_friction_nm, 0.1)])
-
-    def _motion(self, model: VcbModel, designs: Sequence[Design], P: NDArray, steps: int):
-        P = np.atleast_2d(P)
-        k, n = len(P), len(designs)
-        rows = np.repeat(P, n, axis=0)  # parameter-major: set 0 for every design, ...
-        params = MotionParameters(rows[:, 0], model.c.follower_inertia_kg_m2, rows[:, 1],
-                                  rows[:, 2], rows[:, 3] * DEG, rows[:, 4])
-        degree = max(len(d.a) for d in designs)
-        A = np.array([np.pad(d.a, (0, degree - len(d.a))) for d in designs])
-        kc = np.array([d.kc for d in designs])
-        link = np.tile(model.vendor_link, (k * n, 1))
-        rod_offset = model.c.rod_arm_offset_deg * DEG
-        loads = _loads(model)
-        return closing_motion(model, np.tile(A, (k, 1)), np.tile(kc, (k, 1)), link,
-                              rod_offset, loads, params, steps), k, n
-
-    def travel(self, model: VcbModel, designs: Sequence[Design], P: NDArray, steps: int
-               ) -> tuple[NDArray, NDArray]:
-        mo, k, n = self._motion(model, designs, P, steps)
-        return mo.time.reshape(k, n, -1), mo.rod.reshape(k, n, -1)
-
-    def velocity(self, model: VcbModel, designs: Sequence[Design], P: NDArray, steps: int
-                 ) -> tuple[NDArray, NDArray]:
-        mo, k, n = self._motion(model, designs, P, steps)
-        return mo.closing_velocity_avg.reshape(k, n), mo.touch_time.reshape(k, n)
+def travel(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: NDArray,
+           steps: int) -> tuple[NDArray, NDArray]:
+    """Time from the release (s) and rod travel (m) of each design under each parameter
+    row of ``P`` (k, p): arrays (k, n, m) on the form's own grid, time increasing along m
+    (inf after a stall)."""
+    mo = closing(form, model, designs, P, steps)
+    k, n = len(np.atleast_2d(P)), len(designs)
+    return mo.time.reshape(k, n, -1), mo.rod.reshape(k, n, -1)
 
 
-FORMS: dict[str, ModelForm] = {f.name: f for f in (EfficiencyCoulomb(),)}
-"""The model forms calibrate fits, by name."""
+def velocity(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: NDArray,
+             steps: int) -> tuple[NDArray, NDArray]:
+    """The case's closing velocity (m/s) and the touch time from the release (s) of each
+    design under each parameter row of ``P`` (k, p), (k, n) each."""
+    mo = closing(form, model, designs, P, steps)
+    k, n = len(np.atleast_2d(P)), len(designs)
+    return mo.closing_velocity_avg.reshape(k, n), mo.touch_time.reshape(k, n)
 
 
 class _KinematicsMemo(VcbModel):
@@ -197,7 +148,7 @@ class _KinematicsMemo(VcbModel):
         return kin
 
 
-def _loads(model: VcbModel):
+def _loads(model: VcbModel) -> Loads:
     """The case's resisting loads, with the rod travel of its reference design."""
     c = model.c
     kin = model.kinematics(model.vendor_a[None, :], model.vendor_link[None, :],
@@ -290,9 +241,10 @@ class CurveFit:
 class FormFit:
     """The calibration of one model form: RMS misfit over every sample (m), the
     parameters (the form's, then the fitted latch delay in ms, if any), their correlation
-    matrix at the optimum (linearised: (J^T J)^-1 s^2), the curves, the predictions, and
+    matrix at the optimum (linearised: (J^T J)^-1 s^2), the curves, the predictions,
     ``band``: the form's parameter rows met on the profiles inside the intervals, the fit
-    first."""
+    first, whether the form is ``kept`` (:func:`keep`) and how its ``intervals`` were
+    found (``profile``: profile likelihood; ``linearised``: a form not kept)."""
 
     form: str
     description: str
@@ -302,11 +254,52 @@ class FormFit:
     curves: tuple[CurveFit, ...]
     predictions: tuple[Prediction, ...]
     band: NDArray = field(repr=False)
+    kept: bool = True
+    intervals: str = "profile"
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """A form's best fit: fitted coordinates ``q`` (n,), its robust cost, the linearised
+    covariance of q ((J^T J)^-1 s^2, (n, n)), the reduced chi-square s^2 (at least 1) and
+    the RMS misfit (m)."""
+
+    q: NDArray
+    cost: float
+    cov: NDArray
+    s2: float
+    rms: float
+
+
+@dataclass
+class _Profile:
+    """The state of one coordinate's profile in one direction (:meth:`Calibration.
+    _profiles`): its coordinate ``j``, direction, the optimum's value of it
+    (``origin``) and the room to the search bound, the step ``d`` from the optimum now
+    tried, the furthest inside (``near``, its cost rise) and the nearest outside (``far``:
+    distance, rise), the last re-fitted vector inside, those inside, and the end (None:
+    open to a bound)."""
+
+    j: int
+    sign: float
+    origin: float
+    room: float
+    d: float
+    last: NDArray
+    near: float = 0.0
+    near_rise: float = 0.0
+    far: tuple[float, float] | None = None
+    inside: list[NDArray] = field(default_factory=list)
+    done: bool = False
+    end: float | None = None
+    steps: int = 0
 
 
 class Calibration:
     """Fits one model form to the curves (module docstring). ``steps`` the form's grid
     (the case's ``dynamics_steps``)."""
+
+    MAX_PROFILE_STEPS = 10
 
     def __init__(self, config: VcbConfig, form: ModelForm, curves: Sequence[CurveCase],
                  points: VelocityPoints | None = None) -> None:
@@ -315,15 +308,16 @@ class Calibration:
         self.steps = config.dynamics_steps
         self.points = points or VelocityPoints.last_third(config.contact_gap_mm * MM)
         self.designs = [c.design for c in self.curves]
-        self.n_form = len(form.parameters)
+        self.parameters = form.curve_parameters()
+        self.n_form = len(self.parameters)
         # one latch delay for every curve without its own (the same breaker's coil and latch)
         self.free_delay = [i for i, c in enumerate(self.curves) if c.latch_delay is None]
-        lo = [np.log(p.lower) if p.log else p.lower for p in form.parameters]
-        hi = [np.log(p.upper) if p.log else p.upper for p in form.parameters]
+        lo = [np.log(p.lower) if p.log else p.lower for p in self.parameters]
+        hi = [np.log(p.upper) if p.log else p.upper for p in self.parameters]
         shared = 1 if self.free_delay else 0
         self.lower = np.r_[lo, np.zeros(shared)]
         self.upper = np.r_[hi, np.full(shared, MAX_DELAY_S / MS)]
-        self.log = np.array([p.log for p in form.parameters] + [False] * shared)
+        self.log = np.array([p.log for p in self.parameters] + [False] * shared)
         self.sigma = np.array([max(c.curve.noise, 1e-3 * MM) for c in self.curves])
         self.n_samples = sum(len(c.curve.time) for c in self.curves)
 
@@ -340,7 +334,7 @@ class Calibration:
     def simulate(self, Q: NDArray) -> list[NDArray]:
         """Simulated travel (m) at each curve's sample times, per curve (k, m_c)."""
         P, delays = self.values(Q)
-        time, rod = self.form.travel(self.model, self.designs, P, self.steps)
+        time, rod = travel(self.form, self.model, self.designs, P, self.steps)
         k = len(P)
         out = []
         for i, c in enumerate(self.curves):  # curves: a handful, each vectorised over k
@@ -356,43 +350,103 @@ class Calibration:
                                in zip(sims, self.curves, self.sigma)], axis=1)
 
     # ---- fitting ---------------------------------------------------------------------
-    def _fit(self, q0: NDArray, fixed: int | None = None, tight: bool = False
-             ) -> tuple[NDArray, float]:
-        """Robust least squares from q0; ``fixed`` keeps one coordinate at q0's. Returns
-        q and the cost (0.5 sum rho)."""
+    def fit_many(self, Q0: NDArray, fixed: NDArray | None = None, tol: float = 1e-9,
+                 atol: float = 0.0, max_iter: int = 60) -> tuple[NDArray, NDArray]:
+        """Robust least squares from each start of ``Q0`` (B, n) at once; ``fixed`` (B,)
+        the coordinate each row keeps at its start (-1: none). Returns the fits (B, n)
+        and their costs (B,) (0.5 sum rho, as scipy's ``least_squares``).
+
+        Levenberg-Marquardt with Marquardt's scaling on iteratively reweighted least
+        squares (soft-l1: weights w = 1 / sqrt(1 + (r / C)^2), C = :data:`ROBUST_SCALE`):
+        the step solves (J^T W J + lambda diag(J^T W J)) dq = -J^T W r, J by forward
+        differences; a step is kept when it lowers the robust cost (lambda / 3), else
+        lambda x 4; a row stops when a kept step lowers its cost by less than ``tol``
+        relative or ``atol``, or lambda exceeds 1e10, or after ``max_iter`` steps.
+
+        Each step is one vectorised simulation of the trials and their forward steps,
+        k (n + 1) parameter rows for the k rows still running: the Jacobian at a trial is
+        ready when the trial is kept, and the last one still holds when it is not. The
+        profiles' re-fits so run side by side for little more than the price of one (the
+        model's cost grows slowly with the rows)."""
+        Q = np.clip(np.atleast_2d(np.asarray(Q0, dtype=float)), self.lower, self.upper)
+        B, n = Q.shape
+        free = np.ones((B, n), dtype=bool)
+        if fixed is not None:
+            rows = np.flatnonzero(np.asarray(fixed) >= 0)
+            free[rows, np.asarray(fixed)[rows]] = False
+        R, J = self._with_jacobian(Q, free)
+        cost = _robust_cost(R)
+        lam = np.full(B, 1e-3)
+        active = np.ones(B, dtype=bool)
+        eye = np.eye(n)
+        for _ in range(max_iter):
+            idx = np.flatnonzero(active)
+            if len(idx) == 0:
+                break
+            q, r, Jk = Q[idx], R[idx], J[idx]
+            w = 1.0 / np.sqrt(1.0 + (r / ROBUST_SCALE) ** 2)
+            g = np.einsum("knm,km->kn", Jk, w * r)
+            # a coordinate on a bound that the descent would push out of it sits this
+            # step out (an active set: clipping its step instead stalls the others)
+            held = ((q <= self.lower + 1e-12) & (g > 0)) | ((q >= self.upper - 1e-12) & (g < 0))
+            Jk = Jk * ~held[:, :, None]
+            g = np.where(held, 0.0, g)
+            H = np.einsum("knm,kjm,km->knj", Jk, Jk, w)
+            diag = np.einsum("knn->kn", H)
+            scale = np.maximum(diag, 1e-12 * diag.max(axis=1, keepdims=True) + 1e-300)
+            A = H + (lam[idx][:, None] * scale)[:, :, None] * eye
+            # pinv: a parameter the curves do not see (a zero column) takes no step
+            step = -(np.linalg.pinv(A) @ g[:, :, None])[:, :, 0]
+            trial = np.clip(q + step, self.lower, self.upper)
+            Rt, Jt = self._with_jacobian(trial, free[idx])
+            ct = _robust_cost(Rt)
+            better = ct < cost[idx]
+            gain = cost[idx] - ct
+            good = idx[better]
+            Q[good], R[good], J[good], cost[good] = (trial[better], Rt[better], Jt[better],
+                                                     ct[better])
+            lam[good] /= 3.0
+            lam[idx[~better]] *= 4.0
+            moved = np.max(np.abs(trial - q), axis=1)
+            done = (better & ((gain <= np.maximum(tol * ct, atol)) | (moved < 1e-9))) | (
+                lam[idx] > 1e10)
+            active[idx[done]] = False
+        return Q, cost
+
+    def _with_jacobian(self, Q: NDArray, free: NDArray) -> tuple[NDArray, NDArray]:
+        """Residuals (k, N) at the rows of ``Q`` (k, n) and their Jacobians' transposes
+        (k, n, N) by forward differences (step 1e-6 max(1, |q|)), zero in the columns
+        ``free`` (k, n) marks fixed: one simulation of k (n + 1) rows."""
+        k, n = Q.shape
+        h = 1e-6 * np.maximum(1.0, np.abs(Q))
+        rows = np.concatenate([Q[:, None, :], Q[:, None, :] + np.eye(n)[None] * h[:, :, None]],
+                              axis=1)
+        Rall = self.residuals(rows.reshape(k * (n + 1), n)).reshape(k, n + 1, -1)
+        J = (Rall[:, 1:] - Rall[:, :1]) / h[:, :, None]
+        return Rall[:, 0], J * free[:, :, None]
+
+    def _fit(self, q0: NDArray) -> tuple[NDArray, float]:
+        """The fit from ``q0``: scipy's ``least_squares`` (trust region reflective,
+        soft-l1, tight tolerances: the optimum every profile is measured from; its
+        trust region follows the narrow valleys of a single curve better than
+        :meth:`fit_many`'s Levenberg-Marquardt). Returns q and the cost."""
         from scipy.optimize import least_squares
 
-        free = np.array([i != fixed for i in range(len(q0))])
-        base = q0.copy()
-
-        def full(z: NDArray) -> NDArray:
-            Z = np.repeat(base[None, :], len(np.atleast_2d(z)), axis=0)
-            Z[:, free] = np.atleast_2d(z)
-            return Z
-
         def fun(z: NDArray) -> NDArray:
-            return self.residuals(full(z))[0]
+            return self.residuals(z)[0]
 
-        def jac(z: NDArray) -> NDArray:  # forward differences, one vectorised call
-            h = 1e-6 * np.maximum(1.0, np.abs(z))
-            Z = np.vstack([z, z + np.diag(h)])
-            R = self.residuals(full(Z))
-            return ((R[1:] - R[0]) / h[:, None]).T
-
-        lo, hi = self.lower[free], self.upper[free]
-        z0 = np.clip(q0[free], lo + 1e-9, hi - 1e-9)
-        tol = 1e-8 if tight else 1e-6
-        sol = least_squares(fun, z0, jac=jac, bounds=(lo, hi), loss="soft_l1",
-                            f_scale=ROBUST_SCALE, x_scale=1.0, max_nfev=200 if tight else 100,
-                            ftol=tol, xtol=tol)
-        return full(sol.x)[0], float(sol.cost)
+        z0 = np.clip(q0, self.lower + 1e-9, self.upper - 1e-9)
+        sol = least_squares(fun, z0, jac=self._jacobian, bounds=(self.lower, self.upper),
+                            loss="soft_l1", f_scale=ROBUST_SCALE, x_scale=1.0, max_nfev=100,
+                            ftol=1e-8, xtol=1e-8)
+        return sol.x, float(sol.cost)
 
     def start(self) -> NDArray:
         """The form's case values and, for each fitted delay, the delay that puts the
         model's first motion on the curve's (from a quick look at the curves)."""
         p0 = self.form.start(self.config)
-        q = np.array([np.log(v) if p.log else v for v, p in zip(p0, self.form.parameters)])
-        time, rod = self.form.travel(self.model, self.designs, p0[None, :], self.steps)
+        q = np.array([np.log(v) if p.log else v for v, p in zip(p0, self.parameters)])
+        time, rod = travel(self.form, self.model, self.designs, p0[None, :], self.steps)
         delays = []
         for i in self.free_delay:
             c = self.curves[i].curve
@@ -401,101 +455,120 @@ class Calibration:
             delays.append(np.clip((c.time[moved] - t_model) / MS, 0.01, MAX_DELAY_S / MS - 0.01))
         return np.r_[q, np.mean(delays)] if delays else q
 
-    def fit(self) -> FormFit:
-        """The fit, the profiles and the report of this form."""
-        q0 = self.start()
-        # two starts: the case's values and a perturbation of the first fit's end, keeping
-        # the better (the cost surface of a delay and a release offset has shallow valleys)
-        q, cost = self._fit(q0, tight=True)
-        q2, cost2 = self._fit(q + 0.05 * self.log, tight=True)
+    def optimum(self) -> Optimum:
+        """The best fit from two starts: the case's values and a perturbation of the
+        first fit's end, keeping the better (the cost surface of a delay and a release
+        offset has shallow valleys); its linearised covariance and RMS misfit."""
+        q, cost = self._fit(self.start())
+        q2, cost2 = self._fit(q + 0.05 * self.log)
         if cost2 < cost:
             q, cost = q2, cost2
         dof = max(self.n_samples - len(q), 1)
         s2 = max(2 * cost / dof, 1.0)
-        rise = 0.5 * CHI2_95_1DOF * s2
         J = self._jacobian(q)
-        cov = np.linalg.pinv(J.T @ J) * s2
+        return Optimum(q, cost, np.linalg.pinv(J.T @ J) * s2, s2, self._rms(q))
+
+    def fit(self, opt: Optimum | None = None, profiled: bool = True) -> FormFit:
+        """The fit (``opt``, else :meth:`optimum`), its intervals and the report of this
+        form. ``profiled``: profile-likelihood intervals (module docstring); else
+        linearised ones, q +- 1.96 sd of the covariance in the fitted coordinates (the log
+        of a positive parameter), for a form the curves reject (not kept: its values
+        calibrate nothing, and a misfitting form's profiles wander far for little)."""
+        o = opt or self.optimum()
+        q, cov = o.q, o.cov
         sd = np.sqrt(np.maximum(np.diag(cov), 1e-12))
         corr = cov / np.outer(sd, sd)
-        ests, members = [], [q]
+        rise = 0.5 * CHI2_95_1DOF * o.s2
+        ends: dict[tuple[int, float], float | None] = {}
+        members = [q]
+        if profiled:
+            for key, prof in self._profiles(q, o.cost, cov, rise).items():
+                ends[key] = prof.end
+                members += prof.inside
+        else:
+            for j in range(len(q)):
+                for sign in (-1.0, 1.0):
+                    x = q[j] + sign * np.sqrt(CHI2_95_1DOF) * sd[j]
+                    inside = bool(self.lower[j] <= x <= self.upper[j])
+                    ends[(j, sign)] = x if inside else None
+                    # the linearised conditional optimum there: the band's member
+                    m = np.clip(q + cov[:, j] / cov[j, j] * (x - q[j]), self.lower, self.upper)
+                    members.append(m)
+        ests = []
         for j, (name, unit) in enumerate(self.names()):
-            ends = []
-            for sign in (-1.0, 1.0):
-                end, inside = self._profile(q, cost, j, sign, cov, rise)
-                ends.append(end)
-                members += inside
-            lo_q, hi_q = ends
+            lo_q, hi_q = ends[(j, -1.0)], ends[(j, 1.0)]
             low = _out(lo_q if lo_q is not None else self.lower[j], self.log[j])
             high = _out(hi_q if hi_q is not None else self.upper[j], self.log[j])
             value = _out(q[j], self.log[j])
             # identified: a closed profile interval inside the search bounds, within
-            # IDENTIFIED_WITHIN of the value (the delay: IDENTIFIED_DELAY_MS)
+            # IDENTIFIED_WITHIN of the value (the delay: IDENTIFIED_DELAY_MS); a form not
+            # kept identifies nothing
             reach = max(value - low, high - value)
-            identified = bool(lo_q is not None and hi_q is not None and (
+            identified = bool(profiled and lo_q is not None and hi_q is not None and (
                 reach <= IDENTIFIED_WITHIN * abs(value) if self.log[j]
                 else reach <= IDENTIFIED_DELAY_MS))
             ests.append(ParameterEstimate(name, unit, value, low, high, identified))
         P_band, _ = self.values(np.array(members))
-        return FormFit(self.form.name, self.form.description, self._rms(q), tuple(ests),
-                       corr, self._curve_fits(q), (), P_band)
+        return FormFit(self.form.name, self.form.summary, o.rms, tuple(ests), corr,
+                       self._curve_fits(q), (), P_band,
+                       intervals="profile" if profiled else "linearised")
 
     def names(self) -> list[tuple[str, str]]:
         """(name, unit) of every fitted coordinate: the form's, then the latch delay."""
-        return [(p.name, p.unit) for p in self.form.parameters] + (
+        return [(p.name, p.unit) for p in self.parameters] + (
             [("latch_delay_ms", "ms")] if self.free_delay else [])
 
     def _costs(self, Q: NDArray) -> NDArray:
         """The robust cost (0.5 sum rho, as least_squares's) of each row of Q, (k,)."""
-        z = (self.residuals(Q) / ROBUST_SCALE) ** 2
-        return 0.5 * ROBUST_SCALE**2 * np.sum(2 * (np.sqrt(1 + z) - 1), axis=1)
+        return _robust_cost(self.residuals(Q))
 
     def _jacobian(self, q: NDArray) -> NDArray:
         h = 1e-6 * np.maximum(1.0, np.abs(q))
         R = self.residuals(np.vstack([q, q + np.diag(h)]))
         return ((R[1:] - R[0]) / h[:, None]).T
 
-    def _profile(self, q: NDArray, cost: float, j: int, sign: float, cov: NDArray,
-                 rise: float) -> tuple[float | None, list[NDArray]]:
-        """Coordinate j's profile from the optimum ``q`` (cost ``cost``) in direction
-        ``sign``: fixed at 1.5, 3, 6, ... linearised standard deviations (``cov``) from
-        it, the others re-fitted, until the cost rises by more than ``rise``; a rise of
-        more than 4 ``rise`` (a cliff: the profile is not a parabola there) is bisected
+    def _profiles(self, q: NDArray, cost: float, cov: NDArray, rise: float
+                  ) -> dict[tuple[int, float], _Profile]:
+        """Every coordinate's profile from the optimum ``q`` (cost ``cost``) in both
+        directions, side by side (:meth:`fit_many` re-fits them together): coordinate j
+        fixed at 1.5, 3, 6, ... linearised standard deviations (``cov``) from the
+        optimum, the others re-fitted, until the cost rises by more than ``rise``; a rise
+        of more than 4 ``rise`` (a cliff: the profile is not a parabola there) is bisected
         until the bracket holds at most that, and the crossing is placed in the bracket
-        as on a parabola through the optimum. Returns the end (None: the profile reaches
-        the search bound, or 14 re-fits, under the threshold) and the re-fitted vectors
-        inside the interval."""
-        bound = self.upper[j] if sign > 0 else self.lower[j]
-        room = abs(bound - q[j])
-        d, near, near_rise = min(1.5 * float(np.sqrt(cov[j, j])), room), 0.0, 0.0
-        far: tuple[float, float] | None = None
-        last = q
-        inside: list[NDArray] = []
-        for _ in range(14):
-            x = q[j] + sign * d
+        as on a parabola through the optimum. A profile's end is None where it reaches
+        the search bound, or :data:`MAX_PROFILE_STEPS` re-fits, under the threshold."""
+        out = {}
+        for j in range(len(q)):
+            for sign in (-1.0, 1.0):
+                bound = self.upper[j] if sign > 0 else self.lower[j]
+                room = abs(bound - q[j])
+                out[(j, sign)] = _Profile(j, sign, float(q[j]), room,
+                                          min(1.5 * float(np.sqrt(cov[j, j])), room), q)
+        for _ in range(self.MAX_PROFILE_STEPS):
+            live = [p for p in out.values() if not p.done]
+            if not live:
+                break
             # start from the better of the last inside point moved along j alone and the
             # linearised conditional optimum (the valley's direction near the optimum)
-            starts = np.vstack([last, q + cov[:, j] / cov[j, j] * (x - q[j])])
-            starts = np.clip(starts, self.lower + 1e-9, self.upper - 1e-9)
-            starts[:, j] = x
-            trial, c = self._fit(starts[int(np.argmin(self._costs(starts)))], fixed=j)
-            r = c - cost
-            if r <= rise:
-                inside.append(trial)
-                last, near, near_rise = trial, d, max(r, 0.0)
-                if far is None and d >= room:
-                    return None, inside
-                d = min(2 * d, room) if far is None else 0.5 * (near + far[0])
-            else:
-                far = (d, r)
-                if r <= 4 * rise or far[0] - near < 1e-4:
-                    break
-                d = 0.5 * (near + far[0])
-        if far is None:
-            return None, inside
-        # the bracket (near, far): rise ~ a (distance)^2 through its two ends
-        a = (far[1] - near_rise) / max(far[0] ** 2 - near**2, 1e-300)
-        at = np.sqrt(near**2 + (rise - near_rise) / a) if a > 0 else far[0]
-        return q[j] + sign * float(np.clip(at, near, far[0])), inside
+            starts = []
+            for p in live:
+                x = q[p.j] + p.sign * p.d
+                two = np.vstack([p.last, q + cov[:, p.j] / cov[p.j, p.j] * (x - q[p.j])])
+                two = np.clip(two, self.lower + 1e-9, self.upper - 1e-9)
+                two[:, p.j] = x
+                starts.append(two)
+            S = np.vstack(starts)
+            c2 = self._costs(S).reshape(len(live), 2)
+            S0 = S.reshape(len(live), 2, -1)[np.arange(len(live)), np.argmin(c2, axis=1)]
+            # a re-fit needs its cost to a small part of the threshold, not to round-off
+            trials, costs = self.fit_many(S0, np.array([p.j for p in live]), atol=0.005 * rise,
+                                          max_iter=50)
+            for p, trial, c in zip(live, trials, costs):
+                _advance(p, trial, float(c - cost), rise)
+        for p in out.values():
+            if not p.done:
+                _finish(p, rise)
+        return out
 
     def _rms(self, q: NDArray) -> float:
         R = self.residuals(q)[0]
@@ -522,29 +595,93 @@ class Calibration:
         """Closing velocity and touch time of ``designs`` at the fitted form parameters
         ``best`` (P,) and their envelope over the fit's band."""
         P = np.vstack([best, fit.band])
-        v, t = self.form.velocity(self.model, designs, P, self.steps)
-        return tuple(Prediction(d.label, float(v[0, i]), float(np.nanmin(v[:, i])),
-                                float(np.nanmax(v[:, i])), float(t[0, i]),
-                                float(np.nanmin(t[:, i])), float(np.nanmax(t[:, i])))
-                     for i, d in enumerate(designs))
+        v, t = velocity(self.form, self.model, designs, P, self.steps)
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: never touches
+            return tuple(Prediction(d.label, float(v[0, i]), float(np.nanmin(v[:, i])),
+                                    float(np.nanmax(v[:, i])), float(t[0, i]),
+                                    float(np.nanmin(t[:, i])), float(np.nanmax(t[:, i])))
+                         for i, d in enumerate(designs))
+
+
+def _robust_cost(R: NDArray) -> NDArray:
+    """soft-l1 cost of residual rows ``R`` (k, N), (k,): 0.5 C^2 sum 2 (sqrt(1 + (r/C)^2)
+    - 1), scipy ``least_squares``'s with ``f_scale`` C = :data:`ROBUST_SCALE`."""
+    z = (R / ROBUST_SCALE) ** 2
+    return 0.5 * ROBUST_SCALE**2 * np.sum(2 * (np.sqrt(1 + z) - 1), axis=1)
+
+
+def _advance(p: _Profile, trial: NDArray, r: float, rise: float) -> None:
+    """One re-fit of profile ``p`` at its step ``p.d``, the cost risen by ``r``: the next
+    step (doubling while inside, bisecting once outside) or the end."""
+    p.steps += 1
+    if r <= rise:
+        p.inside.append(trial)
+        p.last, p.near, p.near_rise = trial, p.d, max(r, 0.0)
+        if p.far is None and p.d >= p.room:
+            p.done, p.end = True, None  # open up to the search bound
+            return
+        p.d = min(2 * p.d, p.room) if p.far is None else 0.5 * (p.near + p.far[0])
+    else:
+        p.far = (p.d, r)
+        if r <= 4 * rise or p.far[0] - p.near < 1e-4:
+            _finish(p, rise)
+            return
+        p.d = 0.5 * (p.near + p.far[0])
+
+
+def _finish(p: _Profile, rise: float) -> None:
+    """The end of profile ``p``: None without a point outside, else the crossing in the
+    bracket (near, far) on a parabola rise ~ a (distance)^2 through its two ends."""
+    p.done = True
+    if p.far is None:
+        p.end = None
+        return
+    a = (p.far[1] - p.near_rise) / max(p.far[0] ** 2 - p.near**2, 1e-300)
+    at = np.sqrt(p.near**2 + (rise - p.near_rise) / a) if a > 0 else p.far[0]
+    p.end = float(p.origin + p.sign * float(np.clip(at, p.near, p.far[0])))
 
 
 def _out(q: float, log: bool) -> float:
     return float(np.exp(q)) if log else float(q)
 
 
-def calibrate(config: VcbConfig, curves: Sequence[CurveCase], forms: Sequence[ModelForm],
-              predict: Sequence[Design] = (), points: VelocityPoints | None = None
-              ) -> tuple[FormFit, ...]:
-    """Fit every form to the curves jointly and predict ``predict``'s designs (the
-    curves' designs if empty)."""
+KEEP_RATIO = 1.5
+"""A form is kept when its RMS misfit is at most this many times the best form's or the
+curves' noise, whichever is larger (identification's ``form_keep_ratio``, 1.5: a form
+that fits about as well as the best, or to within the analyser's noise, is as
+credible)."""
+
+
+def keep(rms: Sequence[float], noise: float) -> list[bool]:
+    """Which forms are kept by their RMS misfits ``rms`` (m): at most
+    :data:`KEEP_RATIO` times the larger of the best form's and ``noise`` (m, the curves'
+    RMS noise level)."""
+    if not rms:
+        return []
+    limit = KEEP_RATIO * max(min(rms), noise)
+    return [r <= limit for r in rms]
+
+
+def calibrate(config: VcbConfig, curves: Sequence[CurveCase],
+              forms: Sequence[ModelForm] = FORMS, predict: Sequence[Design] = (),
+              points: VelocityPoints | None = None) -> tuple[FormFit, ...]:
+    """Fit every form (default every form of :data:`~camopt.cases.vcb.forms.FORMS`) to
+    the curves jointly, mark the forms kept (:func:`keep`), find the intervals (profile
+    likelihood for the kept forms, linearised for the others: :meth:`Calibration.fit`)
+    and predict ``predict``'s designs (the curves' designs if empty)."""
+    cals = [Calibration(config, form, curves, points) for form in forms]
+    optima = [c.optimum() for c in cals]
+    sigma = np.array([max(c.curve.noise, 1e-3 * MM) for c in curves])
+    counts = np.array([len(c.curve.time) for c in curves])
+    noise = float(np.sqrt(np.sum(counts * sigma**2) / np.sum(counts)))
+    kept = keep([o.rms for o in optima], noise)
     out = []
-    for form in forms:
-        cal = Calibration(config, form, curves, points)
-        fit = cal.fit()
+    for cal, opt, k in zip(cals, optima, kept):
+        fit = cal.fit(opt, profiled=k)
         best = np.array([p.value for p in fit.parameters[:cal.n_form]])
         designs = list(predict) or _unique(cal.designs)
-        out.append(replace(fit, predictions=cal.predict(fit, designs, best)))
+        out.append(replace(fit, predictions=cal.predict(fit, designs, best), kept=k))
     return tuple(out)
 
 

@@ -16,12 +16,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from camopt.cases.vcb.calibrate import (
-    FORMS,
+    KEEP_RATIO,
     CurveCase,
     Design,
     FormFit,
@@ -30,20 +30,22 @@ from camopt.cases.vcb.calibrate import (
 from camopt.cases.vcb.cam_points import read_cam_points
 from camopt.cases.vcb.config import VcbConfig
 from camopt.cases.vcb.curves import AnalyserQuantities, VelocityPoints, read_curve
+from camopt.cases.vcb.forms import BAND_COLUMNS, FORM_NAMES, FORMS, get_form
 from camopt.cases.vcb.model import VcbModel
 from camopt.config.models import CaseConfig
-from camopt.core.calibration import CalibrationRequest
+from camopt.core.calibration import CalibrationRequest, FittedCurve
 from camopt.errors import ConfigError
 from camopt.units import MM, MS, N_PER_MM
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
 
 DESIGN_KEYS = ("kc1_n_per_mm", "kc2_n_per_mm", "a1", "a2", "a3", "cam_points", "label")
 CURVE_KEYS = (*DESIGN_KEYS, "latch_delay_ms")
 REFERENCE_LABEL = "reference"
 INTERVALS = ("profile likelihood, 95 % (chi2(1) / 2 = 1.92 times the reduced chi-square "
              "rise of the robust cost)")
+LINEARISED = ("linearised, 95 % (+-1.96 standard deviations of (J^T J)^-1 s^2 in the fitted "
+              "coordinates): a form not kept is not profiled")
+KEEP_RULE = (f"kept: RMS misfit at most {KEEP_RATIO:g} x the best form's or the curves' "
+             "noise, whichever is larger")
 
 
 def _settings(items: Sequence[str], keys: Sequence[str], where: str
@@ -100,10 +102,10 @@ def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport
     assert isinstance(config, VcbConfig)
     if not request.curves:
         raise ConfigError("--curve", "--curve", "give at least one curve file")
-    unknown = [f for f in request.forms if f not in FORMS]
+    unknown = [f for f in request.forms if f not in FORM_NAMES]
     if unknown:
         raise ConfigError("--form", unknown[0], f"unknown model form; known: "
-                          f"{', '.join(FORMS)}")
+                          f"{', '.join(FORM_NAMES)}")
     model = VcbModel(config)
     curves = []
     for c in request.curves:
@@ -126,10 +128,10 @@ def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport
             raise ConfigError("--velocity-points", f"{low:g},{high:g}",
                               "need 0 < low < high (travel in mm)")
         points = VelocityPoints(low * MM, high * MM)
-    forms = [FORMS[f] for f in request.forms] or list(FORMS.values())
+    forms = [get_form(f) for f in dict.fromkeys(request.forms)] or list(FORMS)
     fits = calibrate(config, curves, forms, list(unique.values()), points)
     used = points or VelocityPoints.last_third(config.contact_gap_mm * MM)
-    return VcbCalibrationReport(fits, used, config.follower_inertia_kg_m2)
+    return VcbCalibrationReport(fits, used, config)
 
 
 def _quantities(q: AnalyserQuantities) -> dict[str, Any]:
@@ -143,11 +145,12 @@ def _quantities(q: AnalyserQuantities) -> dict[str, Any]:
 
 @dataclass(frozen=True)
 class VcbCalibrationReport:
-    """The fits of every form (:class:`~camopt.core.calibration.CalibrationReport`)."""
+    """The fits of every form (:class:`~camopt.core.calibration.CalibrationReport`) and
+    the case they calibrate."""
 
     fits: tuple[FormFit, ...]
     points: VelocityPoints
-    follower_kg_m2: float
+    config: VcbConfig
 
     def to_json(self) -> dict[str, Any]:
         forms = []
@@ -155,7 +158,8 @@ class VcbCalibrationReport:
             names = [p.name for p in f.parameters]
             forms.append({
                 "form": f.form, "description": f.description, "rms_mm": f.rms / MM,
-                "intervals": INTERVALS,
+                "kept": f.kept,
+                "intervals": INTERVALS if f.intervals == "profile" else LINEARISED,
                 "parameters": [{"name": p.name, "unit": p.unit, "value": p.value,
                                 "low": p.low, "high": p.high, "identified": p.identified}
                                for p in f.parameters],
@@ -176,18 +180,24 @@ class VcbCalibrationReport:
                                 for p in f.predictions],
             })
         return {"velocity_points_mm": [self.points.low / MM, self.points.high / MM],
+                "keep_rule": KEEP_RULE, "kept_forms": [f.form for f in self.fits if f.kept],
                 "forms": forms}
 
     def lines(self) -> list[str]:
         out = [f"contact velocity between {self.points.low / MM:.3g} and "
-               f"{self.points.high / MM:.3g} mm of travel; intervals: {INTERVALS}"]
+               f"{self.points.high / MM:.3g} mm of travel; intervals: {INTERVALS}", "",
+               f"{'model form':<28}{'RMS mm':>10}  kept ({KEEP_RULE})"]
+        out += [f"{f.form:<28}{f.rms / MM:>10.4f}  {'yes' if f.kept else 'no'}"
+                for f in self.fits]
         for f in self.fits:
             out += ["", f"form {f.form}: {f.description}",
-                    f"  RMS misfit {f.rms / MM:.4f} mm over {len(f.curves)} curve(s)",
+                    f"  RMS misfit {f.rms / MM:.4f} mm over {len(f.curves)} curve(s); "
+                    f"{'kept' if f.kept else 'NOT kept'}"
+                    + ("" if f.intervals == "profile" else f"; intervals {LINEARISED}"),
                     f"  {'parameter':<22}{'value':>12}{'low':>12}{'high':>12}  identified"]
             for p in f.parameters:
                 out.append(f"  {p.name:<22}{p.value:>12.5g}{p.low:>12.5g}{p.high:>12.5g}  "
-                           f"{'yes' if p.identified else 'NO (not to +-5 %)'}")
+                           f"{_identified(p.identified, f.kept)}")
             names = [p.name for p in f.parameters]
             k = len(names)
             pairs = sorted(((abs(f.correlation[i, j]), names[i], names[j], f.correlation[i, j])
@@ -208,18 +218,19 @@ class VcbCalibrationReport:
                            f"{d.touch_time_high / MS:>8.3f}")
         return out
 
-    def figures(self) -> dict[str, Figure]:
-        from camopt.cases.vcb.calibration_figures import figures
-
-        return figures(self.fits)
+    def curves(self) -> tuple[FittedCurve, ...]:
+        return tuple(FittedCurve(f.form, c.source, c.design, c.time, c.measured, c.fitted)
+                     for f in self.fits for c in f.curves)
 
     def fragment(self, extends: str) -> str:
-        best = min(self.fits, key=lambda f: f.rms)
-        values = {p.name: p for p in best.parameters}
+        kept = [f for f in self.fits if f.kept] or list(self.fits)
+        best = min(kept, key=lambda f: f.rms)
+        form = get_form(best.form)
         lines = [f"# camopt calibrate: form {best.form} ({best.description}),",
                  f"# RMS misfit {best.rms / MM:.4f} mm on "
                  + ", ".join(c.source for c in best.curves) + ".",
                  f"# intervals: {INTERVALS}.",
+                 f"# kept forms ({KEEP_RULE}): " + ", ".join(f.form for f in kept) + ".",
                  f"extends = {_toml_string(extends)}", "", "[case]"]
         for p in best.parameters:
             mark = "" if p.identified else "  NOT identified by the curves"
@@ -229,11 +240,19 @@ class VcbCalibrationReport:
             else:
                 lines.append(f"# {p.name} = {p.value:.6g} (95 %: {p.low:.4g} .. "
                              f"{p.high:.4g} {p.unit}; not a case field){mark}")
-        rows = _band_rows(best, self.follower_kg_m2, values)
-        lines.append("# parameter sets inside the intervals (profiles' extremes):")
-        lines.append("# (J_cam kg m^2, J_f kg m^2, m_rod kg, m_c kg, release offset deg, "
-                     "friction N m)")
+        # what the form fixes rather than fits, where it differs from the case's
+        if form.efficiency == "none":
+            lines.append("efficiency = 1.0    # the form has no efficiency (Coulomb alone)")
+        if form.friction == "none":
+            lines.append("cam_friction_nm = 0.0    # the form has no friction torque")
+        if form.friction == "driven":
+            lines.append("# the form has no friction in the free rotation from the release: "
+                         "only the dynamics_band rows (release_friction_nm = 0) carry that")
+        lines.append("# parameter sets inside the intervals (profiles' extremes), every kept "
+                     "form, the chosen form's fit first:")
+        lines.append("# (" + ", ".join(BAND_COLUMNS) + ")")
         lines.append("dynamics_band = [")
+        rows = _band_rows(best, kept, self.config)
         lines += [f"  [{', '.join(f'{v:.6g}' for v in r)}]," for r in rows]
         lines.append("]")
         return "\n".join(lines) + "\n"
@@ -243,20 +262,23 @@ def _toml_string(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
-def _band_rows(fit: FormFit, follower: float, values: dict) -> list[list[float]]:
-    """The band's extremes per parameter (at most 2 P rows, the fit's first) as
-    ``dynamics_band`` rows; the form's parameters are today's five."""
-    band = fit.band
-    pick = np.unique(np.r_[0, np.argmin(band, axis=0), np.argmax(band, axis=0)])
-    order = ("cam_inertia_kg_m2", "rod_mass_kg", "contacts_mass_kg", "release_offset_deg",
-             "cam_friction_nm")
-    names = [p.name for p in fit.parameters][: band.shape[1]]
-    cols = [names.index(n) for n in order]
-    rows = []
-    for i in pick[:64]:
-        r = band[i, cols]
-        rows.append([r[0], follower, r[1], r[2], r[3], r[4]])
-    return rows
+def _band_rows(best: FormFit, kept: Sequence[FormFit], config: VcbConfig
+               ) -> list[list[float]]:
+    """``dynamics_band`` rows (:data:`~camopt.cases.vcb.forms.BAND_COLUMNS`) of every kept
+    form: each form's fit and its band's extremes per parameter, the chosen form
+    (``best``) first, at most 64 (the case's limit)."""
+    rows: list[list[float]] = []
+    for fit in [best] + [f for f in kept if f is not best]:
+        band = fit.band
+        pick = np.unique(np.r_[0, np.argmin(band, axis=0), np.argmax(band, axis=0)])
+        rows += get_form(fit.form).band_rows(band[pick], config).tolist()
+    return rows[:64]
+
+
+def _identified(identified: bool, kept: bool) -> str:
+    if not kept:
+        return "- (form not kept)"
+    return "yes" if identified else "NO (not to +-5 %)"
 
 
 def _side_by_side(m: AnalyserQuantities, s: AnalyserQuantities) -> list[str]:

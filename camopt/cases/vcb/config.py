@@ -2,11 +2,20 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from collections.abc import Mapping
+from typing import Annotated, ClassVar, Literal
 
 from pydantic import Field, model_validator
 
-from camopt.config.models import Bounds, CaseConfig, Pair, Plausible, Positive, Strict
+from camopt.config.models import (
+    Bounds,
+    CaseConfig,
+    FieldRole,
+    Pair,
+    Plausible,
+    Positive,
+    Strict,
+)
 
 # Physical ranges of a medium-voltage breaker mechanism of this family: a value outside is a
 # unit slip (metres into mm) or a typo; run.check_plausibility = false accepts it.
@@ -56,6 +65,37 @@ efficiency]): six values are the shipped form (the free rotation's friction the
 same, the case's efficiency), eight any model form's (camopt/cases/vcb/forms.py)."""
 
 
+def _roles(role: FieldRole, names: str) -> dict[str, FieldRole]:
+    return dict.fromkeys(names.split(), role)
+
+
+VCB_ROLES: dict[str, FieldRole] = {
+    **_roles("hardware", """reference_label reference_cam_points reference_law l1_mm l2_mm
+        l3_mm l4_mm l5_mm theta1_deg pivot_b_mm pivot_g_mm crank_l8_mm preset_qox_deg rb_mm rf_mm
+        beta_mm gamma_mm node_clearance_mm theta0_deg s1_bar_mm node_cam_deg node_fractions
+        kc1_n_per_mm kc2_n_per_mm kc1_precompression_mm kc2_precompression_mm
+        opening_k_n_per_mm opening_stretch_closed_mm wipe_k_n_per_mm wipe_count
+        wipe_compression_closed_mm contact_gap_mm cam_modulus_gpa poisson
+        contact_length_mm shear_yield_mpa cam_design tolerance_class"""),
+    **_roles("identified", """rod_arm_offset_deg opening_arm_ratio free_contact_force_n
+        alpha efficiency cam_inertia_kg_m2 follower_inertia_kg_m2 rod_mass_kg
+        contacts_mass_kg release_offset_deg cam_friction_nm dynamics_band"""),
+    **_roles("requirement", """rod_travel_mm rod_travel_tolerance_mm closing_velocity_m_s
+        require_latch pressure_angle_max_deg forbid_lift_off latch_energy_min_j
+        latch_energy_max_j release_torque_margin_min lift_off_fraction_min
+        stress_constraint phi_max_deg"""),
+    **_roles("solver setting", """step cam_archive dynamics_steps objective_form positions penalty
+        a1_bounds a2_bounds a3_bounds a4_bounds a5_bounds release_offset_bounds_deg
+        kc1_bounds_n_per_mm kc2_bounds_n_per_mm l1_bounds_mm l3_bounds_mm l4_bounds_mm
+        l5_bounds_mm theta1_bounds_deg"""),
+}
+"""Every VCB ``[case]`` field's role (``docs/cases/vcb.md``, ``camopt init vcb``): what
+describes the breaker, what must be re-identified after a geometry change, what a design
+must meet, and what only steers camopt. ``alpha`` and ``efficiency`` are losses (Eq 1,
+Eq 26): identified, not drawn. ``cam_design`` is the cam step 2 keeps (hardware once
+chosen); ``cam_archive`` only where camopt reads it from."""
+
+
 class CamDesign(Strict):
     """A step-1 design: cubic coefficients (rad, per rad^k) and closing spring rates."""
 
@@ -75,10 +115,25 @@ class CamDesign(Strict):
 class VcbConfig(CaseConfig):
     """12 kV VCB cam-linkage closing mechanism, Kang, Huang & Yang (2023)."""
 
+    field_roles: ClassVar[Mapping[str, FieldRole]] = VCB_ROLES
     kind: Literal["vcb"] = "vcb"
     step: Literal["cam", "fourbar"] = Field(
         "cam", description="cam: a1, a2, a3, kc1, kc2 (Eq 37); fourbar: l1, l3, l4, l5, "
         "theta1 (Eq 41)")
+    reference_label: str = Field(
+        "vendor, Sec 2.3 and Table 2", min_length=1, max_length=200,
+        description="name of the reference design, the breaker these fields describe (its "
+        "cam: reference_cam_points or Eq 8's nodes; its springs: kc1, kc2), shown beside "
+        "every optimum as 'reference: <label>'")
+    reference_cam_points: str | None = Field(
+        None, description="the reference design's cam as a points file (CSV with "
+        "cam_angle_deg and follower_angle_deg, as camopt export writes; relative to the "
+        "working folder or the case file): its follower law (camopt/cases/vcb/cam_points.py) "
+        "replaces the one from Eq 8's nodes; unset: the nodes")
+    reference_law: list[float] | None = Field(
+        None, min_length=4, max_length=6, description="the reference cam's follower law "
+        "a0..ad (rad/rad^k, degree 3 to 5): what reading reference_cam_points gives (filled "
+        "in when the case file is read; may be given instead); unset: Eq 8's nodes")
     # four-bar and pivots (Sec 2.3)
     l1_mm: LinkLength = Field(139.79, description="fixed link BE (Sec 2.3)")
     l2_mm: LinkLength = Field(70.0, description="follower (input) link BD (Sec 2.3)")
@@ -256,6 +311,8 @@ class VcbConfig(CaseConfig):
                     raise ValueError(f"{name}: a step-1 (cam) design variable; step "
                                      "'fourbar' takes the cam design, its latch included, "
                                      "from cam_design or cam_archive")
+        if self.reference_cam_points is not None and not self.reference_cam_points.strip():
+            raise ValueError("reference_cam_points: an empty file name")
         r = self.release_offset_bounds_deg
         if self.kind == "vcb" and r is not None and not 0 < r.lower <= r.upper < 90:
             raise ValueError("release_offset_bounds_deg: the latch holds the crank past its "
@@ -270,6 +327,11 @@ class VcbConfig(CaseConfig):
 class VcbIdentifyConfig(VcbConfig):
     """Fit the VCB parameters the paper leaves out to the results it reports."""
 
+    field_roles: ClassVar[Mapping[str, FieldRole]] = {
+        **VCB_ROLES, **_roles("measured data", """vendor_surplus_target_j
+            optimum_surplus_target_j paper_optimum"""),
+        **_roles("solver setting", """rod_offset_bounds_deg opening_arm_bounds
+            free_contact_bounds_n""")}
     kind: Literal["vcb_identify"] = "vcb_identify"  # type: ignore[assignment]
     vendor_surplus_target_j: float = Field(
         1.75, description="Table 6 vendor objective 1.75e3, read as N mm")
@@ -291,6 +353,15 @@ class VcbDynamicsIdentifyConfig(VcbConfig):
     """Fit the dynamics' parameters the paper leaves out to the vendor design's seven ADAMS data
     (Sec 3.2, Table 4)."""
 
+    field_roles: ClassVar[Mapping[str, FieldRole]] = {
+        **VCB_ROLES, **_roles("measured data", """departure_time_target_ms
+            open_time_target_ms opening_velocity_target_m_s cam_contact_time_target_ms
+            touch_time_target_ms closing_velocity_target_m_s closed_by_ms
+            velocity_reading_pct time_reading_ms"""),
+        **_roles("solver setting", """cam_inertia_bounds_kg_m2 rod_mass_bounds_kg
+            contacts_mass_bounds_kg release_offset_bounds_deg cam_friction_bounds_nm
+            efficiency_bounds model_form form_keep_ratio form_keep_pct band_samples
+            band_seed""")}
     kind: Literal["vcb_identify_dynamics"] = "vcb_identify_dynamics"  # type: ignore[assignment]
     # the ADAMS data of the vendor design (Sec 3.2 and Table 4), times from the release
     departure_time_target_ms: Positive = Field(

@@ -17,9 +17,15 @@ damping, the springs' own mass):
   springs' work, in the opening too).
 
 A form is data (:class:`ModelForm`): its fitted parameters with their bounds (the
-identification config's ``*_bounds`` fields) and the map from a parameter vector to
+identification config's ``*_bounds`` fields for the seven ADAMS data; :data:`CURVE_SEARCH`
+for travel curves, :meth:`ModelForm.curve_parameters`), their starting values from a case
+(:meth:`ModelForm.start`) and the map from a parameter vector to
 :class:`~camopt.cases.vcb.dynamics.MotionParameters`, with which :meth:`ModelForm.closing`
-simulates the closing (events and rod travel curve) of designs, vectorised over rows.
+simulates the closing (events and rod travel curve) of designs, vectorised over rows, and
+:meth:`ModelForm.band_rows` writes ``dynamics_band`` rows. The identification
+(:mod:`camopt.cases.vcb.identify`) and the calibration on travel curves
+(:mod:`camopt.cases.vcb.calibrate`) both fit every form of :data:`FORMS` through this
+one seam.
 Viscous friction (a torque c omega) is not among them: the work it takes depends on the
 speed, so the work-energy integration would become a time-stepped ODE
 (docs/assumptions.md, "VCB: model forms").
@@ -33,7 +39,7 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.cases.vcb.config import ModelFormName, VcbDynamicsIdentifyConfig
+from camopt.cases.vcb.config import ModelFormName, VcbConfig, VcbDynamicsIdentifyConfig
 from camopt.cases.vcb.dynamics import (
     ClosingEvents,
     ClosingMotion,
@@ -53,6 +59,36 @@ BOUNDS = {"cam_inertia_kg_m2": "cam_inertia_bounds_kg_m2", "rod_mass_kg": "rod_m
           "release_offset_deg": "release_offset_bounds_deg",
           "cam_friction_nm": "cam_friction_bounds_nm", "efficiency": "efficiency_bounds"}
 """Each fitted parameter's bounds: the identification config's field."""
+BAND_COLUMNS = ("cam_inertia_kg_m2", "follower_inertia_kg_m2", "rod_mass_kg",
+                "contacts_mass_kg", "release_offset_deg", "cam_friction_nm",
+                "release_friction_nm", "efficiency")
+"""A ``dynamics_band`` row: every MotionParameters field, in the units of the names."""
+
+
+@dataclass(frozen=True)
+class FitParameter:
+    """A parameter fitted on travel curves: its name (a ``[case]`` field, so the fitted
+    value can be written back), unit, search bounds (in the unit) and whether it is fitted
+    in its log (a positive quantity)."""
+
+    name: str
+    unit: str
+    lower: float
+    upper: float
+    log: bool = True
+
+
+CURVE_SEARCH = {p.name: p for p in (
+    FitParameter("cam_inertia_kg_m2", "kg m^2", 1e-5, 0.05),
+    FitParameter("rod_mass_kg", "kg", 0.05, 30.0),
+    FitParameter("contacts_mass_kg", "kg", 0.05, 15.0),
+    FitParameter("release_offset_deg", "deg", 0.5, 40.0),
+    FitParameter("cam_friction_nm", "N m", 0.01, 100.0),
+    FitParameter("efficiency", "1", 0.2, 1.0),
+)}
+"""Search bounds of a calibration on travel curves (wider than the identification's: a
+breaker maker's own mechanism, not the paper's); every parameter positive, fitted in its
+log (the friction from 0.01 N m: a loss too small to see on a curve)."""
 
 
 @dataclass(frozen=True)
@@ -77,6 +113,32 @@ class ModelForm:
         """The parameters with the identification config's bounds."""
         return tuple(Variable(name, getattr(config, BOUNDS[name]).lower,
                               getattr(config, BOUNDS[name]).upper) for name in self.parameters)
+
+    def curve_parameters(self) -> tuple[FitParameter, ...]:
+        """The parameters with the search bounds of a calibration on travel curves
+        (:data:`CURVE_SEARCH`), in the order of a vector."""
+        return tuple(CURVE_SEARCH[name] for name in self.parameters)
+
+    def start(self, config: VcbConfig) -> NDArray:
+        """The case's values of the parameters (their units), (p,): a fit's first start.
+        A friction torque starts at 0.1 N m at least (fitted in its log)."""
+        values = {"cam_friction_nm": max(config.cam_friction_nm, 0.1),
+                  "efficiency": config.efficiency}
+        return np.array([values[n] if n in values else getattr(config, n)
+                         for n in self.parameters], dtype=float)
+
+    def band_rows(self, X: NDArray, config: VcbConfig) -> NDArray:
+        """Parameter rows ``X`` (k, p) as ``dynamics_band`` rows (k, 8):
+        :data:`BAND_COLUMNS`, the case's follower inertia and efficiency where the form
+        does not fit them."""
+        mp = self.motion_parameters(X, config.follower_inertia_kg_m2)
+        k = len(np.atleast_2d(X))
+        friction = mp.friction_nm if mp.release_friction_nm is None else mp.release_friction_nm
+        eps = config.efficiency if mp.efficiency is None else mp.efficiency
+        columns = (mp.cam_kg_m2, mp.follower_kg_m2, mp.rod_kg, mp.contacts_kg,
+                   np.asarray(mp.release_offset_rad) / DEG, mp.friction_nm, friction, eps)
+        return np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), (k,))
+                                for c in columns])
 
     def motion_parameters(self, X: NDArray, follower_kg_m2: float) -> MotionParameters:
         """Parameter rows ``X`` (n, len(parameters)), in the names' units, as

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import VcbDynamicsIdentifyConfig, VcbIdentifyConfig
 from camopt.cases.vcb.dynamics import MotionParameters, opening_motion
-from camopt.cases.vcb.forms import FORMS, INERTIAS, ModelForm, get_form
+from camopt.cases.vcb.forms import BAND_COLUMNS, FORMS, INERTIAS, ModelForm, get_form
 from camopt.cases.vcb.model import VcbModel
 from camopt.core.problem import Evaluation, Problem, Variable
 from camopt.units import DEG, MM, MS
@@ -285,22 +285,10 @@ def consistent_band(problem: VcbDynamicsIdentification, best: NDArray, tolerance
     return np.vstack([best[None, :], members[pick]])
 
 
-BAND_COLUMNS = ("cam_inertia_kg_m2", "follower_inertia_kg_m2", "rod_mass_kg",
-                "contacts_mass_kg", "release_offset_deg", "cam_friction_nm",
-                "release_friction_nm", "efficiency")
-"""A ``dynamics_band`` row: every MotionParameters field, in the units of the names."""
-
-
 def band_rows(form: ModelForm, X: NDArray, config: VcbDynamicsIdentifyConfig) -> NDArray:
-    """Parameter rows ``X`` (k, p) of ``form`` as ``dynamics_band`` rows (k, 8)."""
-    mp = form.motion_parameters(X, config.follower_inertia_kg_m2)
-    k = len(np.atleast_2d(X))
-    friction = mp.friction_nm if mp.release_friction_nm is None else mp.release_friction_nm
-    eps = config.efficiency if mp.efficiency is None else mp.efficiency
-    columns = (mp.cam_kg_m2, mp.follower_kg_m2, mp.rod_kg, mp.contacts_kg,
-               np.asarray(mp.release_offset_rad) / DEG, mp.friction_nm, friction, eps)
-    return np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), (k,))
-                            for c in columns])
+    """Parameter rows ``X`` (k, p) of ``form`` as ``dynamics_band`` rows (k, 8)
+    (:meth:`~camopt.cases.vcb.forms.ModelForm.band_rows`)."""
+    return form.band_rows(X, config)
 
 
 def data_band(config: VcbDynamicsIdentifyConfig, fits: tuple[FormFit, ...]

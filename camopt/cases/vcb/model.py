@@ -22,8 +22,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import VcbConfig
+from camopt.errors import ConfigError
 from camopt.mechanics import cam, fourbar, hertz
 from camopt.units import DEG, MM
+
+REFERENCE_A0_TOLERANCE_DEG = 0.05
+"""Largest difference (deg) between a reference cam's follower angle at theta_c = 0 (its
+points' law) and the case geometry's (Eq 8): five times the points' fitting tolerance."""
 
 
 @dataclass(frozen=True)
@@ -155,6 +160,14 @@ class VcbModel:
         self.vendor_link = np.array([c.l1_mm * MM, c.l3_mm * MM, c.l4_mm * MM,
                                      c.l5_mm * MM, c.theta1_deg * DEG])
         self.vendor_a = self.node_cubic(self.vendor_link)
+        if c.reference_law is not None:  # the reference cam as built (its points' law)
+            self.vendor_a = np.asarray(c.reference_law, dtype=float)
+            miss = abs(self.vendor_a[0] - self.phi0()) / DEG
+            if miss > REFERENCE_A0_TOLERANCE_DEG:
+                raise ConfigError("case", "reference_law", f"the reference cam's follower "
+                                  f"angle at theta_c = 0 is {self.vendor_a[0] / DEG:.3f} deg; "
+                                  f"the case's geometry (Eq 8) puts it at "
+                                  f"{self.phi0() / DEG:.3f} deg: a cam of another geometry?")
         # spring crank angles (rad): dead centre (Q on OG, springs most compressed) and
         # where the cam meets the roller, QOX + theta0 (Sec 2.2 Step 8)
         self.dead_centre = float(np.arctan2(self.G[1], self.G[0]))

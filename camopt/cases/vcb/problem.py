@@ -58,6 +58,11 @@ class VcbProblem(Problem, VariesCase):
             ) + tuple(Variable(name, b.lower, b.upper)
                       for name, b in (("a4", c.a4_bounds), ("a5", c.a5_bounds)) if b is not None)
             self.higher_terms = len(self.variables) - 5
+            if len(m.vendor_a) - 4 > self.higher_terms:
+                need = "a4_bounds" if len(m.vendor_a) == 5 else "a4_bounds and a5_bounds"
+                raise ConfigError("case", "reference_law", f"the reference cam's law has "
+                                  f"degree {len(m.vendor_a) - 1}: set {need} so the "
+                                  "search's law reaches it")
             r = c.release_offset_bounds_deg
             if r is not None:  # beyond the paper: where the latch holds the charged crank
                 self.variables += (Variable("release_offset_deg", r.lower * DEG, r.upper * DEG,
@@ -122,9 +127,12 @@ class VcbProblem(Problem, VariesCase):
         """The vendor's design in this step's variables (initial design of Tables 6, 7)."""
         if self.config.step == "cam":
             c = self.config
-            higher = np.zeros(self.higher_terms)  # the vendor's law is a cubic
+            # the paper's vendor law is a cubic; a reference cam read from points may have
+            # higher terms (its degree was checked against the search's at the build)
+            higher = np.zeros(self.higher_terms)
+            higher[:len(self.model.vendor_a) - 4] = self.model.vendor_a[4:]
             release = [] if self.release_column is None else [c.release_offset_deg * DEG]
-            return np.r_[self.model.vendor_a[1:], c.kc1_n_per_mm * 1e3, c.kc2_n_per_mm * 1e3,
+            return np.r_[self.model.vendor_a[1:4], c.kc1_n_per_mm * 1e3, c.kc2_n_per_mm * 1e3,
                          higher, release]
         return self.model.vendor_link.copy()
 
