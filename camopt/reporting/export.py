@@ -115,17 +115,20 @@ def _time_first(keys: list[str]) -> list[str]:
 def export_files(run: RunView, out_dir: Path, stem: str, fmt: str) -> dict[Path, bytes]:
     """The csv or json export's files by path (nothing written)."""
     analysis = run.analysis
-    doc = report.show(run)
     files: dict[Path, bytes] = {}
     if fmt == "json":
+        doc = report.show(run).to_json()
         doc["analysis"] = {k: report.jsonable(np.asarray(v).tolist()) for k, v in analysis.items()}
         files[out_dir / f"{stem}.json"] = json.dumps(doc, indent=2).encode()
     else:
+        best = report.jsonable({"objective": run.best.objective,
+                                "feasible": run.best.feasible, "x": run.best.x,
+                                "metrics": run.best.metrics})
         rows: list[list[object]] = [["section", "name", "value"],
-                                    ["best", "objective", doc["best"]["objective"]],
-                                    ["best", "feasible", doc["best"]["feasible"]]]
+                                    ["best", "objective", best["objective"]],
+                                    ["best", "feasible", best["feasible"]]]
         for section in ("x", "metrics"):
-            for k, v in doc["best"][section].items():
+            for k, v in best[section].items():
                 rows.append([section, k, json.dumps(v) if isinstance(v, list) else v])
         files[out_dir / f"{stem}-summary.csv"] = _csv(rows)
         groups: dict[int, list[str]] = {}
