@@ -25,7 +25,7 @@ from camopt.core.runview import RunView
 from camopt.errors import ConfigError
 from camopt.mechanics.cam_outline import CamOutline
 from camopt.reporting import report
-from camopt.units import DEG, MM
+from camopt.units import DEG, MM, TO_DEG
 
 FORMATS = ("csv", "json", "dxf")
 STEP_DEG = 1.0
@@ -243,7 +243,7 @@ def _workshop_layers(doc: object, outline: CamOutline, colours: object) -> None:
         layers.add(name, color=next(colours))  # type: ignore[call-overload]
     pivot, arm = outline.pivot / MM, outline.arm / MM
     # the roller centre turns about B (l6, 0) at l2; its direction from B is pi - (xi + phi)
-    ends = [np.degrees(np.pi - outline.xi - f(outline.phi)) for f in (np.max, np.min)]
+    ends = [(np.pi - outline.xi - f(outline.phi)) * TO_DEG for f in (np.max, np.min)]
     msp.add_arc((pivot, 0.0), arm, float(ends[0]), float(ends[1]),
                 dxfattribs={"layer": "roller-path"})
     reach = float(np.max(np.hypot(*outline.profile.T))) / MM
