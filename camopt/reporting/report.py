@@ -43,8 +43,6 @@ from camopt.reporting.views import (
     jsonable,
 )
 
-__all__ = ["jsonable"]  # re-exported: the CLI's JSON of non-view documents
-
 SHOW_KEYS = ("case", "solver", "best", "repeats", "table")
 
 
