@@ -12,8 +12,8 @@ import time
 import numpy as np
 
 from camopt.cases.vcb.calibrate import CurveCase, Design, calibrate
-from camopt.cases.vcb.forms import get_form
 from camopt.cases.vcb.curves import TravelCurve, noise_level
+from camopt.cases.vcb.forms import get_form
 from camopt.cases.vcb.problem import VcbProblem
 from camopt.units import MM, MS, N_PER_MM
 from tests.cases import vcb_ode

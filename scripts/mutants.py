@@ -152,6 +152,12 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
                          "reason = None"),
     "polish_no_reserve": ("camopt/solvers/polish.py", "else budget.max_nfev - 1, budget.deadline)",
                           "else budget.max_nfev, budget.deadline)"),
+    # the multi-start local solves under the run's budget (issue #37)
+    "multistart_unmetered": ("camopt/solvers/multistart.py",
+                             "reason = self.budget.spent(self.used + self.count + 1)",
+                             "reason = None"),
+    "multistart_no_reserve": ("camopt/solvers/multistart.py",
+                              "else budget.max_nfev - 1,\n", "else budget.max_nfev,\n"),
     # statistics
     "stats_mw_direction": ("camopt/core/stats.py", "p_a_better = 1.0 - float(res.statistic)",
                            "p_a_better = float(res.statistic)"),
@@ -182,6 +188,7 @@ MIRROR = {
     "camopt/engine/robust.py": ["tests/engine/test_robust.py"],
     "camopt/reporting/tolerance_figures.py": ["tests/reporting/test_tolerance_figures.py"],
     "camopt/solvers/polish.py": ["tests/solvers/test_polish.py"],
+    "camopt/solvers/multistart.py": ["tests/solvers/test_multistart.py"],
 }
 
 

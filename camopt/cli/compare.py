@@ -42,40 +42,40 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
         if len(runs) == 1 and archive.archive_kind(runs[0]) == "sweep":
             doc = report.rank_sweep(*load_sweep(runs[0]))
             if format is Format.json:
-                sys.stdout.write(json.dumps(doc, indent=2) + "\n")
+                sys.stdout.write(json.dumps(doc.to_json(), indent=2) + "\n")
             else:
                 print_ranking(doc)
             return
         if len(runs) < 2:
             raise CamoptError("compare: RUN: give at least two run archives, or one sweep")
-        doc = report.compare([archive.load_run(p) for p in runs], raw=True,
-                             equivalence=equivalence)
+        comparison = report.compare([archive.load_run(p) for p in runs],
+                                    equivalence=equivalence)
     if format is Format.json:
-        sys.stdout.write(json.dumps(report.jsonable(doc), indent=2) + "\n")
+        sys.stdout.write(json.dumps(comparison.to_json(), indent=2) + "\n")
         return
-    labels = doc["labels"]
-    for label, path in zip(labels, doc["runs"]):
+    labels = comparison.labels
+    for label, path in zip(labels, comparison.runs):
         out.print(f"[bold]{label}[/] = {escape(str(path))}", highlight=False, soft_wrap=True)
-    print_verdicts(doc, labels)
-    print_table("compare", ["", *labels], compare_rows(doc),
+    print_verdicts(comparison.verdicts, labels)
+    print_table("compare", ["", *labels], compare_rows(comparison),
                 numeric=[False, *(True for _ in labels)])
-    for same in doc["same_objective_different_designs"]:
-        i, j = same["runs"]
+    for same in comparison.same_objective_different_designs:
+        i, j = same.runs
         out.print(f"[bold]note[/]: {labels[i]} and {labels[j]} reach one objective "
-                  f"({report.format_value(same['objective'])}) with different designs "
-                  f"(differing in {escape(', '.join(same['differ']))}): the objective is "
+                  f"({report.format_value(same.objective)}) with different designs "
+                  f"(differing in {escape(', '.join(same.differ))}): the objective is "
                   "flat there or has several optima", highlight=False)
-    if "hypervolume" in doc:
-        print_hypervolume(doc["hypervolume"], labels)
-    for test in doc["tests"]:
-        unit = unit_of(doc["objective_name"])
-        effect = ("-" if test["effect"] is None else f"{test['effect']:.3g} {unit}".strip())
-        threshold = ("-" if test["threshold"] is None
-                     else f"{test['threshold']:.3g} {unit}".strip())
+    if comparison.hypervolume:
+        print_hypervolume(comparison.hypervolume, labels)
+    for test in comparison.tests:
+        unit = unit_of(comparison.objective_name)
+        effect = ("-" if test.effect is None else f"{test.effect:.3g} {unit}".strip())
+        threshold = ("-" if test.threshold is None
+                     else f"{test.threshold:.3g} {unit}".strip())
         out.print(f"medians B - A = {effect} (equivalence threshold {threshold}); "
-                  f"Mann-Whitney p = {test['p_value']:.3g}, P(A better) = "
-                  f"{test['p_a_better']:.2f}", highlight=False)
-        out.print(f"success A {success_rate_text(test['success_a'])}, B "
-                  f"{success_rate_text(test['success_b'])}: Fisher exact p = "
-                  f"{test['success_p_value']:.3g}", highlight=False)
-        out.print(f"[bold]{escape(test['verdict'])}[/]", highlight=False)
+                  f"Mann-Whitney p = {test.p_value:.3g}, P(A better) = "
+                  f"{test.p_a_better:.2f}", highlight=False)
+        out.print(f"success A {success_rate_text(test.success_a)}, B "
+                  f"{success_rate_text(test.success_b)}: Fisher exact p = "
+                  f"{test.success_p_value:.3g}", highlight=False)
+        out.print(f"[bold]{escape(test.verdict)}[/]", highlight=False)

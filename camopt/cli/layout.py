@@ -8,7 +8,7 @@ is drawn as columns when the longest word of each column, padded, fits the conso
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from rich.markup import escape
@@ -18,6 +18,16 @@ from camopt.cli.console import fmt, out, plain
 
 if TYPE_CHECKING:
     from camopt.core.runview import RunView
+    from camopt.reporting.views import (
+        Comparison,
+        ReferenceVerdict,
+        RobustSummary,
+        RobustYield,
+        ShowView,
+        Summary,
+        SweepRanking,
+        Verdict,
+    )
 
 BORDER = 3
 """Characters a column adds to its text: a rule and a space each side."""
@@ -108,62 +118,67 @@ def print_show(view: RunView, rows: int | None = None) -> None:
               f"{done} repeats, seed {view.run.get('seed', '-')}", highlight=False)
     if view.interrupted:
         out.print("[bold red]interrupted[/]: the archive holds the finished repeats only")
-    print_verdict(doc)
-    if doc.get("pareto_summary"):
-        print_pareto(doc["pareto_summary"])
+    print_verdict(doc.verdict, robust_yield=doc.robust_yield,
+                  expected_yield=doc.expected_yield, reference=doc.reference)
+    if doc.pareto_summary:
+        print_pareto(doc.pareto_summary)
     style = "green" if view.best.feasible else "bold red"
     out.print(f"run's constraints: [{style}]{escape(report.status(view))}[/]", highlight=False)
     print_best(report.summary(view))  # raw values: inf and NaN are shown
-    if doc.get("model_forms"):  # an identification's forms (the parameters: --format json)
-        print_fitted("model forms fitted on the same data", doc["model_forms"],
+    forms = doc.findings.get("model_forms")
+    if forms:  # an identification's forms (the parameters: --format json)
+        print_fitted("model forms fitted on the same data", report.jsonable(forms),
                      ["name", "misfit", "max_residual_pct", "kept"], None)
     robust = report.robust_summary(view)
     if robust is not None:
         out.print(robust_table(robust))
     print_repeats(doc, rows)
-    for r in doc["repeats"]:
-        for note in r["notes"]:
-            out.print(f"[bold]note[/] (repeat {r['spawn_key'][-1]}): {escape(note)}",
+    for r in doc.repeats:
+        for note in r.notes:
+            out.print(f"[bold]note[/] (repeat {r.spawn_key[-1]}): {escape(note)}",
                       highlight=False)
-    if doc["table"]:
-        best = doc["best"]
-        columns = ["label", *best["x"], view.objective_name, "feasible", "active", "violated"]
-        print_fitted("solver's table", doc["table"], columns, rows)
-    out.print(f"[bold]{escape(doc['next'])}[/]", highlight=False)
+    if doc.table:
+        columns = ["label", *doc.best.x, view.objective_name, "feasible", "active",
+                   "violated"]
+        print_fitted("solver's table", report.jsonable(doc.table), columns, rows)
+    out.print(f"[bold]{escape(doc.next)}[/]", highlight=False)
 
 
-def print_verdict(doc: dict[str, Any], title: str = "best design") -> None:
+def print_verdict(judged: Verdict, title: str = "best design", *,
+                  robust_yield: RobustYield | None = None,
+                  expected_yield: Mapping[str, Any] | None = None,
+                  reference: ReferenceVerdict | None = None) -> None:
     """The answer first: a robust run's yield against its target, the overall verdict in
     words, the expected yield, then the requirement | limit | value | margin | pass table
-    of ``doc`` (``report.show``'s), and the reference design's verdict in one line."""
+    of ``judged``, and the reference design's verdict in one line."""
     from camopt.reporting import report
 
-    if doc.get("robust_yield"):
-        met = doc["robust_yield"]["meets_target"]
+    if robust_yield is not None:
+        met = robust_yield.meets_target
         style = "bold green" if met else "bold red" if met is False else "bold"
-        out.print(f"[{style}]{escape(report.robust_text(doc['robust_yield']))}[/]",
+        out.print(f"[{style}]{escape(report.robust_text(robust_yield))}[/]",
                   highlight=False)
-    plain_pass = doc["verdict"] == "pass" and not doc.get("at_limit")
-    style = ("bold green" if plain_pass else "bold yellow" if doc["verdict"] == "pass"
+    plain_pass = judged.verdict == "pass" and not judged.at_limit
+    style = ("bold green" if plain_pass else "bold yellow" if judged.verdict == "pass"
              else "bold red")
-    out.print(f"[{style}]{escape(doc['verdict_sentence'])}[/]", highlight=False)
-    if doc.get("expected_yield"):
-        out.print(escape(report.yield_text(doc["expected_yield"])), highlight=False)
-    rows = report.verdict_rows(doc["requirements"])
-    styles = ["red" if r["pass"] is False else "yellow" if r.get("at_limit") else None
-              for r in doc["requirements"]]
+    out.print(f"[{style}]{escape(judged.sentence)}[/]", highlight=False)
+    if expected_yield:
+        out.print(escape(report.yield_text(report.jsonable(expected_yield))),
+                  highlight=False)
+    rows = report.verdict_rows(judged.checks)
+    styles = ["red" if c.passed is False else "yellow" if c.at_limit else None
+              for c in judged.checks]
     if rows:
         print_table(f"requirements of the {title}", report.VERDICT_COLUMNS, rows,
                     numeric=[False, True, True, False, True], styles=styles)
-    ref = doc.get("reference")
-    if ref:
-        judged = {"pass": "[green]PASS[/]", "fail": "[red]FAIL[/]"}.get(ref["verdict"] or "",
-                                                                      "not judged")
-        words = ref["verdict_sentence"].removeprefix("PASS: ").removeprefix("FAIL: ")
-        out.print(f"{escape(ref['label'])}: {judged}: {escape(words)}", highlight=False)
+    if reference is not None:
+        words = {"pass": "[green]PASS[/]", "fail": "[red]FAIL[/]"}.get(
+            reference.verdict or "", "not judged")
+        said = reference.verdict_sentence.removeprefix("PASS: ").removeprefix("FAIL: ")
+        out.print(f"{escape(reference.label)}: {words}: {escape(said)}", highlight=False)
 
 
-def print_pareto(doc: dict[str, Any]) -> None:
+def print_pareto(doc: Mapping[str, Any]) -> None:
     """A Pareto run's front: objectives, extent and knee, and what the headline is."""
     from camopt.reporting import report
 
@@ -177,38 +192,40 @@ def print_pareto(doc: dict[str, Any]) -> None:
     out.print(f"headline design below: {escape(doc['headline'])}", highlight=False)
 
 
-def print_best(summary: dict[str, Any]) -> None:
+def print_best(summary: Summary) -> None:
     """The best design beside the reference design (``report.summary``)."""
     from camopt.reporting import report
 
-    label = summary["reference_label"]
+    label = summary.reference_label
     columns = ["quantity", "optimum", *(["reference"] if label else [])]
     rows, sections, section = [], [], None
-    for i, row in enumerate(summary["rows"]):
-        if row["section"] != section:
+    for i, row in enumerate(summary.rows):
+        if row.section != section:
             sections.append(i)
-        section = row["section"]
-        values = [row["optimum"], row["reference"]] if label else [row["optimum"]]
-        name = f"objective: {row['name']}" if i == 0 else row["name"]
+        section = row.section
+        values = [row.optimum, row.reference] if label else [row.optimum]
+        name = f"objective: {row.name}" if i == 0 else row.name
         rows.append([name, *(report.format_value(v) for v in values)])
     print_table("best design" + (f" beside the {label}" if label else ""), columns, rows,
                 sections=sections)
 
 
-def robust_table(summary: dict[str, Any]) -> Table:
+def robust_table(summary: RobustSummary) -> Table:
     """A robust run's final check beside the best nominal design (``report.robust_summary``)."""
-    table = Table(title=f"robust check ({summary['samples']} fresh draws for both; "
-                  f"target {cell(summary['yield_target'])})", title_justify="left")
+    table = Table(title=f"robust check ({summary.samples} fresh draws for both; "
+                  f"target {cell(summary.yield_target)})", title_justify="left")
     table.add_column("", overflow="fold")
-    for label in summary["labels"]:
+    for label in summary.labels:
         table.add_column(label, justify="right", no_wrap=True)
-    for row in summary["rows"]:
-        table.add_row(escape(row["name"]), *(cell(v) for v in row["values"]))
+    for row in summary.rows:
+        table.add_row(escape(row.name), *(cell(v) for v in row.values))
     return table
 
 
-def print_repeats(doc: dict[str, Any], rows: int | None) -> None:
-    reps = doc["repeats"]
+def print_repeats(doc: ShowView, rows: int | None) -> None:
+    """The repeats' feasibility and objectives in one line, then (several repeats) a table
+    of the first ``rows``."""
+    reps = [r.to_json() for r in doc.repeats]  # as JSON: unbounded objectives as '-'
     stats = [r["objective"] for r in reps if r["feasible"] and r["objective"] is not None]
     line = f"repeats: {sum(r['feasible'] for r in reps)} of {len(reps)} feasible"
     if stats:
@@ -260,22 +277,23 @@ def print_fitted(title: str, rows: list[dict[str, Any]], columns: list[str],
 
 
 
-def print_verdicts(doc: dict[str, Any], names: list[str]) -> None:
+def print_verdicts(verdicts: Sequence[Verdict], names: Sequence[str]) -> None:
     """Each run's verdict in words, then requirement | limit | one value per run (3
     significant digits, with pass, FAIL or at limit)."""
     from camopt.core.requirements import engineering
     from camopt.reporting import report
 
-    for name, judged, words in zip(names, doc["verdict"], doc["verdict_sentence"]):
-        style = "green" if judged == "pass" else "bold red"
-        out.print(f"{escape(name)}: [{style}]{escape(words)}[/]", highlight=False)
+    for name, judged in zip(names, verdicts):
+        style = "green" if judged.verdict == "pass" else "bold red"
+        out.print(f"{escape(name)}: [{style}]{escape(judged.sentence)}[/]", highlight=False)
     rows: dict[str, list[str]] = {}
-    for k, reqs in enumerate(doc["requirements"]):
-        for r, cells in zip(reqs, report.verdict_rows(reqs)):
+    for k, judged in enumerate(verdicts):
+        for c, cells in zip(judged.checks, report.verdict_rows(judged.checks)):
             row = rows.setdefault(cells[0], [cells[0], cells[1], *("-" for _ in names)])
-            value = r["value"]
-            shown = (f"{engineering(value)} {r['unit']}".strip() if isinstance(value, float)
-                     and r["limit"] != "yes" and value == value else cells[2])
+            value = c.value
+            shown = (f"{engineering(value)} {c.requirement.unit}".strip()
+                     if isinstance(value, float) and c.requirement.limit != "yes"
+                     and value == value else cells[2])
             row[2 + k] = f"{shown} {cells[4]}"
     print_table("requirements", ["requirement", "limit", *names], list(rows.values()),
                 numeric=[False, True, *(True for _ in names)])
@@ -299,7 +317,7 @@ def _differ(values: list[Any]) -> bool:
     return max(finite) - min(finite) > COMPARE_METRIC_RTOL * scale
 
 
-def compare_rows(doc: dict[str, Any]) -> list[list[str]]:
+def compare_rows(doc: Comparison) -> list[list[str]]:
     """The compare table's rows: config differences, objective, feasibility, variables,
     the metrics that differ between the runs (:data:`COMPARE_METRIC_RTOL`; not those
     already shown: a variable repeated as a metric, ``feasible`` as 1, the reference
@@ -310,12 +328,12 @@ def compare_rows(doc: dict[str, Any]) -> list[list[str]]:
     def row(name: str, values: list[Any]) -> list[str]:
         return [name, *(report.format_value(v) for v in values)]
 
-    rows = [row(k, v) for k, v in doc["config_differences"].items()]
-    rows += [row("objective", doc["objective"]), row("feasible", doc["feasible"])]
-    rows += [row(k, v) for k, v in doc["x"].items()]
-    shown = {"feasible", "objective", *doc["x"]}
+    rows = [row(k, v) for k, v in doc.config_differences.items()]
+    rows += [row("objective", list(doc.objective)), row("feasible", list(doc.feasible))]
+    rows += [row(k, v) for k, v in doc.x.items()]
+    shown = {"feasible", "objective", *doc.x}
     same = 0
-    for key, values in doc["metrics"].items():
+    for key, values in doc.metrics.items():
         if key in shown or key.startswith(report.REFERENCE_PREFIXES):
             continue
         if not _differ(values):
@@ -323,14 +341,14 @@ def compare_rows(doc: dict[str, Any]) -> list[list[str]]:
             continue
         rows.append(row(key, values))
     if same:
-        rows.append([f"other metrics ({same})", *("same" for _ in doc["objective"])])
-    rows.append(row("repeats: median", [s["median"] for s in doc["statistics"]]))
-    rows.append(["repeats: successes", *(f"{s['successes']}/{s['runs']}"
-                                         for s in doc["statistics"])])
+        rows.append([f"other metrics ({same})", *("same" for _ in doc.objective)])
+    rows.append(row("repeats: median", [s.median for s in doc.statistics]))
+    rows.append(["repeats: successes", *(f"{s.successes}/{s.runs}"
+                                         for s in doc.statistics)])
     return rows
 
 
-def print_hypervolume(hv: dict[str, Any], names: list[str]) -> None:
+def print_hypervolume(hv: Mapping[str, Any], names: Sequence[str]) -> None:
     ref = ", ".join(f"{n} {fmt(v)}" for n, v in zip(hv["objectives"], hv["reference_point"] or []))
     out.print(f"hypervolume of the feasible fronts (normalised by their union; reference "
               f"point {ref or '-'}; larger is better):")
@@ -338,31 +356,31 @@ def print_hypervolume(hv: dict[str, Any], names: list[str]) -> None:
         out.print(f"  {name}: {value:.4f} ({size} designs)")
 
 
-def success_rate_text(s: dict[str, float]) -> str:
+def success_rate_text(s: Mapping[str, float]) -> str:
     return f"{s['rate']:.0%} [{s['ci_low']:.0%}, {s['ci_high']:.0%}]"
 
 
-def print_ranking(doc: dict[str, Any]) -> None:
+def print_ranking(doc: SweepRanking) -> None:
     """A sweep's verdict (each grid point's success rate against run.min_success_rate)
     and its grid points ranked (``report.rank_sweep``): a table, or ``name: value`` lines
     when a word would not fit."""
     from camopt.reporting import report
 
-    print_verdict(doc, "sweep (run.min_success_rate)")
+    print_verdict(doc.verdict, "sweep (run.min_success_rate)")
 
     rows = []
-    for r in doc["ranking"]:
-        vs = r.get("vs_best")
-        rows.append([str(r["rank"]), r["label"], f"{r['successes']}/{r['runs']}",
-                     *(report.format_value(r[k]) for k in ("best", "median",
-                                                            "median_nfev_to_target")),
-                     f"{vs['p_value']:.3g}" if vs else "-"])
-    print_table(f"sweep {doc['sweep']}: grid points ranked", ["rank", "grid point",
+    for r in doc.ranking:
+        vs = r.vs_best
+        rows.append([str(r.rank), r.label, f"{r.row['successes']}/{r.row['runs']}",
+                     *(report.format_value(report.jsonable(r.row[k]))
+                       for k in ("best", "median", "median_nfev_to_target")),
+                     f"{vs.p_value:.3g}" if vs else "-"])
+    print_table(f"sweep {doc.sweep}: grid points ranked", ["rank", "grid point",
                 "success", "best", "median", "nfev", "p"], rows,
                 numeric=[True, False, True, True, True, True, True])
     out.print("success: successful/runs; nfev: median evaluations to the target; p: "
               "Mann-Whitney against rank 1; worst and more: --format json", highlight=False)
-    for r in doc["ranking"]:
-        if r.get("vs_best"):
-            out.print(escape(r["vs_best"]["verdict"]))
+    for r in doc.ranking:
+        if r.vs_best:
+            out.print(escape(r.vs_best.verdict))
 

@@ -33,7 +33,7 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
             if row["archive"] != "run" or row["verdict"].startswith(("file:", "damaged")):
                 continue
             try:  # the requirements' verdict (show's first line); feasibility when unreadable
-                row["verdict"] = verdict(archive.load_run(row["path"]))["verdict"] or "-"
+                row["verdict"] = verdict(archive.load_run(row["path"])).verdict or "-"
             except CamoptError:
                 pass
     if format is Format.json:

@@ -67,8 +67,8 @@ def show(run_paths: Annotated[list[Path], typer.Argument(
             else:
                 loaded.append(("run", archive.load_run(path)))
     if format is Format.json:
-        docs = [report.show(item) if kind == "run" else calibration_doc(item)
-                if kind == "calibration" else item for kind, item in loaded]
+        docs = [report.show(item).to_json() if kind == "run" else calibration_doc(item)
+                if kind == "calibration" else jsonable(item) for kind, item in loaded]
         sys.stdout.write(json.dumps(docs[0] if len(docs) == 1 else docs, indent=2) + "\n")
         return
     for i, (kind, item) in enumerate(loaded):

@@ -154,15 +154,22 @@ class Check:
     """Passes, with a margin too small for parts made to tolerance
     (:meth:`Requirement.at_limit`)."""
 
-    def as_dict(self) -> dict[str, Any]:
-        """The JSON form: name, limit, value, margin, pass, at_limit, margin_share (the
-        margin as a share of a two-sided band, else None), unit, source, quantity."""
+    @property
+    def margin_share(self) -> float | None:
+        """The margin as a share of a two-sided band (None for a one-sided limit or an
+        unknown or unbounded margin)."""
         r = self.requirement
-        share = (self.margin / r.band if r.band and self.margin is not None
-                 and math.isfinite(self.margin) else None)
+        return (self.margin / r.band if r.band and self.margin is not None
+                and math.isfinite(self.margin) else None)
+
+    def as_dict(self) -> dict[str, Any]:
+        """The JSON form: name, limit, value, margin, pass, at_limit, margin_share
+        (:attr:`margin_share`), unit, source, quantity."""
+        r = self.requirement
         return {"name": r.name, "limit": r.limit, "value": self.value, "margin": self.margin,
-                "pass": self.passed, "at_limit": self.at_limit, "margin_share": share,
-                "unit": r.unit, "source": r.source, "quantity": r.quantity}
+                "pass": self.passed, "at_limit": self.at_limit,
+                "margin_share": self.margin_share, "unit": r.unit, "source": r.source,
+                "quantity": r.quantity}
 
     @property
     def words(self) -> str:

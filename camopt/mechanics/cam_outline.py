@@ -33,8 +33,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from camopt.mechanics import Floats, cam
+from camopt.units import DEG, TO_DEG, TO_MM
 
-TRIAL_SPANS = np.deg2rad(np.arange(1.0, 121.0))
+TRIAL_SPANS = np.arange(1.0, 121.0) * DEG
 """Candidate lengths of the approach and the run-out (rad): whole degrees 1..120."""
 _TRIAL_SAMPLES = 97  # samples per candidate segment when judging it
 
@@ -98,24 +99,24 @@ class CamOutline:
 
     def notes(self) -> list[str]:
         """The law and angles in words, one line each, for a drawing's notes (degrees)."""
-        lines = [f"{s.name}: {math.degrees(s.start):.1f} to {math.degrees(s.end):.1f} deg, "
+        lines = [f"{s.name}: {s.start * TO_DEG:.1f} to {s.end * TO_DEG:.1f} deg, "
                  f"{s.law}" for s in self.segments]
         closed = self.closure()
         psi, rho = self.limits
         convex, concave = self.radii(closed)
         lines.append(
             "closure: peak pressure angle "
-            f"{math.degrees(float(np.max(np.abs(self.pressure_angle[closed])))):.2f} deg "
-            f"(rise's peak {math.degrees(psi):.2f}), least convex radius "
-            f"{convex * 1e3:.2f} mm (limit {rho * 1e3:.2f})")
+            f"{float(np.max(np.abs(self.pressure_angle[closed]))) * TO_DEG:.2f} deg "
+            f"(rise's peak {psi * TO_DEG:.2f}), least convex radius "
+            f"{convex * TO_MM:.2f} mm (limit {rho * TO_MM:.2f})")
         convex, concave = self.radii(np.ones(self.theta.size, dtype=bool))
-        lines.append(f"outline: least convex radius {convex * 1e3:.2f} mm, least concave "
-                     f"radius {concave * 1e3:.2f} mm (a cutter or wheel must be smaller)"
+        lines.append(f"outline: least convex radius {convex * TO_MM:.2f} mm, least concave "
+                     f"radius {concave * TO_MM:.2f} mm (a cutter or wheel must be smaller)"
                      if np.isfinite(concave) else
-                     f"outline: convex throughout, least radius {convex * 1e3:.2f} mm")
+                     f"outline: convex throughout, least radius {convex * TO_MM:.2f} mm")
         lines.append("follower swing: "
-                     f"{round(math.degrees(float(np.min(self.phi))), 3) + 0.0:.3f} to "
-                     f"{math.degrees(float(np.max(self.phi))):.3f} deg from the base circle")
+                     f"{round(float(np.min(self.phi)) * TO_DEG, 3) + 0.0:.3f} to "
+                     f"{float(np.max(self.phi)) * TO_DEG:.3f} deg from the base circle")
         return lines
 
 
@@ -219,7 +220,7 @@ def closed_outline(a: NDArray, end: float, rise_steps: int, xi: float, l2: float
     top = np.array([last[0] + last[1] * b_o / 2, 0.0, 0.0])
     left = 2 * math.pi - (b_a + end + b_o)
     if left <= 0:
-        raise ValueError(f"the rise and its closure need {math.degrees(2 * math.pi - left):.1f}"
+        raise ValueError(f"the rise and its closure need {(2 * math.pi - left) * TO_DEG:.1f}"
                          " deg: more than a turn")
     dwell, fall = left / 4, left / 2
     coeffs = ", ".join(f"{v:.6g}" for v in a)
@@ -228,7 +229,7 @@ def closed_outline(a: NDArray, end: float, rise_steps: int, xi: float, l2: float
             ("rise", 0.0, end, None, None,
              f"the design's law phi = sum a_k t**k, a_0.. = {coeffs} (rad)"),
             ("run-out", end, end + b_o, last, top, "quintic Hermite to zero velocity "
-             f"(overtravel {math.degrees(top[0] - last[0]):.3f} deg)"),
+             f"(overtravel {(top[0] - last[0]) * TO_DEG:.3f} deg)"),
             ("top dwell", end + b_o, end + b_o + dwell, top, top, "dwell"),
             ("return", end + b_o + dwell, end + b_o + dwell + fall, top, zero,
              "3-4-5 polynomial"),

@@ -95,13 +95,13 @@ def run_row(path: Path, listed: dict[str, Any]) -> DashboardRow:
         config = {"case": view.case, "solver": view.solver, "run": view.run}
     flatten("config", config, values)
     flatten("result", {"objective": view.best.objective, "feasible": view.best.feasible,
-                       "verdict": judged["verdict"], "x": view.best.x,
+                       "verdict": judged.verdict, "x": view.best.x,
                        "metrics": view.best.metrics}, values)
-    for req in judged["requirements"]:
-        values[f"result.requirement.{req['name']}"] = _text(req["value"])
+    for c in judged.checks:
+        values[f"result.requirement.{c.requirement.name}"] = _text(c.value)
     return DashboardRow(
         name=path.name, archive="run", case=view.kind, solver=view.solver_name,
-        verdict=judged["verdict"] or listed["verdict"], expected_yield=expected_yield(view),
+        verdict=judged.verdict or listed["verdict"], expected_yield=expected_yield(view),
         objective_name=view.objective_name, objective=_finite(view.best.objective),
         created=view.created[:16].replace("T", " "), seed=view.run.get("seed"),
         report=_report(path), values=values)

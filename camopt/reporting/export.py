@@ -25,7 +25,7 @@ from camopt.core.runview import RunView
 from camopt.errors import ConfigError
 from camopt.mechanics.cam_outline import CamOutline
 from camopt.reporting import report
-from camopt.units import DEG, MM
+from camopt.units import DEG, MM, TO_DEG
 
 FORMATS = ("csv", "json", "dxf")
 STEP_DEG = 1.0
@@ -115,17 +115,20 @@ def _time_first(keys: list[str]) -> list[str]:
 def export_files(run: RunView, out_dir: Path, stem: str, fmt: str) -> dict[Path, bytes]:
     """The csv or json export's files by path (nothing written)."""
     analysis = run.analysis
-    doc = report.show(run)
     files: dict[Path, bytes] = {}
     if fmt == "json":
+        doc = report.show(run).to_json()
         doc["analysis"] = {k: report.jsonable(np.asarray(v).tolist()) for k, v in analysis.items()}
         files[out_dir / f"{stem}.json"] = json.dumps(doc, indent=2).encode()
     else:
+        best = report.jsonable({"objective": run.best.objective,
+                                "feasible": run.best.feasible, "x": run.best.x,
+                                "metrics": run.best.metrics})
         rows: list[list[object]] = [["section", "name", "value"],
-                                    ["best", "objective", doc["best"]["objective"]],
-                                    ["best", "feasible", doc["best"]["feasible"]]]
+                                    ["best", "objective", best["objective"]],
+                                    ["best", "feasible", best["feasible"]]]
         for section in ("x", "metrics"):
-            for k, v in doc["best"][section].items():
+            for k, v in best[section].items():
                 rows.append([section, k, json.dumps(v) if isinstance(v, list) else v])
         files[out_dir / f"{stem}-summary.csv"] = _csv(rows)
         groups: dict[int, list[str]] = {}
@@ -240,7 +243,7 @@ def _workshop_layers(doc: object, outline: CamOutline, colours: object) -> None:
         layers.add(name, color=next(colours))  # type: ignore[call-overload]
     pivot, arm = outline.pivot / MM, outline.arm / MM
     # the roller centre turns about B (l6, 0) at l2; its direction from B is pi - (xi + phi)
-    ends = [np.degrees(np.pi - outline.xi - f(outline.phi)) for f in (np.max, np.min)]
+    ends = [(np.pi - outline.xi - f(outline.phi)) * TO_DEG for f in (np.max, np.min)]
     msp.add_arc((pivot, 0.0), arm, float(ends[0]), float(ends[1]),
                 dxfattribs={"layer": "roller-path"})
     reach = float(np.max(np.hypot(*outline.profile.T))) / MM

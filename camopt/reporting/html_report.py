@@ -7,6 +7,7 @@ from __future__ import annotations
 import base64
 import io
 import platform
+from collections.abc import Mapping
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
@@ -15,6 +16,7 @@ from camopt import archive
 from camopt.archive.sweeps import load_sweep
 from camopt.core.runview import RunView
 from camopt.reporting import report
+from camopt.reporting.views import RobustYield, Verdict
 
 LIBRARIES = ("camopt", "numpy", "scipy", "h5py", "matplotlib", "pymoo", "pydantic", "Jinja2",
              "ezdxf")
@@ -64,10 +66,10 @@ def run_context(view: RunView) -> dict[str, Any]:
     stats = report.repeat_statistics(view).as_dict()
     doc = report.show(view)
     return {
-        **verdict_context(doc), "reference": doc.get("reference"),
-        "pareto": doc.get("pareto_summary"),
-        "pareto_rows": report.pareto_rows(doc["pareto_summary"])
-        if doc.get("pareto_summary") else [], "pareto_columns": report.PARETO_COLUMNS,
+        **verdict_context(doc.verdict, doc.robust_yield, doc.expected_yield, doc.next),
+        "reference": doc.reference, "pareto": doc.pareto_summary,
+        "pareto_rows": report.pareto_rows(doc.pareto_summary)
+        if doc.pareto_summary else [], "pareto_columns": report.PARETO_COLUMNS,
         "kind": "run", "title": f"{view.kind} / {view.solver_name}: {Path(view.path).name}",
         "path": view.path, "case_kind": view.kind, "case_summary": spec.summary,
         "paper_source": spec.paper_source, "solver": view.solver_name,
@@ -76,7 +78,7 @@ def run_context(view: RunView) -> dict[str, Any]:
         "interrupted": view.interrupted, "status": report.status(view),
         "feasible": view.best.feasible, "active": view.best.active,
         "violated": view.best.violated, "objective_name": view.objective_name,
-        "reference_label": summary["reference_label"], "rows": summary["rows"],
+        "reference_label": summary.reference_label, "rows": summary.rows,
         "robust": report.robust_summary(view),
         "statistics": stats, "target": view.run.get("target"),
         "repeats": view.repeats, "table": view.table[:50], "table_rows": len(view.table),
@@ -88,23 +90,23 @@ def run_context(view: RunView) -> dict[str, Any]:
     }
 
 
-def verdict_context(doc: dict[str, Any]) -> dict[str, Any]:
+def verdict_context(judged: Verdict, robust: RobustYield | None = None,
+                    expected: Mapping[str, Any] | None = None, next_step: str = ""
+                    ) -> dict[str, Any]:
     """The verdict the page leads with: a robust run's yield against its target, the
     sentence, pass/fail, the expected yield, the table's cells with each row's class
     (``bad``: fails, ``at-limit``: passes at its limit, else '') and the next step
-    (``doc``: ``report.show``'s or ``report.rank_sweep``'s)."""
-    classes = ["bad" if r["pass"] is False else "at-limit" if r.get("at_limit") else ""
-               for r in doc["requirements"]]
-    robust = doc.get("robust_yield")
-    expected = doc.get("expected_yield")
-    return {"verdict": doc["verdict"], "verdict_sentence": doc["verdict_sentence"],
-            "at_limit": doc.get("at_limit", []),
+    (``judged``: a run's or a sweep's verdict)."""
+    classes = ["bad" if c.passed is False else "at-limit" if c.at_limit else ""
+               for c in judged.checks]
+    return {"verdict": judged.verdict, "verdict_sentence": judged.sentence,
+            "at_limit": judged.at_limit,
             "robust_yield": report.robust_text(robust) if robust else "",
-            "robust_met": robust.get("meets_target") if robust else None,
+            "robust_met": robust.meets_target if robust else None,
             "expected_yield": report.yield_text(expected) if expected else "",
-            "next_step": doc.get("next", ""),
+            "next_step": next_step,
             "verdict_columns": report.VERDICT_COLUMNS,
-            "verdict_rows": list(zip(report.verdict_rows(doc["requirements"]), classes))}
+            "verdict_rows": list(zip(report.verdict_rows(judged.checks), classes))}
 
 
 def sweep_context(path: Path) -> dict[str, Any]:
@@ -114,10 +116,10 @@ def sweep_context(path: Path) -> dict[str, Any]:
     spec, results = load_sweep(path)
     ranking = report.rank_sweep(spec, results)
     return {
-        **verdict_context(ranking), "reference": None,
+        **verdict_context(ranking.verdict), "reference": None,
         "kind": "sweep", "title": f"sweep: {path.name}", "path": str(path),
         "source": spec.source, "grid": spec.grid, "seeds": list(spec.seeds),
-        "cells": len(results), "ranking": ranking["ranking"],
+        "cells": len(results), "ranking": ranking.ranking,
         "figures": _figures(plots.sweep_figures(spec, results)),
         "config_toml": spec.text, "environment": _environment(),
     }

@@ -120,7 +120,8 @@ def pareto_front(run: RunView) -> Figure:
                        else "infeasible", **style)
     from camopt.reporting.report import reference
 
-    label, ref = reference(run)  # one name everywhere: "reference: vendor, Sec 2.3 ..."
+    ref = reference(run)  # one name everywhere: "reference: vendor, Sec 2.3 ..."
+    label = ref.label
     notes = []
     marks: list[tuple[str, list[Any], dict[str, Any]]] = [
         (label, [ref.get(n) for n in (a, b)],

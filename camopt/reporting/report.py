@@ -1,19 +1,47 @@
-"""Plain-data views of archives for ``show`` and ``compare`` (no printing here)."""
+"""Views of archives for ``show``, ``compare``, ``report`` and ``export`` (no printing
+here): each function builds one of the typed views of :mod:`camopt.reporting.views`,
+whose ``to_json()`` is the JSON output."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from camopt.cases import run_requirements
 from camopt.core import pareto, stats
-from camopt.core.requirements import Requirement, Spread, check, engineering, sentence
+from camopt.core.requirements import (
+    Check,
+    Requirement,
+    Spread,
+    check,
+    engineering,
+    sentence,
+)
 from camopt.core.requirements import verdict as verdict_of
 from camopt.core.runview import RunView, design_values
 from camopt.errors import ConfigError
+from camopt.reporting.views import (
+    Comparison,
+    RankedPoint,
+    Reference,
+    ReferenceVerdict,
+    RepeatRow,
+    RobustDoc,
+    RobustRow,
+    RobustSummary,
+    RobustYield,
+    SameObjective,
+    ShowView,
+    Significance,
+    Summary,
+    SummaryRow,
+    SweepRanking,
+    Verdict,
+    jsonable,
+)
 
 SHOW_KEYS = ("case", "solver", "best", "repeats", "table")
 
@@ -43,58 +71,26 @@ def format_value(value: Any) -> str:
     return "-" if value is None else str(value)
 
 
-def jsonable(value: Any) -> Any:
-    """Replace non-finite floats by None and numpy scalars by Python ones, recursively."""
-    if isinstance(value, dict):
-        return {k: jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [jsonable(v) for v in value]
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
-
-
-REPEAT_KEYS = {"seed": "seed", "objective": "fun", "feasible": "feasible", "nfev": "nfev",
-               "wall_s": "wall_s", "converged_nit": "converged_nit", "spawn_key": "spawn_key",
-               "notes": "notes"}
-"""``show --format json``'s key for each repeat field it reports (``objective``: ``fun``)."""
-
-
-def show(run: RunView) -> dict[str, Any]:
-    """The ``show --format json`` document: verdict ("pass"/"fail") with its sentence and
-    requirements (each with name, limit, value, margin, pass), case, solver, best,
-    repeats, table, the reference design with its own verdict, and for a multi-objective
-    run (a solver with ``objectives``) ``pareto``, and a case's findings under their own
-    names (``model_forms``, ``identifiability``). These keys are a contract scripts rely
-    on; the two-column view is :func:`summary`."""
-    repeats = [{k: getattr(r, attr) for k, attr in REPEAT_KEYS.items()} for r in run.repeats]
-    best = {k: v for k, v in asdict(run.best).items() if k != "repeat"}
+def show(run: RunView) -> ShowView:
+    """``show``'s view (its ``to_json()`` is the ``show --format json`` document): verdict
+    ("pass"/"fail") with its sentence and requirements (each with name, limit, value,
+    margin, pass), case, solver, best, repeats, table, the reference design with its own
+    verdict, and for a multi-objective run (a solver with ``objectives``) ``pareto``, and
+    a case's findings under their own names (``model_forms``, ``identifiability``). These
+    keys are a contract scripts rely on; the two-column view is :func:`summary`."""
+    repeats = tuple(RepeatRow(r.seed, r.fun, r.feasible, r.nfev, r.wall_s, r.converged_nit,
+                              tuple(r.spawn_key), tuple(r.notes)) for r in run.repeats)
     expected(run)  # an older archive's estimate, made once: the verdict's spreads read it
     judged = verdict(run)
-    label, ref = reference(run)
-    doc = {"verdict": judged["verdict"], "verdict_sentence": judged["sentence"],
-           "requirements": judged["requirements"],
-           "at_limit": [r["name"] for r in judged["requirements"] if r["at_limit"]],
-           "expected_yield": expected(run), "next": next_step(run, judged),
-           "case": run.case, "solver": run.solver, "best": best, "repeats": repeats,
-           "table": run.table}
-    if label:
-        ref_judged = verdict(run, ref)
-        doc["reference"] = {"label": label, "values": ref, "verdict": ref_judged["verdict"],
-                            "verdict_sentence": ref_judged["sentence"],
-                            "requirements": ref_judged["requirements"]}
+    ref = reference(run)
     rows = pareto.rows(run)
-    if rows is not None:
-        doc["pareto"] = rows
-        doc["pareto_summary"] = pareto.summary(run)
-    if run.robust:
-        doc["robust"] = {"settings": run.robust, "check": run.robust_check}
-        doc["robust_yield"] = robust_yield(run)
-    # a case's findings under their own names, never over the contract's keys
-    doc.update({k: v for k, v in run.findings.items() if k not in doc})
-    return jsonable(doc)
+    return ShowView(
+        verdict=judged, expected_yield=expected(run), next=next_step(run, judged),
+        case=run.case, solver=run.solver, best=run.best, repeats=repeats, table=run.table,
+        reference=ReferenceVerdict(ref, verdict(run, dict(ref.values))) if ref else None,
+        pareto=rows, pareto_summary=pareto.summary(run) if rows is not None else None,
+        robust=RobustDoc(run.robust, run.robust_check) if run.robust else None,
+        robust_yield=robust_yield(run) if run.robust else None, findings=run.findings)
 
 
 NEAR_LIMIT = -0.05
@@ -102,7 +98,7 @@ NEAR_LIMIT = -0.05
 limit (normalised g above this) at its nominal design or at the yield target."""
 
 
-def robust_summary(run: RunView) -> dict[str, Any] | None:
+def robust_summary(run: RunView) -> RobustSummary | None:
     """A robust run's final check, the robust optimum beside the best nominally feasible
     design the search saw, on the same fresh draws: objective (nominal, mean, quantile),
     yield with its Clopper-Pearson interval, and the margins (normalised g, <= 0 met) of the
@@ -114,32 +110,32 @@ def robust_summary(run: RunView) -> dict[str, Any] | None:
     designs = [d for d in (check.get("robust"), check.get("nominal")) if d]
     scalars = [k for k in designs[0] if k.startswith("objective_") or k.startswith("yield")]
     objective = designs[0].get("case_objective", run.objective_name)  # older archives
-    rows = [{"name": k.replace("objective_", f"{objective} "),
-             "values": [d.get(k) for d in designs]} for k in scalars]
+    rows = [RobustRow(k.replace("objective_", f"{objective} "),
+                      tuple(d.get(k) for d in designs)) for k in scalars]
     for c in designs[0]["margins"]:
         pairs = [d["margins"][c] for d in designs]
         if any(max(p["nominal"], p["at_target"]) > NEAR_LIMIT for p in pairs):
-            rows.append({"name": f"{c} nominal", "values": [p["nominal"] for p in pairs]})
-            rows.append({"name": f"{c} at target", "values": [p["at_target"] for p in pairs]})
-    labels = ["robust optimum", "nominal best seen"][:len(designs)]
-    return {"labels": labels, "samples": designs[0]["samples"],
-            "yield_target": run.robust.get("yield_target"), "rows": rows}
+            rows.append(RobustRow(f"{c} nominal", tuple(p["nominal"] for p in pairs)))
+            rows.append(RobustRow(f"{c} at target", tuple(p["at_target"] for p in pairs)))
+    labels = ("robust optimum", "nominal best seen")[:len(designs)]
+    return RobustSummary(labels, designs[0]["samples"], run.robust.get("yield_target"),
+                         tuple(rows))
 
 
 REFERENCE_PREFIXES = ("initial_", "original_")
 """Metric prefixes under which cases report their reference (vendor's, original) design."""
 
 
-def reference(run: RunView) -> tuple[str, dict[str, Any]]:
+def reference(run: RunView) -> Reference:
     """The reference design the optimum is shown beside, under one name everywhere
     (``reference: vendor, Sec 2.3 and Table 2``: the case file's ``reference_label`` when
     it has one, else the case's ``CaseSpec.reference``):
     the metrics a case reports with a prefix of :data:`REFERENCE_PREFIXES`, completed by
     the ``[case]`` fields named as the design variables (the vendor's spring rates are
     the config's), else the case's ``reference_values`` (a paper's optimum), else the
-    paper's reported values under the optimum's own names. Returns its label ('' when
-    there is none) and ``{name: value}`` keyed by the optimum's names (``objective``
-    included)."""
+    paper's reported values under the optimum's own names: its label ('' when there is
+    none; the view is then false) and ``{name: value}`` keyed by the optimum's names
+    (``objective`` included)."""
     from camopt.cases import get_case
 
     spec = get_case(run.kind)
@@ -155,15 +151,15 @@ def reference(run: RunView) -> tuple[str, dict[str, Any]]:
                 if name not in values and isinstance(run.case.get(name), (int, float)):
                     values[name] = run.case[name]
             label = own or spec.reference or prefix.rstrip("_") + " design"
-            return f"reference: {label}", values
+            return Reference(f"reference: {label}", values)
     names = {run.objective_name, *run.best.x, *metrics}
     source = spec.reference_values or spec.paper
     values = {k: v for k, v in source.items() if k in names and not isinstance(v, list)}
     if run.objective_name in values:
         values["objective"] = values[run.objective_name]
     if not values:
-        return "", {}
-    return f"reference: {spec.reference or 'paper'}", values
+        return Reference()
+    return Reference(f"reference: {spec.reference or 'paper'}", values)
 
 
 _ESTIMATED: dict[str, dict[str, Any]] = {}
@@ -196,7 +192,7 @@ def spreads(run: RunView) -> dict[str, Spread]:
             for r in estimate.get("requirements", [])}
 
 
-def robust_yield(run: RunView) -> dict[str, Any] | None:
+def robust_yield(run: RunView) -> RobustYield | None:
     """A robust run's answer: the final check's yield of the robust optimum with its
     interval, samples and the target (``value``, ``low``, ``high``, ``samples``,
     ``target``, ``meets_target``: the interval's low end at or above the target); None for
@@ -206,12 +202,12 @@ def robust_yield(run: RunView) -> dict[str, Any] | None:
         return None
     target = run.robust.get("yield_target")
     low = checked.get("yield_low")
-    return {"value": checked.get("yield"), "low": low, "high": checked.get("yield_high"),
-            "samples": checked.get("samples"), "target": target,
-            "meets_target": None if target is None or low is None else low >= target}
+    return RobustYield(checked.get("yield"), low, checked.get("yield_high"),
+                       checked.get("samples"), target,
+                       None if target is None or low is None else low >= target)
 
 
-def yield_text(y: dict[str, Any]) -> str:
+def yield_text(y: Mapping[str, Any]) -> str:
     """``expected yield 0.0 % [0.0, 1.3] (300 draws of the case's tolerances)``, or why
     there is none."""
     if y.get("value") is None:
@@ -222,13 +218,17 @@ def yield_text(y: dict[str, Any]) -> str:
             f"tolerances{when})")
 
 
-def robust_text(y: dict[str, Any]) -> str:
+def robust_text(y: RobustYield) -> str:
     """``robust: yield 96.5 % [95.8, 97.0] against a 95 % target (20000 fresh draws)``."""
-    target = "" if y["target"] is None else f" against a {100 * y['target']:.3g} % target"
-    met = {True: ": meets it", False: ": below it", None: ""}[y["meets_target"]]
-    return (f"robust: yield {100 * y['value']:.1f} % [{100 * y['low']:.1f}, "
-            f"{100 * y['high']:.1f}]{target}{met if target else ''} "
-            f"({y['samples']} fresh draws)")
+    target = "" if y.target is None else f" against a {100 * y.target:.3g} % target"
+    met = {True: ": meets it", False: ": below it", None: ""}[y.meets_target]
+    return (f"robust: yield {100 * _share(y.value):.1f} % [{100 * _share(y.low):.1f}, "
+            f"{100 * _share(y.high):.1f}]{target}{met if target else ''} "
+            f"({y.samples} fresh draws)")
+
+
+def _share(value: float | None) -> float:
+    return math.nan if value is None else float(value)
 
 
 LOW_YIELD = 0.9
@@ -236,14 +236,14 @@ LOW_YIELD = 0.9
 tolerance analysis and a robust run."""
 
 
-def next_step(run: RunView, judged: dict[str, Any]) -> str:
+def next_step(run: RunView, judged: Verdict) -> str:
     """One line saying what to do next, fitting the result: a robust config (a sibling
     ``*_robust.toml`` of the run's case file when there is one), tolerance analysis, more
     budget, or the report."""
     path = run.path
     robust_yield_doc = robust_yield(run)
     if robust_yield_doc is not None:
-        if robust_yield_doc["meets_target"] is False:
+        if robust_yield_doc.meets_target is False:
             return ("next: the robust yield is below its target: more generations "
                     "(--set solver.generations=...) or more check draws, or a lower "
                     "robust.yield_target")
@@ -251,12 +251,11 @@ def next_step(run: RunView, judged: dict[str, Any]) -> str:
     if not run.best.feasible:
         return ("next: no feasible design: more budget (--set solver.generations=... or "
                 "--repeats) or a wider bound on the variables the constraints push against")
-    if judged["verdict"] != "pass":
+    if judged.verdict != "pass":
         return ("next: the run's search leaves out the requirements it fails: run a case "
                 "file that requires them (a config of this kind with them as constraints)")
     y = expected(run)
-    at_limit = [r for r in judged["requirements"] if r.get("at_limit")]
-    if at_limit or (y.get("value") is not None and y["value"] < LOW_YIELD):
+    if judged.at_limit or (y.get("value") is not None and y["value"] < LOW_YIELD):
         robust_cfg = robust_sibling(run)
         then = (f"camopt run {robust_cfg}" if robust_cfg
                 else "a [robust] table in the case file (docs/tolerance.md)")
@@ -280,16 +279,15 @@ def robust_sibling(run: RunView) -> str:
     return ""
 
 
-def verdict(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any]:
-    """Requirements evaluated on the best design (or on ``values``, the reference's):
-    ``{"requirements": [...], "verdict": "pass"/"fail", "sentence": words}``; the best
+def verdict(run: RunView, values: dict[str, Any] | None = None) -> Verdict:
+    """Requirements evaluated on the best design (or on ``values``, the reference's),
+    with the verdict ("pass"/"fail", None: not judged) and its sentence; the best
     design's passing requirements are judged at their limit against the spread of the
     expected-yield estimate (:func:`spreads`), the reference's against its band."""
     reqs = run_requirements(run, run.best.violated if values is None else None)
     checks = check(reqs, design_values(run, values), spreads(run) if values is None else None)
     if values is None:
-        return {"requirements": [c.as_dict() for c in checks], "verdict": verdict_of(checks),
-                "sentence": sentence(checks)}
+        return Verdict(tuple(checks), verdict_of(checks), sentence(checks))
     # a reference known by a few reported values: judged on those, incomplete when some
     # requirement's quantity is not among them (verdict None unless it already fails)
     known = [c for c in checks if c.passed is not None]
@@ -299,25 +297,26 @@ def verdict(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any
     words = sentence(known) if known else "no requirement can be checked on its values"
     if len(known) < len(checks):
         words += f" (checked {len(known)} of {len(checks)}: its other values are unknown)"
-    return {"requirements": [c.as_dict() for c in known], "verdict": judged,
-            "sentence": words}
+    return Verdict(tuple(known), judged, words)
 
 
 VERDICT_COLUMNS = ("requirement", "limit", "value", "margin (% of band)", "pass")
 
 
-def verdict_rows(requirements: list[dict[str, Any]]) -> list[list[str]]:
-    """The verdict table's cells (:data:`VERDICT_COLUMNS`) of requirements as
-    :func:`verdict` gives them: values with their unit (6 significant digits), margins in
-    3 with their unit and, for a two-sided limit, as a share of its band; flags as yes/no;
-    pass, FAIL or "at limit"; a quantity the design does not reach is "n/a" and fails."""
+def verdict_rows(checks: Sequence[Check]) -> list[list[str]]:
+    """The verdict table's cells (:data:`VERDICT_COLUMNS`) of a :class:`Verdict`'s checks:
+    values with their unit (6 significant digits), margins in 3 with their unit and, for
+    a two-sided limit, as a share of its band; flags as yes/no; pass, FAIL or "at limit";
+    a quantity the design does not reach is "n/a" and fails."""
     rows = []
-    for r in requirements:
-        flag = r["limit"] == "yes"
-        unit = f" {r['unit']}" if r["unit"] and r["value"] is not None else ""
-        value = (None if r["value"] is None else bool(r["value"]) if flag else r["value"])
-        rows.append([r["name"], r["limit"], _value_cell(value, flag, unit, r["pass"]),
-                     _margin_cell(r, flag, unit), _pass_cell(r)])
+    for c in checks:
+        r = c.requirement
+        raw = jsonable(c.value)  # not finite: a quantity the design does not reach
+        flag = r.limit == "yes"
+        unit = f" {r.unit}" if r.unit and raw is not None else ""
+        value = (None if raw is None else bool(raw) if flag else raw)
+        rows.append([r.name, r.limit, _value_cell(value, flag, unit, c.passed),
+                     _margin_cell(c, flag, unit), _pass_cell(c)])
     return rows
 
 
@@ -327,29 +326,27 @@ def _value_cell(value: Any, flag: bool, unit: str, passed: bool | None) -> str:
     return format_value(value) + ("" if flag else unit)
 
 
-def _margin_cell(r: dict[str, Any], flag: bool, unit: str) -> str:
-    margin = r["margin"]
+def _margin_cell(c: Check, flag: bool, unit: str) -> str:
+    margin = jsonable(c.margin)  # an unbounded margin is shown as none
     if margin is None or flag:
         return "-"
-    if not math.isfinite(margin):
-        return format_value(margin)
-    share = r.get("margin_share")
+    share = c.margin_share
     text = engineering(margin) + unit
     return text + (f" ({100 * share:.2g}%)" if share is not None else "")
 
 
-def _pass_cell(r: dict[str, Any]) -> str:
-    if r["pass"] is None:
+def _pass_cell(c: Check) -> str:
+    if c.passed is None:
         return "-"
-    if not r["pass"]:
+    if not c.passed:
         return "FAIL"
-    return "at limit" if r.get("at_limit") else "pass"
+    return "at limit" if c.at_limit else "pass"
 
 
 PARETO_COLUMNS = ("objective", "sense", "least", "greatest", "knee")
 
 
-def pareto_rows(doc: dict[str, Any]) -> list[list[str]]:
+def pareto_rows(doc: Mapping[str, Any]) -> list[list[str]]:
     """The Pareto summary's table (:data:`PARETO_COLUMNS`): each objective's extent over
     the feasible front and its value at the knee (``doc``: ``pareto.summary``'s)."""
     rows = []
@@ -360,36 +357,34 @@ def pareto_rows(doc: dict[str, Any]) -> list[list[str]]:
     return rows
 
 
-def summary(run: RunView) -> dict[str, Any]:
+def summary(run: RunView) -> Summary:
     """The run summary: the best design beside the reference design, row by row.
 
-    ``rows`` are ``{"section", "name", "optimum", "reference"}`` with sections
+    ``rows`` are :class:`SummaryRow` s (section, name, optimum, reference) with sections
     ``objective``, ``variables`` and ``metrics``; the objective's name carries its unit
     (``objective_j``); reference-design metrics (``initial_*``) are folded into the
     ``reference`` column instead of being rows of their own. Values are raw (inf, NaN
-    kept): :func:`jsonable` turns them into null for JSON."""
-    label, ref = reference(run)
+    kept): ``to_json()`` turns them into null."""
+    ref = reference(run)
     best = run.best
     prefixes = tuple(REFERENCE_PREFIXES)
-    rows = [{"section": "objective", "name": run.objective_name, "optimum": best.objective,
-             "reference": ref.get("objective", ref.get(run.objective_name))}]
     checked = (run.robust_check or {}).get("robust") or {}
     case_objective = checked.get("case_objective", run.objective_name)
+    rows = [SummaryRow("objective", run.objective_name, best.objective,
+                       ref.get("objective", ref.get(run.objective_name)))]
     if case_objective != run.objective_name:
         # a robust run that minimised its margin: the reference's objective is the case's,
         # shown beside the optimum's own case objective, never beside the margin
-        rows[0]["reference"] = None
-        rows.append({"section": "objective", "name": case_objective,
-                     "optimum": checked.get("objective_nominal"),
-                     "reference": ref.get("objective", ref.get(case_objective))})
-    rows.append({"section": "objective", "name": "feasible", "optimum": best.feasible,
-                 "reference": _bool_or_none(ref.get("feasible"))})
-    rows += [{"section": "variables", "name": k, "optimum": v, "reference": ref.get(k)}
-             for k, v in best.x.items()]
+        rows = [SummaryRow("objective", run.objective_name, best.objective, None),
+                SummaryRow("objective", case_objective, checked.get("objective_nominal"),
+                           ref.get("objective", ref.get(case_objective)))]
+    rows.append(SummaryRow("objective", "feasible", best.feasible,
+                           _bool_or_none(ref.get("feasible"))))
+    rows += [SummaryRow("variables", k, v, ref.get(k)) for k, v in best.x.items()]
     shown = {run.objective_name, case_objective, "feasible", "objective", *best.x}
-    rows += [{"section": "metrics", "name": k, "optimum": v, "reference": ref.get(k)}
-             for k, v in best.metrics.items() if k not in shown and not k.startswith(prefixes)]
-    return {"reference_label": label, "rows": rows}
+    rows += [SummaryRow("metrics", k, v, ref.get(k)) for k, v in best.metrics.items()
+             if k not in shown and not k.startswith(prefixes)]
+    return Summary(ref.label, tuple(rows))
 
 
 def _bool_or_none(value: Any) -> bool | None:
@@ -432,7 +427,7 @@ def _finals(run: RunView) -> tuple[np.ndarray, int]:
 
 def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarray,
                  k_b: int, equivalence: float | None = None, unit: str = ""
-                 ) -> dict[str, Any]:
+                 ) -> Significance:
     """Mann-Whitney test of the final objectives with the medians' difference (``effect``,
     B - A in ``unit``) beside the practical-equivalence ``threshold``
     (:func:`camopt.core.stats.equivalence_threshold`; ``equivalence`` an absolute one),
@@ -442,23 +437,21 @@ def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarra
     test = stats.compare_objectives(a, b)
     test["threshold"] = stats.equivalence_threshold(test["median_a"], test["median_b"],
                                                     equivalence)
-    return {"a": name_a, "b": name_b, **test,
-            "decidable": stats.min_p_value(len(a), len(b)) < stats.ALPHA,
-            "success_a": stats.success_rate(k_a, len(a)),
-            "success_b": stats.success_rate(k_b, len(b)),
-            "success_p_value": stats.compare_success(k_a, len(a), k_b, len(b)),
-            "verdict": stats.verdict(name_a, name_b, test, unit=unit)}
+    return Significance(
+        name_a, name_b, test, decidable=stats.min_p_value(len(a), len(b)) < stats.ALPHA,
+        success_a=stats.success_rate(k_a, len(a)), success_b=stats.success_rate(k_b, len(b)),
+        success_p_value=stats.compare_success(k_a, len(a), k_b, len(b)),
+        verdict=stats.verdict(name_a, name_b, test, unit=unit))
 
 
-def compare(runs: list[RunView], raw: bool = False, equivalence: float | None = None
-            ) -> dict[str, Any]:
+def compare(runs: list[RunView], equivalence: float | None = None) -> Comparison:
     """Config differences, best objectives, variables, metrics and repeat statistics;
     for two runs with repeats, a significance test of their final objectives (with the
     practical-equivalence threshold ``equivalence`` in the objective's unit, else the
     case's ``CaseSpec.equivalence``, else relative: :func:`significance`). Runs of
     different case kinds or objectives are not comparable (ConfigError against the second
-    run's ``case_kind`` or ``objective_name``). ``raw`` keeps inf and NaN (for tables);
-    else they are null (JSON)."""
+    run's ``case_kind`` or ``objective_name``). Values are raw (inf and NaN kept, for
+    tables); ``to_json()`` makes them null."""
     for run in runs[1:]:
         for key, mine, first in (("case_kind", run.kind, runs[0].kind),
                                  ("objective_name", run.objective_name,
@@ -483,25 +476,17 @@ def compare(runs: list[RunView], raw: bool = False, equivalence: float | None = 
 
     for run in runs:
         expected(run)  # as show: at limit judged against the tolerance spread
-    judged = [verdict(run) for run in runs]
-    doc = {
-        "runs": [run.path for run in runs],
-        "objective_name": runs[0].objective_name,
-        "verdict": [j["verdict"] for j in judged],
-        "verdict_sentence": [j["sentence"] for j in judged],
-        "requirements": [j["requirements"] for j in judged],
-        "config_differences": differences,
-        "objective": [run.best.objective for run in runs],
-        "feasible": [run.best.feasible for run in runs],
-        "x": side_by_side("x"),
-        "metrics": side_by_side("metrics"),
-        "same_objective_different_designs": same_objective_different_designs(runs),
-        "statistics": [repeat_statistics(run).as_dict() for run in runs],
-        "labels": ["A", "B"] if len(runs) == 2 else [f"run {i + 1}" for i in range(len(runs))],
-        "tests": _pairwise(runs, equivalence),
-        **({"hypervolume": hv} if (hv := pareto.compare_fronts(runs)) else {}),
-    }
-    return doc if raw else jsonable(doc)
+    return Comparison(
+        runs=tuple(run.path for run in runs), objective_name=runs[0].objective_name,
+        verdicts=tuple(verdict(run) for run in runs), config_differences=differences,
+        objective=tuple(run.best.objective for run in runs),
+        feasible=tuple(run.best.feasible for run in runs),
+        x=side_by_side("x"), metrics=side_by_side("metrics"),
+        same_objective_different_designs=same_objective_different_designs(runs),
+        statistics=tuple(repeat_statistics(run) for run in runs),
+        labels=("A", "B") if len(runs) == 2 else tuple(f"run {i + 1}"
+                                                      for i in range(len(runs))),
+        tests=_pairwise(runs, equivalence), hypervolume=pareto.compare_fronts(runs))
 
 
 SAME_OBJECTIVE_RTOL = 1e-6
@@ -512,11 +497,11 @@ DIFFERENT_DESIGN_RTOL = 1e-3
 magnitude."""
 
 
-def same_objective_different_designs(runs: list[RunView]) -> list[dict[str, Any]]:
+def same_objective_different_designs(runs: list[RunView]) -> tuple[SameObjective, ...]:
     """Pairs of feasible runs whose best objectives agree (:data:`SAME_OBJECTIVE_RTOL`, or
     both reach the first run's target) while their designs differ
     (:data:`DIFFERENT_DESIGN_RTOL`): a flat objective or several optima, which the
-    objective alone hides. Each: ``{"runs": [i, j], "objective", "differ": [names]}``."""
+    objective alone hides."""
     found = []
     for i, a in enumerate(runs):
         for j in range(i + 1, len(runs)):
@@ -532,26 +517,26 @@ def same_objective_different_designs(runs: list[RunView]) -> list[dict[str, Any]
             differ = [n for n, va in a.best.x.items() if n in b.best.x and abs(
                 va - b.best.x[n]) > DIFFERENT_DESIGN_RTOL * max(abs(va), abs(b.best.x[n]), 1e-12)]
             if differ:
-                found.append({"runs": [i, j], "objective": fa, "differ": differ})
-    return found
+                found.append(SameObjective((i, j), fa, tuple(differ)))
+    return tuple(found)
 
 
-def _pairwise(runs: list[RunView], equivalence: float | None) -> list[dict[str, Any]]:
+def _pairwise(runs: list[RunView], equivalence: float | None) -> tuple[Significance, ...]:
     from camopt.cases import get_case
     from camopt.config.models import unit_of
 
     if len(runs) != 2 or min(len(r.repeats) for r in runs) < 2:
-        return []
+        return ()
     if equivalence is None:
         equivalence = get_case(runs[0].kind).equivalence
     (fa, ka), (fb, kb) = _finals(runs[0]), _finals(runs[1])
-    return [significance("A", fa, ka, "B", fb, kb, equivalence,
-                         unit_of(runs[0].objective_name))]
+    return (significance("A", fa, ka, "B", fb, kb, equivalence,
+                         unit_of(runs[0].objective_name)),)
 
 
-def rank_sweep(spec: Any, results: dict) -> dict[str, Any]:
+def rank_sweep(spec: Any, results: dict) -> SweepRanking:
     """Grid points ranked by success rate, then median objective; each tested against
-    the best point."""
+    the best point; judged by ``run.min_success_rate`` when set."""
     from camopt.core.stats import sweep_summary as summary
 
     rows = summary(spec, results.values())
@@ -563,26 +548,23 @@ def rank_sweep(spec: Any, results: dict) -> dict[str, Any]:
     ranking = []
     for rank, row in enumerate(order, 1):
         label = _point_label(spec, row["point"])
-        entry = {"rank": rank, "label": label, **row}
+        vs_best = None
         if row is not best:
             b = np.array(finals.get(best["point"], []))
             a = np.array(finals.get(row["point"], []))
-            entry["vs_best"] = significance(label, a, row["successes"],
-                                            _point_label(spec, best["point"]), b,
-                                            best["successes"])
-        ranking.append(entry)
+            vs_best = significance(label, a, row["successes"],
+                                   _point_label(spec, best["point"]), b, best["successes"])
+        ranking.append(RankedPoint(rank, label, row, vs_best))
     floor = spec.data["run"].get("min_success_rate")
-    reqs = [Requirement(f"success rate, {r['label']}", "success_rate", lower=float(floor),
+    reqs = [Requirement(f"success rate, {r.label}", "success_rate", lower=float(floor),
                         source="run.min_success_rate (sweep --check)")
             for r in ranking] if floor is not None else []
-    checks = [check([q], {"success_rate": r["success_rate"]})[0]
+    checks = [check([q], {"success_rate": r.row["success_rate"]})[0]
               for q, r in zip(reqs, ranking)]
-    judged = {"verdict": verdict_of(checks), "verdict_sentence": sentence(checks)} if checks \
-        else {"verdict": None, "verdict_sentence": "not judged: run.min_success_rate is not "
-              "set (the sweep's --check needs it)"}
-    return jsonable({**judged, "requirements": [c.as_dict() for c in checks],
-                     "sweep": spec.source, "grid": spec.grid, "seeds": list(spec.seeds),
-                     "ranking": ranking})
+    judged = Verdict(tuple(checks), verdict_of(checks), sentence(checks)) if checks \
+        else Verdict((), None, "not judged: run.min_success_rate is not set (the sweep's "
+                     "--check needs it)")
+    return SweepRanking(judged, spec.source, spec.grid, tuple(spec.seeds), tuple(ranking))
 
 
 def _point_label(spec: Any, index: int) -> str:

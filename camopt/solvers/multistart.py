@@ -14,10 +14,20 @@ A start counts only when it *converged inside the bounds* (the local solver's ow
 success test and every variable within its bounds). Any other end point is a last
 iterate, not a design: it is never the best, and when no start converged the repeat's
 best is reported infeasible (objective +inf) with a note saying so.
+
+A local solve runs under the run's budget (issue #37): every call scipy makes of the
+start's function goes through a :class:`Meter` that counts it against
+``run.max_evaluations`` (one evaluation kept for the driver's evaluation of the end
+point) and ``run.max_seconds``; once either is spent the meter raises out of scipy, the
+start ends unconverged on the best point it evaluated and the repeat stops with the
+run's limit as its reason. With ``run.max_evaluations`` set, the starts run in order in
+this process whatever ``jobs`` is (a start's share of the budget is what the starts
+before it left). Without a limit reached the meter changes nothing.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -26,14 +36,52 @@ from numpy.typing import NDArray
 from camopt.config.models import SolverOptions
 from camopt.core.perf import fork_pool, kill_pool
 from camopt.core.problem import Evaluation, Problem
-from camopt.solvers.base import Solver, StopReason, best_index
+from camopt.solvers.base import Budget, Solver, StopReason, best_index
 
 _SOLVING: MultiStart | None = None  # the solver whose starts forked workers solve
 
 
 def _solve_start(i: int) -> tuple[NDArray, dict[str, Any]]:
     assert _SOLVING is not None
-    return _SOLVING.local_solve(_SOLVING.starts[i])
+    return _SOLVING.solve_within_budget(_SOLVING.starts[i])
+
+
+class BudgetSpent(Exception):
+    """Raised by a :class:`Meter` out of a scipy solve when the run's budget is spent
+    (control flow inside :meth:`MultiStart.solve_within_budget`, never seen outside)."""
+
+    def __init__(self, reason: StopReason) -> None:
+        super().__init__(reason.value)
+        self.reason = reason
+
+
+class Meter:
+    """Counts a local solve's function calls against ``budget`` (``used`` evaluations
+    already spent by the run) and keeps the point whose value scored least
+    (``score``: the value's badness, e.g. the penalised objective or the largest
+    residual); a call that would pass the budget, or any once the time is spent, raises
+    :class:`BudgetSpent` instead of being made."""
+
+    def __init__(self, budget: Budget, used: int) -> None:
+        self.budget, self.used = budget, used
+        self.count = 0
+        self.best: tuple[NDArray, float] | None = None
+
+    def wrap(self, fun: Callable[[NDArray], Any], score: Callable[[Any], float]
+             ) -> Callable[[NDArray], Any]:
+        """``fun`` (of the bounds-normalised variables) with each call counted."""
+        def metered(u: NDArray) -> Any:
+            reason = self.budget.spent(self.used + self.count + 1)
+            if reason is not None:
+                raise BudgetSpent(reason)
+            value = fun(u)
+            self.count += 1
+            badness = float(score(value))
+            badness = np.inf if badness != badness else badness  # NaN: worst
+            if self.best is None or badness < self.best[1]:
+                self.best = (np.array(u, dtype=float), badness)
+            return value
+        return metered
 
 
 class MultiStartOptions(SolverOptions):
@@ -59,6 +107,10 @@ class MultiStart(Solver):
         self.X: list[NDArray] = []
         self.ev: Evaluation | None = None
         self._solved: list[tuple[NDArray, dict[str, Any]]] | None = None
+        self.meter: Meter | None = None
+        """The running start's meter (None: no run limit set)."""
+        self.stopped: StopReason | None = None
+        """The run's limit that stopped a start's local solve, if one did."""
 
     def _starts(self) -> NDArray:
         n = self.options.starts
@@ -75,8 +127,42 @@ class MultiStart(Solver):
         return len(self.starts)
 
     def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:  # pragma: no cover
-        """One scipy local solve from ``x0``: its end point and a record (success, nfev, ...)."""
+        """One scipy local solve from ``x0``: its end point and a record (success, nfev,
+        ...). The function handed to scipy goes through :meth:`metered`."""
         raise NotImplementedError
+
+    def metered(self, fun: Callable[[NDArray], Any], score: Callable[[Any], float]
+                ) -> Callable[[NDArray], Any]:
+        """``fun`` as a local solve hands it to scipy: counted by the running start's
+        :class:`Meter` (unchanged when the run sets no limit)."""
+        return fun if self.meter is None else self.meter.wrap(fun, score)
+
+    def stopped_record(self, x: NDArray) -> dict[str, Any]:
+        """A stopped start's record beyond success, message and nfev (subclasses add
+        what their table shows of every start)."""
+        return {}
+
+    def solve_within_budget(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:
+        """:meth:`local_solve` under the run's budget (:attr:`Solver.budget`): unchanged
+        while it holds; once spent, the best point the solve evaluated (unconverged,
+        never a design) with a record saying where it stopped (``stopped``: the limit)."""
+        budget = self.budget
+        if budget.max_nfev is None and budget.deadline is None:
+            return self.local_solve(x0)
+        self.meter = Meter(Budget(None if budget.max_nfev is None else budget.max_nfev - 1,
+                                  budget.deadline), self.nfev)
+        try:
+            return self.local_solve(x0)
+        except BudgetSpent as stop:
+            meter = self.meter
+            x = (np.asarray(x0, dtype=float) if meter.best is None
+                 else self.problem.from_unit(meter.best[0]))
+            return x, {"success": False, **self.stopped_record(x),
+                       "message": f"stopped: {stop.reason.value} after {meter.count} "
+                       "evaluations; the best point it evaluated", "nfev": meter.count,
+                       "stopped": stop.reason}
+        finally:
+            self.meter = None
 
     def _solve_all(self) -> list[tuple[NDArray, dict[str, Any]]]:
         """Every start's local solve in ``jobs`` forked workers, in start order."""
@@ -94,12 +180,14 @@ class MultiStart(Solver):
         return solved
 
     def ask(self) -> NDArray:
-        if self.jobs > 1 and len(self.starts) > 1 and self._solved is None:
+        parallel = self.jobs > 1 and len(self.starts) > 1 and self.budget.max_nfev is None
+        if parallel and self._solved is None:
             self._solved = self._solve_all()
         if self._solved is not None:
             x, info = self._solved[self.nit]
         else:
-            x, info = self.local_solve(self.starts[self.nit])
+            x, info = self.solve_within_budget(self.starts[self.nit])
+        self.stopped = info.pop("stopped", None) or self.stopped
         info.setdefault("in_bounds", bool(np.all((x >= self.lo) & (x <= self.hi))))
         self.results.append(info)
         self.nfev += info.pop("nfev", 0)
@@ -128,6 +216,8 @@ class MultiStart(Solver):
         return self.X[0].copy(), Evaluation(np.full(1, np.inf), ev.g, ev.extras)
 
     def stop_reason(self) -> StopReason | None:
+        if self.stopped is not None:
+            return self.stopped
         return StopReason.EXHAUSTED if self.nit >= len(self.starts) else None
 
     def reached(self) -> NDArray:
@@ -171,7 +261,13 @@ class MultiStart(Solver):
         return rows
 
     def convergence_notes(self) -> list[str]:
-        """Plain lines on starts that did not converge inside the bounds (none if all did)."""
+        """Plain lines on starts that did not converge inside the bounds (none if all did),
+        and on a start the run's budget stopped."""
+        stopped = [f"start {i} {r['message']}" for i, r in enumerate(self.results)
+                   if str(r.get("message", "")).startswith("stopped: run.")]
+        return self._unconverged_notes() + stopped
+
+    def _unconverged_notes(self) -> list[str]:
         failed = [r for r in self.results if not r["success"]]
         outside = [r for r in self.results if r["success"] and not r["in_bounds"]]
         if len(failed) + len(outside) == 0:

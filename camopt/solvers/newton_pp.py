@@ -68,7 +68,8 @@ class NewtonPP(MultiStart):
     def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:
         from scipy.optimize import root  # scipy.optimize: 0.5 s, only for a run
 
-        sol = root(self._residual, self.problem.to_unit(x0), method=self.options.method,
+        equations = self.metered(self._residual, lambda r: float(np.max(np.abs(r))))
+        sol = root(equations, self.problem.to_unit(x0), method=self.options.method,
                    options={"xtol": self.options.xtol} if self.options.method == "hybr"
                    else {"xtol": self.options.xtol, "ftol": 1e-15})
         x = self.problem.from_unit(sol.x)
@@ -78,6 +79,12 @@ class NewtonPP(MultiStart):
                    "jacobian_cond": self.jacobian_condition(x) if success else float("nan"),
                    "in_bounds": bool(np.all((x >= self.lo) & (x <= self.hi))),
                    "message": str(sol.message), "nfev": int(sol.nfev)}
+
+    def stopped_record(self, x: NDArray) -> dict[str, Any]:
+        """A start the run's budget stopped: its best point's largest residual (no
+        condition number: it is not a root)."""
+        residual = float(np.max(np.abs(self.equations.residuals(x[None, :])[0])))
+        return {"residual_max": residual, "jacobian_cond": float("nan")}
 
     def notes(self) -> list[str]:
         return [self.distinct_summary("roots", "starts found no root inside the bounds"),

@@ -68,7 +68,7 @@ class Simplex(MultiStart):
         # scipy's default simplex is 5 % of each coordinate: degenerate near a bound
         step = np.where(u0 + o.initial_step <= 1.0, o.initial_step, -o.initial_step)
         simplex = np.vstack([u0, u0 + np.diag(step)])
-        res = minimize(self._objective, u0, method="Nelder-Mead",
+        res = minimize(self.metered(self._objective, float), u0, method="Nelder-Mead",
                        bounds=[(0.0, 1.0)] * self.problem.n_var,
                        options={"maxiter": o.maxiter, "xatol": o.xatol, "fatol": o.fatol,
                                 "adaptive": o.adaptive, "initial_simplex": simplex})

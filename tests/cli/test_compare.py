@@ -72,8 +72,8 @@ def test_compare_leads_with_verdicts_and_repeats_no_row(tmp_path):
         vb.best, objective=va.best.objective, feasible=True))
     va = dataclasses.replace(va, best=dataclasses.replace(va.best, feasible=True))
     (same,) = report.same_objective_different_designs([va, vb])
-    assert same["runs"] == [0, 1] and "a1" in same["differ"]
-    assert report.same_objective_different_designs([va, va]) == []
+    assert same.runs == (0, 1) and "a1" in same.differ
+    assert report.same_objective_different_designs([va, va]) == ()
 
 
 def test_three_repeats_each_are_too_few_to_decide(tmp_path):

@@ -203,13 +203,13 @@ def test_the_reference_label_comes_from_the_case_file(vcb_run, tmp_path):
     vendor unless a maker names its own breaker), in show's table and its JSON; an
     archive whose case lacks the field (written before it) keeps the case's name."""
     view = archive.load_run(vcb_run)
-    assert report.reference(view)[0] == "reference: vendor, Sec 2.3 and Table 2"
+    assert report.reference(view).label == "reference: vendor, Sec 2.3 and Table 2"
     mine = dataclasses.replace(view, case={**view.case,
                                            "reference_label": "my breaker, drawing 4711"})
-    assert report.reference(mine)[0] == "reference: my breaker, drawing 4711"
+    assert report.reference(mine).label == "reference: my breaker, drawing 4711"
     old = dataclasses.replace(view, case={k: v for k, v in view.case.items()
                                           if k != "reference_label"})
-    assert report.reference(old)[0] == "reference: vendor, Sec 2.3 and Table 2"
+    assert report.reference(old).label == "reference: vendor, Sec 2.3 and Table 2"
     out = tmp_path / "mine.h5"
     r = invoke("run", CONFIGS / "vcb.toml", "--out", out, "--quiet", "--set",
                'case.reference_label="my breaker"', "--set", "solver.generations=2",

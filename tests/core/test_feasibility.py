@@ -106,8 +106,8 @@ def test_fast_switch_de_seed_3_verdict_feasibility_and_check_agree(tmp_path):
     view = record_view(record, str(tmp_path / "fs3.h5"))
     judged = report.verdict(view)
     assert view.best.feasible and record.best.success
-    assert judged["verdict"] == "pass", judged["sentence"]
-    assert all(r["pass"] for r in judged["requirements"])
+    assert judged.verdict == "pass", judged.sentence
+    assert all(c.passed for c in judged.checks)
     k = record.best.index
     out = tmp_path / "check.h5"
     r = CliRunner().invoke(app, ["sweep", str(CONFIGS / "fast_switch_de.toml"), "--set",
@@ -117,5 +117,5 @@ def test_fast_switch_de_seed_3_verdict_feasibility_and_check_agree(tmp_path):
     assert r.exit_code == 0, r.output
     doc = report.rank_sweep(*__import__("camopt.archive.sweeps", fromlist=["load_sweep"])
                             .load_sweep(out))
-    assert doc["verdict"] == "pass"
-    assert doc["ranking"][0]["best"] == record.best.fun
+    assert doc.verdict.verdict == "pass"
+    assert doc.ranking[0].row["best"] == record.best.fun

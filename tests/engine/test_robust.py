@@ -195,14 +195,14 @@ def test_show_and_report_give_the_robust_check(tmp_path):
                                  "robust.check_samples=200", "--set", "robust.samples=8"])
     assert r.exit_code == 0, r.output
     view = archive.load_run(out)
-    doc = report.show(view)
+    doc = report.show(view).to_json()
     check = doc["robust"]["check"]["robust"]
     assert doc["robust"]["settings"]["samples"] == 8 and check["samples"] == 200
     assert 0 <= check["yield_low"] <= check["yield"] <= check["yield_high"] <= 1
     shown = CliRunner().invoke(app, ["show", str(out)])
     assert shown.exit_code == 0 and "robust check (200 fresh draws" in shown.output
     summary = report.robust_summary(view)
-    assert summary is not None and summary["rows"][0]["name"] == "yield"
+    assert summary is not None and summary.rows[0].name == "yield"
     html = CliRunner().invoke(app, ["report", str(out), "--out", str(tmp_path / "r.html")])
     assert html.exit_code == 0, html.output
     assert 'id="robust-check"' in (tmp_path / "r.html").read_text()
@@ -230,14 +230,16 @@ def test_margin_run_names_the_case_objective_in_its_check(tmp_path):
     check = view.robust_check["robust"]
     assert check["case_objective"] == "closure_time_ms"
     assert check["objective_nominal"] > 0  # a closure time, not a margin
-    names = [row["name"] for row in report.robust_summary(view)["rows"]]
+    robust = report.robust_summary(view)
+    assert robust is not None
+    names = [row.name for row in robust.rows]
     assert "closure_time_ms nominal" in names and not any("yield_margin" in n for n in names)
-    rows = {row["name"]: row for row in report.summary(view)["rows"]}
-    assert rows["yield_margin"]["optimum"] == view.best.objective
-    assert rows["yield_margin"]["reference"] is None
-    assert rows["closure_time_ms"]["optimum"] == pytest.approx(check["objective_nominal"],
-                                                              rel=1e-12)
-    assert rows["closure_time_ms"]["reference"] > 0  # the reference design's closure time
+    rows = {row.name: row for row in report.summary(view).rows}
+    assert rows["yield_margin"].optimum == view.best.objective
+    assert rows["yield_margin"].reference is None
+    assert rows["closure_time_ms"].optimum == pytest.approx(check["objective_nominal"],
+                                                           rel=1e-12)
+    assert rows["closure_time_ms"].reference > 0  # the reference design's closure time
 
 
 @pytest.mark.parametrize("config, capability", [

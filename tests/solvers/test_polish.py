@@ -174,3 +174,43 @@ def test_a_budget_not_reached_changes_nothing():
                                              Budget(max_nfev=10**6), 0)
     np.testing.assert_array_equal(x, free[0])
     assert (nfev, message, reason) == (free[1], free[2], None)
+
+
+SHIPPED = ("fast_switch_de.toml", ["solver.population=20", "solver.generations=5",
+                                   "solver.polish.maxiter=20", "run.repeats=1"])
+
+
+def _shipped(*overrides: str):
+    from camopt.engine.driver import execute, load
+    from tests.conftest import CONFIGS
+
+    name, short = SHIPPED
+    return execute(load(CONFIGS / name, [*short, *overrides])).best
+
+
+@pytest.fixture(scope="module")
+def shipped_free():
+    return _shipped()
+
+
+def test_a_shipped_polish_config_is_the_same_under_a_budget_it_does_not_reach(shipped_free):
+    """``fast_switch_de`` (DE-gr with ``[solver.polish]``; integer coils: the mixed
+    polish), shortened (SLSQP's iterations too), at its seed: with limits far away its
+    best repeat is the same, bit for bit (design, objective, evaluations, stop reason,
+    notes, table)."""
+    free = shipped_free
+    far = _shipped("run.max_evaluations=100000000", "run.max_seconds=100000")
+    np.testing.assert_array_equal(far.x, free.x)
+    assert (far.fun, far.nfev, far.message, far.notes) == (free.fun, free.nfev,
+                                                           free.message, free.notes)
+    assert far.table == free.table
+
+
+def test_a_tiny_max_evaluations_stops_a_shipped_polish_within_budget(shipped_free):
+    """Five generations of 20 spend 100 evaluations; under run.max_evaluations = 130 the
+    polish that would spend more stops from inside at most one population past it (in
+    fact within it: one evaluation is kept for the end point)."""
+    assert shipped_free.nfev > 130
+    cut = _shipped("run.max_evaluations=130")
+    assert 100 < cut.nfev <= 130 + 20
+    assert cut.message == StopReason.MAX_EVALUATIONS.value

@@ -21,7 +21,7 @@ from camopt.core.capabilities import Repairable
 from camopt.core.problem import Evaluation, Problem, Variable
 from camopt.mechanics import polar_cam as pc
 from camopt.mechanics.spline import ClampedNaturalSpline
-from camopt.units import KN, MM, MPA, SQRT_MPA
+from camopt.units import KN, MM, MPA, SQRT_MPA, TO_DEG
 
 BIG_VIOLATION = 1e6  # normalised violation standing for a non-finite measure
 CONSTRAINTS = ("valid", "contact_stress", "lift", "distortion", "monotonic")
@@ -459,7 +459,7 @@ class EmbCamProblem(Problem, Repairable):
             "nonworking_x_mm": (a0[0] + self.rg * np.cos(sweep)) / MM,
             "nonworking_y_mm": (a0[1] + self.rg * np.sin(sweep)) / MM,
             "rotation_rad": rot, "lift_mm": p.s / MM,
-            "pressure_angle_deg": np.degrees(p.alpha), "torque_nm": p.torque,
+            "pressure_angle_deg": p.alpha * TO_DEG, "torque_nm": p.torque,
             "clamping_force_kn": p.force / KN, "curvature_mm": p.rho / MM,
             "contact_stress_mpa": p.sigma / MPA, "profile_angle_rad": th,
             "screw_torque_nm": screw_torque,

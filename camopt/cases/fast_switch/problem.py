@@ -433,5 +433,5 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         r2, r3, g = v["x7"], v["x6"], v["x10"]
         th3 = coupler_derivatives(r2, r3, travel.q)[0]
         s = g - self.p.p4 - r2 * np.cos(travel.q) - r3 * np.cos(th3)
-        return {"time_ms": travel.t * TO_MS, "theta2_deg": np.degrees(travel.q),
+        return {"time_ms": travel.t * TO_MS, "theta2_deg": travel.q * TO_DEG,
                 "theta2_rate_rad_s": travel.qdot, "spring_length_mm": s * TO_MM}

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from camopt.cases.opening_spring.config import OpeningSpringConfig
 from camopt.core.capabilities import HasResiduals
 from camopt.core.problem import Evaluation, Problem, Variable
-from camopt.units import MM, MS, N_PER_MM
+from camopt.units import DEG, MM, MS, N_PER_MM
 
 # parameter -> (config bounds field, factor from the TOML unit to SI)
 PARAMETERS = {
@@ -84,7 +84,7 @@ class OpeningSpringProblem(Problem, HasResiduals):
         self._n_points = len(self.points_theta)
         self._cos, self._sin = np.cos(self._theta), np.sin(self._theta)
         self._gravity = (c.follower_mass_kg * c.gravity * c.follower_centroid_mm * MM
-                         * np.sin(np.radians(c.follower_centroid_deg) + self._theta)
+                         * np.sin(c.follower_centroid_deg * DEG + self._theta)
                          - c.contact_count * c.contact_mass_kg * c.gravity * self.d * self._sin)
         self._contact_inertia = c.contact_count * c.contact_mass_kg * (self.d * self._cos) ** 2
         self._closing_shape = -c.contact_count * self.d * (self._sin - np.sin(self.theta0))
@@ -144,7 +144,7 @@ class OpeningSpringProblem(Problem, HasResiduals):
         length, _ = self.spring_length(p, theta)
         elastic = 0.5 * c.spring_count * p["k_n_per_mm"] * (length - p["l0_mm"]) ** 2
         gravity = (c.follower_mass_kg * c.gravity * c.follower_centroid_mm * MM
-                   * np.sin(np.radians(c.follower_centroid_deg) + theta)
+                   * np.sin(c.follower_centroid_deg * DEG + theta)
                    - c.contact_count * c.contact_mass_kg * c.gravity * self.d * np.sin(theta))
         return elastic + gravity
 
@@ -251,7 +251,7 @@ class OpeningSpringProblem(Problem, HasResiduals):
         c = self.config
         p = {k: v[0, 0] for k, v in self.params(x[None, :]).items()}
         n_c, m_c, d = c.contact_count, c.contact_mass_kg, self.d
-        psi = np.radians(c.follower_centroid_deg)
+        psi = c.follower_centroid_deg * DEG
 
         def rhs(_t: float, y: NDArray) -> list[float]:
             th, w = y

@@ -112,8 +112,11 @@ class CamDesign(Strict):
     kc2_n_per_mm: Positive
 
 
-class VcbConfig(CaseConfig):
-    """12 kV VCB cam-linkage closing mechanism, Kang, Huang & Yang (2023)."""
+class VcbMechanism(CaseConfig):
+    """The mechanism every VCB ``[case]`` describes (the two design steps and the
+    identifications alike): four-bar and pivots, cam, springs and loads, dynamics and
+    its band, contact stress, and the objective's form; validated on their own (the
+    follower law's nodes, the phi_max and closing-velocity bands)."""
 
     field_roles: ClassVar[Mapping[str, FieldRole]] = VCB_ROLES
     kind: Literal["vcb"] = "vcb"
@@ -258,7 +261,36 @@ class VcbConfig(CaseConfig):
     penalty: float = Field(1e6, ge=0, description="M in Eq 39")
     phi_max_deg: Pair = Field((23.0, 26.0),
                               description="bounds on the follower's maximum angle (Eq 40)")
-    # search bounds
+
+    @model_validator(mode="after")
+    def _nodes(self) -> VcbMechanism:
+        if len(self.node_cam_deg) != 4 or len(self.node_fractions) != 4:
+            raise ValueError("node_cam_deg and node_fractions need four values (Eq 7)")
+        nodes, fractions = self.node_cam_deg, self.node_fractions
+        if nodes[0] != 0 or any(b <= a for a, b in zip(nodes, nodes[1:])) or nodes[-1] > 300:
+            raise ValueError("node_cam_deg: cam angles start at 0 and increase, at most "
+                             "300 deg (Eq 7; the cam must leave the roller within a turn)")
+        if any(b <= a for a, b in zip(fractions, fractions[1:])) or not (
+                0 <= fractions[0] and fractions[-1] <= 1):
+            raise ValueError("node_fractions: increasing fractions of the stroke in [0, 1]")
+        if self.reference_cam_points is not None and not self.reference_cam_points.strip():
+            raise ValueError("reference_cam_points: an empty file name")
+        return self
+
+    @model_validator(mode="after")
+    def _bands(self) -> VcbMechanism:
+        if self.phi_max_deg[0] >= self.phi_max_deg[1]:
+            raise ValueError("phi_max_deg: lower bound must be below upper bound")
+        v = self.closing_velocity_m_s
+        if v is not None and not 0 <= v[0] < v[1]:
+            raise ValueError("closing_velocity_m_s: need 0 <= lower < upper")
+        return self
+
+
+class VcbCamStep(VcbMechanism):
+    """Step 1's search (Eqs 37-38): the follower law's coefficients, the closing spring
+    rates and, beyond the paper, the law's higher terms and the closing latch."""
+
     a1_bounds: Bounds = Field(Bounds(lower=0, upper=0.5), description="Eq 38")
     a2_bounds: Bounds = Field(Bounds(lower=0, upper=0.5), description="Eq 38")
     a3_bounds: Bounds = Field(Bounds(lower=-0.5, upper=0), description="Eq 38")
@@ -276,6 +308,24 @@ class VcbConfig(CaseConfig):
                                         description="Eq 38 widened, docs/assumptions.md")
     kc2_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),
                                         description="Eq 38 widened, docs/assumptions.md")
+
+    @model_validator(mode="after")
+    def _law_terms(self) -> VcbCamStep:
+        if self.a5_bounds is not None and self.a4_bounds is None:
+            raise ValueError("a5_bounds needs a4_bounds: the law's terms are taken in "
+                             "order (a quintic has a quartic term)")
+        r = self.release_offset_bounds_deg
+        if self.kind == "vcb" and r is not None and not 0 < r.lower <= r.upper < 90:
+            raise ValueError("release_offset_bounds_deg: the latch holds the crank past its "
+                             "dead centre: 0 < lower <= upper < 90 deg")
+        return self
+
+
+class VcbConfig(VcbCamStep):
+    """12 kV VCB cam-linkage closing mechanism, Kang, Huang & Yang (2023): step 1 (the
+    cam, :class:`VcbCamStep`) or step 2 (the four-bar from step 1's cam design, Eqs
+    41-42), chosen by ``step``; one flat ``[case]`` table for both."""
+
     l1_bounds_mm: Bounds = Field(Bounds(lower=70, upper=150), description="Eq 42")
     l3_bounds_mm: Bounds = Field(Bounds(lower=70, upper=150), description="Eq 42")
     l4_bounds_mm: Bounds = Field(Bounds(lower=70, upper=150), description="Eq 42")
@@ -287,38 +337,15 @@ class VcbConfig(CaseConfig):
                           "(camopt option)")
 
     @model_validator(mode="after")
-    def _nodes(self) -> VcbConfig:
-        if len(self.node_cam_deg) != 4 or len(self.node_fractions) != 4:
-            raise ValueError("node_cam_deg and node_fractions need four values (Eq 7)")
-        nodes, fractions = self.node_cam_deg, self.node_fractions
-        if nodes[0] != 0 or any(b <= a for a, b in zip(nodes, nodes[1:])) or nodes[-1] > 300:
-            raise ValueError("node_cam_deg: cam angles start at 0 and increase, at most "
-                             "300 deg (Eq 7; the cam must leave the roller within a turn)")
-        if any(b <= a for a, b in zip(fractions, fractions[1:])) or not (
-                0 <= fractions[0] and fractions[-1] <= 1):
-            raise ValueError("node_fractions: increasing fractions of the stroke in [0, 1]")
-        if self.phi_max_deg[0] >= self.phi_max_deg[1]:
-            raise ValueError("phi_max_deg: lower bound must be below upper bound")
-        v = self.closing_velocity_m_s
-        if v is not None and not 0 <= v[0] < v[1]:
-            raise ValueError("closing_velocity_m_s: need 0 <= lower < upper")
-        if self.a5_bounds is not None and self.a4_bounds is None:
-            raise ValueError("a5_bounds needs a4_bounds: the law's terms are taken in "
-                             "order (a quintic has a quartic term)")
-        if self.kind == "vcb" and self.step == "fourbar":
-            for name in ("a4_bounds", "a5_bounds", "release_offset_bounds_deg"):
-                if getattr(self, name) is not None:
-                    raise ValueError(f"{name}: a step-1 (cam) design variable; step "
-                                     "'fourbar' takes the cam design, its latch included, "
-                                     "from cam_design or cam_archive")
-        if self.reference_cam_points is not None and not self.reference_cam_points.strip():
-            raise ValueError("reference_cam_points: an empty file name")
-        r = self.release_offset_bounds_deg
-        if self.kind == "vcb" and r is not None and not 0 < r.lower <= r.upper < 90:
-            raise ValueError("release_offset_bounds_deg: the latch holds the crank past its "
-                             "dead centre: 0 < lower <= upper < 90 deg")
-        if (self.kind == "vcb" and self.step == "fourbar" and self.cam_design is None
-                and self.cam_archive is None):
+    def _fourbar_step(self) -> VcbConfig:
+        if self.kind != "vcb" or self.step != "fourbar":
+            return self
+        for name in ("a4_bounds", "a5_bounds", "release_offset_bounds_deg"):
+            if getattr(self, name) is not None:
+                raise ValueError(f"{name}: a step-1 (cam) design variable; step "
+                                 "'fourbar' takes the cam design, its latch included, "
+                                 "from cam_design or cam_archive")
+        if self.cam_design is None and self.cam_archive is None:
             raise ValueError("step 'fourbar' needs the step-1 design: set cam_design or "
                              "cam_archive")
         return self

@@ -25,7 +25,7 @@ from camopt.cases.vcb.dynamics import MotionParameters, opening_motion
 from camopt.cases.vcb.forms import BAND_COLUMNS, FORMS, INERTIAS, ModelForm, get_form
 from camopt.cases.vcb.model import VcbModel
 from camopt.core.problem import Evaluation, Problem, Variable
-from camopt.units import DEG, MM, MS
+from camopt.units import DEG, MM, MS, N_PER_MM
 
 
 class VcbIdentification(Problem):
@@ -46,7 +46,7 @@ class VcbIdentification(Problem):
         d = c.paper_optimum
         self.A = np.array([m.vendor_a, [m.phi0(), d.a1, d.a2, d.a3]])
         self.kc = np.array([[c.kc1_n_per_mm, c.kc2_n_per_mm],
-                            [d.kc1_n_per_mm, d.kc2_n_per_mm]]) * 1e3
+                            [d.kc1_n_per_mm, d.kc2_n_per_mm]]) * N_PER_MM
 
     def evaluate(self, X: NDArray) -> Evaluation:
         """Squared normalised misfit of (rod travel, vendor surplus, optimum surplus) to
@@ -136,7 +136,7 @@ class VcbDynamicsIdentification(Problem):
         self.form = get_form(c.model_form)
         self.variables = self.form.variables(c)
         self.A = m.vendor_a[None, :]
-        self.kc = np.array([[c.kc1_n_per_mm, c.kc2_n_per_mm]]) * 1e3
+        self.kc = np.array([[c.kc1_n_per_mm, c.kc2_n_per_mm]]) * N_PER_MM
         self.rod_offset = c.rod_arm_offset_deg * DEG
         vendor = m.kinematics(self.A, m.vendor_link[None, :], self.rod_offset)
         self.travel = float(vendor.s1[0, -1])

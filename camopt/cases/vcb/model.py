@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from camopt.cases.vcb.config import VcbConfig
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, fourbar, hertz
-from camopt.units import DEG, MM
+from camopt.units import DEG, GPA, MM, N_PER_MM
 
 REFERENCE_A0_TOLERANCE_DEG = 0.05
 """Largest difference (deg) between a reference cam's follower angle at theta_c = 0 (its
@@ -291,10 +291,10 @@ class VcbModel:
         the vendor design, so they are properties of the breaker, not of a design."""
         c = self.c
         return Loads(
-            opening_k=c.opening_k_n_per_mm * 1e3, opening_arm=opening_arm,
+            opening_k=c.opening_k_n_per_mm * N_PER_MM, opening_arm=opening_arm,
             opening_stretch_open=c.opening_stretch_closed_mm * MM
             - opening_arm * rod_travel_vendor,
-            wipe_k=c.wipe_count * c.wipe_k_n_per_mm * 1e3,
+            wipe_k=c.wipe_count * c.wipe_k_n_per_mm * N_PER_MM,
             wipe_preload=c.wipe_compression_closed_mm * MM
             - (rod_travel_vendor - c.contact_gap_mm * MM),
             gap=c.contact_gap_mm * MM, free_contact=free_contact, efficiency=c.efficiency)
@@ -341,8 +341,8 @@ class VcbModel:
             # arm of the common normal about O: |r x n| for the pitch point (Eq 19 by moments)
             arm = np.abs(xp * dxp + yp * dyp) / np.sqrt(dxp * dxp + dyp * dyp)
             fn = np.abs(torque) / arm
-        e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * 1e9, c.poisson,
-                                        c.cam_modulus_gpa * 1e9, c.poisson)
+        e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * GPA, c.poisson,
+                                        c.cam_modulus_gpa * GPA, c.poisson)
         _, sigma, tau = hertz.line_contact(fn, rho, self.rf, c.contact_length_mm * MM, e_eq)
         return Contact(xp, yp, dxp, dyp, rho, fn, sigma, tau)
     def peak_stress(self, A: NDArray, f: cam.Follower, torque: NDArray,
@@ -396,8 +396,8 @@ class VcbModel:
             dwell |= np.any(f.sin_a[:, 1:] * f.sin_a[:, :-1] <= 0, axis=1)
             low[dwell] = 0.0
             top = np.where(low > 0, 1 / (low * ((l6 * l2) * rf)), np.inf)  # NaN too
-        e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * 1e9, c.poisson,
-                                        c.cam_modulus_gpa * 1e9, c.poisson)
+        e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * GPA, c.poisson,
+                                        c.cam_modulus_gpa * GPA, c.poisson)
         return np.sqrt(top * e_eq / (2 * np.pi * c.contact_length_mm * MM))
 
 

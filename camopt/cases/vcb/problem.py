@@ -29,7 +29,7 @@ from camopt.core.capabilities import VariesCase
 from camopt.core.problem import Evaluation, ObjectiveFloor, Problem, Variable
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, hertz
-from camopt.units import DEG, MM, MPA
+from camopt.units import DEG, MM, MPA, N_PER_MM, TO_MS, TO_N_PER_MM
 
 LINK_FIELDS = ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
 """The linkage fields of ``[case]`` in the order of a linkage row (``designs``)."""
@@ -51,10 +51,10 @@ class VcbProblem(Problem, VariesCase):
                 Variable("a1", c.a1_bounds.lower, c.a1_bounds.upper),
                 Variable("a2", c.a2_bounds.lower, c.a2_bounds.upper),
                 Variable("a3", c.a3_bounds.lower, c.a3_bounds.upper),
-                Variable("kc1_n_per_mm", c.kc1_bounds_n_per_mm.lower * 1e3,
-                         c.kc1_bounds_n_per_mm.upper * 1e3, 1e-3),
-                Variable("kc2_n_per_mm", c.kc2_bounds_n_per_mm.lower * 1e3,
-                         c.kc2_bounds_n_per_mm.upper * 1e3, 1e-3),
+                Variable("kc1_n_per_mm", c.kc1_bounds_n_per_mm.lower * N_PER_MM,
+                         c.kc1_bounds_n_per_mm.upper * N_PER_MM, TO_N_PER_MM),
+                Variable("kc2_n_per_mm", c.kc2_bounds_n_per_mm.lower * N_PER_MM,
+                         c.kc2_bounds_n_per_mm.upper * N_PER_MM, TO_N_PER_MM),
             ) + tuple(Variable(name, b.lower, b.upper)
                       for name, b in (("a4", c.a4_bounds), ("a5", c.a5_bounds)) if b is not None)
             self.higher_terms = len(self.variables) - 5
@@ -100,7 +100,7 @@ class VcbProblem(Problem, VariesCase):
         a0 = self.model.phi0() if d.a0 is None else d.a0
         coefficients = np.array([a0, d.a1, d.a2, d.a3, d.a4, d.a5])
         degree = 5 if d.a5 else 4 if d.a4 else 3  # the paper's cubic unless a design has more
-        return coefficients[:degree + 1], np.array([d.kc1_n_per_mm, d.kc2_n_per_mm]) * 1e3
+        return coefficients[:degree + 1], np.array([d.kc1_n_per_mm, d.kc2_n_per_mm]) * N_PER_MM
 
     def designs(self, X: NDArray, link: NDArray | None = None
                 ) -> tuple[NDArray, NDArray, NDArray]:
@@ -132,8 +132,8 @@ class VcbProblem(Problem, VariesCase):
             higher = np.zeros(self.higher_terms)
             higher[:len(self.model.vendor_a) - 4] = self.model.vendor_a[4:]
             release = [] if self.release_column is None else [c.release_offset_deg * DEG]
-            return np.r_[self.model.vendor_a[1:4], c.kc1_n_per_mm * 1e3, c.kc2_n_per_mm * 1e3,
-                         higher, release]
+            return np.r_[self.model.vendor_a[1:4], c.kc1_n_per_mm * N_PER_MM,
+                         c.kc2_n_per_mm * N_PER_MM, higher, release]
         return self.model.vendor_link.copy()
 
     def evaluate(self, X: NDArray) -> Evaluation:
@@ -225,8 +225,8 @@ class VcbProblem(Problem, VariesCase):
         f = np.where(np.isfinite(base) & np.isfinite(violation),
                      base + c.penalty * violation, np.inf)  # Eq 39
         extras = {
-            "phi_max_deg": q.phi_top, "sigma_max_mpa": sigma_max / 1e6,
-            "tau_max_mpa": q.tau_max / 1e6,
+            "phi_max_deg": q.phi_top, "sigma_max_mpa": sigma_max / MPA,
+            "tau_max_mpa": q.tau_max / MPA,
             "driving_work_j": bal.driving, "resistant_work_j": bal.resistant,
             "surplus_work_j": bal.surplus, "rod_travel_mm": q.travel / MM,
         }
@@ -318,7 +318,7 @@ class VcbProblem(Problem, VariesCase):
             "pressure_angle_deg": cam.pressure_angle(m.l2, m.l6, kin.follower)[0] / DEG,
             "curvature_mm": con.curvature[0] / MM,
             "normal_force_n": con.normal_force[0],
-            "sigma_max_mpa": con.sigma[0] / 1e6, "tau_max_mpa": con.tau[0] / 1e6,
+            "sigma_max_mpa": con.sigma[0] / MPA, "tau_max_mpa": con.tau[0] / MPA,
             "output_angle_deg": m.output_angle(kin)[0] / DEG,
             "rod_travel_mm": kin.s1[0] / MM,
             "fo_n": np.r_[np.nan, m.output_force(bal)[0]], "fr_n": np.r_[np.nan, bal.fr[0]],
@@ -334,7 +334,7 @@ class VcbProblem(Problem, VariesCase):
         mo = self.motion(x)
         shown = np.isfinite(mo.time[0])
         return {
-            "time_ms": mo.time[0, shown] * 1e3,
+            "time_ms": mo.time[0, shown] * TO_MS,
             "dyn_cam_angle_deg": mo.theta_c[shown] / DEG,
             "dyn_rod_travel_mm": mo.rod[0, shown] / MM,
             "dyn_rod_velocity_m_s": mo.rod_velocity[0, shown],

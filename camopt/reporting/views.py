@@ -1,0 +1,392 @@
+"""Typed views of archives, as :mod:`camopt.reporting.report` builds them and the printers,
+the HTML report and the JSON outputs read them (issue #37).
+
+Each view is a frozen dataclass read by attribute; its ``to_json()`` is the JSON document
+``show --format json``, ``compare --format json`` and ``export --format json`` write (the
+keys, their order and the values are a contract scripts rely on: non-finite floats as
+null, numpy scalars as Python ones). Values held by a view are raw (inf and NaN kept),
+which tables print as ``inf`` and ``n/a``. Documents a view carries from elsewhere (the
+archive's stored expected yield and robust check, a case's findings, the Pareto summary
+of :mod:`camopt.core.pareto`, the statistics tests of :mod:`camopt.core.stats`) stay
+mappings under their own keys.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from camopt.core.requirements import Check
+from camopt.core.runview import BestView
+from camopt.core.stats import RunStatistics
+
+Json = dict[str, Any]
+
+
+def jsonable(value: Any) -> Any:
+    """Replace non-finite floats by None and numpy scalars by Python ones, recursively
+    (dicts, lists, tuples; a view by its ``to_json()``)."""
+    if hasattr(value, "to_json"):
+        return value.to_json()
+    if isinstance(value, dict):
+        return {k: jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Requirements judged on one design: the checks (in the case's order), the overall
+    verdict (``"pass"``, ``"fail"``, or None: not judged) and the sentence saying it."""
+
+    checks: tuple[Check, ...]
+    verdict: str | None
+    sentence: str
+
+    @property
+    def requirements(self) -> list[Json]:
+        """Each check's JSON form (:meth:`Check.as_dict`)."""
+        return [c.as_dict() for c in self.checks]
+
+    @property
+    def at_limit(self) -> list[str]:
+        """Names of the passing requirements at their limit."""
+        return [c.requirement.name for c in self.checks if c.at_limit]
+
+    def to_json(self) -> Json:
+        return jsonable({"requirements": self.requirements, "verdict": self.verdict,
+                         "sentence": self.sentence})
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The reference design the optimum is shown beside: its label (``reference: vendor,
+    Sec 2.3 and Table 2``; '' when there is none) and ``{name: value}`` under the
+    optimum's names (``objective`` included)."""
+
+    label: str = ""
+    values: Mapping[str, Any] = field(default_factory=dict)
+
+    def __bool__(self) -> bool:
+        return bool(self.label)
+
+    def get(self, name: str, default: Any = None) -> Any:
+        return self.values.get(name, default)
+
+    def to_json(self) -> Json:
+        return jsonable({"label": self.label, "values": dict(self.values)})
+
+
+@dataclass(frozen=True)
+class ReferenceVerdict:
+    """The reference design with its own verdict (``show``'s ``reference``)."""
+
+    reference: Reference
+    judged: Verdict
+
+    @property
+    def label(self) -> str:
+        return self.reference.label
+
+    @property
+    def verdict(self) -> str | None:
+        return self.judged.verdict
+
+    @property
+    def verdict_sentence(self) -> str:
+        return self.judged.sentence
+
+    def to_json(self) -> Json:
+        return jsonable({"label": self.label, "values": dict(self.reference.values),
+                         "verdict": self.verdict, "verdict_sentence": self.verdict_sentence,
+                         "requirements": self.judged.requirements})
+
+
+@dataclass(frozen=True)
+class RepeatRow:
+    """One repeat as ``show`` reports it (``objective`` is the repeat's ``fun``; wall
+    time in s; ``spawn_key`` (k,) for child k of ``SeedSequence(run.seed)``)."""
+
+    seed: int
+    objective: float
+    feasible: bool
+    nfev: int
+    wall_s: float
+    converged_nit: int | None
+    spawn_key: tuple[int, ...]
+    notes: tuple[str, ...]
+
+    def to_json(self) -> Json:
+        return jsonable({"seed": self.seed, "objective": self.objective,
+                         "feasible": self.feasible, "nfev": self.nfev,
+                         "wall_s": self.wall_s, "converged_nit": self.converged_nit,
+                         "spawn_key": list(self.spawn_key), "notes": list(self.notes)})
+
+
+@dataclass(frozen=True)
+class RobustYield:
+    """A robust run's answer: the final check's yield of the robust optimum (share of
+    ``samples`` fresh draws) with its Clopper-Pearson interval ``low``..``high``, the
+    ``target`` and ``meets_target`` (the interval's low end at or above it; None when
+    either is unknown)."""
+
+    value: float | None
+    low: float | None
+    high: float | None
+    samples: int | None
+    target: float | None
+    meets_target: bool | None
+
+    def to_json(self) -> Json:
+        return jsonable(asdict(self))
+
+
+@dataclass(frozen=True)
+class RobustRow:
+    """A row of the robust check: a quantity's value for each design compared."""
+
+    name: str
+    values: tuple[Any, ...]
+
+    def to_json(self) -> Json:
+        return jsonable({"name": self.name, "values": list(self.values)})
+
+
+@dataclass(frozen=True)
+class RobustSummary:
+    """A robust run's final check, the robust optimum beside the best nominally feasible
+    design (``labels``), on the same ``samples`` fresh draws."""
+
+    labels: tuple[str, ...]
+    samples: int | None
+    yield_target: float | None
+    rows: tuple[RobustRow, ...]
+
+    def to_json(self) -> Json:
+        return jsonable({"labels": list(self.labels), "samples": self.samples,
+                         "yield_target": self.yield_target, "rows": list(self.rows)})
+
+
+@dataclass(frozen=True)
+class SummaryRow:
+    """A row of the run summary: ``section`` (objective, variables, metrics), the name
+    (its unit in it) and the optimum's and the reference design's values (None when
+    the reference has none)."""
+
+    section: str
+    name: str
+    optimum: Any
+    reference: Any
+
+    def to_json(self) -> Json:
+        return jsonable(asdict(self))
+
+
+@dataclass(frozen=True)
+class Summary:
+    """The run summary: the best design beside the reference design, row by row."""
+
+    reference_label: str
+    rows: tuple[SummaryRow, ...]
+
+    def to_json(self) -> Json:
+        return jsonable({"reference_label": self.reference_label, "rows": list(self.rows)})
+
+
+@dataclass(frozen=True)
+class RobustDoc:
+    """A robust run's ``[robust]`` settings as run and its stored final check."""
+
+    settings: Mapping[str, Any]
+    check: Mapping[str, Any]
+
+    def to_json(self) -> Json:
+        return jsonable({"settings": dict(self.settings), "check": dict(self.check)})
+
+
+@dataclass(frozen=True)
+class ShowView:
+    """``show``'s view of a run: the verdict of the best design, the expected yield (the
+    archive's stored estimate, or one made at show time), the next step, the config as
+    run, the best design, repeats and the solver's table; the reference design with its
+    own verdict; a multi-objective run's Pareto rows and summary; a robust run's settings,
+    check and yield; a case's findings (under their own names)."""
+
+    verdict: Verdict
+    expected_yield: Mapping[str, Any]
+    next: str
+    case: Mapping[str, Any]
+    solver: Mapping[str, Any]
+    best: BestView
+    repeats: tuple[RepeatRow, ...]
+    table: Sequence[Mapping[str, Any]]
+    reference: ReferenceVerdict | None = None
+    pareto: Sequence[Mapping[str, Any]] | None = None
+    pareto_summary: Mapping[str, Any] | None = None
+    robust: RobustDoc | None = None
+    robust_yield: RobustYield | None = None
+    findings: Mapping[str, Any] = field(default_factory=dict)
+
+    def to_json(self) -> Json:
+        """The ``show --format json`` document (keys in their documented order)."""
+        best = {k: v for k, v in asdict(self.best).items() if k != "repeat"}
+        doc: Json = {"verdict": self.verdict.verdict,
+                     "verdict_sentence": self.verdict.sentence,
+                     "requirements": self.verdict.requirements,
+                     "at_limit": self.verdict.at_limit,
+                     "expected_yield": self.expected_yield, "next": self.next,
+                     "case": self.case, "solver": self.solver, "best": best,
+                     "repeats": list(self.repeats), "table": self.table}
+        if self.reference is not None:
+            doc["reference"] = self.reference
+        if self.pareto is not None:
+            doc["pareto"] = self.pareto
+            doc["pareto_summary"] = self.pareto_summary
+        if self.robust is not None:
+            doc["robust"] = self.robust
+            doc["robust_yield"] = self.robust_yield
+        # a case's findings under their own names, never over the contract's keys
+        doc.update({k: v for k, v in self.findings.items() if k not in doc})
+        return jsonable(doc)
+
+
+@dataclass(frozen=True)
+class Significance:
+    """Two sets of final objectives compared: ``test`` is
+    :func:`camopt.core.stats.compare_objectives`'s document with the practical-equivalence
+    ``threshold`` added; success rates with their intervals, Fisher's p on them, whether
+    these counts can decide at all, and the verdict line."""
+
+    a: str
+    b: str
+    test: Mapping[str, Any]
+    decidable: bool
+    success_a: Mapping[str, float]
+    success_b: Mapping[str, float]
+    success_p_value: float
+    verdict: str
+
+    @property
+    def p_value(self) -> float:
+        return float(self.test["p_value"])
+
+    @property
+    def p_a_better(self) -> float:
+        return float(self.test["p_a_better"])
+
+    @property
+    def effect(self) -> float | None:
+        """The medians' difference B - A in the objective's unit (None when undefined)."""
+        return self.test.get("effect")
+
+    @property
+    def threshold(self) -> float | None:
+        return self.test.get("threshold")
+
+    def to_json(self) -> Json:
+        return jsonable({"a": self.a, "b": self.b, **self.test, "decidable": self.decidable,
+                         "success_a": self.success_a, "success_b": self.success_b,
+                         "success_p_value": self.success_p_value, "verdict": self.verdict})
+
+
+@dataclass(frozen=True)
+class SameObjective:
+    """Runs ``runs`` (indices) reach one ``objective`` with designs that ``differ`` in
+    these variables."""
+
+    runs: tuple[int, int]
+    objective: float
+    differ: tuple[str, ...]
+
+    def to_json(self) -> Json:
+        return jsonable({"runs": list(self.runs), "objective": self.objective,
+                         "differ": list(self.differ)})
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """``compare``'s view of runs: their paths and labels (A, B or run 1..n), each run's
+    verdict, the config keys that differ (one value per run), best objectives,
+    feasibility, variables and metrics side by side (None where a run lacks one), pairs
+    reaching one objective with different designs, repeat statistics, the significance
+    test (two runs with repeats) and, for multi-objective runs, the fronts' hypervolumes."""
+
+    runs: tuple[str, ...]
+    objective_name: str
+    verdicts: tuple[Verdict, ...]
+    config_differences: Mapping[str, list[Any]]
+    objective: tuple[float, ...]
+    feasible: tuple[bool, ...]
+    x: Mapping[str, list[Any]]
+    metrics: Mapping[str, list[Any]]
+    same_objective_different_designs: tuple[SameObjective, ...]
+    statistics: tuple[RunStatistics, ...]
+    labels: tuple[str, ...]
+    tests: tuple[Significance, ...]
+    hypervolume: Mapping[str, Any] | None = None
+
+    def to_json(self) -> Json:
+        """The ``compare --format json`` document."""
+        doc: Json = {
+            "runs": list(self.runs), "objective_name": self.objective_name,
+            "verdict": [v.verdict for v in self.verdicts],
+            "verdict_sentence": [v.sentence for v in self.verdicts],
+            "requirements": [v.requirements for v in self.verdicts],
+            "config_differences": self.config_differences,
+            "objective": list(self.objective), "feasible": list(self.feasible),
+            "x": self.x, "metrics": self.metrics,
+            "same_objective_different_designs": list(self.same_objective_different_designs),
+            "statistics": [s.as_dict() for s in self.statistics],
+            "labels": list(self.labels), "tests": list(self.tests)}
+        if self.hypervolume:
+            doc["hypervolume"] = self.hypervolume
+        return jsonable(doc)
+
+
+@dataclass(frozen=True)
+class RankedPoint:
+    """A sweep's grid point in the ranking: its rank and label, its row of
+    :func:`camopt.core.stats.sweep_summary` (success rate, objective statistics,
+    evaluations to the target) and, below rank 1, its test against the best point."""
+
+    rank: int
+    label: str
+    row: Mapping[str, Any]
+    vs_best: Significance | None = None
+
+    def to_json(self) -> Json:
+        doc: Json = {"rank": self.rank, "label": self.label, **self.row}
+        if self.vs_best is not None:
+            doc["vs_best"] = self.vs_best
+        return jsonable(doc)
+
+
+@dataclass(frozen=True)
+class SweepRanking:
+    """A sweep's view: its verdict (each grid point's success rate against
+    ``run.min_success_rate``), its case file, grid and seed range, and its points
+    ranked by success rate, then median objective."""
+
+    verdict: Verdict
+    sweep: str
+    grid: Any
+    seeds: tuple[int, ...]
+    ranking: tuple[RankedPoint, ...]
+
+    def to_json(self) -> Json:
+        """The document ``show --format json`` and ``compare --format json`` write for a
+        sweep archive."""
+        return jsonable({"verdict": self.verdict.verdict,
+                         "verdict_sentence": self.verdict.sentence,
+                         "requirements": self.verdict.requirements, "sweep": self.sweep,
+                         "grid": self.grid, "seeds": list(self.seeds),
+                         "ranking": list(self.ranking)})

@@ -1,0 +1,85 @@
+"""The typed report views (issue #37): their ``to_json()`` is the JSON ``show``,
+``compare`` and ``export`` wrote when the views were dicts read by string key.
+
+``tests/data/json/`` holds ``show --format json`` of the run and sweep archives in
+``tests/data/archives/`` and ``compare --format json`` of the run against itself, as the
+dict-based ``report.py`` (70ddf76) printed them; the views must give the same bytes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from camopt import archive
+from camopt.archive.sweeps import load_sweep
+from camopt.cli import app
+from camopt.reporting import report
+from camopt.reporting.views import (
+    Comparison,
+    ShowView,
+    SweepRanking,
+    Verdict,
+)
+
+REPO = Path(__file__).resolve().parents[2]
+RUN = "tests/data/archives/run_main_52e31ad.h5"
+SWEEP = "tests/data/archives/sweep_main_52e31ad.h5"
+GOLDEN = REPO / "tests/data/json"
+
+
+def _text(doc: object) -> str:
+    return json.dumps(doc, indent=2) + "\n"
+
+
+@pytest.fixture
+def at_repo(monkeypatch):
+    monkeypatch.chdir(REPO)  # the golden documents name the archives by relative path
+
+
+def test_show_view_to_json_is_the_dict_era_document(at_repo):
+    view = report.show(archive.load_run(RUN))
+    assert isinstance(view, ShowView) and isinstance(view.verdict, Verdict)
+    assert _text(view.to_json()) == (GOLDEN / "run_main_52e31ad.show.json").read_text()
+
+
+def test_sweep_ranking_to_json_is_the_dict_era_document(at_repo):
+    ranking = report.rank_sweep(*load_sweep(Path(SWEEP)))
+    assert isinstance(ranking, SweepRanking)
+    assert _text(ranking.to_json()) == (GOLDEN / "sweep_main_52e31ad.show.json").read_text()
+
+
+def test_comparison_to_json_is_the_dict_era_document(at_repo):
+    run = archive.load_run(RUN)
+    comparison = report.compare([run, run])
+    assert isinstance(comparison, Comparison) and comparison.tests
+    assert (_text(comparison.to_json())
+            == (GOLDEN / "run_main_52e31ad.compare.json").read_text())
+
+
+def test_the_cli_writes_the_views_json(at_repo):
+    """``show`` and ``compare --format json`` print the views' documents unchanged."""
+    runner = CliRunner()
+    for args, name in ((["show", RUN], "run_main_52e31ad.show.json"),
+                       (["show", SWEEP], "sweep_main_52e31ad.show.json"),
+                       (["compare", RUN, RUN], "run_main_52e31ad.compare.json")):
+        r = runner.invoke(app, [*args, "--format", "json"])
+        assert r.exit_code == 0, r.output
+        assert r.stdout == (GOLDEN / name).read_text(), name
+
+
+def test_views_are_frozen_and_keep_raw_values(at_repo):
+    """A view is read by attribute and cannot be changed; it holds inf and NaN (tables
+    print them), which only its JSON turns into null."""
+    view = report.show(archive.load_run(RUN))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        view.next = "x"  # type: ignore[misc]
+    inf_best = dataclasses.replace(view.best, objective=float("inf"))
+    assert dataclasses.replace(view, best=inf_best).to_json()["best"]["objective"] is None
+    summary = report.summary(archive.load_run(RUN))
+    assert summary.rows[0].section == "objective"
+    assert summary.to_json()["rows"][0]["name"] == summary.rows[0].name
