@@ -125,6 +125,10 @@ class VcbConfig(CaseConfig):
     free_contact_force_n: float = Field(
         0.0, description="self-closing force of the interrupters before touch (identified)")
     efficiency: float = Field(0.85, gt=0, le=1, description="mechanical efficiency (Eq 26)")
+    cam_profile_error_mm: float = Field(
+        0.0, ge=-1.0, le=1.0, description="radial error of the cam profile as made, a uniform "
+        "offset along its normal (+: oversize); the follower sits that much further out "
+        "(tolerance analysis; 0: the profile as designed) (camopt option)")
     rod_travel_mm: Stroke = Field(
         18.0, description="rod travel the breaker needs, opened to closed (Sec 3.2)")
     rod_travel_tolerance_mm: Stroke = Field(
