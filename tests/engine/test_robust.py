@@ -311,3 +311,31 @@ def test_a_case_with_two_forwarded_capabilities_is_refused_as_bad_input():
     with pytest.raises(ConfigError, match=r"case\.toml: robust: a case offering repair, "
                        "family together"):
         robust.wrap(Both(), robust.Plan(RobustSection(), (), (), {}), "case.toml")
+
+
+def test_racing_stages():
+    assert robust.stages(32, 8) == [slice(0, 8), slice(8, 16), slice(16, 32)]
+    assert robust.stages(32, 0) == robust.stages(32, 32) == [slice(0, 32)]
+    assert robust.stages(100, 10)[-1] == slice(80, 100)
+
+
+@pytest.mark.parametrize("search_yield", [0.99, 0.75])
+def test_racing_decides_as_every_draw_does(search_yield):
+    """Racing (robust.race) stops a candidate once it has failed more draws than the order
+    statistic allows: every candidate's feasibility is the same as with all draws at once,
+    a candidate that ran every draw gets the same numbers, and fewer draws are evaluated."""
+    common = ("robust.screen=false", "robust.samples=32", f"robust.search_yield={search_yield}",
+              'robust.vary={sud_mm="±1", s0_mm="±0.1", r2_mm="±0.05"}')
+    raced, full = _problem(*common, "robust.race=4"), _problem(*common, "robust.race=0")
+    for p in (raced, full):
+        p.reseed(np.random.SeedSequence(5))
+        p.new_generation()
+    X = _near_optimum(raced, n=12)
+    a, b = raced.evaluate(X), full.evaluate(X)
+    np.testing.assert_array_equal(a.feasible, b.feasible)
+    np.testing.assert_array_equal(a.g[:, -1] <= FEASIBILITY_TOL, b.g[:, -1] <= FEASIBILITY_TOL)
+    ran_all = np.isclose(a.extras["yield"], b.extras["yield"], rtol=0, atol=0)
+    np.testing.assert_array_equal(a.g[a.feasible], b.g[b.feasible])
+    assert (a.g[~a.feasible, -1] > 0).all()
+    assert full.draws_evaluated == 12 * 32 > raced.draws_evaluated
+    assert ran_all.any()
