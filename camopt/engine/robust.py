@@ -36,7 +36,16 @@ best of them by Deb's rules on those draws is the repeat's result
 (:meth:`RobustProblem.select`): there a design is feasible when the lower bound of its
 yield's Clopper-Pearson interval reaches ``yield_target``.
 
-With ``screen`` a candidate whose nominal design breaks a constraint is not sampled: its
+A case with model variants (capability :class:`~camopt.core.capabilities.HasVariants`:
+the VCB's kept model forms) has draw ``j`` judged under variant ``j mod m``
+(:func:`~camopt.core.variation.assign_variants`): the yield is over the tolerances and the
+forms together, and the final check gives it per form too (``per_form``). Racing
+(``race``): a candidate's draws are evaluated in stages (:func:`stages`) and it stops once
+it has failed more draws than the deciding order statistic allows (:func:`race`); the
+search's decisions are unchanged.
+
+With ``screen`` a candidate whose nominal design breaks a constraint (in every variant,
+where the case has them) is not sampled: its
 columns are its nominal constraints, and its yield column its nominal worst constraint
 plus ``SCREENED`` (1e6), so that it ranks behind every sampled candidate while Deb's rules
 still lead the unsampled ones towards nominal feasibility. The best design is checked at the end
