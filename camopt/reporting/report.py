@@ -116,6 +116,10 @@ def robust_summary(run: RunView) -> dict[str, Any] | None:
     objective = designs[0].get("case_objective", run.objective_name)  # older archives
     rows = [{"name": k.replace("objective_", f"{objective} "),
              "values": [d.get(k) for d in designs]} for k in scalars]
+    for i, form in enumerate(designs[0].get("per_form", [])):  # the case's model forms
+        rows.append({"name": f"yield in form {form['form']}",
+                     "values": [d["per_form"][i]["yield"] if d.get("per_form") else None
+                                for d in designs]})
     for c in designs[0]["margins"]:
         pairs = [d["margins"][c] for d in designs]
         if any(max(p["nominal"], p["at_target"]) > NEAR_LIMIT for p in pairs):
