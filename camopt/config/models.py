@@ -242,7 +242,8 @@ class RobustSection(Strict):
                       "doubling), and a candidate stops once it has failed more draws than "
                       "its order statistic allows (it can no longer meet the search's or "
                       "the selection's target on these draws); 0: every draw at once. "
-                      "Speed; the feasible candidates and their values are the same")
+                      "Speed: feasibility is the same, an infeasible candidate's margins "
+                      "come from fewer draws")
     chunk_rows: int | None = Field(None, ge=1, le=10_000_000, description="rows "
                                    "(candidates x samples) per vectorised call (unset: "
                                    "camopt.core.batch's default): memory and speed, never results")

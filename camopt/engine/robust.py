@@ -41,8 +41,9 @@ the VCB's kept model forms) has draw ``j`` judged under variant ``j mod m``
 (:func:`~camopt.core.variation.assign_variants`): the yield is over the tolerances and the
 forms together, and the final check gives it per form too (``per_form``). Racing
 (``race``): a candidate's draws are evaluated in stages (:func:`stages`) and it stops once
-it has failed more draws than the deciding order statistic allows (:func:`race`); the
-search's decisions are unchanged.
+it has failed more draws than the deciding order statistic allows (:func:`race`): no
+candidate's feasibility changes; an infeasible one's columns are estimated from fewer
+draws.
 
 With ``screen`` a candidate whose nominal design breaks a constraint (in every variant,
 where the case has them) is not sampled: its
