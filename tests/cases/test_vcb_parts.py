@@ -102,3 +102,29 @@ def test_each_form_is_judged_under_its_own_sets(problem, X):
     np.testing.assert_allclose(every.extras["closing_velocity_high_m_s"][closes], high[closes])
     assert list(forms[0].extras["band_sets"]) == [3.0] * n  # identified + 2
     assert list(forms[1].extras["band_sets"]) == [7.0] * n  # coulomb's fit + 6
+
+
+def test_robust_vcb_draws_over_its_forms_and_screens_per_form():
+    """The robust VCB problem takes the case's forms as its plan's variants (the engine
+    names no case kind), samples exactly the designs that meet every constraint in some
+    form (tests/engine/test_robust.py shows one feasible in one form only sampled), and its
+    check gives the yield per form on half the draws each."""
+    from camopt.engine import robust
+    from camopt.engine.driver import prepare
+
+    cfg = load(CONFIG, "robust.samples=8", "robust.check_samples=200")
+    rp, _ = prepare(cfg)
+    assert isinstance(rp, robust.RobustProblem)
+    assert rp.plan.variants == ("efficiency_coulomb", "coulomb")
+    assert "case.cam_friction_nm" in [v.name for v in rp.plan.varies]
+    rng = np.random.default_rng(11)
+    X = rp.base.sample(rng, 200)
+    X[:, rp.base.names.index("release_offset_deg")] = np.deg2rad(18.5)
+    each = [rp.base.describe_variants(X, {}, np.full(len(X), v)) for v in (0, 1)]
+    rp.reseed(np.random.SeedSequence(2))
+    rp.new_generation()
+    ev = rp.evaluate(X)
+    sampled = ev.g[:, -1] < robust.SCREENED
+    np.testing.assert_array_equal(sampled, each[0].feasible | each[1].feasible)
+    (checked,) = robust.check(rp, [X[0]], seed=1)
+    assert [f["samples"] for f in checked["per_form"]] == [100, 100]
