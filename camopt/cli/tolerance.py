@@ -176,6 +176,13 @@ def print_tolerance(doc: dict) -> None:
     out.print(f"yield (feasible share): [bold]{doc['yield']:.1%}[/] [{doc['yield_low']:.1%}, "
               f"{doc['yield_high']:.1%}] (95 % interval{cls})"
               f"{'' if doc['nominal_feasible'] else ' (the nominal design is infeasible)'}")
+    if doc.get("per_form"):
+        print_table("yield per model form (each sample judged under one kept form of the "
+                    "case, in turn; the yield above is over both)",
+                    ["form", "samples", "yield", "95 % interval"],
+                    [[r["form"], str(r["samples"]), f"{r['yield']:.1%}",
+                      f"[{r['yield_low']:.1%}, {r['yield_high']:.1%}]"]
+                     for r in doc["per_form"]], numeric=[False, True, True, True])
     if doc["requirements"]:
         rows = [[r["name"], r["limit"], f"{r['yield']:.1%}", report.format_value(
                  r["margin_p5"]) + (f" {r['unit']}" if r["unit"] and r["margin_p5"]

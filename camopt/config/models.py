@@ -238,6 +238,13 @@ class RobustSection(Strict):
                                "draws of that selection and of the final check of the best")
     confidence: float = Field(0.95, gt=0, lt=1, description="level of the final yield's "
                               "Clopper-Pearson interval")
+    race: int = Field(0, ge=0, le=MAX_CHECK_SAMPLES, description="racing: a candidate's "
+                      "draws are evaluated in stages (this many, as many again, then "
+                      "doubling), and a candidate stops once it has failed more draws than "
+                      "its order statistic allows (it can no longer meet the search's or "
+                      "the selection's target on these draws); 0 (default): every draw at once. "
+                      "Speed: feasibility is the same, an infeasible candidate's margins "
+                      "come from fewer draws")
     chunk_rows: int | None = Field(None, ge=1, le=10_000_000, description="rows "
                                    "(candidates x samples) per vectorised call (unset: "
                                    "camopt.core.batch's default): memory and speed, never results")

@@ -69,6 +69,23 @@ def describe(problem: Problem, X: NDArray, fields: Mapping[str, NDArray] | None 
     return _chunked(lambda Xc, _: problem.describe(Xc), X, {}, size, progress)
 
 
+VARIANT = "\0variant"
+"""Key of the variant column among the chunked fields (no case field can be named so)."""
+
+
+def describe_variants(problem: Problem, X: NDArray, fields: Mapping[str, NDArray],
+                      variant: NDArray, size: int | None = None,
+                      progress: RowsDone | None = None) -> Evaluation:
+    """``problem.describe_variants`` (capability
+    :class:`~camopt.core.capabilities.HasVariants`) of designs ``X`` (n, n_var) with
+    ``fields`` and each row's ``variant`` (n,), in chunks: the same Evaluation as one call."""
+    def call(Xc: NDArray, f: Mapping[str, NDArray]) -> Evaluation:
+        return problem.describe_variants(  # type: ignore[attr-defined]
+            Xc, {k: v for k, v in f.items() if k != VARIANT}, f[VARIANT])
+    return _chunked(call, X, {**fields, VARIANT: np.asarray(variant)},
+                    size or chunk_rows(problem), progress)
+
+
 def _chunked(fn: Callable[[NDArray, Mapping[str, NDArray]], Evaluation], X: NDArray,
              fields: Mapping[str, NDArray], size: int,
              progress: RowsDone | None = None) -> Evaluation:

@@ -69,6 +69,26 @@ class VariesCase(Protocol):
 
 
 @runtime_checkable
+class HasVariants(Protocol):
+    """Variants of the case's model that fit its data equally well (the VCB's kept model
+    forms): robust design and ``camopt tolerance`` draw over them as over the tolerances,
+    each draw judged under one variant, and report the yield over both and per variant
+    (docs/tolerance.md, "Model forms in the draws"). A case with a single model offers
+    none (an empty tuple)."""
+
+    def variants(self) -> tuple[str, ...]:
+        """The variants' names, in a fixed order (none: the case has one model)."""
+        ...
+
+    def describe_variants(self, X: NDArray, fields: Mapping[str, NDArray],
+                          variant: NDArray) -> Evaluation:
+        """As ``describe_with(X, fields)`` (``fields`` may be empty), row ``i`` judged
+        under variant ``variant[i]`` ((n,) int, an index into :meth:`variants`; -1: every
+        variant at once, the case's own evaluation)."""
+        ...
+
+
+@runtime_checkable
 class Stochastic(Protocol):
     """An evaluation on random draws renewed every generation (robust design,
     :mod:`camopt.engine.robust`): the candidates of one generation share one set of draws
@@ -108,7 +128,7 @@ class Stochastic(Protocol):
 
 
 CAPABILITIES = {"family": HasFamily, "repair": Repairable, "residuals": HasResiduals,
-                "case_fields": VariesCase}
+                "case_fields": VariesCase, "variants": HasVariants}
 """Capability names as a solver's error messages and ``camopt solvers`` spell them."""
 
 

@@ -215,3 +215,17 @@ def sweep_summary(spec: SweepSpec, results: Iterable[Repeat]) -> list[dict[str, 
         })
         rows.append(row)
     return rows
+
+
+def per_variant(passed: NDArray, variant: NDArray, names: Sequence[str],
+                confidence: float) -> list[dict[str, Any]]:
+    """The yield of the draws of each model variant, with its Clopper-Pearson interval:
+    ``passed`` (S,) bool, ``variant`` (S,) each draw's index into ``names``."""
+    out = []
+    for v, name in enumerate(names):
+        mine = variant == v
+        count = int(mine.sum())
+        rate = success_rate(int(passed[mine].sum()), count, confidence)
+        out.append({"form": name, "samples": count, "yield": rate["rate"],
+                    "yield_low": rate["ci_low"], "yield_high": rate["ci_high"]})
+    return out

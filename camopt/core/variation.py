@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from camopt.config.models import CaseConfig, Plausible
 from camopt.core import batch
-from camopt.core.capabilities import VariesCase
+from camopt.core.capabilities import HasVariants, VariesCase
 from camopt.core.problem import Evaluation, Problem
 from camopt.errors import CamoptError
 
@@ -177,13 +177,29 @@ def draw(rng: np.random.Generator, n: int, nominal: NDArray, half: NDArray,
     return nominal + unit_draws(rng, n, len(nominal), distribution) * half
 
 
+def variants_of(problem: Problem) -> tuple[str, ...]:
+    """The model variants a Problem offers to draw over (capability
+    :class:`~camopt.core.capabilities.HasVariants`; none without it)."""
+    return problem.variants() if isinstance(problem, HasVariants) else ()
+
+
+def assign_variants(n: int, m: int) -> NDArray:
+    """The variant of each of ``n`` draws among ``m`` (n,) int: draw ``j`` takes variant
+    ``j mod m`` (stratified: each variant the same share, the draws being independent and
+    identically distributed whatever their index; -1 for every draw when m = 0)."""
+    return np.arange(n) % m if m else np.full(n, -1)
+
+
 def apply(problem: Problem, X: NDArray, varies: Sequence[Vary], values: NDArray,
           describe: bool = False, size: int | None = None,
-          progress: batch.RowsDone | None = None) -> Evaluation:
+          progress: batch.RowsDone | None = None,
+          variant: NDArray | None = None) -> Evaluation:
     """Designs ``X`` (rows, n_var), SI, with the varied inputs set to ``values`` (rows, k)
     in the inputs' own units (display units for variables), evaluated in row chunks of
     ``size`` (:mod:`camopt.core.batch`; unset: its default): the case's ``describe_with`` when a
-    case field varies, else ``describe`` or ``evaluate``."""
+    case field varies, else ``describe`` or ``evaluate``; with ``variant`` (rows,) the
+    case's ``describe_variants`` (capability :class:`HasVariants`), each row under its
+    variant."""
     X = np.array(X, dtype=float)
     fields = {}
     for j, v in enumerate(varies):
@@ -193,6 +209,9 @@ def apply(problem: Problem, X: NDArray, varies: Sequence[Vary], values: NDArray,
             i = problem.names.index(v.name)
             X[:, i] = values[:, j] / problem.variables[i].scale
     assert not fields or isinstance(problem, VariesCase)
+    if variant is not None and np.any(variant >= 0):
+        assert isinstance(problem, HasVariants)
+        return batch.describe_variants(problem, X, fields, variant, size, progress)
     if fields or describe:
         return batch.describe(problem, X, fields, size, progress)
     return batch.evaluate(problem, X, size, progress)

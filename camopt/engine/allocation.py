@@ -24,7 +24,7 @@ from camopt.cases import get_case
 from camopt.core.problem import FEASIBILITY_TOL
 from camopt.core.runview import RunView
 from camopt.core.stats import success_rate
-from camopt.core.variation import Distribution, Vary
+from camopt.core.variation import Distribution, Vary, assign_variants, variants_of
 from camopt.engine.tolerance import (
     class_varies,
     draw_inputs,
@@ -111,10 +111,13 @@ def allocate(run: RunView, target: float, samples: int, seed: int,
     nominal = nominal_inputs(run, problem, plans[names[0]])
     unit = draw_inputs(seed, samples, np.zeros(len(inputs)), np.ones(len(inputs)),
                        distribution)
+    # each draw judged under one of the case's model variants, as in camopt tolerance
+    variant = assign_variants(samples, len(variants_of(problem)))
 
     def passes(varies: list[Vary]) -> int:
         half = np.array([v.half_width(x) for v, x in zip(varies, nominal)])
-        ev, _ = evaluate_inputs(run, problem, varies, nominal + unit * half, describe=False)
+        ev, _ = evaluate_inputs(run, problem, varies, nominal + unit * half, describe=False,
+                                variant=variant)
         return int(np.count_nonzero((ev.g <= FEASIBILITY_TOL).all(axis=1)))
 
     classes = []

@@ -36,7 +36,17 @@ best of them by Deb's rules on those draws is the repeat's result
 (:meth:`RobustProblem.select`): there a design is feasible when the lower bound of its
 yield's Clopper-Pearson interval reaches ``yield_target``.
 
-With ``screen`` a candidate whose nominal design breaks a constraint is not sampled: its
+A case with model variants (capability :class:`~camopt.core.capabilities.HasVariants`:
+the VCB's kept model forms) has draw ``j`` judged under variant ``j mod m``
+(:func:`~camopt.core.variation.assign_variants`): the yield is over the tolerances and the
+forms together, and the final check gives it per form too (``per_form``). Racing
+(``race``): a candidate's draws are evaluated in stages (:func:`stages`) and it stops once
+it has failed more draws than the deciding order statistic allows (:func:`race`): no
+candidate's feasibility changes; an infeasible one's columns are estimated from fewer
+draws.
+
+With ``screen`` a candidate whose nominal design breaks a constraint (in every variant,
+where the case has them) is not sampled: its
 columns are its nominal constraints, and its yield column its nominal worst constraint
 plus ``SCREENED`` (1e6), so that it ranks behind every sampled candidate while Deb's rules
 still lead the unsampled ones towards nominal feasibility. The best design is checked at the end
@@ -74,12 +84,14 @@ from camopt.core.variation import (
     Vary,
     applicable_defaults,
     apply,
+    assign_variants,
     check_varies,
     mark,
     outside,
     parse_vary,
     physical_range,
     unit_draws,
+    variants_of,
 )
 from camopt.errors import ConfigError
 
@@ -96,13 +108,15 @@ CHECK_KEY = 2**32 - 1  # the final check's key under ROBUST_KEY (never a repeat 
 
 @dataclass(frozen=True)
 class Plan:
-    """What varies and how: the inputs, their physical ranges (input units) and the case
-    fields' nominal values (fields' units)."""
+    """What varies and how: the inputs, their physical ranges (input units), the case
+    fields' nominal values (fields' units) and the case's model variants drawn over
+    (capability :class:`~camopt.core.capabilities.HasVariants`; none: one model)."""
 
     spec: RobustSection
     varies: tuple[Vary, ...]
     ranges: tuple[tuple[float, bool, float], ...]
     field_nominal: dict[str, float]
+    variants: tuple[str, ...] = ()
 
     @property
     def distribution(self) -> Distribution:
@@ -129,7 +143,7 @@ def plan(problem: Problem, case: CaseConfig, spec: RobustSection, tolerances: di
                           "inputs; give robust.vary")
     ranges = tuple(physical_range(problem, type(case), v) for v in varies)
     fields = {v.field: float(getattr(case, v.field)) for v in varies if v.is_case_field}
-    return Plan(spec, tuple(varies), ranges, fields)
+    return Plan(spec, tuple(varies), ranges, fields, variants_of(problem))
 
 
 def _values(problem: Problem, plan: Plan, X: NDArray, unit: NDArray) -> NDArray:
@@ -152,11 +166,13 @@ def _values(problem: Problem, plan: Plan, X: NDArray, unit: NDArray) -> NDArray:
 @dataclass(frozen=True)
 class Sampled:
     """Candidates evaluated at their samples: constraints (n, S, n_constr), objectives
-    (n, S), each sample's worst constraint (n, S; +inf for a non-finite objective)."""
+    (n, S), each sample's worst constraint (n, S; +inf for a non-finite objective) and
+    each draw's model variant (S,; -1: every variant)."""
 
     g: NDArray
     f: NDArray
     worst: NDArray
+    variant: NDArray
 
     @property
     def feasible(self) -> NDArray:
@@ -165,20 +181,98 @@ class Sampled:
 
 
 def sample(problem: Problem, plan: Plan, X: NDArray, unit: NDArray,
-           progress: RowsDone | None = None) -> Sampled:
+           progress: RowsDone | None = None, first: int = 0) -> Sampled:
     """Evaluate designs ``X`` (n, n_var) at draws ``unit`` (S, k): n x S rows in chunks of
     ``plan.spec.chunk_rows`` (:mod:`camopt.core.batch`); draws outside an input's physical
-    range count as failed. ``progress`` is told the rows done after each chunk."""
+    range count as failed. ``progress`` is told the rows done after each chunk. Draw ``j``
+    is judged under the case's model variant ``j mod m`` (:func:`assign_variants`), the
+    same for every candidate; ``unit`` may be draws ``first ..`` of a generation's."""
     n, S = len(X), len(unit)
     values = _values(problem, plan, X, unit)
+    variant = assign_variants(first + S, len(plan.variants))[first:]
     ev = apply(problem, np.repeat(X, S, axis=0), plan.varies, values,
-               size=plan.spec.chunk_rows, progress=progress)
+               size=plan.spec.chunk_rows, progress=progress, variant=np.tile(variant, n))
     ev = mark(ev, outside(values, plan.ranges))
     g = np.where(np.isnan(ev.g), np.inf, ev.g).reshape(n, S, -1)
     f = np.asarray(ev.f, dtype=float).reshape(n, S)
     worst = g.max(axis=2) if g.shape[2] else np.full((n, S), -np.inf)
     worst = np.where(np.isfinite(f), worst, np.inf)
-    return Sampled(g, f, worst)
+    return Sampled(g, f, worst, variant)
+
+
+def _worst(g: NDArray, f: NDArray) -> NDArray:
+    """Each row's worst constraint (n,), +inf for a non-finite objective (-inf without
+    constraints)."""
+    worst = g.max(axis=1) if g.shape[1] else np.full(len(g), -np.inf)
+    return np.where(np.isfinite(f), worst, np.inf)
+
+
+def stages(samples: int, race: int) -> list[slice]:
+    """The draws of each racing stage: ``race``, as many again, then doubling, the last
+    stage cut at ``samples`` (one stage of all when ``race`` is 0 or covers them)."""
+    if race <= 0 or race >= samples:
+        return [slice(0, samples)]
+    out, start, size = [], 0, race
+    while start < samples:
+        out.append(slice(start, min(start + size, samples)))
+        start += size
+        size = race if len(out) == 1 else 2 * size
+    return out
+
+
+@dataclass(frozen=True)
+class Raced:
+    """Candidates (n) raced over a generation's S draws (:func:`race`): the constraints at
+    the deciding order statistic (n, n_constr), each candidate's worst constraint there
+    (n,), its pass share over the draws it was evaluated on (n,), the objective statistic
+    (n,) and the draws evaluated (n,; a prefix of the S)."""
+
+    g: NDArray
+    worst: NDArray
+    estimate: NDArray
+    f: NDArray
+    evaluated: NDArray
+
+
+def race(problem: Problem, plan: Plan, X: NDArray, unit: NDArray, k: int) -> Raced:
+    """Designs ``X`` (n, n_var) on draws ``unit`` (S, k_in), their evaluation decided by
+    the 0-based order statistic ``k`` of each draw's worst constraint: it is <= 0 iff at
+    least k + 1 draws pass, so a candidate that has failed more than S - k - 1 draws
+    cannot meet it whatever its other draws give, and is not evaluated on them
+    (:func:`stages`, ``plan.spec.race``). A stopped candidate's columns are the same
+    quantile's order statistic over the draws it was evaluated on (index
+    ceil((k + 1) e / S) - 1 of e): a positive yield column, as the full S would give
+    (it failed), ranking it among the infeasible by an estimate of the same quantity.
+    A candidate evaluated on every draw gets exactly :func:`sample`'s numbers."""
+    n, S = len(X), len(unit)
+    spec = plan.spec
+    g = np.full((n, S, len(problem.constraint_names)), np.nan)
+    f = np.full((n, S), np.nan)
+    worst = np.full((n, S), np.nan)
+    done = np.zeros(n, dtype=int)
+    alive = np.arange(n)
+    allowed = S - k - 1
+    for rows in stages(S, spec.race):
+        if not alive.size:
+            break
+        s = sample(problem, plan, X[alive], unit[rows], first=rows.start)
+        g[alive, rows], f[alive, rows], worst[alive, rows] = s.g, s.f, s.worst
+        done[alive] = rows.stop
+        failed = (~(worst[alive, :rows.stop] <= FEASIBILITY_TOL)).sum(axis=1)
+        alive = alive[failed <= allowed]
+    n_constr = g.shape[2]
+    g_at, worst_at = np.empty((n, n_constr)), np.empty(n)
+    estimate, f_stat = np.empty(n), np.empty(n)
+    for e in np.unique(done):
+        mine = np.flatnonzero(done == e)
+        j = k if e == S else min(int(math.ceil((k + 1) * e / S - 1e-9)) - 1, e - 1)
+        j = max(j, 0)
+        g_at[mine] = np.partition(g[mine, :e], j, axis=1)[:, j, :]
+        worst_at[mine] = np.partition(worst[mine, :e], j, axis=1)[:, j]
+        estimate[mine] = (worst[mine, :e] <= FEASIBILITY_TOL).mean(axis=1)
+        if spec.objective in ("mean", "quantile"):
+            f_stat[mine] = statistic(f[mine, :e], spec.objective, spec.quantile)
+    return Raced(g_at, worst_at, estimate, f_stat, done)
 
 
 def order_index(target: float, samples: int) -> int:
@@ -227,6 +321,8 @@ class RobustProblem(Problem, Stochastic):
         self.unit: NDArray | None = None
         self.nominal_best: tuple[NDArray, float] | None = None
         """The best design seen whose nominal evaluation is feasible, and its objective."""
+        self.draws_evaluated = 0
+        """Candidate draws evaluated so far (racing's saving is measured against it)."""
         self.finalists: tuple[NDArray, NDArray] = (np.empty((0, self.n_var)), np.empty(0))
         """Designs (m, n_var) that met the target on their generation's draws, lowest
         objective (m,) first: checked again at the end of the repeat (:meth:`select`)."""
@@ -264,22 +360,33 @@ class RobustProblem(Problem, Stochastic):
         nominal = self.base.evaluate(X)
         self._remember(X, nominal)
         nom_g = np.where(np.isnan(nominal.g), np.inf, nominal.g)
-        nom_worst = nom_g.max(axis=1) if nom_g.shape[1] else np.full(len(X), -np.inf)
-        nom_worst = np.where(np.isfinite(nominal.f), nom_worst, np.inf)
+        nom_worst = _worst(nom_g, nominal.f)
+        screened_in = nominal.feasible
+        if spec.screen and self.plan.variants:
+            # draws are judged one variant each: a design that meets every constraint in
+            # some variant has a yield above 0, and is sampled; the others rank by the
+            # variant they come nearest in
+            m, n = len(self.plan.variants), len(X)
+            each = apply(self.base, np.repeat(X, m, axis=0), (), np.empty((n * m, 0)),
+                         size=spec.chunk_rows, variant=np.tile(np.arange(m), n))
+            each_g = np.where(np.isnan(each.g), np.inf, each.g)
+            nom_worst = np.minimum(nom_worst, _worst(each_g, each.f).reshape(n, m).min(axis=1))
+            screened_in = screened_in | each.feasible.reshape(n, m).any(axis=1)
         # an unsampled candidate ranks behind every sampled one: without the offset a
         # nominal design just outside a limit (violation 1e-3) beats a nominally feasible
         # one whose draws fail (violation ~1), and the search never leaves the limit
         g = np.column_stack([nom_g, SCREENED + np.maximum(nom_worst, 0.0)])
         f = np.array(nominal.f, dtype=float)
         estimate = np.full(len(X), np.nan)
-        todo = np.flatnonzero(nominal.feasible) if spec.screen else np.arange(len(X))
+        todo = np.flatnonzero(screened_in) if spec.screen else np.arange(len(X))
         if todo.size:
-            s = sample(self.base, self.plan, X[todo], unit)
-            g[todo, :-1] = np.partition(s.g, k, axis=1)[:, k, :]
-            g[todo, -1] = np.partition(s.worst, k, axis=1)[:, k]
-            estimate[todo] = s.feasible.mean(axis=1)
+            r = race(self.base, self.plan, X[todo], unit, k)
+            g[todo, :-1] = r.g
+            g[todo, -1] = r.worst
+            estimate[todo] = r.estimate
+            self.draws_evaluated += int(r.evaluated.sum())
             if spec.objective in ("mean", "quantile"):
-                f[todo] = statistic(s.f, spec.objective, spec.quantile)
+                f[todo] = r.f
         if spec.objective == "margin":
             f = g[:, -1].copy()
         return Evaluation(f, g, {**nominal.extras, YIELD: estimate})
@@ -443,5 +550,8 @@ def check(problem: RobustProblem, designs: Sequence[NDArray], seed: int,
             "nominal_feasible": bool(nominal.feasible[i]),
             "margins": {c: {"nominal": float(nominal.g[i, j]), "at_target": float(at_target[i, j])}
                         for j, c in enumerate(problem.base.constraint_names)},
+            **({"per_form": stats.per_variant(s.feasible[i], s.variant, problem.plan.variants,
+                                        spec.confidence)} if problem.plan.variants else {}),
         })
     return out
+

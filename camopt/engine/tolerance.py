@@ -28,18 +28,20 @@ from camopt.cases import build_problem, get_case, run_requirements
 from camopt.core.batch import RowsDone
 from camopt.core.problem import FEASIBILITY_TOL, Evaluation, Problem
 from camopt.core.runview import RunView
-from camopt.core.stats import share_interval
+from camopt.core.stats import per_variant, share_interval
 from camopt.core.variation import (  # noqa: F401 - Distribution, parse_vary: the CLI's names
     Distribution,
     Vary,
     applicable_defaults,
     apply,
+    assign_variants,
     check_varies,
     draw,
     mark,
     outside,
     parse_vary,
     physical_range,
+    variants_of,
 )
 from camopt.engine.driver import validate
 from camopt.errors import CamoptError
@@ -71,6 +73,10 @@ class Tolerance:
     """The analysed run (its case's requirements give the yield per requirement)."""
     tolerance_class: str | None = None
     """The case's tolerance class the inputs were drawn from (None: ``--vary`` given)."""
+    variants: tuple[str, ...] = ()
+    """The case's model variants the samples were drawn over (none: one model)."""
+    variant: NDArray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    """(n,) each sample's variant, an index into ``variants`` (empty without variants)."""
 
     def metric_columns(self, ev: Evaluation) -> dict[str, NDArray]:
         """The objective and every metric of an evaluation, (rows,) each. The objective is
@@ -120,7 +126,9 @@ def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
             progress: RowsDone | None = None) -> Tolerance:
     """Draw ``samples`` sets of the varied inputs from ``SeedSequence(seed)`` and evaluate
     them, the nominal design and the one-at-a-time ends together (row chunks; ``progress``
-    is told the rows done, of 1 + 2 k + samples, after each)."""
+    is told the rows done, of 1 + 2 k + samples, after each). Where the case offers model
+    variants (its kept model forms) sample ``j`` is judged under variant ``j mod m``;
+    the nominal row and the ends under every variant at once (the case's own verdict)."""
     if not varies:
         raise CamoptError(f"{run.path}: --vary: give at least one input to vary")
     if samples < 2:
@@ -134,12 +142,16 @@ def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
     ends[np.arange(0, 2 * k, 2), np.arange(k)] -= half
     ends[np.arange(1, 2 * k, 2), np.arange(k)] += half
     values = np.vstack([nominal, ends, drawn])
-    ev, bad = evaluate_inputs(run, problem, varies, values, describe=True, progress=progress)
+    variants = variants_of(problem)
+    variant = assign_variants(samples, len(variants))
+    ev, bad = evaluate_inputs(run, problem, varies, values, describe=True, progress=progress,
+                              variant=np.r_[np.full(1 + 2 * k, -1), variant])
     result = Tolerance(run.path, list(varies), distribution, seed, nominal, drawn,
                        ev.take(0), ev.take(slice(1, 1 + 2 * k)),
                        ev.take(slice(1 + 2 * k, None)), problem.objective_name,
                        problem.constraint_names, outside=bad[1 + 2 * k:], run=run,
-                       tolerance_class=tolerance_class)
+                       tolerance_class=tolerance_class, variants=variants,
+                       variant=variant if variants else np.zeros(0, dtype=int))
     result.summary = summarise(result)
     return result
 
@@ -153,13 +165,15 @@ def draw_inputs(seed: int, samples: int, nominal: NDArray, half: NDArray,
 
 
 def evaluate_inputs(run: RunView, problem: Problem, varies: Sequence[Vary], values: NDArray,
-              describe: bool, progress: RowsDone | None = None) -> tuple[Evaluation, NDArray]:
+              describe: bool, progress: RowsDone | None = None,
+              variant: NDArray | None = None) -> tuple[Evaluation, NDArray]:
     """The run's best design with its varied inputs set to ``values`` (rows, k), rows
     whose inputs leave their physical range counted as failed (docs/tolerance.md), and
-    those rows (rows,) bool. ``progress`` is told the rows done after each chunk."""
+    those rows (rows,) bool. ``progress`` is told the rows done after each chunk;
+    ``variant`` (rows,) each row's model variant (-1 or None: every variant)."""
     x0 = problem.from_display(run.best.x)
     ev = apply(problem, np.tile(x0, (len(values), 1)), varies, values, describe=describe,
-               progress=progress)
+               progress=progress, variant=variant)
     ranges = [physical_range(problem, get_case(run.kind).config, v) for v in varies]
     bad = outside(values, ranges)
     return mark(ev, bad), bad
@@ -199,6 +213,8 @@ def summarise(t: Tolerance) -> dict[str, Any]:
                  for v, x in zip(t.varies, t.nominal_inputs)],
         "yield": float(np.mean(t.samples.feasible)),
         **_interval(int(np.count_nonzero(t.samples.feasible)), len(t.inputs)),
+        "forms": list(t.variants),
+        "per_form": per_variant(t.samples.feasible, t.variant, t.variants, YIELD_CONFIDENCE),
         "tolerance_class": t.tolerance_class,
         "nominal_feasible": bool(t.nominal.feasible[0]),
         "nominal": nominal, "metrics": metrics, "sensitivity": sensitivity,

@@ -112,6 +112,10 @@ def robust_summary(run: RunView) -> RobustSummary | None:
     objective = designs[0].get("case_objective", run.objective_name)  # older archives
     rows = [RobustRow(k.replace("objective_", f"{objective} "),
                       tuple(d.get(k) for d in designs)) for k in scalars]
+    for i, form in enumerate(designs[0].get("per_form", [])):  # the case's model forms
+        rows.append(RobustRow(f"yield in form {form['form']}",
+                              tuple(d["per_form"][i]["yield"] if d.get("per_form") else None
+                                    for d in designs)))
     for c in designs[0]["margins"]:
         pairs = [d["margins"][c] for d in designs]
         if any(max(p["nominal"], p["at_target"]) > NEAR_LIMIT for p in pairs):

@@ -313,3 +313,86 @@ def test_a_case_with_two_forwarded_capabilities_is_refused_as_bad_input():
     with pytest.raises(ConfigError, match=r"case\.toml: robust: a case offering repair, "
                        "family together"):
         robust.wrap(Both(), robust.Plan(RobustSection(), (), (), {}), "case.toml")
+
+
+def test_racing_stages():
+    assert robust.stages(32, 8) == [slice(0, 8), slice(8, 16), slice(16, 32)]
+    assert robust.stages(32, 0) == robust.stages(32, 32) == [slice(0, 32)]
+    assert robust.stages(100, 10)[-1] == slice(80, 100)
+
+
+@pytest.mark.parametrize("search_yield", [0.99, 0.75])
+def test_racing_decides_as_every_draw_does(search_yield):
+    """Racing (robust.race) stops a candidate once it has failed more draws than the order
+    statistic allows: every candidate's feasibility is the same as with all draws at once,
+    a candidate that ran every draw gets the same numbers, and fewer draws are evaluated."""
+    common = ("robust.screen=false", "robust.samples=32", f"robust.search_yield={search_yield}",
+              'robust.vary={sud_mm="±1", s0_mm="±0.1", r2_mm="±0.05"}')
+    raced, full = _problem(*common, "robust.race=4"), _problem(*common, "robust.race=0")
+    for p in (raced, full):
+        p.reseed(np.random.SeedSequence(5))
+        p.new_generation()
+    X = _near_optimum(raced, n=12)
+    a, b = raced.evaluate(X), full.evaluate(X)
+    np.testing.assert_array_equal(a.feasible, b.feasible)
+    np.testing.assert_array_equal(a.g[:, -1] <= FEASIBILITY_TOL, b.g[:, -1] <= FEASIBILITY_TOL)
+    ran_all = np.isclose(a.extras["yield"], b.extras["yield"], rtol=0, atol=0)
+    np.testing.assert_array_equal(a.g[a.feasible], b.g[b.feasible])
+    assert (a.g[~a.feasible, -1] > 0).all()
+    assert full.draws_evaluated == 12 * 32 > raced.draws_evaluated
+    assert ran_all.any()
+
+
+class _TwoForms:
+    """A one-variable case with two model variants of known yield: the part x (drawn
+    ±20 % around the design) must stay below 1.0 in variant "a" and below 0.8 in "b";
+    every variant at once (-1) asks both (0.8)."""
+
+    @staticmethod
+    def build():
+        from camopt.core.capabilities import HasVariants
+        from camopt.core.problem import Evaluation, Problem, Variable
+
+        class TwoForms(Problem, HasVariants):
+            variables = (Variable("x", 0.1, 2.0),)
+            constraint_names = ("c",)
+
+            def evaluate(self, X):
+                return self.describe_variants(X, {}, np.full(len(X), -1))
+
+            def variants(self):
+                return ("a", "b")
+
+            def describe_variants(self, X, fields, variant):
+                limit = np.where(np.asarray(variant) == 0, 1.0, 0.8)
+                return Evaluation(X[:, 0].copy(), (X[:, 0] / limit - 1)[:, None])
+
+        return TwoForms()
+
+
+def test_draws_over_model_variants_give_the_yield_over_both_and_per_form():
+    """Draw j is judged in variant j mod 2: x = 0.9 ± 20 % passes variant a with
+    probability (1 - 0.72) / 0.36 = 7/9 and b with 2/9, so the yield over both is 1/2; the
+    check reports each form's with its interval. The nominal design fails variant b (so
+    the case's own verdict), but meets a: the screen samples it."""
+    from camopt.core.variation import Vary
+
+    base = _TwoForms.build()
+    spec = RobustSection(samples=32, check_samples=4000, search_yield=0.5)
+    plan = robust.Plan(spec, (Vary("x", 20.0, True),), ((0.0, True, math.inf),), {},
+                       robust.variants_of(base))
+    assert plan.variants == ("a", "b")
+    problem = robust.RobustProblem(base, plan)
+    problem.reseed(np.random.SeedSequence(8))
+    problem.new_generation()
+    ev = problem.evaluate(np.array([[0.9]]))
+    assert ev.g[0, -1] < robust.SCREENED  # sampled although nominally infeasible
+    assert ev.extras["yield"][0] == pytest.approx(0.5, abs=0.2)
+    (checked,) = robust.check(problem, [np.array([0.9])], seed=1)
+    forms = checked["per_form"]
+    assert [f["form"] for f in forms] == ["a", "b"] and [f["samples"] for f in forms] == [
+        2000, 2000]
+    for f, true in zip(forms, (7 / 9, 2 / 9)):
+        assert f["yield_low"] <= true <= f["yield_high"]
+    assert checked["yield"] == pytest.approx(np.mean([f["yield"] for f in forms]))
+    assert checked["yield_low"] <= 0.5 <= checked["yield_high"]

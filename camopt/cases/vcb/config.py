@@ -76,7 +76,7 @@ VCB_ROLES: dict[str, FieldRole] = {
         kc1_n_per_mm kc2_n_per_mm kc1_precompression_mm kc2_precompression_mm
         opening_k_n_per_mm opening_stretch_closed_mm wipe_k_n_per_mm wipe_count
         wipe_compression_closed_mm contact_gap_mm cam_modulus_gpa poisson
-        contact_length_mm shear_yield_mpa cam_design tolerance_class"""),
+        contact_length_mm shear_yield_mpa cam_design tolerance_class cam_profile_error_mm"""),
     **_roles("identified", """rod_arm_offset_deg opening_arm_ratio free_contact_force_n
         alpha efficiency cam_inertia_kg_m2 follower_inertia_kg_m2 rod_mass_kg
         contacts_mass_kg release_offset_deg cam_friction_nm dynamics_band"""),
@@ -183,6 +183,10 @@ class VcbMechanism(CaseConfig):
     free_contact_force_n: float = Field(
         0.0, description="self-closing force of the interrupters before touch (identified)")
     efficiency: float = Field(0.85, gt=0, le=1, description="mechanical efficiency (Eq 26)")
+    cam_profile_error_mm: float = Field(
+        0.0, ge=-1.0, le=1.0, description="radial error of the cam profile as made, a uniform "
+        "offset along its normal (+: oversize); the follower sits that much further out "
+        "(tolerance analysis; 0: the profile as designed) (camopt option)")
     rod_travel_mm: Stroke = Field(
         18.0, description="rod travel the breaker needs, opened to closed (Sec 3.2)")
     rod_travel_tolerance_mm: Stroke = Field(

@@ -284,33 +284,41 @@ def first_zero(x: NDArray, energy: NDArray, slope: NDArray) -> NDArray:
     return root
 
 
-def release_torque_ratio(model: VcbModel, kc: NDArray, p: ParameterColumns) -> NDArray:
+def release_torque_ratio(model: VcbModel, kc: NDArray, p: ParameterColumns,
+                         pre: NDArray | None = None) -> NDArray:
     """eps T_s / T_f at the release crank angle, (n,): the springs' torque on the cam at
     rest there, eps of it driving (Eq 26), against the friction torque of the free
     rotation. The cam starts iff this exceeds 1 (Coulomb friction holds it up to T_f; a
     torque ratio of exactly 1 does not start it). inf where there is no friction there
     (and the springs turn it), 0 where the springs hold it back (crank at or before its
-    dead centre)."""
+    dead centre). ``pre`` (n, 2) m: each row's spring compressions (else the config's)."""
     start = model.dead_centre + p.release_offset_rad[:, 0] - model.contact_crank_angle
     ext, rate = model.closing_spring_geometry(start)
-    torque = _row_torque(model, kc, ext, rate)
+    torque = _row_torque(model, kc, ext, rate, pre)
     driving = p.efficiency[:, 0] * np.maximum(torque, 0.0)
     friction = p.release_friction_nm[:, 0]
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(friction > 0, driving / friction, np.where(driving > 0, np.inf, 0.0))
 
 
-def _row_torque(model: VcbModel, kc: NDArray, ext: NDArray, rate: NDArray) -> NDArray:
+def _row_torque(model: VcbModel, kc: NDArray, ext: NDArray, rate: NDArray,
+                pre: NDArray | None = None) -> NDArray:
     """Closing springs' torque (N m) with one spring geometry per row: ``ext``, ``rate``
-    (n,) or (n, m) for ``kc`` (n, 2)."""
+    (n,) or (n, m) for ``kc`` (n, 2); ``pre`` (n, 2) m each row's compressions."""
     c = model.c
-    k1, k2 = (kc[:, i].reshape((-1,) + (1,) * (np.ndim(ext) - 1)) for i in range(2))
-    return (k1 * (c.kc1_precompression_mm * MM - ext)
-            + k2 * (c.kc2_precompression_mm * MM - ext)) * rate
+    shape = (-1,) + (1,) * (np.ndim(ext) - 1)
+    k1, k2 = (kc[:, i].reshape(shape) for i in range(2))
+    p1: NDArray | float
+    p2: NDArray | float
+    if pre is None:
+        p1, p2 = c.kc1_precompression_mm * MM, c.kc2_precompression_mm * MM
+    else:
+        p1, p2 = (pre[:, i].reshape(shape) for i in range(2))
+    return (k1 * (p1 - ext) + k2 * (p2 - ext)) * rate
 
 
-def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps: int = 64
-                  ) -> tuple[NDArray, NDArray]:
+def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps: int = 64,
+                  pre: NDArray | None = None) -> tuple[NDArray, NDArray]:
     """Cam speed (rad/s) and time (s) when the freely turning cam meets the roller, (n,):
     from rest, the crank ``release_offset`` past its dead centre, to the crank angle
     QOX + theta0 (theta_c = 0), under eps of the closing springs' work and the free
@@ -321,7 +329,8 @@ def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps:
     contact); the time, on ``steps`` intervals graded toward the release, is within 4e-5
     of 12,800 intervals at the vendor's latch (14.07 deg) and 1e-5 at 18.8 deg: 64 rather
     than more, because with the latch a design variable every sampled part has its own
-    path and this geometry is a third of a band's cost."""
+    path and this geometry is a third of a band's cost. ``pre`` (n, 2) m: each row's
+    spring compressions in the opened state (else the config's)."""
     p = params.columns(len(kc), model.c.efficiency)
     # cam angle theta_c of the release: negative, measured back from the roller contact
     start = model.dead_centre + p.release_offset_rad - model.contact_crank_angle
@@ -331,20 +340,23 @@ def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps:
     offsets, which = np.unique(start[:, 0], return_inverse=True)
     theta = offsets[:, None] * (1 - u * u)  # graded toward the release, at rest there
     extension, rate = model.closing_spring_geometry(theta)
-    pre = np.array([model.c.kc1_precompression_mm, model.c.kc2_precompression_mm])[:, None,
-                                                                                     None] * MM
-    per_rate = 0.5 * (pre - extension) ** 2  # (2, offsets, m): stored energy per N/m
-    released = per_rate[:, :, :1] - per_rate  # energy given up per N/m
-    torque_per_rate = (pre - extension) * rate
-    work = kc[:, :1] * released[0][which] + kc[:, 1:2] * released[1][which]
-    torque = kc[:, :1] * torque_per_rate[0][which] + kc[:, 1:2] * torque_per_rate[1][which]
+    # per N/m of a spring compressed p in the opened state: the energy given up from the
+    # release, 1/2 ((p - e0)^2 - (p - e)^2) = p (e - e0) - 1/2 (e^2 - e0^2), and the
+    # torque (p - e) rate: linear in p, so a compression per row costs no geometry
+    moved = extension - extension[:, :1]
+    squares = 0.5 * (extension * extension - extension[:, :1] ** 2)
+    p1, p2 = model.precompressions(pre)
+    work = (kc[:, :1] * (p1 * moved[which] - squares[which])
+            + kc[:, 1:2] * (p2 * moved[which] - squares[which]))
+    torque = (kc[:, :1] * (p1 - extension[which]) + kc[:, 1:2] * (p2 - extension[which])
+              ) * rate[which]
     eps, friction = p.efficiency, p.release_friction_nm
     kinetic = eps * work - friction * (theta[which] - start)
     with np.errstate(invalid="ignore", divide="ignore"):
         omega = np.sqrt(np.maximum(2 * kinetic / p.cam_kg_m2, 0.0))
     time = _cumulative_time(-2 * start * u, omega, 1.0 / steps)[:, -1]
     starts = (p.release_offset_rad[:, 0] > 0) & (start[:, 0] < 0) & (
-        release_torque_ratio(model, kc, p) > 1)
+        release_torque_ratio(model, kc, p, pre) > 1)
     stops = np.isfinite(first_zero(theta[which], kinetic, eps * torque - friction))
     stuck = ~starts | stops
     return np.where(stuck, 0.0, omega[:, -1]), np.where(stuck, np.inf, time)
@@ -398,22 +410,23 @@ class ClosingState:
 
 def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
                   rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
-                  steps: int, sets: int = 1) -> ClosingState:
+                  steps: int, sets: int = 1, pre: NDArray | None = None) -> ClosingState:
     """The closing of n designs (follower law ``A`` (n, d + 1), spring rates ``kc``
     (n, 2) N/m, linkage ``link`` (n, 5)) from the release of the closing springs, by the
     work-energy equation on ``steps`` graded intervals of the cam angle, for ``sets``
     parameter sets per design (``params`` holds that many for every design,
     :meth:`MotionParameters.repeat`, set-major; the rows are sets x designs). The
     kinematics and the resisting springs' work, which do not depend on the parameters,
-    are computed once per design."""
+    are computed once per design. ``pre`` (n, 2) m: each design's closing-spring
+    compressions in the opened state (else the config's)."""
     n = len(A) * sets
     p = params.columns(n, model.c.efficiency)
     end = model.theta_c[-1]
     theta, dtheta_du = graded_grid(end, steps)
     kin = model.kinematics(A, link, rod_offset, theta)
     extension, rate = model.closing_spring_geometry(theta)
-    spring = model.closing_energy(kc, extension)
-    springs_torque = model.closing_torque(kc, (extension, rate))
+    spring = model.closing_energy(kc, extension, pre)
+    springs_torque = model.closing_torque(kc, (extension, rate), pre)
     dphi, s1, ds1 = kin.dphi, kin.s1, kin.ds1
     resisting = loads.resistant_energy(s1)
     resisting_torque = loads.resistant_force(s1) * ds1  # Fr ds1/dtheta
@@ -421,10 +434,12 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
         dphi, s1, ds1, spring, springs_torque, resisting, resisting_torque, kc = (
             np.tile(a, (sets, 1)) for a in (dphi, s1, ds1, spring, springs_torque, resisting,
                                             resisting_torque, kc))
+        loads = loads.tiled(sets)
+        pre = None if pre is None else np.tile(pre, (sets, 1))
     eps, friction = p.efficiency, p.friction_nm
     follower = p.follower_kg_m2 * dphi * dphi  # J_f phi'^2
     # 1. free rotation, then the plastic impact of the cam on the roller at rest
-    omega_free, t_free = free_rotation(model, kc, params)
+    omega_free, t_free = free_rotation(model, kc, params, pre=pre)
     moving = p.rod_kg + p.contacts_kg
     j_before = p.cam_kg_m2 + follower + moving * ds1 * ds1
     omega0 = np.ravel(p.cam_kg_m2 * omega_free[:, None] / j_before[:, :1])
@@ -488,7 +503,7 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     reached = touched & ~(stall_theta <= theta_touch)
     return ClosingState(
         theta=theta, dtheta_du=dtheta_du, du=du, gap=gap, s1=s1, ds1=ds1, drive=drive, p=p,
-        t_free=t_free, release_ratio=release_torque_ratio(model, kc, p),
+        t_free=t_free, release_ratio=release_torque_ratio(model, kc, p, pre),
         omega_before=omega_before, omega_after=omega_after, kinetic=kinetic, after=after,
         k=k, touched=reached, v_touch=v_touch, loss=loss, t_before=t_before,
         t_touch=t_touch, t_k=t_touch + first_cell, cells=cells, stall_theta=stall_theta,
@@ -544,19 +559,20 @@ def curves_of(s: ClosingState) -> ClosingMotion:
 
 def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
                    rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
-                   steps: int) -> ClosingMotion:
+                   steps: int, pre: NDArray | None = None) -> ClosingMotion:
     """Closing of n designs from the release of the closing springs: the events and the
     curves (:func:`closing_state`, :func:`curves_of`)."""
-    return curves_of(closing_state(model, A, kc, link, rod_offset, loads, params, steps))
+    return curves_of(closing_state(model, A, kc, link, rod_offset, loads, params, steps,
+                                   pre=pre))
 
 
 def closing_events(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
                    rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
-                   steps: int, sets: int = 1) -> ClosingEvents:
+                   steps: int, sets: int = 1, pre: NDArray | None = None) -> ClosingEvents:
     """The events of :func:`closing_motion` alone for ``sets`` parameter sets per design
     (:func:`closing_state`, :func:`events_of`): sets x n rows."""
     return events_of(closing_state(model, A, kc, link, rod_offset, loads, params, steps,
-                                   sets))
+                                   sets, pre))
 
 
 def _path(model: VcbModel, link: NDArray, rod_offset: NDArray | float, start: NDArray,

@@ -200,3 +200,19 @@ def get_form(name: str) -> ModelForm:
             return f
     raise ConfigError("case", "model_form", f"unknown form {name!r}; known: "
                       f"{', '.join(FORM_NAMES)}")
+
+
+def form_of(row: NDArray) -> str:
+    """The model form a parameter set of ``dynamics_band`` belongs to, read from its
+    eight values (:data:`~camopt.cases.vcb.config.BandRow`): no friction torque is
+    ``fitted_efficiency``; friction in the driven closing alone (none in the free rotation)
+    one of the ``driven`` forms, else one with friction everywhere; an efficiency of 1 a
+    form without efficiency (``coulomb``, ``driven_coulomb``), any other the case's
+    (``efficiency_*``: the identification fits those with the case's eps)."""
+    friction, release_friction, efficiency = float(row[5]), float(row[6]), float(row[7])
+    if friction == 0.0:
+        return "fitted_efficiency"
+    driven = release_friction == 0.0
+    if efficiency == 1.0:
+        return "driven_coulomb" if driven else "coulomb"
+    return "efficiency_driven_coulomb" if driven else "efficiency_coulomb"

@@ -16,7 +16,7 @@ Every array is (population, cam position); nothing loops over individuals.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -101,16 +101,27 @@ class Contact:
 
 @dataclass(frozen=True)
 class Loads:
-    """Load model at the rod: resisting springs, free-contact force, efficiency (SI)."""
+    """Load model at the rod: resisting springs, free-contact force, efficiency (SI). The
+    springs' rates may be (n, 1) columns, one per design (springs made to a tolerance),
+    the efficiency (n,) (Eq 26's surplus)."""
 
-    opening_k: float
+    opening_k: NDArray | float
     opening_arm: NDArray | float
     opening_stretch_open: NDArray | float  # opening-spring stretch in the opened state
-    wipe_k: float  # all contact springs together
+    wipe_k: NDArray | float  # all contact springs together
     wipe_preload: NDArray | float  # contact-spring compression at touch
     gap: float
     free_contact: NDArray | float
-    efficiency: float
+    efficiency: NDArray | float
+
+    def tiled(self, sets: int) -> Loads:
+        """The loads of n designs for ``sets`` parameter sets per design (sets x n rows,
+        set-major, as :meth:`~camopt.cases.vcb.dynamics.MotionParameters.repeat`): the
+        per-design columns repeated; shared values unchanged."""
+        def tile(v: NDArray | float) -> NDArray | float:
+            return np.tile(v, (sets,) + (1,) * (np.ndim(v) - 1)) if np.ndim(v) else v
+        return replace(self, **{f.name: tile(getattr(self, f.name))  # type: ignore[arg-type]
+                                for f in fields(self)})
 
     def resistant_force(self, s1: NDArray) -> NDArray:
         """General resistant force Fr (Eq 24) at rod travel s1 (N)."""
@@ -261,26 +272,43 @@ class VcbModel:
         th4 = self.theta_bo - np.arctan2(kin.sin4, kin.cos4)
         return np.arctan2(np.sin(th4), np.cos(th4))
 
-    def closing_energy(self, kc: NDArray, extension: NDArray) -> NDArray:
+    def closing_energy(self, kc: NDArray, extension: NDArray, pre: NDArray | None = None
+                       ) -> NDArray:
         """Elastic energy of both closing springs (J), (n, m), at spring ``extension`` (m,)
-        from the opened state; kc (n, 2) N/m; compressions from Table 2."""
+        from the opened state; kc (n, 2) N/m; compressions in the opened state from Table 2,
+        or ``pre`` (n, 2) m, one pair per design (springs made to a free-length tolerance)."""
         c = self.c
+        if pre is not None:
+            return self.closing_energy_rows(kc, np.atleast_2d(extension), pre)
         left = np.stack([(c.kc1_precompression_mm * MM - extension) ** 2,
                          (c.kc2_precompression_mm * MM - extension) ** 2])
         return 0.5 * (kc @ left.reshape(2, -1)).reshape((len(kc), *np.shape(extension)))
 
-    def closing_energy_rows(self, kc: NDArray, extension: NDArray) -> NDArray:
-        """As :meth:`closing_energy` with one grid per design: ``extension`` (n, m)."""
-        c = self.c
-        return 0.5 * (kc[:, :1] * (c.kc1_precompression_mm * MM - extension) ** 2
-                      + kc[:, 1:2] * (c.kc2_precompression_mm * MM - extension) ** 2)
+    def closing_energy_rows(self, kc: NDArray, extension: NDArray, pre: NDArray | None = None
+                            ) -> NDArray:
+        """As :meth:`closing_energy` with one grid per design: ``extension`` (n, m) (or
+        (1, m) shared), ``pre`` (n, 2) m or the config's compressions."""
+        p1, p2 = self.precompressions(pre)
+        return 0.5 * (kc[:, :1] * (p1 - extension) ** 2 + kc[:, 1:2] * (p2 - extension) ** 2)
 
-    def closing_torque(self, kc: NDArray, geometry: tuple[NDArray, NDArray] | None = None
-                       ) -> NDArray:
+    def precompressions(self, pre: NDArray | None) -> tuple[NDArray | float, NDArray | float]:
+        """The closing springs' compressions in the opened state (m): the config's, or
+        the columns (n, 1) of ``pre`` (n, 2)."""
+        c = self.c
+        if pre is None:
+            return c.kc1_precompression_mm * MM, c.kc2_precompression_mm * MM
+        return pre[:, :1], pre[:, 1:2]
+
+    def closing_torque(self, kc: NDArray, geometry: tuple[NDArray, NDArray] | None = None,
+                       pre: NDArray | None = None) -> NDArray:
         """Torque of both closing springs on the cam, (n, m) N m; kc (n, 2) N/m; on the
-        case's grid or at the (extension, rate) of :meth:`closing_spring_geometry`."""
+        case's grid or at the (extension, rate) of :meth:`closing_spring_geometry`;
+        ``pre`` (n, 2) m: each design's compressions (else the config's)."""
         c = self.c
         ext, rate = (self.spring_ext, self.spring_rate) if geometry is None else geometry
+        if pre is not None:
+            p1, p2 = self.precompressions(pre)
+            return (kc[:, :1] * (p1 - ext) + kc[:, 1:2] * (p2 - ext)) * rate
         per_rate = np.stack([(c.kc1_precompression_mm * MM - ext),
                              (c.kc2_precompression_mm * MM - ext)]) * rate
         return kc @ per_rate
@@ -299,14 +327,17 @@ class VcbModel:
             - (rod_travel_vendor - c.contact_gap_mm * MM),
             gap=c.contact_gap_mm * MM, free_contact=free_contact, efficiency=c.efficiency)
 
-    def driving_work(self, kc: NDArray) -> NDArray:
+    def driving_work(self, kc: NDArray, pre: NDArray | None = None) -> NDArray:
         """Work of the closing springs over the stroke theta_c = 0 .. 140 deg (J), (n,):
         their elastic energy at the start less that at the end (Eq 23's first integral,
-        exactly: the springs are conservative)."""
-        return kc @ self.unit_work
+        exactly: the springs are conservative); ``pre`` as :meth:`closing_energy`."""
+        if pre is None:
+            return kc @ self.unit_work
+        ends = self.closing_energy(kc, self.spring_ext[[0, -1]], pre)
+        return ends[:, 0] - ends[:, 1]
 
-    def balance(self, kin: Kinematics, kc: NDArray, torque: NDArray, loads: Loads
-                ) -> ForceBalance:
+    def balance(self, kin: Kinematics, kc: NDArray, torque: NDArray, loads: Loads,
+                pre: NDArray | None = None) -> ForceBalance:
         """Fo, Fr along the stroke at positions i = 1..Ns and the works of Eqs 23-26 (J).
 
         The works are potential differences between the opened and closed states, so
@@ -314,7 +345,7 @@ class VcbModel:
         interval that contains the contacts' touch with the contact springs' 2.5 kN
         step and converges only as 1/Ns).
         """
-        driving = self.driving_work(kc)
+        driving = self.driving_work(kc, pre)
         # an (n, 1) column: loads may hold one value per design (identification)
         resistant = loads.resistant_energy(kin.s1[:, -1:])[:, 0]
         return ForceBalance(torque=torque[:, 1:], s1=kin.s1[:, 1:], ds1=kin.ds1[:, 1:],

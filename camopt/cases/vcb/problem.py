@@ -4,7 +4,7 @@ or step 2 (four-bar), Kang, Huang & Yang (2023), Eqs 37-43."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,14 +18,16 @@ from camopt.cases.vcb.dynamics import (
     closing_events,
     closing_motion,
 )
+from camopt.cases.vcb.forms import form_of
 from camopt.cases.vcb.model import (
+    Loads,
     VcbModel,
     follower_dwell,
     phi_max,
     rate_zeros,
     row_max,
 )
-from camopt.core.capabilities import VariesCase
+from camopt.core.capabilities import HasVariants, VariesCase
 from camopt.core.problem import Evaluation, ObjectiveFloor, Problem, Variable
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, hertz
@@ -33,9 +35,58 @@ from camopt.units import DEG, MM, MPA, N_PER_MM, TO_MS, TO_N_PER_MM
 
 LINK_FIELDS = ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
 """The linkage fields of ``[case]`` in the order of a linkage row (``designs``)."""
+PART_FIELDS = ("kc1_precompression_mm", "kc2_precompression_mm", "opening_k_n_per_mm",
+               "wipe_k_n_per_mm", "cam_friction_nm", "efficiency", "cam_profile_error_mm")
+"""The parts' fields of ``[case]`` a design can take per row in either step: the closing
+springs' compressions in the opened state (their free lengths as made), the opening and
+contact springs' rates, the friction and efficiency, the cam profile's radial error."""
 
 
-class VcbProblem(Problem, VariesCase):
+@dataclass(frozen=True)
+class Parts:
+    """Each design's parts as made, one row per design (SI); None: the config's value.
+    ``link`` (n, 5); ``pre`` the closing springs' compressions (n, 2) m; ``opening_k``,
+    ``wipe_k`` the opening spring's and all contact springs' rates (n, 1) N/m;
+    ``friction_scale`` (n,) every friction torque of every parameter set times this;
+    ``efficiency_shift`` (n,) added to every efficiency below 1 (the forms with Eq 26's
+    eps; a form without one keeps 1); ``profile_rad`` (n,) the follower's angle offset
+    from the cam profile's radial error."""
+
+    link: NDArray | None = None
+    pre: NDArray | None = None
+    opening_k: NDArray | None = None
+    wipe_k: NDArray | None = None
+    friction_scale: NDArray | None = None
+    efficiency_shift: NDArray | None = None
+    profile_rad: NDArray | None = None
+
+    def take(self, rows: NDArray) -> Parts:
+        """The parts of the designs ``rows`` (bool or index array)."""
+        return Parts(*(None if v is None else v[rows] for v in
+                       (self.link, self.pre, self.opening_k, self.wipe_k, self.friction_scale,
+                        self.efficiency_shift, self.profile_rad)))
+
+
+@dataclass(frozen=True)
+class FormSets:
+    """The parameter sets a closing is judged under: the ``nominal`` set (its values and
+    metrics are the design's ``closing_*``) and the ``members`` of the band beside it
+    (``count`` sets, set-major arrays; None when there are none). Release offsets are the
+    sets' own (rad); a design's latch moves every one with it."""
+
+    name: str
+    nominal: MotionParameters
+    members: MotionParameters | None
+    count: int
+
+
+def _sets(rows: NDArray) -> MotionParameters:
+    """Eight-value band rows (k, 8) as k parameter sets (SI)."""
+    return MotionParameters(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4] * DEG,
+                            rows[:, 5], rows[:, 6], rows[:, 7])
+
+
+class VcbProblem(Problem, VariesCase, HasVariants):
     """Step 1 (cam + springs) or step 2 (four-bar) of the VCB design; minimise Eq 39."""
 
     def __init__(self, config: VcbConfig) -> None:
@@ -90,11 +141,45 @@ class VcbProblem(Problem, VariesCase):
         # case's efficiency
         band = np.array([tuple(r) + ((r[5], c.efficiency) if len(r) == 6 else ())
                          for r in c.dynamics_band], dtype=float).reshape(-1, 8)
-        self.band = MotionParameters(band[:, 0], band[:, 1], band[:, 2], band[:, 3],
-                                     band[:, 4] * DEG, band[:, 5], band[:, 6],
-                                     band[:, 7]) if len(band) else None
+        self.band = _sets(band) if len(band) else None
+        self.forms = self._forms(band)
         self.search_dynamics = (c.closing_velocity_m_s is not None or c.require_latch
                                 or c.forbid_lift_off)
+
+    def _forms(self, band: NDArray) -> tuple[FormSets, ...]:
+        """The sets of every model form in the band (the identified parameters' form
+        first): each form's closing is judged under its own fit (the identified set for
+        that form, else the form's first row: the identification lists each form's fit
+        first) and its other sets. A single form gives one entry, the full band."""
+        c = self.config
+        identified = np.array([[c.cam_inertia_kg_m2, c.follower_inertia_kg_m2, c.rod_mass_kg,
+                                c.contacts_mass_kg, c.release_offset_deg, c.cam_friction_nm,
+                                c.cam_friction_nm, c.efficiency]])
+        names = [form_of(identified[0])] + [form_of(r) for r in band]
+        order = list(dict.fromkeys(names))
+        if len(order) == 1:
+            return (FormSets(order[0], self.dynamics, self.band, len(band)),)
+        out = []
+        for name in order:
+            rows = band[[i for i, f in enumerate(names[1:]) if f == name]]
+            if name == names[0]:
+                nominal, members = self.dynamics, rows
+            else:
+                nominal = replace(_sets(rows[:1]), **{
+                    f: float(np.ravel(getattr(_sets(rows[:1]), f))[0]) for f in
+                    ("cam_kg_m2", "follower_kg_m2", "rod_kg", "contacts_kg",
+                     "release_offset_rad", "friction_nm")})
+                nominal = replace(nominal, release_friction_nm=float(rows[0, 6]),
+                                  efficiency=float(rows[0, 7]))
+                members = rows[1:]
+            out.append(FormSets(name, nominal, _sets(members) if len(members) else None,
+                                len(members)))
+        return tuple(out)
+
+    def variants(self) -> tuple[str, ...]:
+        """The kept model forms the band holds (docs/tolerance.md, "Model forms in the
+        draws"): a design drawn in form ``i`` is judged under that form's sets alone."""
+        return tuple(f.name for f in self.forms) if len(self.forms) > 1 else ()
 
     def _cam(self, d: CamDesign) -> tuple[NDArray, NDArray]:
         a0 = self.model.phi0() if d.a0 is None else d.a0
@@ -147,32 +232,151 @@ class VcbProblem(Problem, VariesCase):
 
     def case_fields(self) -> tuple[str, ...]:
         """Step 1: the linkage fields (the four-bar is fixed there, so its made lengths
-        may vary per design); step 2 varies the linkage as design variables."""
-        return LINK_FIELDS if self.config.step == "cam" else ()
+        may vary per design); step 2 varies the linkage as design variables. Both: the
+        parts (:data:`PART_FIELDS`)."""
+        return (LINK_FIELDS if self.config.step == "cam" else ()) + PART_FIELDS
 
     def describe_with(self, X: NDArray, fields: Mapping[str, NDArray]) -> Evaluation:
-        """As :meth:`describe`, with the named linkage fields (mm, deg) per row: the
-        linkage array the kinematics already takes per design (the loads stay those of
-        the config's linkage: they describe the breaker, not the parts made)."""
+        """As :meth:`describe`, with the named fields (mm, deg, N/mm, N m) per row: the
+        linkage array the kinematics already takes per design, and the parts
+        (:class:`Parts`); the loads' preloads stay those of the config's linkage (they
+        describe the breaker, not the parts made)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
+        return self._evaluate(X, detail=True, parts=self.parts(len(X), fields))
+
+    def describe_variants(self, X: NDArray, fields: Mapping[str, NDArray], variant: NDArray
+                          ) -> Evaluation:
+        """As :meth:`describe_with`, each row judged under the sets of its model form
+        ``variants()[variant[i]]`` alone (-1: every form, the case's own evaluation)."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        parts = self.parts(len(X), fields)
+        variant = np.asarray(variant, dtype=int)
+        order, pieces = [], []
+        for v in np.unique(variant):
+            rows = np.flatnonzero(variant == v)
+            order.append(rows)
+            pieces.append(self._evaluate(X[rows], detail=True, parts=parts.take(rows),
+                                         form=None if v < 0 else int(v)))
+        if len(pieces) == 1:
+            return pieces[0]
+        return Evaluation.concat(pieces).take(np.argsort(np.concatenate(order), kind="stable"))
+
+    def parts(self, n: int, fields: Mapping[str, NDArray]) -> Parts:
+        """The :class:`Parts` of n rows from per-row case fields (their units)."""
         unknown = sorted(set(fields) - set(self.case_fields()))
         if unknown:
             raise ConfigError("case", unknown[0], "cannot vary per design; fields that can: "
                               f"{', '.join(self.case_fields()) or 'none'}")
-        link = np.tile(self.model.vendor_link, (len(X), 1))
-        for i, name in enumerate(LINK_FIELDS):
-            if name in fields:
-                link[:, i] = np.asarray(fields[name], dtype=float) * (
-                    DEG if name.endswith("_deg") else MM)
-        return self._evaluate(X, detail=True, link=link)
+        c = self.config
 
-    def motion(self, X: NDArray, link: NDArray | None = None) -> ClosingMotion:
+        def col(name: str) -> NDArray:
+            return np.broadcast_to(np.asarray(fields[name], dtype=float), (n,))
+        link = None
+        if any(f in fields for f in LINK_FIELDS):
+            link = np.tile(self.model.vendor_link, (n, 1))
+            for i, name in enumerate(LINK_FIELDS):
+                if name in fields:
+                    link[:, i] = col(name) * (DEG if name.endswith("_deg") else MM)
+        pre = None
+        if "kc1_precompression_mm" in fields or "kc2_precompression_mm" in fields:
+            pre = np.column_stack([
+                col(f) if f in fields else np.full(n, float(getattr(c, f)))
+                for f in ("kc1_precompression_mm", "kc2_precompression_mm")]) * MM
+        profile = None
+        if "cam_profile_error_mm" in fields:
+            profile = self._profile_offset(col("cam_profile_error_mm"))
+        return Parts(
+            link=link, pre=pre,
+            opening_k=col("opening_k_n_per_mm")[:, None] * 1e3
+            if "opening_k_n_per_mm" in fields else None,
+            wipe_k=c.wipe_count * col("wipe_k_n_per_mm")[:, None] * 1e3
+            if "wipe_k_n_per_mm" in fields else None,
+            friction_scale=col("cam_friction_nm") / c.cam_friction_nm
+            if "cam_friction_nm" in fields and c.cam_friction_nm > 0 else None,
+            efficiency_shift=col("efficiency") - c.efficiency if "efficiency" in fields
+            else None,
+            profile_rad=profile)
+
+    def loads(self, parts: Parts | None) -> Loads:
+        """The resisting loads, with the parts' spring rates and efficiency per row."""
+        if parts is None or (parts.opening_k is None and parts.wipe_k is None
+                             and parts.efficiency_shift is None):
+            return self.load
+        eff = (self.load.efficiency if parts.efficiency_shift is None
+               else self.config.efficiency + parts.efficiency_shift)
+        return replace(self.load,
+                       opening_k=self.load.opening_k if parts.opening_k is None
+                       else parts.opening_k,
+                       wipe_k=self.load.wipe_k if parts.wipe_k is None else parts.wipe_k,
+                       efficiency=eff)
+
+    def _as_made(self, sets: MotionParameters, k: int, n: int, moved: NDArray,
+                 parts: Parts | None) -> MotionParameters:
+        """``k`` parameter sets for n designs (k n rows, set-major): each design's latch
+        ``moved`` (n,) from the identified one moves every set's, and its parts scale the
+        friction and shift the efficiency."""
+        rows = sets.repeat(n)
+        out = replace(rows, release_offset_rad=np.asarray(rows.release_offset_rad)
+                      + np.tile(moved, k))
+        if parts is None:
+            return out
+        if parts.friction_scale is not None:
+            scale = np.tile(parts.friction_scale, k)
+            out = replace(out, friction_nm=np.asarray(out.friction_nm) * scale,
+                          release_friction_nm=None if out.release_friction_nm is None
+                          else np.asarray(out.release_friction_nm) * scale)
+        if parts.efficiency_shift is not None:
+            shift = np.tile(parts.efficiency_shift, k)
+            eff = (np.full(k * n, self.config.efficiency) if out.efficiency is None
+                   else np.asarray(out.efficiency, dtype=float))
+            out = replace(out, efficiency=np.where(eff < 1.0, eff + shift, eff))
+        return out
+
+    def motion(self, X: NDArray, link: NDArray | None = None, parts: Parts | None = None,
+               form: int | None = None) -> ClosingMotion:
         """Closing dynamics of each row of ``X`` with the identified parameters
-        (:mod:`camopt.cases.vcb.dynamics`)."""
+        (:mod:`camopt.cases.vcb.dynamics`), or model form ``form``'s fit, with each
+        row's ``parts`` as made."""
+        link = link if parts is None or parts.link is None else parts.link
         A, kc, link = self.designs(X, link)
-        params = replace(self.dynamics, release_offset_rad=self.release_offset(X))
-        return closing_motion(self.model, A, kc, link, self.rod_offset, self.load,
-                              params, self.config.dynamics_steps)
+        A = self._profiled(A, parts)
+        if parts is None and form is None:
+            params = replace(self.dynamics, release_offset_rad=self.release_offset(X))
+            return closing_motion(self.model, A, kc, link, self.rod_offset, self.load,
+                                  params, self.config.dynamics_steps)
+        sets = self.forms[form or 0].nominal
+        params = self._as_made(sets, 1, len(A), self._moved(X, len(A)), parts)
+        return closing_motion(self.model, A, kc, link, self.rod_offset, self.loads(parts),
+                              params, self.config.dynamics_steps,
+                              pre=None if parts is None else parts.pre)
+
+    def _moved(self, X: NDArray, n: int) -> NDArray:
+        """How far each design's latch lies from the identified one (rad), (n,)."""
+        return np.broadcast_to(self.release_offset(X) - self.config.release_offset_deg * DEG,
+                               (n,))
+
+    def _profile_offset(self, error_mm: NDArray | float) -> NDArray:
+        """The follower's angle offset (rad) from a cam profile made ``error_mm`` oversize
+        (a uniform offset along its normal): the roller sits that much further from O, so
+        the follower angle at the base circle moves by the change of Eq 10's base angle,
+        and (first order, docs/assumptions.md) by the same along the stroke."""
+        m = self.model
+        rp = m.rb + m.rf + self.config.node_clearance_mm * MM
+        return np.asarray(cam.base_angle(m.l2, m.l6, rp + np.asarray(error_mm) * MM)
+                          - cam.base_angle(m.l2, m.l6, rp), dtype=float)
+
+    def _profiled(self, A: NDArray, parts: Parts | None) -> NDArray:
+        """The follower law's coefficients with the cam profile's error (the row's, else
+        the config's ``cam_profile_error_mm``) in a0."""
+        if parts is not None and parts.profile_rad is not None:
+            offset: NDArray | float = parts.profile_rad
+        elif self.config.cam_profile_error_mm:
+            offset = float(self._profile_offset(self.config.cam_profile_error_mm))
+        else:
+            return A
+        A = A.copy()
+        A[:, 0] += offset
+        return A
 
     def release_offset(self, X: NDArray) -> NDArray | float:
         """Where the closing latch holds the charged spring crank, past its dead centre,
@@ -183,41 +387,48 @@ class VcbProblem(Problem, VariesCase):
             return self.case_release
         return np.atleast_2d(np.asarray(X, dtype=float))[:, self.release_column]
 
-    def motion_band(self, X: NDArray, nominal: ClosingMotion, link: NDArray | None = None
-                    ) -> MotionBand:
-        """The closing of each row under every parameter set of ``dynamics_band`` and the
-        identified one (``nominal``, already computed): the extremes per design. One
-        vectorised call over (sets x designs) rows."""
-        if self.band is None:
+    def motion_band(self, X: NDArray, nominal: ClosingMotion, link: NDArray | None = None,
+                    parts: Parts | None = None, form: int | None = None) -> MotionBand:
+        """The closing of each row under every parameter set of ``dynamics_band`` (or of
+        model form ``form``'s) and the nominal one (``nominal``, already computed): the
+        extremes per design. One vectorised call over (sets x designs) rows."""
+        members, k = ((self.band, len(np.ravel(self.band.cam_kg_m2))) if self.band is not None
+                      else (None, 0)) if form is None else (
+            self.forms[form].members, self.forms[form].count)
+        if members is None:
             return MotionBand.of(nominal)
+        link = link if parts is None or parts.link is None else parts.link
         A, kc, link = self.designs(X, link)
-        k, n = len(np.ravel(self.band.cam_kg_m2)), len(A)
-        sets = self.band.repeat(n)
+        A = self._profiled(A, parts)
+        n = len(A)
         # a design's latch moved from the identified offset moves every set's with it: the
         # sets keep their spread (what the ADAMS data leave open) about the design's
-        moved = np.broadcast_to(self.release_offset(X) - self.config.release_offset_deg * DEG,
-                                (n,))
-        sets = replace(sets, release_offset_rad=np.asarray(sets.release_offset_rad)
-                       + np.tile(moved, k))
-        members = closing_events(self.model, A, kc, link, self.rod_offset, self.load,
-                                 sets, self.config.dynamics_steps, sets=k)
-        return MotionBand.of(nominal, members, k)
+        sets = self._as_made(members, k, n, self._moved(X, n), parts)
+        events = closing_events(self.model, A, kc, link, self.rod_offset, self.loads(parts),
+                                sets, self.config.dynamics_steps, sets=k,
+                                pre=None if parts is None else parts.pre)
+        return MotionBand.of(nominal, events, k)
 
-    def _evaluate(self, X: NDArray, detail: bool, link: NDArray | None = None) -> Evaluation:
+    def _evaluate(self, X: NDArray, detail: bool, parts: Parts | None = None,
+                  form: int | None = None) -> Evaluation:
         c, m = self.config, self.model
-        A, kc, link = self.designs(X, link)
+        A, kc, link = self.designs(X, None if parts is None else parts.link)
+        A = self._profiled(A, parts)
+        pre = None if parts is None else parts.pre
         kin = m.kinematics(A, link, self.rod_offset)
-        torque = m.closing_torque(kc)
-        bal = m.balance(kin, kc, torque, self.load)
+        torque = m.closing_torque(kc, pre=pre)
+        bal = m.balance(kin, kc, torque, self.loads(parts), pre)
         end = m.theta_c[-1]
         zeros = rate_zeros(A, end)  # where phi' = 0: dwell, and phi_max's candidates
         sigma_max = m.peak_stress(A, kin.follower, torque, zeros)
-        motion = self.motion(X, link) if (detail or self.search_dynamics) else None
+        motion = (self.motion(X, parts=parts, form=form) if (detail or self.search_dynamics)
+                  else None)
         q = Terms(config=c, model=m, kin=kin, bal=bal, link=link,
                   phi_top=phi_max(A, end, zeros) / DEG,  # exact, not the sampled maximum
                   tau_max=hertz.max_shear_stress(sigma_max),  # Eq 31
                   motion=motion,
-                  band=self.motion_band(X, motion, link) if motion is not None else None)
+                  band=self.motion_band(X, motion, parts=parts, form=form)
+                  if motion is not None else None)
         G = np.column_stack([con.g(q) for con in self.constraints])
         G = np.where(np.isnan(G), np.inf, G)
         violation = np.clip(G, 0, None).sum(axis=1)

@@ -1,0 +1,130 @@
+"""The VCB's parts as made, per row (issue #33): the closing springs' free lengths, the
+opening and contact springs, friction and efficiency, the cam profile; and its kept model
+forms as variants (capability HasVariants) that robust design and tolerance draw over."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from camopt.cases import build_problem
+from camopt.core.capabilities import HasVariants, VariesCase
+from tests.conftest import CONFIGS
+from tests.helpers import load
+
+CONFIG = CONFIGS / "vcb_velocity_robust.toml"
+
+
+@pytest.fixture(scope="module")
+def problem():
+    return build_problem(load(CONFIG).case)
+
+
+@pytest.fixture(scope="module")
+def X(problem):
+    """Four designs near the shipped robust search's region (release offset 18.5 deg)."""
+    rng = np.random.default_rng(7)
+    X = problem.sample(rng, 4)
+    X[:, problem.names.index("release_offset_deg")] = np.deg2rad(18.5)
+    return X
+
+
+def _close(a, b):
+    np.testing.assert_allclose(np.nan_to_num(a.g, posinf=1e300),
+                               np.nan_to_num(b.g, posinf=1e300), rtol=1e-10, atol=1e-12)
+    for k, v in b.extras.items():
+        np.testing.assert_allclose(a.extras[k], v, rtol=1e-10, atol=1e-12, err_msg=k)
+
+
+def test_the_parts_are_case_fields_and_the_forms_variants(problem):
+    assert isinstance(problem, VariesCase) and isinstance(problem, HasVariants)
+    assert {"kc1_precompression_mm", "kc2_precompression_mm", "opening_k_n_per_mm",
+            "wipe_k_n_per_mm", "cam_friction_nm", "efficiency",
+            "cam_profile_error_mm"} <= set(problem.case_fields())
+    # configs/vcb.toml's band: 2 sets of the shipped form, 7 of Coulomb-only friction
+    assert problem.variants() == ("efficiency_coulomb", "coulomb")
+    assert [f.count for f in problem.forms] == [2, 6]  # coulomb's fit is its nominal
+
+
+def test_nominal_parts_change_nothing(problem, X):
+    c = problem.config
+    fields = {f: np.full(len(X), float(getattr(c, f))) for f in problem.case_fields()}
+    _close(problem.describe_with(X, fields), problem.describe(X))
+    # every variant at once (-1) is the case's own evaluation
+    _close(problem.describe_variants(X, fields, np.full(len(X), -1)), problem.describe(X))
+
+
+@pytest.mark.parametrize("field, value", [
+    ("kc1_precompression_mm", 141.5), ("kc2_precompression_mm", 98.5),
+    ("opening_k_n_per_mm", 18.26), ("wipe_k_n_per_mm", 74.16),
+    ("cam_profile_error_mm", 0.03)])
+def test_a_part_per_row_is_a_config_with_that_value(problem, X, field, value):
+    """Row by row the same as a case file with the part's value: the springs' energy,
+    torque and loads take one value per design."""
+    made = build_problem(load(CONFIG, f"case.{field}={value}").case)
+    ev = problem.describe_with(X, {field: np.full(len(X), value)})
+    _close(ev, made.describe(X))
+
+
+def test_friction_and_efficiency_per_row(problem, X):
+    """Friction 25 % high takes latch energy in every form; the efficiency moves only the
+    forms that have one (Coulomb-only sets keep eps = 1)."""
+    n = len(X)
+    base = problem.describe_variants(X, {}, np.ones(n, dtype=int))
+    c = problem.config
+    high = problem.describe_with(X, {"cam_friction_nm": np.full(n, 1.25 * c.cam_friction_nm)})
+    nominal = problem.describe(X)
+    ok = nominal.extras["latched"] == 1
+    assert (high.extras["latch_kinetic_energy_low_j"][ok]
+            < nominal.extras["latch_kinetic_energy_low_j"][ok]).all()
+    eff = {"efficiency": np.full(n, c.efficiency - 0.03)}
+    coulomb = problem.describe_variants(X, eff, np.ones(n, dtype=int))
+    for k in ("latch_kinetic_energy_low_j", "closing_velocity_low_m_s"):
+        np.testing.assert_array_equal(coulomb.extras[k], base.extras[k])
+    shipped = problem.describe_variants(X, eff, np.zeros(n, dtype=int))
+    plain = problem.describe_variants(X, {}, np.zeros(n, dtype=int))
+    assert (shipped.extras["surplus_work_j"] < plain.extras["surplus_work_j"]).all()
+
+
+def test_each_form_is_judged_under_its_own_sets(problem, X):
+    """A row in form f gets f's band alone: the band over every form is the extremes of
+    the forms' bands, row by row (the identified set belongs to the shipped form)."""
+    n = len(X)
+    every = problem.describe(X)
+    forms = [problem.describe_variants(X, {}, np.full(n, v)) for v in range(2)]
+    mixed = problem.describe_variants(X, {}, np.array([0, 1, 0, 1]))
+    for i in range(n):
+        _close(mixed.take(i), forms[i % 2].take(i))
+    low = np.minimum(*(f.extras["closing_velocity_low_m_s"] for f in forms))
+    high = np.maximum(*(f.extras["closing_velocity_high_m_s"] for f in forms))
+    closes = np.isfinite(every.extras["closing_velocity_low_m_s"])
+    np.testing.assert_allclose(every.extras["closing_velocity_low_m_s"][closes], low[closes])
+    np.testing.assert_allclose(every.extras["closing_velocity_high_m_s"][closes], high[closes])
+    assert list(forms[0].extras["band_sets"]) == [3.0] * n  # identified + 2
+    assert list(forms[1].extras["band_sets"]) == [7.0] * n  # coulomb's fit + 6
+
+
+def test_robust_vcb_draws_over_its_forms_and_screens_per_form():
+    """The robust VCB problem takes the case's forms as its plan's variants (the engine
+    names no case kind), samples exactly the designs that meet every constraint in some
+    form (tests/engine/test_robust.py shows one feasible in one form only sampled), and its
+    check gives the yield per form on half the draws each."""
+    from camopt.engine import robust
+    from camopt.engine.driver import prepare
+
+    cfg = load(CONFIG, "robust.samples=8", "robust.check_samples=200")
+    rp, _ = prepare(cfg)
+    assert isinstance(rp, robust.RobustProblem)
+    assert rp.plan.variants == ("efficiency_coulomb", "coulomb")
+    assert "case.cam_friction_nm" in [v.name for v in rp.plan.varies]
+    rng = np.random.default_rng(11)
+    X = rp.base.sample(rng, 200)
+    X[:, rp.base.names.index("release_offset_deg")] = np.deg2rad(18.5)
+    each = [rp.base.describe_variants(X, {}, np.full(len(X), v)) for v in (0, 1)]
+    rp.reseed(np.random.SeedSequence(2))
+    rp.new_generation()
+    ev = rp.evaluate(X)
+    sampled = ev.g[:, -1] < robust.SCREENED
+    np.testing.assert_array_equal(sampled, each[0].feasible | each[1].feasible)
+    (checked,) = robust.check(rp, [X[0]], seed=1)
+    assert [f["samples"] for f in checked["per_form"]] == [100, 100]
