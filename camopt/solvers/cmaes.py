@@ -116,6 +116,8 @@ class CMAESOptions(SolverOptions):
     x0: dict[str, float] | None = Field(
         None, description="start (display units); default the case's design, else the centre")
     tolx: float = Field(1e-12, gt=0, description="stop when every step is below (normalised)")
+    evaluations: int | None = Field(None, ge=1, description="evaluation budget over every "
+                                    "restart (None: generations alone)")
     restarts: int = Field(0, ge=0, le=20, description="IPOP: restarts from random starts "
                           "with a growing population after convergence or stagnation")
     population_growth: float = Field(2.0, ge=1.0, le=10.0, description="IPOP: population "
@@ -195,6 +197,8 @@ class CMAES(Solver):
 
     def stop_reason(self) -> StopReason | None:
         if self.nit >= self.options.generations:
+            return StopReason.BUDGET
+        if self.options.evaluations is not None and self.nfev >= self.options.evaluations:
             return StopReason.BUDGET
         if self.nit == 0:
             return None

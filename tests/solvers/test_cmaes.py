@@ -90,3 +90,9 @@ def test_no_restarts_is_the_single_run():
     """restarts = 0 (the default) keeps the one run's stop rule: converged on tolx only."""
     solver, lams = _run(CMAESOptions(generations=60), 1)
     assert set(lams) == {7} and solver.nit == 60 and solver.stop_reason() == StopReason.BUDGET
+
+
+def test_the_evaluation_budget_spans_the_restarts():
+    solver, lams = _run(CMAESOptions(restarts=5, tolfun=1e-6, evaluations=700), 2)
+    assert solver.stop_reason() == StopReason.BUDGET and 700 <= solver.nfev < 700 + lams[-1]
+    assert solver.restart >= 1
