@@ -49,7 +49,7 @@ OBJECTIVES: dict[str, tuple[str, list[str]]] = {
     "emb": ("emb.toml", ["solver.iterations=100", "solver.polish.evaluations=3000"]),
     "fast_switch_de": ("fast_switch_de.toml", ["solver.generations=200"]),
     "vcb_velocity_robust": ("vcb_velocity_robust.toml", [
-        "solver.population=20", "solver.generations=15", "robust.samples=8",
+        "solver.population=20", "solver.generations=40", "robust.samples=8",
         "robust.check_samples=200"]),
 }
 SEEDS = 5
