@@ -13,6 +13,14 @@ and it draws from numpy's global generator unless told otherwise; this core draw
 the run's Generator and costs ~0.1 ms per generation.
 
 The same core is the ``cmaes`` stage of ``[solver.polish]`` (:mod:`camopt.solvers.polish`).
+
+IPOP (Auger & Hansen 2005, "A restart CMA evolution strategy with increasing population
+size"): with ``restarts`` > 0 the solver starts again, from a uniform random point of the
+unit box drawn from the run's Generator and with the population multiplied by
+``population_growth``, when a run converges (every step below ``tolx``) or stagnates (its
+generation-best by Deb's rules changes by at most ``tolfun`` relative, in violation and in
+objective, over the last 10 + ceil(30 n / lambda) generations, Hansen's TolFun window).
+The best so far is kept over every restart.
 """
 
 from __future__ import annotations
@@ -108,6 +116,15 @@ class CMAESOptions(SolverOptions):
     x0: dict[str, float] | None = Field(
         None, description="start (display units); default the case's design, else the centre")
     tolx: float = Field(1e-12, gt=0, description="stop when every step is below (normalised)")
+    evaluations: int | None = Field(None, ge=1, description="evaluation budget over every "
+                                    "restart (None: generations alone)")
+    restarts: int = Field(0, ge=0, le=20, description="IPOP: restarts from random starts "
+                          "with a growing population after convergence or stagnation")
+    population_growth: float = Field(2.0, ge=1.0, le=10.0, description="IPOP: population "
+                                     "factor per restart")
+    tolfun: float = Field(1e-9, ge=0, description="IPOP: a run stagnates when its "
+                          "generation-best changes by at most this (relative) over "
+                          "10 + 30 n / lambda generations")
 
 
 @register_solver
@@ -134,6 +151,8 @@ class CMAES(Solver):
         self.core = CMACore(np.clip(problem.to_unit(x0), 0, 1), options.sigma, rng,
                             options.population)
         self._best = BestSoFar()
+        self.restart = 0
+        self._history: list[tuple[float, float]] = []  # (violation, f) of each generation's best
 
     def max_iterations(self) -> int:
         return self.options.generations
@@ -147,6 +166,31 @@ class CMAES(Solver):
         order = deb_order(ev.f, ev.violation)
         self.core.tell(self.problem.to_unit(X), order)
         self._best.offer(X, ev)
+        self._history.append((float(ev.violation[order[0]]), float(ev.f[order[0]])))
+        if self.restart < self.options.restarts and self._run_ended():
+            self._start_again()
+
+    def _run_ended(self) -> bool:
+        """Whether the current run converged (every step below ``tolx``) or stagnated
+        (Hansen's TolFun over the window 10 + ceil(30 n / lambda) generations)."""
+        if self.core.step_size() < self.options.tolx:
+            return True
+        window = 10 + int(np.ceil(30 * self.core.n / self.core.lam))
+        if len(self._history) < window:
+            return False
+        recent = np.array(self._history[-window:])
+        with np.errstate(invalid="ignore"):
+            spread = np.ptp(recent, axis=0)
+            scale = np.maximum(1.0, np.abs(recent).min(axis=0))
+        return bool(np.all(spread <= self.options.tolfun * scale))
+
+    def _start_again(self) -> None:
+        """IPOP: a new run from a uniform random start, population times the growth."""
+        self.restart += 1
+        lam = min(int(np.ceil(self.core.lam * self.options.population_growth)),
+                  MAX_POPULATION)
+        self.core = CMACore(self.rng.random(self.core.n), self.options.sigma, self.rng, lam)
+        self._history = []
 
     def best(self) -> tuple[NDArray, Evaluation]:
         return self._best.get()
@@ -154,6 +198,17 @@ class CMAES(Solver):
     def stop_reason(self) -> StopReason | None:
         if self.nit >= self.options.generations:
             return StopReason.BUDGET
-        if self.nit > 0 and self.core.step_size() < self.options.tolx:
+        if self.options.evaluations is not None and self.nfev >= self.options.evaluations:
+            return StopReason.BUDGET
+        if self.nit == 0:
+            return None
+        if not self.options.restarts:  # one run: it ends when it has converged
+            return StopReason.CONVERGED if self.core.step_size() < self.options.tolx else None
+        if self.restart >= self.options.restarts and self._run_ended():
             return StopReason.CONVERGED
         return None
+
+    def notes(self) -> list[str]:
+        if not self.options.restarts:
+            return []
+        return [f"IPOP: {self.restart} restart(s), last population {self.core.lam}"]

@@ -15,7 +15,7 @@ from camopt.cases import build_problem
 from camopt.cli import app
 from camopt.core.plotting import readable
 from camopt.engine.driver import validate
-from camopt.engine.tolerance import Distribution, analyse, parse_vary
+from camopt.engine.tolerance import Distribution, analyse, average_ranks, parse_vary
 from camopt.reporting.tolerance_figures import figures
 from tests.conftest import CONFIGS
 
@@ -335,3 +335,14 @@ def test_progress_bar_on_a_terminal_only(vcb_run, monkeypatch):
     assert "tolerance samples" in bar and "605/605" in bar  # nominal + 2 x 2 ends + 600
     assert nothing == ""
     assert json.loads(shown) == json.loads(quiet)
+
+
+def test_average_ranks_are_scipy_rankdata():
+    """The ranks Spearman's rho reads (no scipy.stats import at show time) equal
+    scipy.stats.rankdata's average ranks exactly, ties included."""
+    from scipy.stats import rankdata
+
+    rng = np.random.default_rng(0)
+    for a in (rng.random(1000), rng.integers(0, 10, 1000).astype(float), np.array([1.0]),
+              np.full(3, 2.0), rng.integers(0, 3, 17) * 0.5):
+        assert np.array_equal(average_ranks(a), rankdata(a))

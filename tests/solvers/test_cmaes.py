@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from camopt.solvers.cmaes import CMACore, deb_order
+from camopt.solvers.base import StopReason
+from camopt.solvers.cmaes import CMAES, CMACore, CMAESOptions, deb_order
 from camopt.solvers.polish import PolishOptions, polish
 from tests.conftest import SphereConfig, SphereProblem
 
@@ -51,3 +52,47 @@ def test_cmaes_stage_same_generator_same_result():
     b = polish(problem, np.full(3, -0.5), opts, np.random.default_rng(7))[0]
     c = polish(problem, np.full(3, -0.5), opts, np.random.default_rng(8))[0]
     assert np.array_equal(a, b) and not np.array_equal(a, c)
+
+
+def _run(options: CMAESOptions, seed: int, budget: int = 20_000):
+    problem = SphereProblem(SphereConfig(n_var=3))
+    solver = CMAES(problem, options, np.random.default_rng(seed))
+    lams = []
+    while solver.stop_reason() is None and solver.nfev < budget:
+        X = solver.ask()
+        lams.append(len(X))
+        solver.tell(X, problem.evaluate(X))
+    return solver, lams
+
+
+def test_ipop_restarts_with_growing_populations_and_keeps_the_best():
+    """IPOP (Auger & Hansen 2005): each run stagnates on the sphere, the next starts with
+    twice the population; after the last restart the solver stops as converged; the best
+    over every run is kept (the sphere's minimum, 0 at x = 0.3)."""
+    solver, lams = _run(CMAESOptions(restarts=3, tolfun=1e-12), 0)
+    assert solver.restart == 3 and solver.stop_reason() == StopReason.CONVERGED
+    assert sorted(set(lams)) == [7, 14, 28, 56]  # 4 + 3 ln 3 = 7, doubled per restart
+    assert lams == sorted(lams)
+    x, ev = solver.best()
+    np.testing.assert_allclose(x, 0.3, atol=1e-4)
+    assert "3 restart(s)" in solver.notes()[0]
+
+
+def test_ipop_same_seed_same_result():
+    a, _ = _run(CMAESOptions(restarts=2), 5, 3000)
+    b, _ = _run(CMAESOptions(restarts=2), 5, 3000)
+    c, _ = _run(CMAESOptions(restarts=2), 6, 3000)
+    assert np.array_equal(a.best()[0], b.best()[0]) and a.nfev == b.nfev
+    assert not np.array_equal(a.best()[0], c.best()[0])
+
+
+def test_no_restarts_is_the_single_run():
+    """restarts = 0 (the default) keeps the one run's stop rule: converged on tolx only."""
+    solver, lams = _run(CMAESOptions(generations=60), 1)
+    assert set(lams) == {7} and solver.nit == 60 and solver.stop_reason() == StopReason.BUDGET
+
+
+def test_the_evaluation_budget_spans_the_restarts():
+    solver, lams = _run(CMAESOptions(restarts=5, tolfun=1e-6, evaluations=700), 2)
+    assert solver.stop_reason() == StopReason.BUDGET and 700 <= solver.nfev < 700 + lams[-1]
+    assert solver.restart >= 1

@@ -52,6 +52,8 @@ vectorises over a population and needs no time stepping (``docs/design.md``).
 
 from __future__ import annotations
 
+import os
+from collections.abc import Callable
 from dataclasses import dataclass, fields, replace
 
 import numpy as np
@@ -408,6 +410,25 @@ class ClosingState:
         return np.isnan(self.stall_theta)
 
 
+def closing_inputs(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
+                   rod_offset: NDArray | float, loads: Loads, theta: NDArray,
+                   pre: NDArray | None = None
+                   ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
+    """What the closing of n designs needs from their geometry on the cam-angle nodes
+    ``theta`` (m,), each (n, m), independent of the motion parameters: the follower rate
+    phi', the rod travel s1 (m) and ds1/dtheta (m/rad), the closing springs' energy (J)
+    and torque (N m), the resisting springs' energy V_r(s1) (J) and torque
+    Fr ds1/dtheta (N m). ``pre`` (n, 2) m: each design's closing-spring compressions in
+    the opened state (else the config's)."""
+    kin = model.kinematics(A, link, rod_offset, theta)
+    extension, rate = model.closing_spring_geometry(theta)
+    spring = model.closing_energy(kc, extension, pre)
+    springs_torque = model.closing_torque(kc, (extension, rate), pre)
+    resisting = loads.resistant_energy(kin.s1)
+    resisting_torque = loads.resistant_force(kin.s1) * kin.ds1  # Fr ds1/dtheta
+    return kin.dphi, kin.s1, kin.ds1, spring, springs_torque, resisting, resisting_torque
+
+
 def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
                   rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
                   steps: int, sets: int = 1, pre: NDArray | None = None) -> ClosingState:
@@ -421,15 +442,9 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     compressions in the opened state (else the config's)."""
     n = len(A) * sets
     p = params.columns(n, model.c.efficiency)
-    end = model.theta_c[-1]
-    theta, dtheta_du = graded_grid(end, steps)
-    kin = model.kinematics(A, link, rod_offset, theta)
-    extension, rate = model.closing_spring_geometry(theta)
-    spring = model.closing_energy(kc, extension, pre)
-    springs_torque = model.closing_torque(kc, (extension, rate), pre)
-    dphi, s1, ds1 = kin.dphi, kin.s1, kin.ds1
-    resisting = loads.resistant_energy(s1)
-    resisting_torque = loads.resistant_force(s1) * ds1  # Fr ds1/dtheta
+    theta, dtheta_du = graded_grid(model.theta_c[-1], steps)
+    dphi, s1, ds1, spring, springs_torque, resisting, resisting_torque = closing_inputs(
+        model, A, kc, link, rod_offset, loads, theta, pre)
     if sets > 1:
         dphi, s1, ds1, spring, springs_torque, resisting, resisting_torque, kc = (
             np.tile(a, (sets, 1)) for a in (dphi, s1, ds1, spring, springs_torque, resisting,
@@ -569,10 +584,61 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
 def closing_events(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
                    rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
                    steps: int, sets: int = 1, pre: NDArray | None = None) -> ClosingEvents:
-    """The events of :func:`closing_motion` alone for ``sets`` parameter sets per design
-    (:func:`closing_state`, :func:`events_of`): sets x n rows."""
+    """The events of :func:`closing_motion` alone for ``sets`` parameter sets per design:
+    sets x n rows (``pre`` as :func:`closing_state`'s). Compiled
+    (:mod:`camopt.cases.vcb.kernel`, the same arithmetic in one loop per row) where numba
+    is installed and ``CAMOPT_NUMBA`` is not ``0``; else, and as the reference,
+    :func:`closing_state` then :func:`events_of`."""
+    if os.environ.get("CAMOPT_NUMBA", "1") != "0":
+        try:
+            from camopt.cases.vcb import kernel
+        except ImportError:  # numba not installed: the numpy path, no error
+            pass
+        else:
+            return compiled_events(kernel.band_events, model, A, kc, link, rod_offset,
+                                   loads, params, steps, sets, pre)
     return events_of(closing_state(model, A, kc, link, rod_offset, loads, params, steps,
                                    sets, pre))
+
+
+def compiled_events(band_events: Callable[..., None], model: VcbModel, A: NDArray,
+                    kc: NDArray, link: NDArray, rod_offset: NDArray | float, loads: Loads,
+                    params: MotionParameters, steps: int, sets: int = 1,
+                    pre: NDArray | None = None) -> ClosingEvents:
+    """:func:`closing_events` through the compiled ``band_events``
+    (:func:`camopt.cases.vcb.kernel.band_events`): the geometry once per design and the
+    free rotation and the pick-up impact in numpy, the rest in the kernel."""
+    n = len(A) * sets
+    p = params.columns(n, model.c.efficiency)
+    theta, dtheta_du = graded_grid(model.theta_c[-1], steps)
+    inputs = closing_inputs(model, A, kc, link, rod_offset, loads, theta, pre)
+    kc_rows = np.tile(kc, (sets, 1)) if sets > 1 else kc
+    pre_rows = None if pre is None else np.tile(pre, (sets, 1)) if sets > 1 else pre
+    omega_free, t_free = free_rotation(model, kc_rows, params, pre=pre_rows)
+    # the pick-up impact as closing_state has it (the same operations: the same bits)
+    dphi0, ds1_0 = (np.tile(inputs[i][:, 0], sets) for i in (0, 2))
+    j0 = (p.cam_kg_m2[:, 0] + p.follower_kg_m2[:, 0] * dphi0 * dphi0
+          + (p.rod_kg + p.contacts_kg)[:, 0] * ds1_0 * ds1_0)
+    omega0 = p.cam_kg_m2[:, 0] * omega_free / j0
+    pickup_loss = 0.5 * p.cam_kg_m2[:, 0] * omega_free**2 - 0.5 * j0 * omega0**2
+    rows_loads = loads.tiled(sets) if sets > 1 else loads  # a part's springs per design
+    resisting_gap = np.broadcast_to(
+        rows_loads.resistant_energy(np.full((n, 1), loads.gap))[:, 0], (n,))
+    out = np.empty((9, n))
+    columns = (p.cam_kg_m2, p.follower_kg_m2, p.rod_kg, p.contacts_kg, p.friction_nm,
+               p.efficiency)
+    band_events(theta, dtheta_du, 1.0 / steps, float(loads.gap),
+                *(np.ascontiguousarray(a, dtype=float) for a in inputs),
+                *(np.ascontiguousarray(c[:, 0], dtype=float) for c in columns),
+                np.ascontiguousarray(omega_free, dtype=float),
+                np.ascontiguousarray(t_free, dtype=float),
+                np.ascontiguousarray(resisting_gap, dtype=float), out)
+    return ClosingEvents(
+        cam_contact_time=out[0], touch_time=out[1], touch_velocity=out[2],
+        closing_velocity_avg=out[3], closing_time=out[4], final_kinetic=out[5],
+        touch_loss=out[6], latched=out[7] > 0, reach=out[8],
+        release_torque_ratio=release_torque_ratio(model, kc_rows, p, pre_rows),
+        pickup_loss=pickup_loss)
 
 
 def _path(model: VcbModel, link: NDArray, rod_offset: NDArray | float, start: NDArray,

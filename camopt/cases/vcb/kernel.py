@@ -1,0 +1,210 @@
+"""The closing's events compiled: one fused loop per row over the cam-angle nodes (numba).
+
+The same arithmetic as :func:`camopt.cases.vcb.dynamics.closing_state` followed by
+:func:`~camopt.cases.vcb.dynamics.events_of`, operation for operation (the work-energy
+equation before and after the contacts' touch, the touch's interpolation and plastic
+loss, :func:`~camopt.cases.vcb.dynamics.first_zero`'s Hermite scan and bisection, the
+trapezoid times, the average closing velocity over the last third of the contact stroke),
+without the (rows, nodes) temporaries numpy needs for each step: a band member is read
+in one pass over its 401 nodes. The numpy path stays the reference;
+``tests/cases/test_vcb_kernel.py`` compares the two to 1e-12 (relative) on random
+designs and at the near-balance release (torque ratio 0.999 and 1.001).
+
+Why numba (``docs/design.md``): the loop is plain float arithmetic over arrays, which
+numba compiles from this Python source with no build step; ``cache=True`` keeps the
+machine code beside the module, so the ~1-2 s compile is paid once per install, and only
+by a command that evaluates a VCB (:mod:`camopt.cases.vcb.dynamics` imports this module
+inside :func:`~camopt.cases.vcb.dynamics.closing_events`; ``validate`` and ``show`` never
+do). Importing this module raises ImportError where numba is not installed: the caller
+then takes the numpy path.
+
+Inputs per design (``nd`` rows, set-major rows ``r = set * nd + design`` read design
+``r % nd``): the geometry of :func:`~camopt.cases.vcb.dynamics.closing_inputs`; per row:
+the resolved parameter columns, the free rotation's speed and time and the resistant
+energy at the gap.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+HERMITE_POINTS = 16  # as camopt.cases.vcb.dynamics.HERMITE_POINTS
+BISECTIONS = 30  # as camopt.cases.vcb.dynamics.BISECTIONS
+
+
+@njit(cache=True, error_model="numpy")
+def _hermite(t: float, h: float, e0: float, d0: float, e1: float, d1: float) -> float:
+    t2 = t * t
+    t3 = t * t * t
+    return ((2 * t3 - 3 * t2 + 1) * e0 + (t3 - 2 * t2 + t) * h * d0
+            + (-2 * t3 + 3 * t2) * e1 + (t3 - t2) * h * d1)
+
+
+@njit(cache=True, error_model="numpy")
+def _first_zero(x: NDArray, e: NDArray, d: NDArray) -> float:
+    """:func:`camopt.cases.vcb.dynamics.first_zero` for one row (nan: no zero)."""
+    m = len(e)
+    last = m - 1
+    for j in range(m - 1):
+        if e[j + 1] <= 0:
+            last = j
+            break
+    for c in range(min(last, m - 2) + 1):
+        h = x[c + 1] - x[c]
+        e0, d0, e1, d1 = e[c], d[c], e[c + 1], d[c + 1]
+        if not min(e0, e1) - 4 / 27 * h * (abs(d0) + abs(d1)) <= 0:
+            continue
+        point = -1
+        for i in range(HERMITE_POINTS):
+            if i == HERMITE_POINTS - 1:
+                value = e1
+            else:
+                value = _hermite((i + 1) / HERMITE_POINTS, h, e0, d0, e1, d1)
+            if value <= 0:
+                point = i
+                break
+        if point < 0:
+            continue
+        lo = point / HERMITE_POINTS
+        hi = (point + 1) / HERMITE_POINTS
+        for _ in range(BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            if _hermite(mid, h, e0, d0, e1, d1) > 0:
+                lo = mid
+            else:
+                hi = mid
+        return x[c] + hi * h
+    return math.nan
+
+
+@njit(cache=True, error_model="numpy")
+def _crossing(values: NDArray, level: float) -> tuple[int, float]:
+    """:func:`camopt.cases.vcb.dynamics._crossing` for one row."""
+    k = 0
+    for j in range(len(values)):
+        if values[j] >= level:
+            k = j
+            break
+    if k == 0:
+        return 0, 0.0
+    lo, hi = values[k - 1], values[k]
+    w = (level - lo) / (hi - lo)
+    if math.isnan(w):
+        w = 0.0
+    elif math.isinf(w):
+        w = 1.0 if w > 0 else 0.0  # nan_to_num's largest float, then the clip
+    return k, min(max(w, 0.0), 1.0)
+
+
+@njit(cache=True, error_model="numpy")
+def _at(a: NDArray, k: int, w: float) -> float:
+    return (1 - w) * a[max(k - 1, 0)] + w * a[k]
+
+
+@njit(cache=True, error_model="numpy")
+def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
+                dphi: NDArray, s1: NDArray, ds1: NDArray, spring: NDArray,
+                springs_torque: NDArray, resisting: NDArray, resisting_torque: NDArray,
+                cam: NDArray, follower_kg: NDArray, rod: NDArray, contacts: NDArray,
+                friction: NDArray, eps: NDArray, omega_free: NDArray, t_free: NDArray,
+                resisting_gap: NDArray, out: NDArray) -> None:
+    """The closing's events of every row into ``out`` (9, rows): cam contact time, touch
+    time, touch velocity, average closing velocity, closing time, final kinetic energy,
+    touch loss, latched (1/0), reach. Geometry (nd, m) per design, the rest (rows,)."""
+    nd, m = s1.shape
+    rows = len(cam)
+    end = theta[m - 1]
+    ke_b = np.empty(m)
+    om_b = np.empty(m)
+    kin = np.empty(m)
+    slope = np.empty(m)
+    t_b = np.empty(m)
+    for r in range(rows):
+        i = r % nd
+        moving = rod[r] + contacts[r]
+        f_kg, c_kg = follower_kg[r], cam[r]
+        e, fr = eps[r], friction[r]
+        j0 = c_kg + f_kg * dphi[i, 0] * dphi[i, 0] + moving * ds1[i, 0] * ds1[i, 0]
+        omega0 = c_kg * omega_free[r] / j0
+        kinetic0 = 0.5 * j0 * omega0 ** 2
+        for j in range(m):
+            jb = c_kg + f_kg * dphi[i, j] * dphi[i, j] + moving * ds1[i, j] * ds1[i, j]
+            ke = kinetic0 + e * (spring[i, 0] - spring[i, j]) - resisting[i, j]
+            ke -= fr * theta[j]
+            ke_b[j] = ke
+            om_b[j] = math.sqrt(max(2 * ke / jb, 0.0))
+        k, w = _crossing(s1[i], gap)
+        touched = k > 0
+        theta_touch = _at(theta, k, w)
+        ds1_touch = _at(ds1[i], k, w)
+        dphi_touch = _at(dphi[i], k, w)
+        ke_touch = (kinetic0 + e * (spring[i, 0] - _at(spring[i], k, w)) - resisting_gap[r]
+                    - fr * theta_touch)
+        j_touch = c_kg + f_kg * dphi_touch ** 2 + moving * ds1_touch ** 2
+        omega_touch = math.sqrt(max(2 * ke_touch / j_touch, 0.0))
+        v_touch = ds1_touch * omega_touch if touched else math.nan
+        loss = 0.0
+        if touched:
+            vt = v_touch if math.isfinite(v_touch) else (
+                0.0 if math.isnan(v_touch) else math.copysign(1.7976931348623157e308,
+                                                              v_touch))
+            loss = 0.5 * contacts[r] * vt ** 2
+        for j in range(m):
+            if touched and j >= k:
+                kin[j] = ke_b[j] - loss
+            else:
+                kin[j] = ke_b[j]
+            slope[j] = (e * springs_torque[i, j] - fr) - resisting_torque[i, j]
+            # t_b's integrand; its ends below
+            t_b[j] = dtheta_du[j] / om_b[j]
+        stall = _first_zero(theta, kin, slope)
+        if not math.isfinite(t_free[r]):
+            stall = 0.0
+        # time before the touch (dynamics._cumulative_time, then + t_free)
+        if dtheta_du[0] == 0:
+            t_b[0] = 0.0 if om_b[0] > 0 else t_b[1]
+        if dtheta_du[m - 1] == 0:
+            t_b[m - 1] = 0.0 if om_b[m - 1] > 0 else t_b[m - 2]
+        g_prev = t_b[0]
+        acc = 0.0
+        t_b[0] = t_free[r] + 0.0
+        for j in range(1, m):
+            g = t_b[j]
+            acc += 0.5 * (g + g_prev) * du
+            g_prev = g
+            t_b[j] = t_free[r] + acc
+        km = max(k - 1, 0)
+        last_cell = (theta_touch - theta[km]) * 0.5 * (1 / om_b[km] + 1 / omega_touch)
+        t_touch = t_b[km] + last_cell if touched else math.nan
+        latched = math.isnan(stall)
+        reached = touched and not (stall <= theta_touch)
+        if touched:
+            ja_k = c_kg + f_kg * dphi[i, k] * dphi[i, k] + rod[r] * ds1[i, k] * ds1[i, k]
+            om_a_k = math.sqrt(max(2 * (ke_b[k] - loss) / ja_k, 0.0))
+            first_cell = (theta[k] - theta_touch) * 0.5 * (1 / omega_touch + 1 / om_a_k)
+            t_k = t_touch + first_cell
+            total = 0.0
+            g_prev = dtheta_du[k] / om_a_k
+            for j in range(k + 1, m):
+                ja = c_kg + f_kg * dphi[i, j] * dphi[i, j] + rod[r] * ds1[i, j] * ds1[i, j]
+                g = dtheta_du[j] / math.sqrt(max(2 * (ke_b[j] - loss) / ja, 0.0))
+                total += 0.5 * (g + g_prev) * du
+                g_prev = g
+            t_end = t_k + total
+        else:
+            t_end = t_b[m - 1]
+        k3, w3 = _crossing(s1[i], 2 * gap / 3)
+        t23 = _at(t_b, k3, w3) if k3 > 0 else math.nan
+        out[0, r] = t_free[r]
+        out[1, r] = t_touch if reached else math.inf
+        out[2, r] = v_touch
+        out[3, r] = (gap / 3) / (t_touch - t23) if reached else math.nan
+        out[4, r] = t_end if latched else math.inf
+        out[5, r] = kin[m - 1] if latched else 0.0
+        out[6, r] = loss
+        out[7, r] = 1.0 if latched else 0.0
+        out[8, r] = 1.0 if latched else (0.0 if math.isnan(stall) else stall) / end

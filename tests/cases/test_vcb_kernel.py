@@ -1,0 +1,120 @@
+"""The compiled closing events (camopt/cases/vcb/kernel.py) against the numpy reference
+(closing_state then events_of) to 1e-12 relative, on random designs under the band's
+parameter sets and at the near-balance release; the fallback when numba is absent."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from dataclasses import fields
+
+import numpy as np
+import pytest
+
+from camopt.cases.vcb import VcbProblem
+from camopt.cases.vcb import dynamics as dyn
+from tests.conftest import CONFIGS, ROOT
+from tests.helpers import load
+
+kernel = pytest.importorskip("camopt.cases.vcb.kernel", reason="numba not installed")
+
+
+def _same(ref: dyn.ClosingEvents, new: dyn.ClosingEvents) -> None:
+    """Every field equal to 1e-12 relative, with the same NaN and inf."""
+    for f in fields(ref):
+        a = np.asarray(getattr(ref, f.name), dtype=float)
+        b = np.asarray(getattr(new, f.name), dtype=float)
+        np.testing.assert_allclose(b, a, rtol=1e-12, atol=0, err_msg=f.name)
+
+
+def _band_args(problem: VcbProblem, X: np.ndarray) -> tuple:
+    A, kc, link = problem.designs(X, None)
+    assert problem.band is not None
+    sets = problem.band.repeat(len(A))
+    return (problem.model, A, kc, link, problem.rod_offset, problem.load, sets,
+            problem.config.dynamics_steps)
+
+
+def test_kernel_matches_numpy_on_random_designs_under_the_band():
+    p = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
+    rng = np.random.default_rng(36)
+    # random designs (most stall), and the vendor's neighbourhood (most close and latch)
+    X = np.vstack([p.lower + rng.random((60, p.n_var)) * (p.upper - p.lower),
+                   p.vendor_x() * (1 + 0.02 * rng.standard_normal((40, p.n_var)))])
+    X = np.clip(X, p.lower, p.upper)
+    args = _band_args(p, X)
+    sets = len(np.ravel(p.band.cam_kg_m2))
+    ref = dyn.events_of(dyn.closing_state(*args, sets=sets))
+    new = dyn.compiled_events(kernel.band_events, *args, sets=sets)
+    assert ref.latched.any() and not ref.latched.all()  # both branches covered
+    assert np.isfinite(ref.touch_time).any() and np.isinf(ref.touch_time).any()
+    _same(ref, new)
+
+
+@pytest.mark.parametrize("ratio", [0.999, 1.001])
+def test_kernel_matches_numpy_at_the_near_balance_release(ratio):
+    """Friction set so that eps T_s / T_f at the release is 0.999 (the cam never starts)
+    or 1.001 (it starts slowly), as in test_vcb_dynamics."""
+    base = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]").case)
+    m, c = base.model, base.config
+    _, kc, _ = base.designs(base.vendor_x())
+    start = m.dead_centre + c.release_offset_deg * np.pi / 180 - m.contact_crank_angle
+    spring = m.closing_torque(kc, m.closing_spring_geometry(np.array([start])))[0, 0]
+    friction = float(c.efficiency * spring / ratio)
+    p = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]",
+                        f"case.cam_friction_nm={friction!r}").case)
+    X = p.vendor_x()[None, :]
+    A, kc, link = p.designs(X, None)
+    args = (p.model, A, kc, link, p.rod_offset, p.load, p.dynamics, p.config.dynamics_steps)
+    ref = dyn.events_of(dyn.closing_state(*args))
+    new = dyn.compiled_events(kernel.band_events, *args)
+    assert ref.release_torque_ratio[0] == pytest.approx(ratio, rel=1e-12)
+    assert np.isinf(ref.cam_contact_time[0]) == (ratio < 1)
+    _same(ref, new)
+
+
+def test_closing_events_take_the_kernel_and_the_numpy_path_alike(monkeypatch):
+    """``closing_events`` (what the band evaluates through) gives the same with the kernel
+    and with ``CAMOPT_NUMBA=0`` (the numpy path)."""
+    p = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
+    X = p.vendor_x()[None, :] * np.array([[1.0], [1.01], [0.99]])
+    args = _band_args(p, np.clip(X, p.lower, p.upper))
+    sets = len(np.ravel(p.band.cam_kg_m2))
+    compiled = dyn.closing_events(*args, sets=sets)
+    monkeypatch.setenv("CAMOPT_NUMBA", "0")
+    _same(dyn.closing_events(*args, sets=sets), compiled)
+
+
+def test_validate_does_not_import_numba():
+    """No compile or import cost on a command that evaluates no VCB."""
+    code = ("import sys; from typer.testing import CliRunner; from camopt.cli import app; "
+            f"r = CliRunner().invoke(app, ['validate', {str(CONFIGS / 'vcb_velocity.toml')!r}]);"
+            " assert r.exit_code == 0, r.output; print('numba' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=ROOT, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "False"
+
+
+def test_kernel_matches_numpy_with_parts_per_design():
+    """A drawn breaker's own parts (closing-spring compressions, opening and contact spring
+    rates per design: what tolerance and robust runs evaluate) through the kernel and the
+    numpy path alike, the pick-up impact included."""
+    from dataclasses import replace
+
+    p = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
+    rng = np.random.default_rng(33)
+    n = 12
+    X = p.vendor_x() * (1 + 0.02 * rng.standard_normal((n, p.n_var)))
+    X = np.clip(X, p.lower, p.upper)
+    model, A, kc, link, rod_offset, loads, sets, steps = _band_args(p, X)
+    c = p.config
+    pre = np.array([c.kc1_precompression_mm, c.kc2_precompression_mm]) * 1e-3 * (
+        1 + 0.02 * rng.standard_normal((n, 2)))
+    loads = replace(loads, opening_k=loads.opening_k * (1 + 0.1 * rng.standard_normal((n, 1))),
+                    wipe_k=loads.wipe_k * (1 + 0.1 * rng.standard_normal((n, 1))))
+    k = len(np.ravel(p.band.cam_kg_m2))
+    args = (model, A, kc, link, rod_offset, loads, sets, steps)
+    ref = dyn.events_of(dyn.closing_state(*args, sets=k, pre=pre))
+    new = dyn.compiled_events(kernel.band_events, *args, sets=k, pre=pre)
+    assert np.isfinite(ref.pickup_loss).all() and (ref.pickup_loss > 0).any()
+    _same(ref, new)
