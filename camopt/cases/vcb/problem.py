@@ -287,9 +287,9 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             profile = self._profile_offset(col("cam_profile_error_mm"))
         return Parts(
             link=link, pre=pre,
-            opening_k=col("opening_k_n_per_mm")[:, None] * 1e3
+            opening_k=col("opening_k_n_per_mm")[:, None] * N_PER_MM
             if "opening_k_n_per_mm" in fields else None,
-            wipe_k=c.wipe_count * col("wipe_k_n_per_mm")[:, None] * 1e3
+            wipe_k=c.wipe_count * col("wipe_k_n_per_mm")[:, None] * N_PER_MM
             if "wipe_k_n_per_mm" in fields else None,
             friction_scale=col("cam_friction_nm") / c.cam_friction_nm
             if "cam_friction_nm" in fields and c.cam_friction_nm > 0 else None,
