@@ -81,7 +81,7 @@ def test_three_repeats_each_are_too_few_to_decide(tmp_path):
     2 / C(6, 3) = 0.1), so compare says the test cannot decide, whatever the medians; the
     success rates get Fisher's exact test; two runs fit about 40 lines at 80 columns."""
     small = ["--set", "solver.generations=10", "--set", "solver.population=20",
-             "--repeats", "3"]
+             "--set", "solver.polish.maxiter=5", "--repeats", "3"]  # the polish is no subject
     fs = str(CONFIGS / "fast_switch_de.toml")
     a = run(tmp_path, "a.h5", fs, "--seed", "1", *small)
     b = run(tmp_path, "b.h5", fs, "--seed", "2", *small)
