@@ -73,7 +73,10 @@ def test_a_writer_racing_a_just_started_one_names_it(tmp_path):
 
 def test_two_concurrent_runs_into_one_file_never_both_succeed(tmp_path):
     out = tmp_path / "same.h5"
-    cmd = [*CAMOPT, "run", DE, "--out", str(out), "--quiet", "--set", "solver.generations=150"]
+    # long enough for the loser to find the winner's claim (or, late, its archive); the
+    # polish is no subject here
+    cmd = [*CAMOPT, "run", DE, "--out", str(out), "--quiet", "--set", "solver.generations=100",
+           "--set", "solver.polish.maxiter=5", "--repeats", "3"]
     procs = [subprocess.Popen([*cmd, "--seed", str(i)], stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, text=True) for i in range(2)]
     results = [(p.wait(timeout=120), p.stderr.read()) for p in procs]
