@@ -174,6 +174,9 @@ def test_same_config_same_numbers():
     assert a.best.fun == b.best.fun and np.array_equal(a.best.x, b.best.x)
 
 
+STEP = float(np.sqrt(np.finfo(float).eps))  # scipy's 2-point step on [0, 1]
+
+
 def _nlp_per_coil_count(problem: FastSwitchProblem) -> tuple[float, float]:
     """Independent optimum: for every coil count, scipy's SLSQP over sf, sud, s0, r3, r2
     (bounds-normalised, every constraint g <= 0) from the count's Eq 86 family member and
@@ -185,25 +188,33 @@ def _nlp_per_coil_count(problem: FastSwitchProblem) -> tuple[float, float]:
     family = problem.family()
 
     def solve(row: np.ndarray, u0: np.ndarray) -> tuple[float, np.ndarray]:
-        seen: dict[bytes, object] = {}  # f and g, and their differences, at the same points
+        seen: dict[bytes, tuple] = {}  # f, g and their forward differences at a point
 
-        def design(u):
-            x = row.copy()
-            x[free] = lo + u * span
-            return x[None, :]
+        def design(U):
+            X = np.tile(row, (len(U), 1))
+            X[:, free] = lo + U * span
+            return X
 
         def cached(u):
+            """f, g and their gradients at u from one evaluation of u and its forward
+            steps (scipy's 2-point steps, sqrt(eps), turned back at the upper bound):
+            what SLSQP's own differences would evaluate one design at a time."""
             key = u.tobytes()
             if key not in seen:
                 if len(seen) > 16:
                     seen.clear()
-                seen[key] = problem.evaluate(design(u))
+                h = np.where(u + STEP <= 1.0, STEP, -STEP)
+                ev = problem.evaluate(design(np.vstack([u, u + np.diag(h)])))
+                with np.errstate(invalid="ignore"):  # inf - inf where the loop cannot close
+                    seen[key] = (ev.f[0], ev.g[0], (ev.f[1:] - ev.f[0]) / h,
+                                 ((ev.g[1:] - ev.g[0]) / h[:, None]).T)
             return seen[key]
-        res = minimize(lambda u: float(cached(u).f[0]), u0,
+        res = minimize(lambda u: float(cached(u)[0]), u0, jac=lambda u: cached(u)[2],
                        method="SLSQP", bounds=[(0, 1)] * len(u0),
-                       constraints=[{"type": "ineq", "fun": lambda u: -cached(u).g[0]}],
+                       constraints=[{"type": "ineq", "fun": lambda u: -cached(u)[1],
+                                     "jac": lambda u: -cached(u)[3]}],
                        options={"maxiter": 500, "ftol": 1e-12})
-        ev = problem.evaluate(design(res.x))
+        ev = problem.evaluate(design(res.x[None, :]))
         return (float(ev.f[0]) if ev.feasible[0] else np.inf), res.x
 
     best = [(np.inf, None)] * len(family)
