@@ -15,7 +15,8 @@ from tests.conftest import CONFIGS
 runner = CliRunner()
 FAST = str(CONFIGS / "fast_switch.toml")
 DE = str(CONFIGS / "fast_switch_de.toml")
-SMALL_DE = ["--set", "solver.generations=10", "--set", "solver.population=10"]
+SMALL_DE = ["--set", "solver.generations=10", "--set", "solver.population=10",
+            "--set", "solver.polish.maxiter=5"]  # small runs: the polish is no subject
 
 
 def invoke(*args):

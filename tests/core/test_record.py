@@ -75,7 +75,7 @@ def test_a_sweep_archive_of_the_previous_camopt_loads_to_what_it_holds():
 def test_a_run_record_survives_its_archive(tmp_path):
     """Written and read back: scipy's fields, the seed and the derived nfev_to_target."""
     rec = execute(load(CONFIGS / "fast_switch_de.toml", "solver.generations=3",
-                       "solver.population=8", "run.repeats=2"))
+                       "solver.population=8", "run.repeats=2", "solver.polish.maxiter=5"))
     view = load_run(write_run(rec, tmp_path / "a.h5"))
     for a, b in zip(rec.repeats, view.repeats):
         np.testing.assert_allclose(b.x, a.x, rtol=1e-14)
@@ -90,7 +90,7 @@ def test_a_run_record_is_archived_from_its_plain_fields_alone(tmp_path):
     import dataclasses
 
     rec = execute(load(CONFIGS / "fast_switch_de.toml", "solver.generations=2",
-                       "solver.population=6", "run.repeats=1"))
+                       "solver.population=6", "run.repeats=1", "solver.polish.maxiter=5"))
     assert rec.problem is not None
     assert rec.names == rec.problem.names and rec.objective_name == "closure_time_ms"
     np.testing.assert_array_equal(rec.scale, rec.problem.scale)
