@@ -19,6 +19,7 @@ from camopt.cases.vcb.identify import (
 )
 from camopt.engine.driver import execute
 from camopt.units import MS
+from tests.cases import vcb_ode
 from tests.conftest import CONFIGS
 from tests.helpers import load
 
@@ -417,14 +418,10 @@ def test_release_decision_matches_an_ode_at_torque_ratios_either_side_of_one(rat
     latch), at 1.001 it meets the roller at the ODE's time within 2e-3 (the start is slow
     near a ratio of 1: the 64-interval free rotation is within 1.4e-3 at 1.001, 1e-5 at
     1.2)."""
-    base = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]").case)
-    m, c = base.model, base.config
-    _, kc, _ = base.designs(base.vendor_x())
+    p = vcb_ode.problem_at_release_ratio(ratio)
+    m, c, friction = p.model, p.config, p.config.cam_friction_nm
+    _, kc, _ = p.designs(p.vendor_x())
     start = m.dead_centre + c.release_offset_deg * np.pi / 180 - m.contact_crank_angle
-    spring = m.closing_torque(kc, m.closing_spring_geometry(np.array([start])))[0, 0]
-    friction = float(c.efficiency * spring / ratio)
-    p = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]",
-                        f"case.cam_friction_nm={friction!r}").case)
     mo = p.motion(p.vendor_x())
 
     def rhs(_t, y):

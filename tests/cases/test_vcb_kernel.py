@@ -13,6 +13,7 @@ import pytest
 
 from camopt.cases.vcb import VcbProblem
 from camopt.cases.vcb import dynamics as dyn
+from tests.cases import vcb_ode
 from tests.conftest import CONFIGS, ROOT
 from tests.helpers import load
 
@@ -55,14 +56,7 @@ def test_kernel_matches_numpy_on_random_designs_under_the_band():
 def test_kernel_matches_numpy_at_the_near_balance_release(ratio):
     """Friction set so that eps T_s / T_f at the release is 0.999 (the cam never starts)
     or 1.001 (it starts slowly), as in test_vcb_dynamics."""
-    base = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]").case)
-    m, c = base.model, base.config
-    _, kc, _ = base.designs(base.vendor_x())
-    start = m.dead_centre + c.release_offset_deg * np.pi / 180 - m.contact_crank_angle
-    spring = m.closing_torque(kc, m.closing_spring_geometry(np.array([start])))[0, 0]
-    friction = float(c.efficiency * spring / ratio)
-    p = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]",
-                        f"case.cam_friction_nm={friction!r}").case)
+    p = vcb_ode.problem_at_release_ratio(ratio)
     X = p.vendor_x()[None, :]
     A, kc, link = p.designs(X, None)
     args = (p.model, A, kc, link, p.rod_offset, p.load, p.dynamics, p.config.dynamics_steps)

@@ -155,3 +155,19 @@ def main() -> None:  # pragma: no cover - writes tests/data/curves
 
 if __name__ == "__main__":
     main()
+
+
+def problem_at_release_ratio(ratio: float) -> VcbProblem:
+    """configs/vcb.toml (identified set alone) with the friction torque set so that eps T_s
+    / T_f at the vendor's release crank angle is ``ratio`` (the near-balance release)."""
+    from tests.conftest import CONFIGS
+    from tests.helpers import load
+
+    base = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]").case)
+    m, c = base.model, base.config
+    _, kc, _ = base.designs(base.vendor_x())
+    start = m.dead_centre + c.release_offset_deg * DEG - m.contact_crank_angle
+    spring = m.closing_torque(kc, m.closing_spring_geometry(np.array([start])))[0, 0]
+    friction = float(c.efficiency * spring / ratio)
+    return VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]",
+                           f"case.cam_friction_nm={friction!r}").case)
