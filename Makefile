@@ -19,7 +19,7 @@ run: install
 	$(BIN)/camopt run $(RUN_CASE)
 
 # one pytest worker per core (pytest-xdist): the suite is ~9 CPU-minutes, about 5 minutes on
-# 2 cores (measured 4:45, 4:55 and 5:30 in three clean runs, 25 Nov: at the budget, not
+# 2 cores (measured 4:45, 4:55, 5:30 and 5:19 in four clean runs, 25 Nov: at the budget, not
 # under it with margin; the 20 slowest are printed)
 test: install
 	$(BIN)/python -m pytest -q -n auto --durations=20
