@@ -25,7 +25,8 @@ test: install
 	$(BIN)/python -m pytest -q -n auto --durations=20
 
 lint: typecheck
-	$(BIN)/ruff check camopt tests bench scripts/mutants.py scripts/vcb_release_margin.py
+	$(BIN)/ruff check camopt tests bench scripts/mutants.py scripts/vcb_release_margin.py \
+		scripts/vcb_yield_limit.py
 
 # types and units as a gate: mypy's settings are in pyproject.toml ([tool.mypy])
 typecheck: install
