@@ -232,11 +232,17 @@ def _select(
 
 
 def _merge(base: dict[str, Any], child: dict[str, Any]) -> dict[str, Any]:
-    """[case], [run] and [robust] merge key by key; a child's [solver] replaces the base's whole."""
+    """[case], [run] and [robust] merge key by key; so does [solver] when the child names
+    the base's solver or none (``population = 100`` alone changes the base's solver's
+    population). A child's [solver] naming another solver replaces the base's whole: the
+    base's options belong to its solver."""
     merged = dict(base)
     for key, value in child.items():
-        if (key in ("case", "run", "robust") and isinstance(value, dict)
-                and isinstance(base.get(key), dict)):
+        same_solver = (key == "solver" and isinstance(value, dict)
+                       and isinstance(base.get(key), dict)
+                       and value.get("name", base[key].get("name")) == base[key].get("name"))
+        if (key in ("case", "run", "robust") or same_solver) and isinstance(value, dict) \
+                and isinstance(base.get(key), dict):
             merged[key] = {**base[key], **value}
         else:
             merged[key] = value

@@ -119,6 +119,20 @@ def test_extends_through_a_symlink_loop_or_itself(tmp_path):
         load(case)
 
 
+def test_a_solver_table_extending_the_same_solver_merges_key_by_key(tmp_path):
+    """A file extending vcb_velocity_robust.toml (DE-gr) with ``population = 100`` alone
+    keeps the base's generations and F/CR; naming another solver replaces the table."""
+    case = tmp_path / "c.toml"
+    base = (CONFIGS / "vcb_velocity_robust.toml").as_posix()
+    case.write_text(f'extends = "{base}"\n[solver]\npopulation = 100\n')
+    solver = load(case).solver
+    assert (solver.name, solver.population, solver.generations,
+            solver.mutation_factor) == ("de_gr", 100, 500, 0.7)
+    case.write_text(f'extends = "{base}"\n[solver]\nname = "pso"\n')
+    swarm = load(case).solver
+    assert swarm.name == "pso" and not hasattr(swarm, "mutation_factor")
+
+
 # ---- did you mean (issue #34): a near name is offered for every unknown name
 
 
