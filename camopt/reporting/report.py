@@ -248,12 +248,12 @@ def next_step(run: RunView, judged: Verdict) -> str:
     robust_yield_doc = robust_yield(run)
     if robust_yield_doc is not None:
         if robust_yield_doc.meets_target is False:
-            return ("next: the robust yield is below its target: more generations "
-                    "(--set solver.generations=...) or more check draws, or a lower "
-                    "robust.yield_target")
+            return (f"next: the robust yield is below its target: more budget (--set "
+                    f"{budget_key(run)}=...), another tolerance_class (camopt tolerance "
+                    f"{path} --allocate), or a lower robust.yield_target")
         return f"next: camopt report {path} (or camopt export {path} --format dxf)"
     if not run.best.feasible:
-        return ("next: no feasible design: more budget (--set solver.generations=... or "
+        return (f"next: no feasible design: more budget (--set {budget_key(run)}=... or "
                 "--repeats) or a wider bound on the variables the constraints push against")
     if judged.verdict != "pass":
         return ("next: the run's search leaves out the requirements it fails: run a case "
@@ -265,6 +265,17 @@ def next_step(run: RunView, judged: Verdict) -> str:
                 else "a [robust] table in the case file (docs/tolerance.md)")
         return f"next: camopt tolerance {path} --samples 2000; for parts made to tolerance: {then}"
     return f"next: camopt report {path} (or camopt export {path} --format dxf)"
+
+
+def budget_key(run: RunView) -> str:
+    """The option that bounds the run's search: ``solver.evaluations`` where the solver has
+    one (cmaes: its generations are a ceiling the evaluations reach first), else its
+    ``generations``, ``starts`` or ``iterations``; ``solver.generations`` when none is
+    recorded (an older archive)."""
+    for key in ("evaluations", "generations", "starts", "iterations", "maxiter"):
+        if key in run.solver:
+            return f"solver.{key}"
+    return "solver.generations"
 
 
 def robust_sibling(run: RunView) -> str:

@@ -83,3 +83,18 @@ def test_views_are_frozen_and_keep_raw_values(at_repo):
     summary = report.summary(archive.load_run(RUN))
     assert summary.rows[0].section == "objective"
     assert summary.to_json()["rows"][0]["name"] == summary.rows[0].name
+
+
+def test_the_budget_hint_names_the_option_that_binds():
+    """``next`` asks for more of the budget the solver has: cmaes stops on its
+    evaluations (its generations are a ceiling), DE-gr on generations, multistart on
+    starts."""
+    from types import SimpleNamespace
+
+    from camopt.reporting.report import budget_key
+    for solver, key in [({"name": "cmaes", "evaluations": 30000, "generations": 100000},
+                         "solver.evaluations"),
+                        ({"name": "de_gr", "generations": 300}, "solver.generations"),
+                        ({"name": "simplex", "starts": 8}, "solver.starts"),
+                        ({"name": "evaluate"}, "solver.generations")]:
+        assert budget_key(SimpleNamespace(solver=solver)) == key  # type: ignore[arg-type]
