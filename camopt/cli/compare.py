@@ -20,7 +20,6 @@ from camopt.cli.layout import (
     print_verdicts,
     success_rate_text,
 )
-from camopt.config.models import unit_of
 from camopt.errors import CamoptError
 
 
@@ -36,6 +35,7 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
     or rank the grid points of a sweep."""
     from camopt import archive
     from camopt.archive.sweeps import load_sweep
+    from camopt.config.models import unit_of
     from camopt.reporting import report
 
     with errors():
