@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from camopt.config.models import CaseConfig
-from camopt.core.plugins import OnDemand, entry_point
+from camopt.core.plugins import OnDemand, entry_point, entry_points
 from camopt.core.problem import Problem
 from camopt.core.requirements import Requirement
 from camopt.errors import ConfigError, did_you_mean
@@ -248,8 +248,6 @@ def _load() -> None:
     if _loaded:
         return
     _loaded = True
-    from importlib.metadata import entry_points
-
     package = importlib.import_module("camopt.cases")
     for module in pkgutil.iter_modules(package.__path__, "camopt.cases."):
         if module.ispkg:  # one package per built-in case

@@ -13,8 +13,9 @@ what is found and every error are unchanged. Listing a registry imports everythi
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Iterator, Mapping
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 if TYPE_CHECKING:
     from importlib.metadata import EntryPoint
@@ -22,12 +23,24 @@ if TYPE_CHECKING:
 T = TypeVar("T")
 
 
+@functools.cache
+def _installed() -> Any:
+    """Every installed entry point, read once per process (each reading opens every
+    installed distribution's metadata, and a command looks up a case and a solver)."""
+    from importlib.metadata import entry_points
+
+    return entry_points()  # .select() works on what every Python >= 3.10 returns
+
+
+def entry_points(group: str) -> list[EntryPoint]:
+    """The installed entry points of ``group``."""
+    return list(_installed().select(group=group))
+
+
 def entry_point(group: str, name: str) -> EntryPoint | None:
     """The one entry point called ``name`` in ``group``; None when there is none, or more
     than one (only importing them all tells which registers what)."""
-    from importlib.metadata import entry_points
-
-    found = list(entry_points(group=group, name=name))
+    found = list(_installed().select(group=group, name=name))
     return found[0] if len(found) == 1 else None
 
 

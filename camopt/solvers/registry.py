@@ -18,7 +18,7 @@ import pkgutil
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
-from camopt.core.plugins import OnDemand, entry_point
+from camopt.core.plugins import OnDemand, entry_point, entry_points
 from camopt.errors import SolverError, did_you_mean
 
 if TYPE_CHECKING:
@@ -54,8 +54,6 @@ def _load() -> None:
     if _loaded:
         return
     _loaded = True
-    from importlib.metadata import entry_points
-
     package = importlib.import_module("camopt.solvers")
     for module in pkgutil.iter_modules(package.__path__, "camopt.solvers."):
         importlib.import_module(module.name)  # solver modules register on import
