@@ -168,13 +168,14 @@ def check_variables(view: RunView) -> None:
     config's own error (docs/reliability.md)."""
     from pydantic import ValidationError
 
-    from camopt.cases import build_problem
-    from camopt.engine.driver import validate
+    from camopt.cases import build_problem, case_configs
+    from camopt.config import validate_data
     from camopt.errors import CamoptError
+    from camopt.solvers.registry import solver_options
 
-    try:
-        config = validate({"case": view.case, "solver": view.solver, "run": view.run},
-                          view.path)
+    try:  # engine.driver.validate's check, without importing the engine (issue #36)
+        config = validate_data({"case": view.case, "solver": view.solver, "run": view.run},
+                               solver_options(), case_configs(), view.path)
         with np.errstate(all="ignore"):  # a non-assembling design is the run's business
             names = tuple(build_problem(config.case).names)
     except (CamoptError, ValidationError):

@@ -6,6 +6,11 @@ registers its spec when imported. Packages outside camopt add cases through the
 ``camopt.cases`` entry-point group, whose entry points name a ``CaseSpec`` (or a module
 that registers one). Nothing else in camopt names a case kind: the CLI, archive, plots
 and export ask the registry.
+
+A look-up by kind (:func:`get_case`, :func:`case_configs`) imports only the package the
+kind's entry point names (pyproject.toml declares every built-in case there), not every
+case: a command that reads one case file or archive starts without the others' models
+(issue #36, :mod:`camopt.core.plugins`). Listing (:func:`cases`) imports them all.
 """
 
 from __future__ import annotations
@@ -14,16 +19,18 @@ import importlib
 import pkgutil
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
-from importlib.metadata import entry_points
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from camopt.config.models import CaseConfig
+from camopt.core.plugins import OnDemand, entry_point, entry_points
 from camopt.core.problem import Problem
 from camopt.core.requirements import Requirement
 from camopt.errors import ConfigError, did_you_mean
 
 if TYPE_CHECKING:
+    from importlib.metadata import EntryPoint
+
     from matplotlib.figure import Figure
 
     from camopt.core.calibration import CalibrationReport, CalibrationRequest
@@ -226,6 +233,16 @@ def register_case(spec: CaseSpec) -> CaseSpec:
     return spec
 
 
+def _load_entry_point(ep: EntryPoint) -> None:
+    try:
+        obj = ep.load()
+    except Exception as exc:  # a broken plugin must not break camopt
+        raise ConfigError("camopt", f"case plugin {ep.name}",
+                          f"failed to load ({ep.value}): {exc}") from exc
+    if isinstance(obj, CaseSpec):
+        register_case(obj)
+
+
 def _load() -> None:
     global _loaded
     if _loaded:
@@ -236,34 +253,47 @@ def _load() -> None:
         if module.ispkg:  # one package per built-in case
             importlib.import_module(module.name)
     for ep in entry_points(group=ENTRY_POINT_GROUP):
-        try:
-            obj = ep.load()
-        except Exception as exc:  # a broken plugin must not break camopt
-            raise ConfigError("camopt", f"case plugin {ep.name}",
-                              f"failed to load ({ep.value}): {exc}") from exc
-        if isinstance(obj, CaseSpec):
-            register_case(obj)
+        _load_entry_point(ep)
+
+
+def _find(kind: str) -> CaseSpec | None:
+    """The spec of ``kind`` (None: unknown), importing the package its one entry point
+    names when it is not registered yet, else every case (:func:`_load`)."""
+    if kind not in _REGISTRY and not _loaded:
+        ep = entry_point(ENTRY_POINT_GROUP, kind)
+        if ep is not None:
+            _load_entry_point(ep)
+        if kind not in _REGISTRY:
+            _load()
+    return _REGISTRY.get(kind)
 
 
 def cases() -> dict[str, CaseSpec]:
-    """All registered cases by kind."""
+    """All registered cases by kind (every case package imported)."""
     _load()
     return dict(sorted(_REGISTRY.items()))
 
 
 def get_case(kind: str) -> CaseSpec:
-    """The spec of ``kind``; an unknown kind lists the known ones."""
-    known = cases()
-    if kind not in known:
+    """The spec of ``kind`` (only its package imported); an unknown kind lists the known
+    ones."""
+    spec = _find(kind)
+    if spec is None:
+        known = cases()
         raise ConfigError("case", "kind", f"unknown case kind {kind!r}"
                           f"{did_you_mean(kind, known)}; known: "
                           f"{', '.join(known)}")
-    return known[kind]
+    return spec
 
 
-def case_configs() -> dict[str, type[CaseConfig]]:
-    """Case kinds to their config models (what the loader validates ``[case]`` with)."""
-    return {kind: spec.config for kind, spec in cases().items()}
+def case_configs() -> Mapping[str, type[CaseConfig]]:
+    """Case kinds to their config models (what the loader validates ``[case]`` with); a
+    kind looked up imports its package only, listing the kinds imports every case."""
+    def config(kind: str) -> type[CaseConfig] | None:
+        spec = _find(kind)
+        return None if spec is None else spec.config
+
+    return OnDemand(config, lambda: {kind: spec.config for kind, spec in cases().items()})
 
 
 def run_requirements(run: RunView, violated: list[str] | None = None

@@ -17,12 +17,16 @@ from camopt.cli import (  # noqa: F401  (commands)
     tolerance,
 )
 from camopt.cli.app import app, internal_error
+from camopt.core import perf
 from camopt.engine import interrupts
 
 
 def main() -> None:
-    """Console-script entry point: SIGTERM handled like Ctrl-C; whatever escapes a
-    command (a closed pipe, a bug) is still one line, never a traceback."""
+    """Console-script entry point: BLAS on one thread before numpy loads
+    (:func:`camopt.core.perf.one_blas_thread_on_load`); SIGTERM handled like Ctrl-C;
+    whatever escapes a command (a closed pipe, a bug) is still one line, never a
+    traceback."""
+    perf.one_blas_thread_on_load()
     interrupts.install()
     try:
         app(standalone_mode=True)

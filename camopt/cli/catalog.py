@@ -40,11 +40,11 @@ def init(kind: Annotated[str, typer.Argument(help="case kind")],
     """Write a commented case-file template for a case kind."""
     from camopt.cases import get_case
     from camopt.config import template
-    from camopt.solvers import solvers
+    from camopt.solvers import get_solver
 
     with errors():
         spec = get_case(kind)
-        text = template(spec.config, solvers()[spec.default_solver].Options.model_validate({}))
+        text = template(spec.config, get_solver(spec.default_solver).Options.model_validate({}))
         if out_path is None:
             sys.stdout.write(text)
             return

@@ -20,7 +20,6 @@ from camopt.cli.layout import (
     print_verdicts,
     success_rate_text,
 )
-from camopt.config.models import unit_of
 from camopt.errors import CamoptError
 
 
@@ -35,11 +34,13 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
     """Compare runs (config differences, designs, statistics, a significance test for two)
     or rank the grid points of a sweep."""
     from camopt import archive
-    from camopt.archive.sweeps import load_sweep
+    from camopt.config.models import unit_of
     from camopt.reporting import report
 
     with errors():
         if len(runs) == 1 and archive.archive_kind(runs[0]) == "sweep":
+            from camopt.archive.sweeps import load_sweep
+
             doc = report.rank_sweep(*load_sweep(runs[0]))
             if format is Format.json:
                 sys.stdout.write(json.dumps(doc.to_json(), indent=2) + "\n")

@@ -46,7 +46,6 @@ def show(run_paths: Annotated[list[Path], typer.Argument(
     as runs/NAME-*.h5) are each shown, in the order given (a glob's order: oldest
     first, as the names carry the time); with --format json, as a JSON array."""
     from camopt import archive
-    from camopt.archive.sweeps import load_sweep
     from camopt.reporting import report
     from camopt.reporting.report import jsonable
 
@@ -55,6 +54,8 @@ def show(run_paths: Annotated[list[Path], typer.Argument(
         for path in run_paths:
             kind = archive.archive_kind(path)
             if kind == "sweep":
+                from camopt.archive.sweeps import load_sweep
+
                 loaded.append(("sweep", report.rank_sweep(*load_sweep(path))))
             elif kind == "tolerance":
                 from camopt.archive.samples import load_samples

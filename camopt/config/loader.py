@@ -219,16 +219,16 @@ def _select(
     if not isinstance(table, dict):
         raise ConfigError(source, section, f"[{section}] must be a table")
     value = table.get(tag)
-    names = ", ".join(sorted(known))
+    if isinstance(value, str) and value in known:  # a registry imports only what defines it
+        return known[value]
+    names = ", ".join(sorted(known))  # listing the names imports every case or solver
     if value is None:
         raise ConfigError(source, f"{section}.{tag}", f"missing; known {noun}s: {names}")
     if not isinstance(value, str):
         raise ConfigError(source, f"{section}.{tag}", f"must be a string; known {noun}s: "
                           f"{names}")
-    if value not in known:
-        raise ConfigError(source, f"{section}.{tag}", f"unknown {noun} {value!r}"
-                          f"{did_you_mean(value, known)}; known: {names}")
-    return known[value]
+    raise ConfigError(source, f"{section}.{tag}", f"unknown {noun} {value!r}"
+                      f"{did_you_mean(value, known)}; known: {names}")
 
 
 def _merge(base: dict[str, Any], child: dict[str, Any]) -> dict[str, Any]:

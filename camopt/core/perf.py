@@ -12,11 +12,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:  # imported where used: the CLI starts without it
+if TYPE_CHECKING:  # imported where used: the CLI starts without them
+    import ctypes
     from concurrent.futures import ProcessPoolExecutor
 
-import ctypes
-import ctypes.util
 import functools
 import sys
 
@@ -29,6 +28,9 @@ _done = False
 def _libc() -> ctypes.CDLL:
     """The C library, found once per process and inherited by forked workers
     (``find_library`` runs ``ldconfig`` in a subprocess: ~10 ms, more in a large parent)."""
+    import ctypes
+    import ctypes.util
+
     return ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
 
 
@@ -61,14 +63,30 @@ def pin_blas_threads() -> None:
     scipy's BLAS (a library of its own, loaded with ``scipy.linalg``) is not loaded here
     (``validate`` would pay ~0.1 s CPU for it): OpenBLAS reads ``OPENBLAS_NUM_THREADS``
     when it loads, so one loaded later starts on one thread (tests/core/test_perf.py)."""
-    import os
-
     import numpy  # noqa: F401  (loads numpy's BLAS, so threadpoolctl finds it)
     from threadpoolctl import threadpool_limits
 
-    for name in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS"):
-        os.environ[name] = "1"  # for a BLAS loaded later (read when it loads)
+    one_blas_thread_on_load()  # for a BLAS loaded later (read when it loads)
     threadpool_limits(limits=1, user_api="blas")  # again each time: a caller may raise it
+
+
+BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
+"""The variables a BLAS reads, once, when it loads for its number of threads."""
+
+
+def one_blas_thread_on_load() -> None:
+    """Tell every BLAS loaded from now on to start on one thread (:data:`BLAS_THREADS`):
+    the half of :func:`pin_blas_threads` that imports nothing.
+
+    The command line calls it first (``camopt.cli.main``), before anything imports numpy:
+    camopt computes on one BLAS thread anyway (:func:`pin_blas_threads`), and an OpenBLAS
+    that loads with its default starts a thread per core whose start-up cost ~0.06 s of
+    CPU on every command, numpy's import being most of what a command that evaluates
+    nothing pays for (issue #36, bench/bench_startup.py)."""
+    import os
+
+    for name in BLAS_THREADS:
+        os.environ[name] = "1"
 
 
 _PR_SET_PDEATHSIG = 1

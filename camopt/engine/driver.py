@@ -7,7 +7,7 @@ any repeat can be re-run alone from the archived entropy and spawn key.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import as_completed
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
@@ -28,7 +28,7 @@ from camopt.core.stats import succeeded
 from camopt.engine import interrupts, robust
 from camopt.engine.interrupts import deferred
 from camopt.errors import ConfigError, SolverError
-from camopt.solvers import Solver, StopReason, get_solver, solvers
+from camopt.solvers import Solver, StopReason, get_solver, registry
 from camopt.solvers.base import Budget
 
 
@@ -44,13 +44,14 @@ class Progress:
     objective_name: str = "objective"  # the problem's (a robust run's: yield_margin)
 
 
-def solver_options() -> dict[str, Any]:
-    """Solver names to their Options models (what the loader validates ``[solver]`` with)."""
-    return {name: cls.Options for name, cls in solvers().items()}
+def solver_options() -> Mapping[str, Any]:
+    """Solver names to their Options models (what the loader validates ``[solver]`` with;
+    a name looked up imports that solver only: :func:`camopt.solvers.registry.solver_options`)."""
+    return registry.solver_options()
 
 
 def load(path: str | Path, overrides: Sequence[str] = ()) -> LoadedConfig:
-    """Load and validate a case file against every registered case and solver."""
+    """Load and validate a case file against the registered cases and solvers."""
     return load_config(path, solver_options(), case_configs(), overrides)
 
 

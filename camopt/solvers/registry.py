@@ -5,18 +5,25 @@ and the classes decorated with ``@register_solver`` register themselves (no list
 keep). They are also declared as entry points in pyproject.toml like any plugin (a test
 checks the two agree); listing the package makes a source checkout work without
 installed metadata.
+
+A look-up by name (:func:`get_solver`, :func:`solver_options`) imports only the module the
+name's entry point names, not every solver; listing (:func:`solvers`) imports them all
+(issue #36, :mod:`camopt.core.plugins`).
 """
 
 from __future__ import annotations
 
 import importlib
 import pkgutil
-from importlib.metadata import entry_points
-from typing import TYPE_CHECKING
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
+from camopt.core.plugins import OnDemand, entry_point, entry_points
 from camopt.errors import SolverError, did_you_mean
 
 if TYPE_CHECKING:
+    from importlib.metadata import EntryPoint
+
     from camopt.solvers.base import Solver
 
 ENTRY_POINT_GROUP = "camopt.solvers"
@@ -33,6 +40,15 @@ def register_solver(cls: type[Solver]) -> type[Solver]:
     return cls
 
 
+def _load_entry_point(ep: EntryPoint) -> None:
+    try:
+        register_solver(ep.load())
+    except Exception as exc:  # a broken plugin must not break camopt
+        raise SolverError(
+            f"solver plugin '{ep.name}' ({ep.value}) failed to load: {exc}"
+        ) from exc
+
+
 def _load() -> None:
     global _loaded
     if _loaded:
@@ -44,24 +60,43 @@ def _load() -> None:
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         if ep.name in _REGISTRY:
             continue
-        try:
-            register_solver(ep.load())
-        except Exception as exc:  # a broken plugin must not break camopt
-            raise SolverError(
-                f"solver plugin '{ep.name}' ({ep.value}) failed to load: {exc}"
-            ) from exc
+        _load_entry_point(ep)
+
+
+def _find(name: str) -> type[Solver] | None:
+    """The solver ``name`` (None: unknown), importing the module its one entry point
+    names when it is not registered yet, else every solver (:func:`_load`)."""
+    if name not in _REGISTRY and not _loaded:
+        ep = entry_point(ENTRY_POINT_GROUP, name)
+        if ep is not None:
+            _load_entry_point(ep)
+        if name not in _REGISTRY:
+            _load()
+    return _REGISTRY.get(name)
 
 
 def solvers() -> dict[str, type[Solver]]:
-    """All registered solvers by name."""
+    """All registered solvers by name (every solver module imported)."""
     _load()
     return dict(sorted(_REGISTRY.items()))
 
 
 def get_solver(name: str) -> type[Solver]:
-    """The solver class named ``name``; an unknown name lists the known ones."""
-    known = solvers()
-    if name not in known:
+    """The solver class named ``name`` (only its module imported); an unknown name lists
+    the known ones."""
+    cls = _find(name)
+    if cls is None:
+        known = solvers()
         raise SolverError(f"unknown solver '{name}'{did_you_mean(name, known)}; known: "
                           f"{', '.join(known)}")
-    return known[name]
+    return cls
+
+
+def solver_options() -> Mapping[str, Any]:
+    """Solver names to their Options models (what the loader validates ``[solver]``
+    with); a name looked up imports its solver only, listing them imports every solver."""
+    def options(name: str) -> Any:
+        cls = _find(name)
+        return None if cls is None else cls.Options
+
+    return OnDemand(options, lambda: {name: cls.Options for name, cls in solvers().items()})

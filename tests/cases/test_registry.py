@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -86,3 +88,38 @@ def test_a_test_only_case_runs_through_the_cli(tmp_path):
     assert r.exit_code == 0, r.output
     r = runner.invoke(app, ["show", str(out), "--format", "json"])
     assert r.exit_code == 0 and '"kind": "sphere"' in r.stdout
+
+
+LOOK_UP = """
+import json, sys
+from importlib.metadata import EntryPoints
+import camopt.core.plugins as plugins
+if sys.argv[1] == "no metadata":  # a source checkout: no entry point is installed
+    plugins._installed = lambda: EntryPoints(())
+from camopt.cases import get_case
+from camopt.solvers import get_solver
+spec, solver = get_case("vcb"), get_solver("cmaes")
+print(json.dumps({"spec": spec.problem.__module__, "solver": solver.__module__,
+                  "modules": sorted(m for m in sys.modules if m.startswith("camopt."))}))
+"""
+
+
+@pytest.mark.parametrize("metadata", ["installed", "no metadata"])
+def test_a_look_up_imports_its_entry_point_s_package_else_every_case(metadata: str) -> None:
+    """Issue #36: with camopt's entry points installed, looking a kind (a solver) up
+    imports that package (module) only; without them, every case and solver, as before.
+    Either way the same spec and solver are found."""
+    if metadata == "installed":
+        from camopt.core.plugins import entry_point
+
+        if entry_point("camopt.cases", "vcb") is None:
+            pytest.skip("camopt's entry points are not installed")
+    done = subprocess.run([sys.executable, "-c", LOOK_UP, metadata], capture_output=True,
+                          text=True, check=True, cwd=ROOT)
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["spec"] == "camopt.cases.vcb.problem"
+    assert result["solver"] == "camopt.solvers.cmaes"
+    others = {"camopt.cases.emb_cam", "camopt.cases.fast_switch", "camopt.solvers.de_gr",
+              "camopt.solvers.pso"}
+    loaded = others & set(result["modules"])
+    assert loaded == (set() if metadata == "installed" else others), sorted(loaded)

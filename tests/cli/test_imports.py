@@ -1,11 +1,17 @@
 """What the command line imports before a command runs (issue #22): ``--version`` and
 ``--help`` must not pay for numpy, scipy, h5py, pymoo, matplotlib or dask (their cost is
 measured in bench/bench_startup.py; here only which modules are loaded). pydantic is not
-on the list: typer itself imports it to convert a command's parameters."""
+on that list: typer itself imports it to convert a command's parameters (``run --help``
+loads it); the bare ``--version`` and ``--help`` load neither it nor camopt's config.
+
+A command that reads one case file or archive imports that case's package and that
+solver's module only (issue #36: the registries look a name up through its entry point),
+and BLAS is told to start on one thread before numpy loads."""
 
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -19,23 +25,32 @@ ROOT = Path(__file__).resolve().parents[2]
 ARCHIVE = str(ROOT / "tests" / "data" / "archives" / "run_main_52e31ad.h5")
 
 PROBE = """
-import json, sys
+import json, os, sys
 from camopt.cli import main
 sys.argv = ["camopt", *json.loads(sys.argv[1])]
 try:
     main()
 except SystemExit as exc:
     code = exc.code
-print("\\n" + json.dumps({"code": code, "modules": sorted(sys.modules)}))
+print("\\n" + json.dumps({"code": code, "modules": sorted(sys.modules),
+                         "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS")}))
 """
+
+
+def probe(*args: str) -> dict:
+    """What :data:`PROBE` reports once ``camopt ARGS`` has run, in a fresh interpreter
+    (this test process has imported everything already) without OPENBLAS_NUM_THREADS."""
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    done = subprocess.run([sys.executable, "-c", PROBE, json.dumps(list(args))],
+                          capture_output=True, text=True, check=True, cwd=ROOT, env=env)
+    result: dict = json.loads(done.stdout.strip().splitlines()[-1])
+    return result
 
 
 def loaded_after(*args: str) -> tuple[int, set[str]]:
     """Exit code and the modules loaded once ``camopt ARGS`` has run, in a fresh
-    interpreter (this test process has imported everything already)."""
-    done = subprocess.run([sys.executable, "-c", PROBE, json.dumps(list(args))],
-                          capture_output=True, text=True, check=True, cwd=ROOT)
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    interpreter."""
+    result = probe(*args)
     return result["code"], set(result["modules"])
 
 
@@ -44,6 +59,13 @@ def test_startup_imports_no_heavy_library(args: tuple[str, ...]) -> None:
     code, modules = loaded_after(*args)
     assert code in (0, None)
     assert not modules & set(HEAVY), sorted(modules & set(HEAVY))
+
+
+@pytest.mark.parametrize("args", [("--version",), ("--help",)])
+def test_version_and_help_load_no_pydantic_nor_config(args: tuple[str, ...]) -> None:
+    code, modules = loaded_after(*args)
+    assert code in (0, None)
+    assert not modules & {"pydantic", "camopt.config"}, sorted(modules)
 
 
 def test_probe_sees_a_command_that_imports_them() -> None:
@@ -69,6 +91,37 @@ def test_validate_loads_no_solver_library() -> None:
     assert {"numpy", "pydantic", "camopt.cases"} <= modules  # the probe sees the case
 
 
+CASES = {"emb_cam", "fast_switch", "opening_spring", "vcb"}
+"""camopt's case packages ..."""
+SOLVERS = {"cmaes", "de_gr", "enumeration", "evaluate", "newton_pp", "nsga2", "pso",
+           "simplex"}
+"""... and solver modules."""
+
+
+def _loaded(modules: set[str], wing: str) -> set[str]:
+    """The sub-packages and modules of ``camopt.<wing>`` that are loaded."""
+    prefix = f"camopt.{wing}."
+    return {m[len(prefix):].split(".")[0] for m in modules if m.startswith(prefix)}
+
+
+def test_validate_imports_its_case_and_solver_only() -> None:
+    """configs/vcb_velocity.toml: the VCB package and CMA-ES, not the other cases'
+    models nor the other solvers (issue #36: they were about a third of validate's
+    start-up); BLAS was told one thread before numpy loaded (``camopt.cli.main``)."""
+    result = probe("validate", "configs/vcb_velocity.toml")
+    modules = set(result["modules"])
+    assert result["code"] in (0, None)
+    assert _loaded(modules, "cases") & CASES == {"vcb"}
+    assert _loaded(modules, "solvers") & SOLVERS == {"cmaes"}
+    assert result["blas_threads"] == "1"
+
+
+def test_an_unknown_kind_imports_every_case_to_list_them() -> None:
+    code, modules = loaded_after("init", "escapement")
+    assert code == 2
+    assert _loaded(modules, "cases") >= CASES
+
+
 @pytest.fixture(scope="module")
 def current_archive(tmp_path_factory: pytest.TempPathFactory) -> str:
     """An archive this camopt wrote: it stores its expected yield (issue #34), so ``show``
@@ -88,3 +141,7 @@ def test_show_and_runs_load_no_solver_library(command: str, current_archive: str
     assert code in (0, None)
     assert not modules & set(NEVER_FOR_CHECKS), sorted(modules & set(NEVER_FOR_CHECKS))
     assert "h5py" in modules  # the probe sees the archive being read
+    assert "camopt.engine.driver" not in modules  # the registries validate, not the engine
+    if command == "show":  # the archive's case and solver only
+        assert _loaded(modules, "cases") & CASES == {"fast_switch"}
+        assert _loaded(modules, "solvers") & SOLVERS == {"enumeration"}
