@@ -232,15 +232,15 @@ def _select(
 
 
 def _merge(base: dict[str, Any], child: dict[str, Any]) -> dict[str, Any]:
-    """[case], [run] and [robust] merge key by key; so does [solver] when the child names
-    the base's solver or none (``population = 100`` alone changes the base's solver's
-    population). A child's [solver] naming another solver replaces the base's whole: the
-    base's options belong to its solver."""
+    """[case], [run] and [robust] merge key by key; so does a child's [solver] that names
+    no solver (``population = 100`` alone changes the base solver's population). A child's
+    [solver] with a ``name`` replaces the base's whole, even for the same solver: a child
+    that names its solver says which options it wants (fast_switch_robust.toml leaves out
+    fast_switch_de.toml's [solver.polish] that way)."""
     merged = dict(base)
     for key, value in child.items():
-        same_solver = (key == "solver" and isinstance(value, dict)
-                       and isinstance(base.get(key), dict)
-                       and value.get("name", base[key].get("name")) == base[key].get("name"))
+        same_solver = (key == "solver" and isinstance(value, dict) and "name" not in value
+                       and isinstance(base.get(key), dict))
         if (key in ("case", "run", "robust") or same_solver) and isinstance(value, dict) \
                 and isinstance(base.get(key), dict):
             merged[key] = {**base[key], **value}

@@ -121,7 +121,8 @@ def test_extends_through_a_symlink_loop_or_itself(tmp_path):
 
 def test_a_solver_table_extending_the_same_solver_merges_key_by_key(tmp_path):
     """A file extending vcb_velocity_robust.toml (DE-gr) with ``population = 100`` alone
-    keeps the base's generations and F/CR; naming another solver replaces the table."""
+    keeps the base's generations and F/CR; a [solver] with a name replaces the table, the
+    same solver's too (fast_switch_robust.toml drops fast_switch_de.toml's polish so)."""
     case = tmp_path / "c.toml"
     base = (CONFIGS / "vcb_velocity_robust.toml").as_posix()
     case.write_text(f'extends = "{base}"\n[solver]\npopulation = 100\n')
@@ -131,6 +132,8 @@ def test_a_solver_table_extending_the_same_solver_merges_key_by_key(tmp_path):
     case.write_text(f'extends = "{base}"\n[solver]\nname = "pso"\n')
     swarm = load(case).solver
     assert swarm.name == "pso" and not hasattr(swarm, "mutation_factor")
+    assert load(CONFIGS / "fast_switch_robust.toml").solver.polish is None
+    assert load(CONFIGS / "fast_switch_de.toml").solver.polish is not None
 
 
 # ---- did you mean (issue #34): a near name is offered for every unknown name
