@@ -48,8 +48,11 @@ OBJECTIVES: dict[str, tuple[str, list[str]]] = {
     "vcb_velocity": ("vcb_velocity.toml", ["solver.evaluations=15000"]),
     "emb": ("emb.toml", ["solver.iterations=100", "solver.polish.evaluations=3000"]),
     "fast_switch_de": ("fast_switch_de.toml", ["solver.generations=200"]),
+    # 120 generations: with the shipped 30 mm base circle and buffer (issue #33) designs
+    # meet every nominal constraint after ~50, so the draws are what is compared (at 40
+    # no solver sampled a candidate and the table compared the nominal screen alone)
     "vcb_velocity_robust": ("vcb_velocity_robust.toml", [
-        "solver.population=20", "solver.generations=40", "robust.samples=8",
+        "solver.population=20", "solver.generations=120", "robust.samples=8",
         "robust.check_samples=200"]),
 }
 SEEDS = 5

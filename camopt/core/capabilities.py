@@ -119,6 +119,12 @@ class Stochastic(Protocol):
         """The best design this repeat saw whose nominal evaluation is feasible, or None."""
         ...
 
+    def draw_dependent(self, ev: Evaluation) -> NDArray:
+        """(n,) bool: the rows of an evaluation of this problem that depend on the draws.
+        A screened candidate's do not (its columns are its nominal design's), so a solver
+        that evaluates its parents again on new draws need not evaluate those."""
+        ...
+
     def final_check(self, best: NDArray, seen: Sequence[NDArray], seed: int,
                     progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
         """The run's check of its best design and of the best of the repeats' ``seen``

@@ -426,6 +426,13 @@ class RobustProblem(Problem, Stochastic):
     def nominal_design(self) -> NDArray | None:
         return None if self.nominal_best is None else self.nominal_best[0]
 
+    def draw_dependent(self, ev: Evaluation) -> NDArray:
+        """The rows that were sampled: with ``screen`` an unsampled candidate's columns are
+        its nominal design's (its yield estimate is NaN), the same on any draws."""
+        if not self.plan.spec.screen:
+            return np.ones(len(ev.f), dtype=bool)
+        return np.isfinite(np.asarray(ev.extras[YIELD], dtype=float))
+
     def final_check(self, best: NDArray, seen: Sequence[NDArray], seed: int,
                     progress: RowsDone | None = None) -> dict[str, Any]:
         """The best design and the best nominally feasible design ``seen`` (lowest nominal

@@ -77,6 +77,7 @@ class DEGR(Polishing, Solver):
         self._trial = False
         # parents are evaluated again on each generation's draws (Stochastic's docstring)
         self.redraws = isinstance(problem, Stochastic)
+        self._again = np.arange(0)  # the parents evaluated again with the trials
 
     def max_iterations(self) -> int:
         return self.options.generations + (self.options.polish is not None)
@@ -96,8 +97,11 @@ class DEGR(Polishing, Solver):
         if self.redraws:
             # the parents again, on this generation's draws: a parent kept for passing an
             # earlier generation's draws by luck would otherwise lead best/1 (and every
-            # comparison) with an evaluation no trial is measured against
-            return np.vstack([snap(self.problem, trial), self.pop])
+            # comparison) with an evaluation no trial is measured against. Only the parents
+            # whose evaluation depends on the draws: a screened one's is its nominal's
+            assert self.ev is not None and isinstance(self.problem, Stochastic)
+            self._again = np.flatnonzero(self.problem.draw_dependent(self.ev))
+            return np.vstack([snap(self.problem, trial), self.pop[self._again]])
         return snap(self.problem, trial)
 
     def tell(self, X: NDArray, ev: Evaluation) -> None:
@@ -110,8 +114,12 @@ class DEGR(Polishing, Solver):
             return
         assert self.ev is not None
         n = len(self.pop)
-        if len(X) == 2 * n and self.redraws:
-            X, ev, self.ev = X[:n], ev.take(slice(0, n)), ev.take(slice(n, 2 * n))
+        if self.redraws and len(X) == n + len(self._again):
+            # the parents evaluated again replace their old rows; the others keep theirs
+            index = np.arange(n)
+            index[self._again] = n + np.arange(len(self._again))
+            self.ev = Evaluation.concat([self.ev, ev.take(slice(n, None))]).take(index)
+            X, ev = X[:n], ev.take(slice(0, n))
         win = ~better(self.ev.f, self.ev.violation, ev.f, ev.violation)  # trial ties win
         self.pop = np.where(win[:, None], X, self.pop)
         self.ev = ev.where(win, self.ev)

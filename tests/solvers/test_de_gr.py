@@ -73,3 +73,39 @@ def test_parents_are_evaluated_again_on_each_generations_draws():
     assert kept.any()
     np.testing.assert_array_equal(solver.ev.g[kept], ev.g[6:][kept])
     np.testing.assert_array_equal(solver.ev.f[kept], ev.f[6:][kept])
+
+
+def test_screened_parents_are_not_evaluated_again():
+    """With screen, a parent whose nominal design breaks a constraint was not sampled: its
+    evaluation is its nominal's on any draws, so the ask after it holds only the sampled
+    parents, and after tell every parent's row equals a fresh evaluation on the current
+    draws (the skipped ones too)."""
+    from camopt.core.capabilities import Stochastic
+    from camopt.engine.driver import prepare
+    from camopt.solvers.de_gr import DEGR, DEGROptions
+    from tests.conftest import CONFIGS
+    from tests.helpers import load
+
+    problem, _ = prepare(load(CONFIGS / "fast_switch_de.toml", "robust.samples=8",
+                              "robust.screen=true"))
+    assert isinstance(problem, Stochastic)
+    solver = DEGR(problem, DEGROptions(population=40, generations=3), np.random.default_rng(4))
+    problem.reseed(np.random.SeedSequence(5))
+    problem.new_generation()
+    first = solver.ask()
+    # six near fast_switch_robust.toml's optimum, which meet every nominal constraint
+    x = problem.from_display({"coils": 17, "sf_mm": 98.78, "sud_mm": 170.41, "s0_mm": 46.48,
+                              "r3_mm": 256.32, "r2_mm": 54.98})
+    first[:6] = x * (1 + 0.003 * np.random.default_rng(3).standard_normal((6, len(x))))
+    first[:6, 0] = 17
+    ev0 = problem.evaluate(first)
+    solver.tell(first, ev0)
+    sampled = problem.draw_dependent(ev0)
+    assert sampled.any() and not sampled.all()  # both kinds among the parents
+    problem.new_generation()
+    both = solver.ask()
+    np.testing.assert_array_equal(both[40:], first[sampled])
+    solver.tell(both, problem.evaluate(both))
+    fresh = problem.evaluate(solver.pop)
+    np.testing.assert_array_equal(solver.ev.g, fresh.g)
+    np.testing.assert_array_equal(solver.ev.f, fresh.f)
