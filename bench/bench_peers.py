@@ -253,13 +253,18 @@ def compare(objective: str, seeds: int, full: bool = False) -> None:
                  if importlib.util.find_spec(module) is not None}
     missing = [name for name in PEERS if name not in available]
     traces: dict[str, list[Trace]] = {"camopt": [], **{name: [] for name in available}}
+    crashed: list[str] = []
     for seed in range(seeds):
         trace = Trace()
         budget = run_camopt(cfg, problem, solver_cls, seed, trace)
         traces["camopt"].append(trace)
         for name, fn in available.items():
             trace = Trace()
-            fn(problem, budget, seed, trace)
+            try:
+                fn(problem, budget, seed, trace)
+            except Exception as exc:  # a peer's own bug: keep what it reached, say so
+                crashed.append(f"{name} (seed {seed}: {type(exc).__name__}: {exc}; "
+                               f"stopped at {trace.nfev} evaluations)")
             traces[name].append(trace)
     best = {name: median_quality([t.best for t in ts]) for name, ts in traces.items()}
     peers = {k: v for k, v in best.items() if k != "camopt"}
@@ -279,6 +284,8 @@ def compare(objective: str, seeds: int, full: bool = False) -> None:
               f"{'-' if not np.isfinite(cpu) else format(cpu, '.2f')} |")
     if missing:
         print(f"not installed: {', '.join(missing)}")
+    for line in crashed:
+        print(f"raised: {line}")
     if best_peer is not None:
         ahead = at_least(best["camopt"], quality)
         ours = statistics.median(t.cpu_to(quality) for t in traces["camopt"])
@@ -289,6 +296,10 @@ def compare(objective: str, seeds: int, full: bool = False) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
+    import warnings
+
+    # pycma's notes on injected and rescaled solutions are its own business, not a result
+    warnings.filterwarnings("ignore", module=r"cma\..*")
     args = list(sys.argv[1:] if argv is None else argv)
     full = "--full" in args
     args = [a for a in args if a != "--full"]
