@@ -2,10 +2,11 @@
 
 Built-in cases are the sub-packages of :mod:`camopt.cases`, found by listing them (so a
 source checkout without installed metadata works, and no list names them); each
-registers its spec when imported. Packages outside camopt add cases through the
-``camopt.cases`` entry-point group, whose entry points name a ``CaseSpec`` (or a module
-that registers one). Nothing else in camopt names a case kind: the CLI, archive, plots
-and export ask the registry.
+registers its spec when imported (or, for the names in its ``DEFERRED_SPECS``, when the
+name is first read: a package of several kinds builds the rarer ones on demand). Packages
+outside camopt add cases through the ``camopt.cases`` entry-point group, whose entry
+points name a ``CaseSpec`` (or a module that registers one). Nothing else in camopt names
+a case kind: the CLI, archive, plots and export ask the registry.
 
 A look-up by kind (:func:`get_case`, :func:`case_configs`) imports only the package the
 kind's entry point names (pyproject.toml declares every built-in case there), not every
@@ -251,7 +252,9 @@ def _load() -> None:
     package = importlib.import_module("camopt.cases")
     for module in pkgutil.iter_modules(package.__path__, "camopt.cases."):
         if module.ispkg:  # one package per built-in case
-            importlib.import_module(module.name)
+            case = importlib.import_module(module.name)
+            for name in getattr(case, "DEFERRED_SPECS", ()):  # registered when asked for
+                getattr(case, name)
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         _load_entry_point(ep)
 

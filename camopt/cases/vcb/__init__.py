@@ -1,8 +1,15 @@
 """12 kV VCB closing mechanism, Kang, Huang & Yang (2023), Machines 11:150: the cam and
 closing springs (step 1), the four-bar (step 2), and the identification of what the paper
-leaves out (kind ``vcb_identify``)."""
+leaves out (kind ``vcb_identify``).
+
+The identification kinds' specs (``VCB_IDENTIFY``, ``VCB_IDENTIFY_DYNAMICS``) and problems
+are built and registered on first use (PEP 562; their entry points name them, and the
+registry asks for :data:`DEFERRED_SPECS` when it lists every case): a command on a ``vcb``
+case file does not import :mod:`camopt.cases.vcb.identify` (issue #36)."""
 
 from __future__ import annotations
+
+from typing import Any
 
 from camopt.cases.registry import (
     ArchiveLoader,
@@ -19,7 +26,6 @@ from camopt.cases.vcb.config import (
     VcbDynamicsIdentifyConfig,
     VcbIdentifyConfig,
 )
-from camopt.cases.vcb.identify import VcbDynamicsIdentification, VcbIdentification
 from camopt.cases.vcb.paper import PAPER
 from camopt.cases.vcb.problem import VcbProblem
 from camopt.cases.vcb.requirements import requirements
@@ -130,15 +136,38 @@ VCB = register_case(CaseSpec(
     reference="vendor, Sec 2.3 and Table 2",
     calibration="camopt.cases.vcb.calibration_report:run",
 ))
-VCB_IDENTIFY = register_case(CaseSpec(
-    kind="vcb_identify", config=VcbIdentifyConfig, problem=VcbIdentification,
-    default_solver="de_gr",
-    summary="fits the VCB parameters the paper omits to the numbers it reports",
-    paper_source=SOURCE,
-))
-VCB_IDENTIFY_DYNAMICS = register_case(CaseSpec(
-    kind="vcb_identify_dynamics", config=VcbDynamicsIdentifyConfig,
-    problem=VcbDynamicsIdentification, default_solver="de_gr",
-    summary="fits the VCB dynamics' parameters to the vendor design's seven ADAMS data",
-    paper_source=SOURCE,
-))
+DEFERRED_SPECS = ("VCB_IDENTIFY", "VCB_IDENTIFY_DYNAMICS")
+"""Specs registered when first asked for (:func:`camopt.cases.registry.cases` asks)."""
+_IDENTIFY = ("VcbIdentification", "VcbDynamicsIdentification")
+
+
+def _register_identifications() -> None:
+    """Build and register the identification kinds' specs (imports their problems)."""
+    from camopt.cases.vcb.identify import VcbDynamicsIdentification, VcbIdentification
+
+    specs = {
+        "VCB_IDENTIFY": CaseSpec(
+            kind="vcb_identify", config=VcbIdentifyConfig, problem=VcbIdentification,
+            default_solver="de_gr",
+            summary="fits the VCB parameters the paper omits to the numbers it reports",
+            paper_source=SOURCE,
+        ),
+        "VCB_IDENTIFY_DYNAMICS": CaseSpec(
+            kind="vcb_identify_dynamics", config=VcbDynamicsIdentifyConfig,
+            problem=VcbDynamicsIdentification, default_solver="de_gr",
+            summary="fits the VCB dynamics' parameters to the vendor design's seven ADAMS "
+            "data",
+            paper_source=SOURCE,
+        ),
+    }
+    for name, spec in specs.items():
+        globals()[name] = register_case(spec)
+    globals().update(VcbIdentification=VcbIdentification,
+                     VcbDynamicsIdentification=VcbDynamicsIdentification)
+
+
+def __getattr__(name: str) -> Any:
+    if name in DEFERRED_SPECS or name in _IDENTIFY:
+        _register_identifications()
+        return globals()[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
