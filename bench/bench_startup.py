@@ -154,7 +154,8 @@ def main(before: Path | None = None) -> None:
         if name.startswith("floor: "):
             print(f"{name:36s} {cpu:.3f} s CPU: ratio {cpu / base:.2f} (not camopt's)")
             continue
-        target = "" if name in UNTARGETED else " (target <= 1.5)"
+        untargeted = name.removeprefix("before: ") in UNTARGETED
+        target = "" if untargeted else " (target <= 1.5)"
         print(f"camopt {name:29s} {cpu:.3f} s CPU: ratio {cpu / base:.2f}{target}")
 
 

@@ -96,7 +96,7 @@ class CommandsOnDemand(typer.Typer):
 
     _chosen = False  # the command modules are imported, or being imported
 
-    @property  # type: ignore[override]
+    @property
     def registered_commands(self) -> list[Any]:
         if not self._chosen:
             load_commands()
