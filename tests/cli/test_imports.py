@@ -170,3 +170,14 @@ def test_every_command_is_where_commands_says() -> None:
     found = {info.name or info.callback.__name__: info.callback.__module__
              for info in app.registered_commands}
     assert found == {name: f"camopt.cli.{module}" for name, module in COMMANDS.items()}
+
+
+def test_init_imports_its_case_s_config_not_its_model() -> None:
+    """``camopt init vcb`` prints the config's template: the VCB package is imported, its
+    problem, dynamics and identifications are not (the spec names its problem as
+    ``"module:Class"``, imported when a problem is built: issue #36)."""
+    code, modules = loaded_after("init", "vcb")
+    assert code in (0, None)
+    assert "camopt.cases.vcb.config" in modules
+    assert not modules & {"camopt.cases.vcb.problem", "camopt.cases.vcb.dynamics",
+                          "camopt.cases.vcb.identify"}

@@ -2,14 +2,15 @@
 closing springs (step 1), the four-bar (step 2), and the identification of what the paper
 leaves out (kind ``vcb_identify``).
 
-The identification kinds' specs (``VCB_IDENTIFY``, ``VCB_IDENTIFY_DYNAMICS``) and problems
-are built and registered on first use (PEP 562; their entry points name them, and the
-registry asks for :data:`DEFERRED_SPECS` when it lists every case): a command on a ``vcb``
-case file does not import :mod:`camopt.cases.vcb.identify` (issue #36)."""
+The specs name their problems as ``"module:Class"`` (imported when a problem is built,
+:func:`camopt.cases.registry.problem_at`), and ``VcbProblem``, ``VcbIdentification`` and
+``VcbDynamicsIdentification`` are imported from here on first use (PEP 562): ``camopt init
+vcb`` or ``show`` of a VCB archive do not import the model and its dynamics, nor a
+``vcb`` case the identifications (issue #36)."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from camopt.cases.registry import (
     ArchiveLoader,
@@ -18,6 +19,7 @@ from camopt.cases.registry import (
     ProfileCircle,
     ProfileCurve,
     ToleranceClass,
+    problem_at,
     register_case,
 )
 from camopt.cases.vcb.config import (
@@ -27,11 +29,17 @@ from camopt.cases.vcb.config import (
     VcbIdentifyConfig,
 )
 from camopt.cases.vcb.paper import PAPER
-from camopt.cases.vcb.problem import VcbProblem
 from camopt.cases.vcb.requirements import requirements
 from camopt.config.models import CaseConfig
 from camopt.errors import ConfigError
 from camopt.units import DEG
+
+if TYPE_CHECKING:  # imported on first use: __getattr__ below
+    from camopt.cases.vcb.identify import (
+        VcbDynamicsIdentification as VcbDynamicsIdentification,
+    )
+    from camopt.cases.vcb.identify import VcbIdentification as VcbIdentification
+    from camopt.cases.vcb.problem import VcbProblem as VcbProblem
 
 SOURCE = "Kang, Huang & Yang (2023), Machines 11:150"
 TOLERANCES = {  # class "standard", docs/tolerance.md, "Tolerance classes"
@@ -115,7 +123,8 @@ def resolve_cam_archive(config: CaseConfig, load: ArchiveLoader) -> CaseConfig:
 
 
 VCB = register_case(CaseSpec(
-    kind="vcb", config=VcbConfig, problem=VcbProblem, default_solver="de_gr",
+    kind="vcb", config=VcbConfig, problem=problem_at("camopt.cases.vcb.problem:VcbProblem"),
+    default_solver="de_gr",
     summary="VCB closing mechanism: cam + closing springs (step 1) or four-bar (step 2)",
     paper_source=SOURCE, figures="camopt.cases.vcb.figures:figures", paper=PAPER,
     profiles=(ProfileCurve("cam-profile", ("profile_x_mm",), ("profile_y_mm",)),
@@ -136,38 +145,27 @@ VCB = register_case(CaseSpec(
     reference="vendor, Sec 2.3 and Table 2",
     calibration="camopt.cases.vcb.calibration_report:run",
 ))
-DEFERRED_SPECS = ("VCB_IDENTIFY", "VCB_IDENTIFY_DYNAMICS")
-"""Specs registered when first asked for (:func:`camopt.cases.registry.cases` asks)."""
-_IDENTIFY = ("VcbIdentification", "VcbDynamicsIdentification")
+VCB_IDENTIFY = register_case(CaseSpec(
+    kind="vcb_identify", config=VcbIdentifyConfig,
+    problem=problem_at("camopt.cases.vcb.identify:VcbIdentification"),
+    default_solver="de_gr",
+    summary="fits the VCB parameters the paper omits to the numbers it reports",
+    paper_source=SOURCE,
+))
+VCB_IDENTIFY_DYNAMICS = register_case(CaseSpec(
+    kind="vcb_identify_dynamics", config=VcbDynamicsIdentifyConfig,
+    problem=problem_at("camopt.cases.vcb.identify:VcbDynamicsIdentification"),
+    default_solver="de_gr",
+    summary="fits the VCB dynamics' parameters to the vendor design's seven ADAMS data",
+    paper_source=SOURCE,
+))
 
-
-def _register_identifications() -> None:
-    """Build and register the identification kinds' specs (imports their problems)."""
-    from camopt.cases.vcb.identify import VcbDynamicsIdentification, VcbIdentification
-
-    specs = {
-        "VCB_IDENTIFY": CaseSpec(
-            kind="vcb_identify", config=VcbIdentifyConfig, problem=VcbIdentification,
-            default_solver="de_gr",
-            summary="fits the VCB parameters the paper omits to the numbers it reports",
-            paper_source=SOURCE,
-        ),
-        "VCB_IDENTIFY_DYNAMICS": CaseSpec(
-            kind="vcb_identify_dynamics", config=VcbDynamicsIdentifyConfig,
-            problem=VcbDynamicsIdentification, default_solver="de_gr",
-            summary="fits the VCB dynamics' parameters to the vendor design's seven ADAMS "
-            "data",
-            paper_source=SOURCE,
-        ),
-    }
-    for name, spec in specs.items():
-        globals()[name] = register_case(spec)
-    globals().update(VcbIdentification=VcbIdentification,
-                     VcbDynamicsIdentification=VcbDynamicsIdentification)
+_PROBLEMS = {"VcbProblem": VCB, "VcbIdentification": VCB_IDENTIFY,
+             "VcbDynamicsIdentification": VCB_IDENTIFY_DYNAMICS}
 
 
 def __getattr__(name: str) -> Any:
-    if name in DEFERRED_SPECS or name in _IDENTIFY:
-        _register_identifications()
-        return globals()[name]
+    """The problem classes, imported on first use (their specs name them)."""
+    if name in _PROBLEMS:
+        return _PROBLEMS[name].problem
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
