@@ -14,7 +14,13 @@ evaluates the design 300 times: that is measured apart, ``show (older)``, withou
 Bytecode: the children run with ``PYTHONPYCACHEPREFIX`` set to a temporary folder and
 ``PYTHONDONTWRITEBYTECODE`` unset, after one warm-up round, so camopt's modules load from
 cached bytecode as they do for any installed copy (an editable checkout under
-``PYTHONDONTWRITEBYTECODE=1`` compiles ~70 modules on every start: +0.15-0.35 s)."""
+``PYTHONDONTWRITEBYTECODE=1`` compiles ~70 modules on every start: +0.15-0.35 s).
+
+Floors: what is not camopt's, each also a ratio to the base (issue #36). A bare typer app
+of two commands (typer converts a command's parameters through pydantic: ~0.07 s of
+it), ``import numpy, typer, pydantic`` and ``import h5py``, both with BLAS told one thread
+as the command line tells it (``camopt.core.perf.one_blas_thread_on_load``): ``validate``
+needs the second's libraries, ``show`` and ``runs`` those and h5py's."""
 
 from __future__ import annotations
 
@@ -34,12 +40,49 @@ CASE = ROOT / "configs" / "vcb_velocity.toml"
 RUN = ROOT / "configs" / "fast_switch.toml"
 
 
-def _cpu(args: list[str], env: dict[str, str]) -> float:
+def _cpu(args: list[str], env: dict[str, str], cwd: Path = ROOT) -> float:
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     subprocess.run(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True,
-                   env=env, cwd=ROOT)
+                   env=env, cwd=cwd)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
+
+
+BARE_TYPER = """import typer
+
+app = typer.Typer()
+
+
+@app.command()
+def hello(name: str, count: int = 1) -> None:
+    print(name * count)
+
+
+@app.command()
+def bye() -> None:
+    print("bye")
+
+
+app()
+"""
+"""The floor of any typer command line: two commands, one run with an argument."""
+
+
+def floors(folder: Path) -> dict[str, list[str]]:
+    """What is not camopt's, measured beside it (:data:`BARE_TYPER` written to ``folder``)."""
+    script = folder / "bare_typer.py"
+    script.write_text(BARE_TYPER)
+    return {
+        "bare typer app": [sys.executable, str(script), "hello", "x"],
+        "import numpy, typer, pydantic": [sys.executable, "-c",
+                                          "import numpy, typer, pydantic"],
+        "import h5py": [sys.executable, "-c", "import h5py"],
+    }
+
+
+ONE_BLAS_THREAD = dict.fromkeys(("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                                 "BLIS_NUM_THREADS"), "1")
+"""The floors' BLAS setting: the command line's (numpy then starts no thread per core)."""
 
 
 def commands(folder: Path) -> dict[str, list[str]]:
@@ -74,32 +117,47 @@ def write_archives(folder: Path, env: dict[str, str]) -> None:
     shutil.copy(first, second)
 
 
-def measure(rounds: int = ROUNDS) -> dict[str, float]:
-    """Median CPU seconds per command, rounds interleaved (load hits every command)."""
+def measure(rounds: int = ROUNDS, before: Path | None = None) -> dict[str, float]:
+    """Median CPU seconds per command, rounds interleaved (load hits every command);
+    ``before``: another checkout of camopt (an earlier commit) whose commands are measured
+    in the same rounds, as ``before: NAME``."""
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp) / "runs"
         folder.mkdir()
         env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
         env["PYTHONPYCACHEPREFIX"] = str(Path(tmp) / "pycache")
         write_archives(folder, env)
-        cmds = commands(folder)
-        for args in cmds.values():  # warm-up: bytecode written, files in the page cache
-            _cpu(args, env)
+        floor_env = {**env, **ONE_BLAS_THREAD}
+        cmds = {**{f"floor: {name}": (args, floor_env, ROOT)
+                   for name, args in floors(Path(tmp)).items()},
+                **{name: (args, env, ROOT) for name, args in commands(folder).items()}}
+        if before is not None:
+            old = {**env, "PYTHONPATH": str(before)}
+            cmds.update({f"before: {name}": (args, old, before)
+                         for name, args in commands(folder).items() if args[1] == "-m"})
+        for args, cmd_env, cwd in cmds.values():  # warm-up: bytecode written, page cache
+            _cpu(args, cmd_env, cwd)
         times: dict[str, list[float]] = {name: [] for name in cmds}
         for _ in range(rounds):
-            for name, args in cmds.items():
-                times[name].append(_cpu(args, env))
+            for name, (args, cmd_env, cwd) in cmds.items():
+                times[name].append(_cpu(args, cmd_env, cwd))
     return {name: statistics.median(t) for name, t in times.items()}
 
 
-def main() -> None:
-    medians = measure()
+def main(before: Path | None = None) -> None:
+    """The table; ``before`` (``python -m bench.bench_startup --before DIR``): the
+    commands of another checkout too, in the same rounds."""
+    medians = measure(before=before)
     base = medians.pop("import numpy, scipy")
     print(f"python -c 'import numpy, scipy': {base:.3f} s CPU (median of {ROUNDS})")
     for name, cpu in medians.items():
-        target = "" if name in UNTARGETED else " (target <= 1.5)"
-        print(f"camopt {name:12s} {cpu:.3f} s CPU: ratio {cpu / base:.2f}{target}")
+        if name.startswith("floor: "):
+            print(f"{name:36s} {cpu:.3f} s CPU: ratio {cpu / base:.2f} (not camopt's)")
+            continue
+        untargeted = name.removeprefix("before: ") in UNTARGETED
+        target = "" if untargeted else " (target <= 1.5)"
+        print(f"camopt {name:29s} {cpu:.3f} s CPU: ratio {cpu / base:.2f}{target}")
 
 
 if __name__ == "__main__":
-    main()
+    main(Path(sys.argv[2]).resolve() if sys.argv[1:2] == ["--before"] else None)

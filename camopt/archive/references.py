@@ -8,11 +8,14 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from camopt.cases import get_case
 from camopt.config import LoadedConfig
-from camopt.core.runview import RunView
 from camopt.errors import ArchiveError, ConfigError
+
+if TYPE_CHECKING:  # a case that refers to no archive needs no run records
+    from camopt.core.runview import RunView
 
 
 def resolve_references(config: LoadedConfig) -> LoadedConfig:

@@ -112,10 +112,14 @@ class OverlayCurve:
 class CaseSpec:
     """Everything camopt needs to know about one mechanism.
 
-    ``figures`` is ``"module:function"``, imported only when figures are drawn (matplotlib
-    is slow to import); the function takes a :class:`~camopt.core.runview.RunView` and returns
-    ``{name: Figure}``. ``paper`` holds the paper's reported values, used to mark figures
-    only, never by a model. ``resolve`` fills config values that come from other run
+    ``problem`` is the Problem class, or ``"module:Class"`` (:func:`problem_at`) imported
+    when ``spec.problem`` is first read (building a problem, listing solvers): a command
+    that reads a case file or archive without building its problem (``init``, ``show``)
+    does not import the case's model (issue #36). ``figures`` is ``"module:function"``,
+    imported only when figures are drawn (matplotlib is slow to import); the function
+    takes a :class:`~camopt.core.runview.RunView` and returns ``{name: Figure}``.
+    ``paper`` holds the paper's reported values, used to mark figures only, never by a
+    model. ``resolve`` fills config values that come from other run
     archives (VCB step 2's cam) before a run.
     """
 
@@ -215,6 +219,34 @@ class CaseSpec:
             return None
         module, _, name = self.outline.partition(":")
         return getattr(importlib.import_module(module), name)(run, step)
+
+
+class _ProblemClass:
+    """:attr:`CaseSpec.problem`: stored as given (a class or ``"module:Class"``), read as
+    the class, imported on the first read and kept."""
+
+    def __get__(self, spec: CaseSpec | None, owner: Any = None) -> type[Problem]:
+        if spec is None:  # the dataclass sees no default (and the class no attribute)
+            raise AttributeError("problem")
+        problem = spec.__dict__["_problem"]
+        if isinstance(problem, str):
+            module, _, name = problem.partition(":")
+            problem = getattr(importlib.import_module(module), name)
+            spec.__dict__["_problem"] = problem
+        return problem
+
+    def __set__(self, spec: CaseSpec, problem: type[Problem] | str) -> None:
+        spec.__dict__["_problem"] = problem
+
+
+CaseSpec.problem = _ProblemClass()  # type: ignore[assignment]  # after @dataclass: no default
+
+
+def problem_at(ref: str) -> type[Problem]:
+    """A case's Problem class named ``"module:Class"``, for :class:`CaseSpec`'s ``problem``:
+    imported when the spec's ``problem`` is first read (its package need not import the
+    model to register the case)."""
+    return ref  # type: ignore[return-value]  # read through _ProblemClass as the class
 
 
 _REGISTRY: dict[str, CaseSpec] = {}

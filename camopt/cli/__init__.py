@@ -1,22 +1,14 @@
-"""Command-line interface: thin typer commands, one module each, over one function each."""
+"""Command-line interface: thin typer commands, one module each, over one function each.
+
+The command modules are imported when the application's commands are first asked for
+(:class:`camopt.cli.app.CommandsOnDemand`): ``camopt CMD`` imports CMD's module only."""
 
 from __future__ import annotations
 
 import os
 import sys
 
-from camopt.cli import (  # noqa: F401  (commands)
-    calibrate,
-    catalog,
-    compare,
-    listing,
-    outputs,
-    run,
-    show,
-    sweep,
-    tolerance,
-)
-from camopt.cli.app import app, internal_error
+from camopt.cli.app import app, internal_error, load_commands
 from camopt.core import perf
 from camopt.engine import interrupts
 
@@ -28,6 +20,7 @@ def main() -> None:
     traceback."""
     perf.one_blas_thread_on_load()
     interrupts.install()
+    load_commands(sys.argv[1:])
     try:
         app(standalone_mode=True)
     except SystemExit:

@@ -15,7 +15,6 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
-import click
 import typer
 from typer.core import TyperGroup
 
@@ -79,8 +78,53 @@ def unwrap(text: str) -> str:
     return "\n\n".join(" ".join(p.split()) for p in inspect.cleandoc(text).split("\n\n"))
 
 
+COMMANDS = {"init": "catalog", "validate": "catalog", "solvers": "catalog",
+            "calibrate": "calibrate", "run": "run", "show": "show", "tolerance": "tolerance",
+            "report": "outputs", "export": "outputs", "plot": "outputs",
+            "dashboard": "outputs", "compare": "compare", "sweep": "sweep",
+            "runs": "listing"}
+"""Each command's module in :mod:`camopt.cli` (tests/cli/test_imports.py checks that every
+command is here and defined where it says)."""
+
+
+class CommandsOnDemand(typer.Typer):
+    """The typer application whose command modules are imported when its commands are
+    first asked for: all of them (``--help``, tests' ``CliRunner``), or only the module of
+    the command a command line names (:func:`load_commands`, from ``camopt.cli.main``),
+    so ``camopt validate`` builds and imports one module's commands, not all 14
+    (issue #36)."""
+
+    _chosen = False  # the command modules are imported, or being imported
+
+    @property
+    def registered_commands(self) -> list[Any]:
+        if not self._chosen:
+            load_commands()
+        return self._commands
+
+    @registered_commands.setter
+    def registered_commands(self, value: list[Any]) -> None:
+        self._commands = value
+
+
+def load_commands(args: Sequence[str] | None = None) -> None:
+    """Import the command modules: the one of the command ``args`` start with (a command
+    line), else every one (no command first: ``--help``, ``--version``, an unknown name
+    that typer lists the commands for, shell completion)."""
+    import importlib
+    import os
+
+    app._chosen = True
+    completing = any(k.startswith("_") and k.endswith("_COMPLETE") for k in os.environ)
+    names = set(COMMANDS.values())
+    if args and args[0] in COMMANDS and not completing:
+        names = {COMMANDS[args[0]]}
+    for name in sorted(names):
+        importlib.import_module(f"camopt.cli.{name}")
+
+
 # -h as --help on every command; typer's --install-completion / --show-completion
-app = typer.Typer(cls=WorkflowGroup, rich_markup_mode="rich", no_args_is_help=True,
+app = CommandsOnDemand(cls=WorkflowGroup, rich_markup_mode="rich", no_args_is_help=True,
                   add_completion=True,
                   context_settings={"help_option_names": ["-h", "--help"]},
                   help="Batch optimiser for spring-actuated mechanisms.")
@@ -121,19 +165,29 @@ def errors() -> Iterator[None]:
         interrupts.handled()
         print("error: interrupted; no archive written", file=sys.stderr)
         raise typer.Exit(130) from None
-    except (typer.Exit, typer.Abort, click.exceptions.Exit, click.exceptions.ClickException,
-            click.exceptions.Abort):
+    except (typer.Exit, typer.Abort):
         raise
-    except MemoryError:
-        print("error: out of memory", file=sys.stderr)
-        raise typer.Exit(2) from None
     except Exception as exc:
+        if is_click_exception(exc):
+            raise
+        if isinstance(exc, MemoryError):
+            print("error: out of memory", file=sys.stderr)
+            raise typer.Exit(2) from None
         if is_validation_error(exc):
             print(f"error: {str(exc).splitlines()[0]}", file=sys.stderr)
             raise typer.Exit(2) from None
         # a bug: still one line, never a traceback (tests keep it unused)
         print(internal_error(exc), file=sys.stderr)
         raise typer.Exit(2) from None
+
+
+def is_click_exception(exc: BaseException) -> bool:
+    """``exc`` is one of click's own exits, aborts or usage errors, passed on to typer
+    (click is not imported to ask: only code that imported it can raise them; typer
+    vendors its own click, whose exceptions typer's are)."""
+    click = sys.modules.get("click.exceptions")
+    return click is not None and isinstance(
+        exc, (click.Exit, click.ClickException, click.Abort))
 
 
 def is_validation_error(exc: BaseException) -> bool:
@@ -156,7 +210,7 @@ def load_case(case: Path, overrides: Sequence[str] | None = None) -> LoadedConfi
     """A case file validated against every registered case and solver, with archive
     references (e.g. VCB step 2's ``cam_archive``) read."""
     from camopt import archive
-    from camopt.engine.driver import load
+    from camopt.engine.setup import load
 
     return archive.resolve_references(load(case, list(overrides or [])))
 

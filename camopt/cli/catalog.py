@@ -20,7 +20,7 @@ def validate(case: Annotated[Path, typer.Argument(help="case file (TOML)")],
     design can reach, or one inherited from a file whose case table differs."""
     import numpy as np
 
-    from camopt.engine.driver import build_solver, prepare
+    from camopt.engine.setup import build_solver, prepare
     from camopt.engine.targets import target_warnings
 
     with errors():

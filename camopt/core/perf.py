@@ -22,6 +22,7 @@ import sys
 _M_TRIM_THRESHOLD = -1
 _M_MMAP_THRESHOLD = -3
 _done = False
+_one_on_load = False  # BLAS was told one thread before numpy loaded
 
 
 @functools.cache
@@ -62,11 +63,19 @@ def pin_blas_threads() -> None:
 
     scipy's BLAS (a library of its own, loaded with ``scipy.linalg``) is not loaded here
     (``validate`` would pay ~0.1 s CPU for it): OpenBLAS reads ``OPENBLAS_NUM_THREADS``
-    when it loads, so one loaded later starts on one thread (tests/core/test_perf.py)."""
+    when it loads, so one loaded later starts on one thread (tests/core/test_perf.py).
+
+    When :func:`one_blas_thread_on_load` ran before numpy loaded (the command line) and
+    nothing has imported threadpoolctl since (the one way a caller raises a loaded BLAS's
+    threads), every BLAS in the process read one thread when it loaded: threadpoolctl is
+    not imported (~5 ms, ``camopt validate`` evaluates nothing; issue #36)."""
     import numpy  # noqa: F401  (loads numpy's BLAS, so threadpoolctl finds it)
-    from threadpoolctl import threadpool_limits
 
     one_blas_thread_on_load()  # for a BLAS loaded later (read when it loads)
+    if _one_on_load and "threadpoolctl" not in sys.modules:
+        return
+    from threadpoolctl import threadpool_limits
+
     threadpool_limits(limits=1, user_api="blas")  # again each time: a caller may raise it
 
 
@@ -85,8 +94,11 @@ def one_blas_thread_on_load() -> None:
     nothing pays for (issue #36, bench/bench_startup.py)."""
     import os
 
+    global _one_on_load
     for name in BLAS_THREADS:
         os.environ[name] = "1"
+    if "numpy" not in sys.modules:  # numpy's BLAS, and any later, will read it
+        _one_on_load = True
 
 
 _PR_SET_PDEATHSIG = 1

@@ -145,3 +145,39 @@ def test_show_and_runs_load_no_solver_library(command: str, current_archive: str
     if command == "show":  # the archive's case and solver only
         assert _loaded(modules, "cases") & CASES == {"fast_switch"}
         assert _loaded(modules, "solvers") & SOLVERS == {"enumeration"}
+
+
+def test_validate_imports_its_command_module_only_and_not_the_engine_s_loop() -> None:
+    """``camopt validate`` imports ``camopt.cli.catalog`` (init, validate, solvers), not the
+    other command modules; ``camopt.engine.setup``, not the driver's loop; not the VCB
+    identification kinds; and not threadpoolctl (BLAS was told one thread before numpy
+    loaded): issue #36."""
+    code, modules = loaded_after("validate", "configs/vcb_velocity.toml")
+    assert code in (0, None)
+    commands = _loaded(modules, "cli") - {"app", "console"}
+    assert commands == {"catalog"}, commands
+    assert "camopt.engine.setup" in modules
+    assert not modules & {"camopt.engine.driver", "camopt.engine.robust",
+                          "camopt.cases.vcb.identify", "threadpoolctl", "click"}
+
+
+def test_every_command_is_where_commands_says() -> None:
+    """:data:`camopt.cli.app.COMMANDS` names each command's module (what ``camopt CMD``
+    imports): the application's commands are exactly its keys, each defined there."""
+    from camopt.cli import app
+    from camopt.cli.app import COMMANDS
+
+    found = {info.name or info.callback.__name__: info.callback.__module__
+             for info in app.registered_commands}
+    assert found == {name: f"camopt.cli.{module}" for name, module in COMMANDS.items()}
+
+
+def test_init_imports_its_case_s_config_not_its_model() -> None:
+    """``camopt init vcb`` prints the config's template: the VCB package is imported, its
+    problem, dynamics and identifications are not (the spec names its problem as
+    ``"module:Class"``, imported when a problem is built: issue #36)."""
+    code, modules = loaded_after("init", "vcb")
+    assert code in (0, None)
+    assert "camopt.cases.vcb.config" in modules
+    assert not modules & {"camopt.cases.vcb.problem", "camopt.cases.vcb.dynamics",
+                          "camopt.cases.vcb.identify"}

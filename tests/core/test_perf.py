@@ -56,3 +56,33 @@ def test_numpy_loaded_after_the_command_line_s_setting_starts_on_one_thread() ->
     result = json.loads(done.stdout.strip().splitlines()[-1])
     assert not result["before"]
     assert result["threads"] and all(n == 1 for n in result["threads"]), result
+
+
+SKIPPED = """
+import json, os, sys
+for name in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS",
+             "OMP_NUM_THREADS"):
+    os.environ.pop(name, None)
+from camopt.core.perf import one_blas_thread_on_load, pin_blas_threads
+one_blas_thread_on_load()
+pin_blas_threads()
+skipped = "threadpoolctl" not in sys.modules
+from threadpoolctl import threadpool_info, threadpool_limits
+threads = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+threadpool_limits(limits=2, user_api="blas")  # a caller raises it: the pin lowers it again
+pin_blas_threads()
+again = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+print(json.dumps({"skipped": skipped, "threads": threads, "again": again}))
+"""
+
+
+def test_pin_after_the_command_line_s_setting_needs_no_threadpoolctl() -> None:
+    """After ``one_blas_thread_on_load`` ran before numpy (the command line), numpy's BLAS
+    started on one thread: the pin imports no threadpoolctl (issue #36), until something
+    has imported it (a caller that may have raised the threads), when it pins again."""
+    done = subprocess.run([sys.executable, "-c", SKIPPED], capture_output=True, text=True,
+                          check=True)
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["skipped"]
+    assert result["threads"] and all(n == 1 for n in result["threads"]), result
+    assert result["again"] and all(n == 1 for n in result["again"]), result

@@ -2,17 +2,22 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 from camopt.cases.emb_cam.config import EmbCamConfig
 from camopt.cases.emb_cam.paper import PAPER
-from camopt.cases.emb_cam.problem import EmbCamProblem
 from camopt.cases.emb_cam.requirements import requirements
 from camopt.cases.registry import (
     CaseSpec,
     ProfileCircle,
     ProfileCurve,
     ToleranceClass,
+    problem_at,
     register_case,
 )
+
+if TYPE_CHECKING:  # imported on first use: __getattr__ below
+    from camopt.cases.emb_cam.problem import EmbCamProblem as EmbCamProblem
 
 TOLERANCES = {  # docs/assumptions.md, "Default tolerances": a ground cam profile
     **{f"r{j}_mm": "±0.01" for j in range(1, 40)},  # key radii (those of the run apply)
@@ -26,7 +31,8 @@ TOLERANCE_CLASSES = {
 }
 
 SPEC = register_case(CaseSpec(
-    kind="emb_cam", config=EmbCamConfig, problem=EmbCamProblem, default_solver="pso",
+    kind="emb_cam", config=EmbCamConfig,
+    problem=problem_at("camopt.cases.emb_cam.problem:EmbCamProblem"), default_solver="pso",
     summary="negative-radius roller cam of an electromechanical brake",
     paper_source="Yan, Chen, Yan & Hang (2023), Actuators 12:329",
     figures="camopt.cases.emb_cam.figures:figures", paper=PAPER,
@@ -37,3 +43,10 @@ SPEC = register_case(CaseSpec(
     reference="paper, Sec 4.4",
     reference_values={k: PAPER[k] for k in ("peak_torque_nm", "clearance_angle_rad")},
 ))
+
+
+def __getattr__(name: str) -> Any:
+    """The problem class, imported on first use (the spec names it)."""
+    if name == "EmbCamProblem":
+        return SPEC.problem
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 from camopt.cases.fast_switch.config import FastSwitchConfig
 from camopt.cases.fast_switch.paper import OPTIMUM, PAPER
-from camopt.cases.fast_switch.problem import FastSwitchProblem
 from camopt.cases.fast_switch.requirements import requirements
-from camopt.cases.registry import CaseSpec, ToleranceClass, register_case
+from camopt.cases.registry import CaseSpec, ToleranceClass, problem_at, register_case
+
+if TYPE_CHECKING:  # imported on first use: __getattr__ below
+    from camopt.cases.fast_switch.problem import FastSwitchProblem as FastSwitchProblem
 
 TOLERANCES = {  # docs/assumptions.md, "Default tolerances"
     "sud_mm": "±1",  # undeformed (free) spring length
@@ -26,7 +30,8 @@ TOLERANCE_CLASSES = {
 }
 
 SPEC = register_case(CaseSpec(
-    kind="fast_switch", config=FastSwitchConfig, problem=FastSwitchProblem,
+    kind="fast_switch", config=FastSwitchConfig,
+    problem=problem_at("camopt.cases.fast_switch.problem:FastSwitchProblem"),
     default_solver="enumeration",
     summary="minimum closure time of a spring-driven slider-crank switch",
     paper_source="Clauss & Papalambros (1982), UM-MEAM-81-3",
@@ -34,3 +39,10 @@ SPEC = register_case(CaseSpec(
     tolerance_classes=TOLERANCE_CLASSES,
     requirements=requirements, reference="paper's optimum, Eq 92", reference_values=OPTIMUM,
 ))
+
+
+def __getattr__(name: str) -> Any:
+    """The problem class, imported on first use (the spec names it)."""
+    if name == "FastSwitchProblem":
+        return SPEC.problem
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

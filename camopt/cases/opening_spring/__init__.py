@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 from camopt.cases.opening_spring.config import OpeningSpringConfig
 from camopt.cases.opening_spring.paper import PAPER
-from camopt.cases.opening_spring.problem import OpeningSpringProblem
 from camopt.cases.opening_spring.requirements import requirements
-from camopt.cases.registry import CaseSpec, ToleranceClass, register_case
+from camopt.cases.registry import CaseSpec, ToleranceClass, problem_at, register_case
+
+if TYPE_CHECKING:  # imported on first use: __getattr__ below
+    from camopt.cases.opening_spring.problem import OpeningSpringProblem as OpeningSpringProblem
 
 TOLERANCES = {  # class "standard", docs/tolerance.md, "Tolerance classes"
     "k_n_per_mm": "±10%", "l0_mm": "±1",  # ungraded spring: rate, free length
@@ -20,7 +24,8 @@ TOLERANCE_CLASSES = {
 }
 
 SPEC = register_case(CaseSpec(
-    kind="opening_spring", config=OpeningSpringConfig, problem=OpeningSpringProblem,
+    kind="opening_spring", config=OpeningSpringConfig,
+    problem=problem_at("camopt.cases.opening_spring.problem:OpeningSpringProblem"),
     default_solver="newton_pp",
     summary="opening spring of a 40 kA VCB for a specified opening motion (energy method)",
     paper_source="Ahn, Cho, Park & Kim, design of a spring-actuated linkage",
@@ -28,3 +33,10 @@ SPEC = register_case(CaseSpec(
     tolerances=TOLERANCES, tolerance_classes=TOLERANCE_CLASSES, requirements=requirements,
     reference="original design, Table 1",
 ))
+
+
+def __getattr__(name: str) -> Any:
+    """The problem class, imported on first use (the spec names it)."""
+    if name == "OpeningSpringProblem":
+        return SPEC.problem
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,8 +1,16 @@
 """12 kV VCB closing mechanism, Kang, Huang & Yang (2023), Machines 11:150: the cam and
 closing springs (step 1), the four-bar (step 2), and the identification of what the paper
-leaves out (kind ``vcb_identify``)."""
+leaves out (kind ``vcb_identify``).
+
+The specs name their problems as ``"module:Class"`` (imported when a problem is built,
+:func:`camopt.cases.registry.problem_at`), and ``VcbProblem``, ``VcbIdentification`` and
+``VcbDynamicsIdentification`` are imported from here on first use (PEP 562): ``camopt init
+vcb`` or ``show`` of a VCB archive do not import the model and its dynamics, nor a
+``vcb`` case the identifications (issue #36)."""
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
 
 from camopt.cases.registry import (
     ArchiveLoader,
@@ -11,6 +19,7 @@ from camopt.cases.registry import (
     ProfileCircle,
     ProfileCurve,
     ToleranceClass,
+    problem_at,
     register_case,
 )
 from camopt.cases.vcb.config import (
@@ -19,13 +28,18 @@ from camopt.cases.vcb.config import (
     VcbDynamicsIdentifyConfig,
     VcbIdentifyConfig,
 )
-from camopt.cases.vcb.identify import VcbDynamicsIdentification, VcbIdentification
 from camopt.cases.vcb.paper import PAPER
-from camopt.cases.vcb.problem import VcbProblem
 from camopt.cases.vcb.requirements import requirements
 from camopt.config.models import CaseConfig
 from camopt.errors import ConfigError
 from camopt.units import DEG
+
+if TYPE_CHECKING:  # imported on first use: __getattr__ below
+    from camopt.cases.vcb.identify import (
+        VcbDynamicsIdentification as VcbDynamicsIdentification,
+    )
+    from camopt.cases.vcb.identify import VcbIdentification as VcbIdentification
+    from camopt.cases.vcb.problem import VcbProblem as VcbProblem
 
 SOURCE = "Kang, Huang & Yang (2023), Machines 11:150"
 TOLERANCES = {  # class "standard", docs/tolerance.md, "Tolerance classes"
@@ -109,7 +123,8 @@ def resolve_cam_archive(config: CaseConfig, load: ArchiveLoader) -> CaseConfig:
 
 
 VCB = register_case(CaseSpec(
-    kind="vcb", config=VcbConfig, problem=VcbProblem, default_solver="de_gr",
+    kind="vcb", config=VcbConfig, problem=problem_at("camopt.cases.vcb.problem:VcbProblem"),
+    default_solver="de_gr",
     summary="VCB closing mechanism: cam + closing springs (step 1) or four-bar (step 2)",
     paper_source=SOURCE, figures="camopt.cases.vcb.figures:figures", paper=PAPER,
     profiles=(ProfileCurve("cam-profile", ("profile_x_mm",), ("profile_y_mm",)),
@@ -131,14 +146,26 @@ VCB = register_case(CaseSpec(
     calibration="camopt.cases.vcb.calibration_report:run",
 ))
 VCB_IDENTIFY = register_case(CaseSpec(
-    kind="vcb_identify", config=VcbIdentifyConfig, problem=VcbIdentification,
+    kind="vcb_identify", config=VcbIdentifyConfig,
+    problem=problem_at("camopt.cases.vcb.identify:VcbIdentification"),
     default_solver="de_gr",
     summary="fits the VCB parameters the paper omits to the numbers it reports",
     paper_source=SOURCE,
 ))
 VCB_IDENTIFY_DYNAMICS = register_case(CaseSpec(
     kind="vcb_identify_dynamics", config=VcbDynamicsIdentifyConfig,
-    problem=VcbDynamicsIdentification, default_solver="de_gr",
+    problem=problem_at("camopt.cases.vcb.identify:VcbDynamicsIdentification"),
+    default_solver="de_gr",
     summary="fits the VCB dynamics' parameters to the vendor design's seven ADAMS data",
     paper_source=SOURCE,
 ))
+
+_PROBLEMS = {"VcbProblem": VCB, "VcbIdentification": VCB_IDENTIFY,
+             "VcbDynamicsIdentification": VCB_IDENTIFY_DYNAMICS}
+
+
+def __getattr__(name: str) -> Any:
+    """The problem classes, imported on first use (their specs name them)."""
+    if name in _PROBLEMS:
+        return _PROBLEMS[name].problem
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
