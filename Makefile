@@ -18,9 +18,9 @@ install: $(STAMP)
 run: install
 	$(BIN)/camopt run $(RUN_CASE)
 
-# one pytest worker per core (pytest-xdist): the suite is ~9 CPU-minutes, about 5 minutes on
-# 2 cores (measured 4:45, 4:55, 5:30 and 5:19 in four clean runs, 25 Nov: at the budget, not
-# under it with margin; the 20 slowest are printed)
+# one pytest worker per core (pytest-xdist): the suite is ~5.5 CPU-minutes, 2 min 41 s on 2
+# cores in a clean CI run (27 Nov, after issue #36's start-up cuts; 4:45-5:30 on 25 Nov);
+# the 20 slowest are printed
 test: install
 	$(BIN)/python -m pytest -q -n auto --durations=20
 
