@@ -393,10 +393,16 @@ class RobustProblem(Problem, Stochastic):
 
     def _keep_finalists(self, X: NDArray, ev: Evaluation) -> None:
         """Keep the ``finalists`` distinct designs with the lowest objective among those
-        that met the target on their generation's draws, each with its latest passing
-        score (a design that fails a later generation's draws keeps its place: it passed
-        once, and the selection judges it on fresh draws)."""
+        that met the target on their generation's draws, each with its latest score. A
+        finalist evaluated again (a DE parent) that fails the new draws leaves: it passed
+        by luck once, and kept, such designs crowd out the ones that pass every time (the
+        winner's curse). The selection judges the rest on fresh draws."""
         ok = ev.feasible
+        kept = self.finalists[0]
+        if len(kept) and not ok.all():
+            # (finalists, failed rows, n_var): at most 8 x population x n_var booleans
+            gone = (kept[:, None, :] == X[~ok][None, :, :]).all(axis=2).any(axis=1)
+            self.finalists = (kept[~gone], self.finalists[1][~gone])
         if not ok.any():
             return
         # this generation's rows first: np.unique keeps a design's first row, so a design

@@ -396,3 +396,22 @@ def test_draws_over_model_variants_give_the_yield_over_both_and_per_form():
         assert f["yield_low"] <= true <= f["yield_high"]
     assert checked["yield"] == pytest.approx(np.mean([f["yield"] for f in forms]))
     assert checked["yield_low"] <= 0.5 <= checked["yield_high"]
+
+
+def test_a_finalist_that_fails_new_draws_leaves():
+    """A design kept as a finalist for passing one generation's draws leaves when it is
+    evaluated again (a DE parent) and fails; one that passes again stays with its new
+    score; a failing design that was never a finalist changes nothing."""
+    from camopt.core.problem import Evaluation
+
+    problem = _problem()
+    X = _near_optimum(problem, n=3)
+    passing = Evaluation(np.array([3.0, 2.0, 1.0]), np.full((3, 1), -1.0))
+    problem._keep_finalists(X, passing)
+    assert len(problem.finalists[0]) == 3
+    other = problem.sample(np.random.default_rng(1), 1)
+    again = Evaluation(np.array([5.0, 0.5, 7.0]), np.array([[1.0], [-1.0], [1.0]]))
+    problem._keep_finalists(np.vstack([X[0], X[1], other[0]]), again)
+    kept, scores = problem.finalists
+    np.testing.assert_array_equal(kept, X[[1, 2]][np.argsort([0.5, 1.0])])
+    np.testing.assert_array_equal(scores, [0.5, 1.0])
