@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from camopt.config.models import CaseConfig
-from camopt.core.plugins import OnDemand, entry_point, entry_points
+from camopt.core.plugins import OnDemand, entry_points, look_up
 from camopt.core.problem import Problem
 from camopt.core.requirements import Requirement
 from camopt.errors import ConfigError, did_you_mean
@@ -291,13 +291,7 @@ def _load() -> None:
 def _find(kind: str) -> CaseSpec | None:
     """The spec of ``kind`` (None: unknown), importing the package its one entry point
     names when it is not registered yet, else every case (:func:`_load`)."""
-    if kind not in _REGISTRY and not _loaded:
-        ep = entry_point(ENTRY_POINT_GROUP, kind)
-        if ep is not None:
-            _load_entry_point(ep)
-        if kind not in _REGISTRY:
-            _load()
-    return _REGISTRY.get(kind)
+    return look_up(_REGISTRY, kind, ENTRY_POINT_GROUP, _loaded, _load_entry_point, _load)
 
 
 def cases() -> dict[str, CaseSpec]:

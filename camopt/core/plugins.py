@@ -44,6 +44,20 @@ def entry_point(group: str, name: str) -> EntryPoint | None:
     return found[0] if len(found) == 1 else None
 
 
+def look_up(registry: Mapping[str, T], name: str, group: str, loaded: bool,
+            load_one: Callable[[EntryPoint], None], load_all: Callable[[], None]) -> T | None:
+    """``registry[name]`` (None: unknown), importing first what its one entry point of
+    ``group`` names (``load_one``) when it is not registered yet, else everything
+    (``load_all``); nothing when the registry is ``loaded`` already."""
+    if name not in registry and not loaded:
+        ep = entry_point(group, name)
+        if ep is not None:
+            load_one(ep)
+        if name not in registry:
+            load_all()
+    return registry.get(name)
+
+
 class OnDemand(Mapping[str, T]):
     """A registry as a read-only mapping for the config loader: looking a name up
     (``in``, ``[]``, ``get``) imports only what defines it (``find``, None when the name is

@@ -18,7 +18,7 @@ import pkgutil
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
-from camopt.core.plugins import OnDemand, entry_point, entry_points
+from camopt.core.plugins import OnDemand, entry_points, look_up
 from camopt.errors import SolverError, did_you_mean
 
 if TYPE_CHECKING:
@@ -66,13 +66,7 @@ def _load() -> None:
 def _find(name: str) -> type[Solver] | None:
     """The solver ``name`` (None: unknown), importing the module its one entry point
     names when it is not registered yet, else every solver (:func:`_load`)."""
-    if name not in _REGISTRY and not _loaded:
-        ep = entry_point(ENTRY_POINT_GROUP, name)
-        if ep is not None:
-            _load_entry_point(ep)
-        if name not in _REGISTRY:
-            _load()
-    return _REGISTRY.get(name)
+    return look_up(_REGISTRY, name, ENTRY_POINT_GROUP, _loaded, _load_entry_point, _load)
 
 
 def solvers() -> dict[str, type[Solver]]:
