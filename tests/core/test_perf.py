@@ -8,12 +8,22 @@ import json
 import subprocess
 import sys
 
-PROBE = """
+CLEAN_ENV = """
 import json, os, sys
 for name in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS",
              "OMP_NUM_THREADS"):
     os.environ.pop(name, None)
-from camopt.core.perf import pin_blas_threads
+"""  # each probe starts with no thread count set by the environment
+
+
+def _probe(script: str) -> dict:
+    """The last line of ``script`` run in a fresh interpreter, as JSON."""
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+PROBE = CLEAN_ENV + """from camopt.core.perf import pin_blas_threads
 pin_blas_threads()
 before = "scipy.linalg" in sys.modules
 import scipy.linalg  # its BLAS loads now, after the pin
@@ -25,20 +35,13 @@ print(json.dumps({"before": before, "threads": [i["num_threads"] for i in blas],
 
 
 def test_blas_loaded_after_the_pin_runs_on_one_thread() -> None:
-    done = subprocess.run([sys.executable, "-c", PROBE], capture_output=True, text=True,
-                          check=True)
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result = _probe(PROBE)
     assert not result["before"]
     assert any("scipy" in lib for lib in result["libs"]), result["libs"]
     assert result["threads"] and all(n == 1 for n in result["threads"]), result
 
 
-ON_LOAD = """
-import json, os, sys
-for name in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS",
-             "OMP_NUM_THREADS"):
-    os.environ.pop(name, None)
-from camopt.core.perf import one_blas_thread_on_load
+ON_LOAD = CLEAN_ENV + """from camopt.core.perf import one_blas_thread_on_load
 one_blas_thread_on_load()
 before = "numpy" in sys.modules
 import numpy  # its BLAS loads now, told one thread
@@ -51,19 +54,12 @@ print(json.dumps({"before": before, "threads": [i["num_threads"] for i in thread
 def test_numpy_loaded_after_the_command_line_s_setting_starts_on_one_thread() -> None:
     """``camopt.cli.main`` calls ``one_blas_thread_on_load`` before numpy loads: its BLAS
     never starts a thread per core (issue #36: ~0.06 s of CPU at every start)."""
-    done = subprocess.run([sys.executable, "-c", ON_LOAD], capture_output=True, text=True,
-                          check=True)
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result = _probe(ON_LOAD)
     assert not result["before"]
     assert result["threads"] and all(n == 1 for n in result["threads"]), result
 
 
-SKIPPED = """
-import json, os, sys
-for name in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS",
-             "OMP_NUM_THREADS"):
-    os.environ.pop(name, None)
-from camopt.core.perf import one_blas_thread_on_load, pin_blas_threads
+SKIPPED = CLEAN_ENV + """from camopt.core.perf import one_blas_thread_on_load, pin_blas_threads
 one_blas_thread_on_load()
 pin_blas_threads()
 skipped = "threadpoolctl" not in sys.modules
@@ -80,9 +76,7 @@ def test_pin_after_the_command_line_s_setting_needs_no_threadpoolctl() -> None:
     """After ``one_blas_thread_on_load`` ran before numpy (the command line), numpy's BLAS
     started on one thread: the pin imports no threadpoolctl (issue #36), until something
     has imported it (a caller that may have raised the threads), when it pins again."""
-    done = subprocess.run([sys.executable, "-c", SKIPPED], capture_output=True, text=True,
-                          check=True)
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result = _probe(SKIPPED)
     assert result["skipped"]
     assert result["threads"] and all(n == 1 for n in result["threads"]), result
     assert result["again"] and all(n == 1 for n in result["again"]), result
