@@ -130,27 +130,33 @@ def test_robust_vcb_draws_over_its_forms_and_screens_per_form():
     assert [f["samples"] for f in checked["per_form"]] == [100, 100]
 
 
-def test_the_latch_energy_falls_with_friction_at_least_the_friction_work(problem):
-    """The limit docs/tolerance.md states ("VCB: what the friction tolerance leaves"):
-    the kinetic energy left at the latch in the weakest set falls with the friction
-    scale s at least as fast as the friction torque's work over the cam's driven
-    rotation, T_f x 2.2 rad (126 deg of its 140 deg stroke; the impacts give some of it
-    back), in each model form. So a window of W joules passes at most W / (T_f x 2.2 x 2
-    w) of a friction tolerance 1 +- w, whatever the design: 4 J at +-25 % passes < 0.32
-    in form efficiency_coulomb (T_f 11.53 N m) and < 0.24 in coulomb (15.8 N m)."""
+def test_the_latch_energy_falls_with_friction_at_least_the_bound_of_the_equations(problem):
+    """The bound docs/tolerance.md derives ("VCB: what the friction tolerance leaves"):
+    with everything else held, the kinetic energy left at the latch is affine in the
+    friction scale s while the cam latches, and falls by T_f (theta_end - r theta_touch)
+    + c0 (1 - r) T_fr L_free per unit s (dynamics.closing_state: r the share of the
+    touch's kinetic energy the contacts' impact takes, c0 the pick-up impact's share of
+    the free rotation, both in [0, 1]; eps never multiplies T_f). r is at most m_c / (m_rod
+    + m_c), so the slope is at least T_f theta_end m_rod / (m_rod + m_c) whatever the
+    design: 1.37 rad x 11.445 N m in form efficiency_coulomb, 1.30 rad x 15.69 N m in
+    coulomb (the least over each form's sets). Checked on 600 random designs in each form;
+    the least slope seen there (2.3 x T_f, the sample's) is no bound."""
     rng = np.random.default_rng(20261127)
     X = problem.sample(rng, 600)
     c = problem.config
     scales = np.array([0.95, 1.05])
     rows = np.repeat(X, 2, axis=0)
     fields = {"cam_friction_nm": c.cam_friction_nm * np.tile(scales, len(X))}
+    theta_end = np.deg2rad(140.0)  # the cam's stroke from the pick-up to the latch
     for v, form in enumerate(problem.forms):
         sets = [form.nominal] + ([] if form.members is None else [form.members])
         friction = min(float(np.min(np.ravel(s.friction_nm))) for s in sets)
+        rod_share = min(float(np.min(np.ravel(s.rod_kg) / (np.ravel(s.rod_kg)
+                                                          + np.ravel(s.contacts_kg))))
+                        for s in sets)
         ev = problem.describe_variants(rows, fields, np.full(len(rows), v))
         energy = ev.extras["latch_kinetic_energy_low_j"].reshape(-1, 2)
         latched = (energy > 0.5).all(axis=1)  # both ends close, away from a stall
         assert latched.sum() >= 5, form.name  # the property is tested on real closings
         slope = -(energy[latched, 1] - energy[latched, 0]) / (scales[1] - scales[0])
-        assert slope.min() >= 2.2 * friction, (
-            form.name, slope.min())
+        assert slope.min() >= friction * theta_end * rod_share, (form.name, slope.min())
