@@ -239,10 +239,9 @@ def _merge(base: dict[str, Any], child: dict[str, Any]) -> dict[str, Any]:
     fast_switch_de.toml's [solver.polish] that way)."""
     merged = dict(base)
     for key, value in child.items():
-        same_solver = (key == "solver" and isinstance(value, dict) and "name" not in value
-                       and isinstance(base.get(key), dict))
-        if (key in ("case", "run", "robust") or same_solver) and isinstance(value, dict) \
-                and isinstance(base.get(key), dict):
+        if (isinstance(value, dict) and isinstance(base.get(key), dict)
+                and (key in ("case", "run", "robust") or (key == "solver"
+                                                          and "name" not in value))):
             merged[key] = {**base[key], **value}
         else:
             merged[key] = value
