@@ -18,9 +18,12 @@ cached bytecode as they do for any installed copy (an editable checkout under
 
 Floors: what is not camopt's, each also a ratio to the base (issue #36). A bare typer app
 of two commands (typer converts a command's parameters through pydantic: ~0.07 s of
-it), ``import numpy, typer, pydantic`` and ``import h5py``, both with BLAS told one thread
-as the command line tells it (``camopt.core.perf.one_blas_thread_on_load``): ``validate``
-needs the second's libraries, ``show`` and ``runs`` those and h5py's."""
+it); the same app whose command imports what ``validate`` cannot start without (numpy,
+rich's console: its line is printed and wrapped by rich) and what ``show`` cannot
+(h5py, rich's console and tables); ``import numpy, typer, pydantic`` and ``import h5py``;
+each with BLAS told one thread as the command line tells it
+(``camopt.core.perf.one_blas_thread_on_load``). The second and third are each command's
+floor: what is above them is camopt's."""
 
 from __future__ import annotations
 
@@ -55,7 +58,7 @@ app = typer.Typer()
 
 @app.command()
 def hello(name: str, count: int = 1) -> None:
-    print(name * count)
+    {imports}print(name * count)
 
 
 @app.command()
@@ -65,15 +68,31 @@ def bye() -> None:
 
 app()
 """
-"""The floor of any typer command line: two commands, one run with an argument."""
+"""The floor of any typer command line: two commands, one run with an argument
+(``{imports}``: what the command imports before it prints, as a library floor)."""
+
+COMMAND_LIBRARIES = {
+    "typer app + numpy + rich (validate's)": "numpy, rich.console",
+    "typer app + h5py + rich (show's)": "h5py, rich.console, rich.table",
+}
+"""Typer apps whose command imports the libraries a camopt command cannot start without:
+``validate`` numpy and rich (its line is wrapped as rich wraps), ``show`` also h5py and
+rich's tables; each with camopt's own BLAS setting."""
 
 
 def floors(folder: Path) -> dict[str, list[str]]:
-    """What is not camopt's, measured beside it (:data:`BARE_TYPER` written to ``folder``)."""
+    """What is not camopt's, measured beside it (:data:`BARE_TYPER`'s apps written to
+    ``folder``)."""
     script = folder / "bare_typer.py"
-    script.write_text(BARE_TYPER)
+    script.write_text(BARE_TYPER.format(imports=""))
+    apps = {}
+    for i, (name, libraries) in enumerate(COMMAND_LIBRARIES.items()):
+        app = folder / f"typer_libraries_{i}.py"
+        app.write_text(BARE_TYPER.format(imports=f"import {libraries}\n\n    "))
+        apps[name] = [sys.executable, str(app), "hello", "x"]
     return {
         "bare typer app": [sys.executable, str(script), "hello", "x"],
+        **apps,
         "import numpy, typer, pydantic": [sys.executable, "-c",
                                           "import numpy, typer, pydantic"],
         "import h5py": [sys.executable, "-c", "import h5py"],
@@ -150,13 +169,14 @@ def main(before: Path | None = None) -> None:
     medians = measure(before=before)
     base = medians.pop("import numpy, scipy")
     print(f"python -c 'import numpy, scipy': {base:.3f} s CPU (median of {ROUNDS})")
+    width = max(len(name) for name in medians)
     for name, cpu in medians.items():
         if name.startswith("floor: "):
-            print(f"{name:36s} {cpu:.3f} s CPU: ratio {cpu / base:.2f} (not camopt's)")
+            print(f"{name:{width + 7}s} {cpu:.3f} s CPU: ratio {cpu / base:.2f} (not camopt's)")
             continue
         untargeted = name.removeprefix("before: ") in UNTARGETED
         target = "" if untargeted else " (target <= 1.5)"
-        print(f"camopt {name:29s} {cpu:.3f} s CPU: ratio {cpu / base:.2f}{target}")
+        print(f"camopt {name:{width}s} {cpu:.3f} s CPU: ratio {cpu / base:.2f}{target}")
 
 
 if __name__ == "__main__":
