@@ -361,17 +361,20 @@ class RobustProblem(Problem, Stochastic):
         self._remember(X, nominal)
         nom_g = np.where(np.isnan(nominal.g), np.inf, nominal.g)
         nom_worst = _worst(nom_g, nominal.f)
-        screened_in = nominal.feasible
-        if spec.screen and self.plan.variants:
+        screened_in = nominal.feasible.copy()
+        if spec.screen and self.plan.variants and not screened_in.all():
             # draws are judged one variant each: a design that meets every constraint in
             # some variant has a yield above 0, and is sampled; the others rank by the
-            # variant they come nearest in
-            m, n = len(self.plan.variants), len(X)
-            each = apply(self.base, np.repeat(X, m, axis=0), (), np.empty((n * m, 0)),
+            # variant they come nearest in. A nominally feasible design is sampled anyway,
+            # and its columns come from its draws: only the others are judged per variant
+            m, out = len(self.plan.variants), np.flatnonzero(~screened_in)
+            n = len(out)
+            each = apply(self.base, np.repeat(X[out], m, axis=0), (), np.empty((n * m, 0)),
                          size=spec.chunk_rows, variant=np.tile(np.arange(m), n))
             each_g = np.where(np.isnan(each.g), np.inf, each.g)
-            nom_worst = np.minimum(nom_worst, _worst(each_g, each.f).reshape(n, m).min(axis=1))
-            screened_in = screened_in | each.feasible.reshape(n, m).any(axis=1)
+            nom_worst[out] = np.minimum(nom_worst[out],
+                                        _worst(each_g, each.f).reshape(n, m).min(axis=1))
+            screened_in[out] = each.feasible.reshape(n, m).any(axis=1)
         # an unsampled candidate ranks behind every sampled one: without the offset a
         # nominal design just outside a limit (violation 1e-3) beats a nominally feasible
         # one whose draws fail (violation ~1), and the search never leaves the limit

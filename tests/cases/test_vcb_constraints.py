@@ -20,7 +20,10 @@ def test_names_are_listed_once_and_a_config_takes_its_rows_in_order():
     names = [con.name for con in CONSTRAINTS]
     assert len(names) == len(set(names))
     p = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
-    assert p.constraint_names == tuple(n for n in names if n != "grashof")
+    assert p.constraint_names == tuple(n for n in names
+                                       if n not in ("grashof", "preload_setting"))
+    robust = VcbProblem(load(CONFIGS / "vcb_velocity_robust.toml").case)
+    assert robust.constraint_names == tuple(n for n in names if n != "grashof")
     assert VcbProblem(load(CONFIGS / "vcb.toml").case).constraint_names == (
         "phi_max_low", "phi_max_high", "monotonic", "assembly", "rod_travel", "shear_yield")
 
@@ -31,6 +34,19 @@ def test_lift_off_is_met_above_the_share_and_violated_below():
     q = SimpleNamespace(config=SimpleNamespace(lift_off_fraction_min=0.05),
                         lift_off_ratio=np.array([0.2, 0.0, -0.1]))
     np.testing.assert_allclose(ROW["lift_off"].g(q), [-0.15, 0.05, 0.15])
+
+
+def test_the_setting_fails_beyond_the_nuts_reach_and_on_a_missed_velocity():
+    """The factory setting (issue #33): the nut travel needed within its reach (10 mm:
+    4 mm met, 12 mm and -15 mm violated by the share), and the set velocity within 1 %
+    of the setting (1.5 % missed, a stall NaN failed)."""
+    q = SimpleNamespace(config=SimpleNamespace(preload_setting_range_mm=10.0),
+                        setting=np.array([4e-3, 12e-3, -15e-3, 1e-3, 1e-3]),
+                        setting_velocity=np.full(5, 1.0),
+                        motion=SimpleNamespace(closing_velocity_avg=np.array(
+                            [1.0, 1.0, 1.0, 1.015, np.nan])))
+    np.testing.assert_allclose(ROW["preload_setting"].g(q)[:4], [-0.6, 0.2, 0.5, 0.5])
+    assert ROW["preload_setting"].g(q)[4] == np.inf
 
 
 def test_release_torque_is_met_above_the_margin_and_violated_below():

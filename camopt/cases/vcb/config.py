@@ -38,6 +38,7 @@ ModelFormName = Literal["efficiency_coulomb", "coulomb", "efficiency_driven_coul
 RELEASE_TORQUE_MARGIN_MIN = 1.2  # assumed: docs/assumptions.md, "VCB: release and lift-off"
 LATCH_ENERGY_MAX_J = 5.0  # assumed: docs/assumptions.md, "VCB: release and lift-off"
 LIFT_OFF_FRACTION_MIN = 0.05  # assumed: docs/assumptions.md, "VCB: release and lift-off"
+PRELOAD_SETTING_RANGE_MM = 5.0  # assumed: docs/assumptions.md, "VCB: factory setting"
 
 
 # the parameter sets configs/vcb_identify_dynamics.toml finds consistent with the ADAMS
@@ -76,7 +77,8 @@ VCB_ROLES: dict[str, FieldRole] = {
         kc1_n_per_mm kc2_n_per_mm kc1_precompression_mm kc2_precompression_mm
         opening_k_n_per_mm opening_stretch_closed_mm wipe_k_n_per_mm wipe_count
         wipe_compression_closed_mm contact_gap_mm cam_modulus_gpa poisson
-        contact_length_mm shear_yield_mpa cam_design tolerance_class cam_profile_error_mm"""),
+        contact_length_mm shear_yield_mpa cam_design tolerance_class cam_profile_error_mm
+        preload_setting_range_mm"""),
     **_roles("identified", """rod_arm_offset_deg opening_arm_ratio free_contact_force_n
         alpha efficiency cam_inertia_kg_m2 follower_inertia_kg_m2 rod_mass_kg
         contacts_mass_kg release_offset_deg cam_friction_nm dynamics_band"""),
@@ -86,8 +88,8 @@ VCB_ROLES: dict[str, FieldRole] = {
         stress_constraint phi_max_deg"""),
     **_roles("solver setting", """step cam_archive dynamics_steps objective_form positions penalty
         a1_bounds a2_bounds a3_bounds a4_bounds a5_bounds release_offset_bounds_deg
-        kc1_bounds_n_per_mm kc2_bounds_n_per_mm l1_bounds_mm l3_bounds_mm l4_bounds_mm
-        l5_bounds_mm theta1_bounds_deg"""),
+        velocity_setting_bounds_m_s kc1_bounds_n_per_mm kc2_bounds_n_per_mm l1_bounds_mm
+        l3_bounds_mm l4_bounds_mm l5_bounds_mm theta1_bounds_deg"""),
 }
 """Every VCB ``[case]`` field's role (``docs/cases/vcb.md``, ``camopt init vcb``): what
 describes the breaker, what must be re-identified after a geometry change, what a design
@@ -308,6 +310,16 @@ class VcbCamStep(VcbMechanism):
         None, description="beyond the paper: where the closing latch holds the charged spring "
         "crank (past its dead centre) becomes a design variable, release_offset_deg; the "
         "band's sets keep their spread about it; unset: the identified release_offset_deg")
+    velocity_setting_bounds_m_s: Bounds | None = Field(
+        None, description="beyond the paper: every breaker is set at the factory, its closing "
+        "springs' preload turned by a nut until the analyser reads the design's reference "
+        "closing velocity, velocity_setting_m_s, a design variable within these bounds "
+        "(docs/tolerance.md, \"VCB: factory setting\"); unset: every breaker as its parts "
+        "are made")
+    preload_setting_range_mm: float = Field(
+        PRELOAD_SETTING_RANGE_MM, gt=0, le=100, description="how far the setting nut may "
+        "move both closing springs' compression from the design's, either way (mm; "
+        "constraint with velocity_setting_bounds_m_s) (assumed; docs/assumptions.md)")
     kc1_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),
                                         description="Eq 38 widened, docs/assumptions.md")
     kc2_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),
@@ -322,6 +334,9 @@ class VcbCamStep(VcbMechanism):
         if self.kind == "vcb" and r is not None and not 0 < r.lower <= r.upper < 90:
             raise ValueError("release_offset_bounds_deg: the latch holds the crank past its "
                              "dead centre: 0 < lower <= upper < 90 deg")
+        v = self.velocity_setting_bounds_m_s
+        if v is not None and not 0 < v.lower <= v.upper <= 20:
+            raise ValueError("velocity_setting_bounds_m_s: 0 < lower <= upper <= 20 m/s")
         return self
 
 
@@ -344,7 +359,8 @@ class VcbConfig(VcbCamStep):
     def _fourbar_step(self) -> VcbConfig:
         if self.kind != "vcb" or self.step != "fourbar":
             return self
-        for name in ("a4_bounds", "a5_bounds", "release_offset_bounds_deg"):
+        for name in ("a4_bounds", "a5_bounds", "release_offset_bounds_deg",
+                     "velocity_setting_bounds_m_s"):
             if getattr(self, name) is not None:
                 raise ValueError(f"{name}: a step-1 (cam) design variable; step "
                                  "'fourbar' takes the cam design, its latch included, "

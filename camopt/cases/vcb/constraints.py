@@ -37,6 +37,11 @@ class Terms:
     tau_max: NDArray
     motion: ClosingMotion | None
     band: MotionBand | None
+    setting: NDArray | None = None
+    """The nut travel the factory setting needs (m, (n,); +inf: none reaches the
+    velocity), where the run sets its breakers (:meth:`VcbProblem.as_set`)."""
+    setting_velocity: NDArray | None = None
+    """The velocity each breaker is set to (m/s, (n,)), with :attr:`setting`."""
 
     @property
     def travel(self) -> NDArray:
@@ -112,6 +117,24 @@ def _latch(q: Terms) -> NDArray:
                     c.latch_energy_min_j + driving * (1 - band.reach_low)) / driving
 
 
+def _setting(q: Terms) -> NDArray:
+    """The factory setting's constraint: the nut travel it needs within the nut's reach,
+    and the set breaker's velocity (the form's fit, as computed for the verdict) within
+    :data:`SETTING_MISS` of the setting (a stall or kink the secant's extrapolation
+    missed)."""
+    assert q.setting is not None and q.setting_velocity is not None and q.motion is not None
+    reach = np.abs(q.setting) / (q.config.preload_setting_range_mm * MM) - 1
+    with np.errstate(invalid="ignore"):
+        miss = np.abs(q.motion.closing_velocity_avg / q.setting_velocity - 1) / SETTING_MISS - 1
+    return np.maximum(reach, np.where(np.isnan(miss), np.inf, miss))
+
+
+SETTING_MISS = 0.01
+"""How far a set breaker's velocity may lie from its setting (share): beyond, the setting
+failed (the secant's two steps leave ~1e-7 where the velocity is smooth in the nut's
+travel)."""
+
+
 def _always(_: VcbConfig) -> bool:
     return True
 
@@ -152,6 +175,9 @@ CONSTRAINTS = (
     # lift_off_fraction_min (positive g: the follower comes near to lifting off)
     Constraint("lift_off", lambda c: c.forbid_lift_off,
                lambda q: q.config.lift_off_fraction_min - q.lift_off_ratio),
+    # the factory setting within the nut's reach
+    Constraint("preload_setting", lambda c: c.velocity_setting_bounds_m_s is not None,
+               _setting),
     Constraint("pressure_angle", lambda c: c.pressure_angle_max_deg is not None,
                lambda q: q.psi_max / (q.config.pressure_angle_max_deg or np.inf) - 1),
 )

@@ -3,6 +3,7 @@ or step 2 (four-bar), Kang, Huang & Yang (2023), Eqs 37-43."""
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
@@ -33,6 +34,13 @@ from camopt.errors import ConfigError
 from camopt.mechanics import cam, hertz
 from camopt.units import DEG, MM, MPA, N_PER_MM, TO_MS, TO_N_PER_MM
 
+_WORST_LOW = ("latched", "lift_off_torque_ratio", "cam_torque_min_nm")
+_WORST_HIGH = ("pickup_tau_mpa",)
+"""Metrics of a set breaker's verdict over every form (:meth:`VcbProblem._worst_form`)
+whose worst is their least / greatest, beside the band's ``_low`` / ``_high`` ends."""
+SETTING_TRIAL_MM = 2.0
+"""The factory setting's trial nut travel (mm; the other trial is none): the secant's
+two points (:meth:`VcbProblem.as_set`)."""
 LINK_FIELDS = ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
 """The linkage fields of ``[case]`` in the order of a linkage row (``designs``)."""
 PART_FIELDS = ("kc1_precompression_mm", "kc2_precompression_mm", "opening_k_n_per_mm",
@@ -120,11 +128,15 @@ class VcbProblem(Problem, VariesCase, HasVariants):
                                             1 / DEG),)
             self.release_column = len(self.variables) - 1 if r is not None else None
             self.case_release = c.release_offset_deg * DEG
+            v = c.velocity_setting_bounds_m_s
+            if v is not None:  # beyond the paper: the velocity every breaker is set to
+                self.variables += (Variable("velocity_setting_m_s", v.lower, v.upper),)
+            self.setting_column = len(self.variables) - 1 if v is not None else None
         else:
             if c.cam_design is None:  # cam_archive is read into cam_design before a build
                 raise ConfigError("case", "cam_archive", "the step-1 archive was not read")
             self.cam_a, self.cam_kc = self._cam(c.cam_design)
-            self.release_column = None
+            self.release_column = self.setting_column = None
             self.case_release = (c.release_offset_deg if c.cam_design.release_offset_deg is None
                                  else c.cam_design.release_offset_deg) * DEG
             self.variables = tuple(
@@ -144,7 +156,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         self.band = _sets(band) if len(band) else None
         self.forms = self._forms(band)
         self.search_dynamics = (c.closing_velocity_m_s is not None or c.require_latch
-                                or c.forbid_lift_off)
+                                or c.forbid_lift_off or self.setting_column is not None)
 
     def _forms(self, band: NDArray) -> tuple[FormSets, ...]:
         """The sets of every model form in the band (the identified parameters' form
@@ -217,8 +229,12 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             higher = np.zeros(self.higher_terms)
             higher[:len(self.model.vendor_a) - 4] = self.model.vendor_a[4:]
             release = [] if self.release_column is None else [c.release_offset_deg * DEG]
+            # the vendor's breaker set to the middle of the setting's bounds (it has no
+            # reference velocity of its own in this search)
+            v = c.velocity_setting_bounds_m_s
+            setting = [] if v is None else [0.5 * (v.lower + v.upper)]
             return np.r_[self.model.vendor_a[1:4], c.kc1_n_per_mm * N_PER_MM,
-                         c.kc2_n_per_mm * N_PER_MM, higher, release]
+                         c.kc2_n_per_mm * N_PER_MM, higher, release, setting]
         return self.model.vendor_link.copy()
 
     def evaluate(self, X: NDArray) -> Evaluation:
@@ -378,6 +394,53 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         A[:, 0] += offset
         return A
 
+    def as_set(self, X: NDArray, parts: Parts | None, form: int | None = None
+               ) -> tuple[Parts | None, NDArray | None]:
+        """Each breaker of ``X`` (n rows, its ``parts`` as made) set at the factory, where
+        the run has ``velocity_setting_bounds_m_s``: both closing springs' compressions in
+        the opened state moved by the same nut travel d until the average closing velocity
+        of the form's fit (``form``'s nominal set; the identified one for the case's own
+        evaluation), what the breaker analyser reads, is the design's
+        ``velocity_setting_m_s``. Returns the parts with the set compressions, d clipped to
+        +- ``preload_setting_range_mm`` (the nut's end), and the d needed (m, (n,); +inf
+        where no compression within reach moves the cam: a stall at both trials); without
+        a setting ``(parts, None)``.
+
+        d solves v(d)^2 = v_set^2 by one secant step from d = 0 and 2 mm: the kinetic
+        energy at the touch is affine in d (the springs' energy is linear in their
+        compression), so v^2 is nearly so, and the step leaves < 1e-3 m/s, twenty times
+        inside the analyser's 2 % (6e-5 on 2,000 draws of the shipped design, up to 8e-4
+        on random designs: tests/cases/test_vcb_setting.py); a second step (3e-8) cost a
+        third more. The setting is judged with the form's fit: the band's other sets keep
+        their spread about it (a measurement would narrow it: conservative,
+        docs/tolerance.md, "VCB: factory setting")."""
+        if self.setting_column is None:
+            return parts, None
+        c, m = self.config, self.model
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        n = len(X)
+        parts = Parts() if parts is None else parts
+        base = parts.pre if parts.pre is not None else np.tile(
+            [c.kc1_precompression_mm * MM, c.kc2_precompression_mm * MM], (n, 1))
+        A, kc, link = self.designs(X, parts.link)
+        A = self._profiled(A, parts)
+        params = self._as_made(self.forms[form or 0].nominal, 1, n, self._moved(X, n), parts)
+        loads = self.loads(parts)
+        target = X[:, self.setting_column] ** 2
+
+        def squared_speed(d: NDArray) -> NDArray:
+            ev = closing_events(m, A, kc, link, self.rod_offset, loads, params,
+                                c.dynamics_steps, pre=base + d[:, None])
+            return np.nan_to_num(ev.closing_velocity_avg, nan=0.0) ** 2
+
+        d_a, d_b = np.zeros(n), np.full(n, SETTING_TRIAL_MM * MM)
+        w_a, w_b = squared_speed(d_a), squared_speed(d_b)  # the breaker as made, and a trial
+        with np.errstate(divide="ignore", invalid="ignore"):
+            needed = d_b + (target - w_b) * (d_b - d_a) / (w_b - w_a)
+        needed = np.where(np.isfinite(needed), needed, np.inf)
+        reach = c.preload_setting_range_mm * MM
+        return replace(parts, pre=base + np.clip(needed, -reach, reach)[:, None]), needed
+
     def release_offset(self, X: NDArray) -> NDArray | float:
         """Where the closing latch holds the charged spring crank, past its dead centre,
         for each row of ``X`` (rad, (n,) or one for all): the design variable
@@ -411,7 +474,10 @@ class VcbProblem(Problem, VariesCase, HasVariants):
 
     def _evaluate(self, X: NDArray, detail: bool, parts: Parts | None = None,
                   form: int | None = None) -> Evaluation:
+        if form is None and self.setting_column is not None and len(self.forms) > 1:
+            return self._worst_form(X, detail, parts)
         c, m = self.config, self.model
+        parts, setting = self.as_set(X, parts, form)
         A, kc, link = self.designs(X, None if parts is None else parts.link)
         A = self._profiled(A, parts)
         pre = None if parts is None else parts.pre
@@ -428,7 +494,8 @@ class VcbProblem(Problem, VariesCase, HasVariants):
                   tau_max=hertz.max_shear_stress(sigma_max),  # Eq 31
                   motion=motion,
                   band=self.motion_band(X, motion, parts=parts, form=form)
-                  if motion is not None else None)
+                  if motion is not None else None, setting=setting,
+                  setting_velocity=None if setting is None else X[:, self.setting_column])
         G = np.column_stack([con.g(q) for con in self.constraints])
         G = np.where(np.isnan(G), np.inf, G)
         violation = np.clip(G, 0, None).sum(axis=1)
@@ -441,6 +508,8 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             "driving_work_j": bal.driving, "resistant_work_j": bal.resistant,
             "surplus_work_j": bal.surplus, "rod_travel_mm": q.travel / MM,
         }
+        if setting is not None:  # the nut travel the factory setting needs (+inf: none)
+            extras["preload_setting_mm"] = setting / MM
         if motion is not None:
             spread = q.spread
             closes = np.isfinite(spread.high["touch_time"])  # every set touches
@@ -494,6 +563,38 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             })
         return Evaluation(f=f, g=G, extras=extras)
 
+    def _worst_form(self, X: NDArray, detail: bool, parts: Parts | None) -> Evaluation:
+        """The case's own verdict on a breaker set at the factory, over every kept model
+        form: whichever form is the breaker's, the analyser reads it and the nut sets it,
+        so each form is judged with its own setting (:meth:`as_set`), and the verdict is
+        each constraint's worst form. The objective and the metrics are the identified
+        form's (the first), the band's ends and counts over every form's sets: a lower end
+        the least, a higher end the greatest, the setting the longest nut travel."""
+        each = [self._evaluate(X, detail, parts, form=f) for f in range(len(self.forms))]
+        g = np.max([e.g for e in each], axis=0)
+        violation = np.clip(g, 0, None).sum(axis=1)
+        first = each[0]
+        own = np.clip(first.g, 0, None).sum(axis=1)
+        with np.errstate(invalid="ignore"):  # inf - inf: no finite objective either way
+            base = np.where(own == 0, first.f, first.f - self.config.penalty * own)
+        f = np.where(np.isfinite(base) & np.isfinite(violation),
+                     base + self.config.penalty * violation, np.inf)
+        extras = dict(first.extras)
+        for key in extras:
+            stack = np.array([e.extras[key] for e in each], dtype=float)
+            with np.errstate(invalid="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns stay NaN
+                if key in ("band_sets", "band_sets_not_latched"):
+                    extras[key] = stack.sum(axis=0)
+                elif key == "preload_setting_mm":
+                    extras[key] = np.take_along_axis(
+                        stack, np.argmax(np.abs(stack), axis=0)[None], axis=0)[0]
+                elif "_low" in key or key in _WORST_LOW:
+                    extras[key] = np.nanmin(stack, axis=0)
+                elif "_high" in key or key in _WORST_HIGH:
+                    extras[key] = np.nanmax(stack, axis=0)
+        return Evaluation(f=f, g=g, extras=extras)
+
     # ---- single-design output ----------------------------------------------------
     def _metrics_of(self, x: NDArray) -> dict[str, object]:
         ev = self.describe(x[None, :])
@@ -516,9 +617,11 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         """Analysis curves of one design along the closing stroke (display units)."""
         m = self.model
         A, kc, link = self.designs(x)
+        parts, _ = self.as_set(x, None)  # the breaker as set at the factory, if it is
+        pre = None if parts is None else parts.pre
         kin = m.kinematics(A, link, self.rod_offset)
-        torque = m.closing_torque(kc)
-        bal = m.balance(kin, kc, torque, self.load)
+        torque = m.closing_torque(kc, pre=pre)
+        bal = m.balance(kin, kc, torque, self.load, pre)
         con = m.contact(kin.follower, torque)
         xc, yc = cam.profile(con.xp, con.yp, con.dxp, con.dyp, m.rf)
         return {
@@ -534,15 +637,15 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             "rod_travel_mm": kin.s1[0] / MM,
             "fo_n": np.r_[np.nan, m.output_force(bal)[0]], "fr_n": np.r_[np.nan, bal.fr[0]],
             # works along the stroke as exact potential differences
-            "driving_work_j": m.closing_energy(kc, m.spring_ext)[0, 0]
-            - m.closing_energy(kc, m.spring_ext)[0],
+            "driving_work_j": m.closing_energy(kc, m.spring_ext, pre)[0, 0]
+            - m.closing_energy(kc, m.spring_ext, pre)[0],
             "resistant_work_j": self.load.resistant_energy(kin.s1[0]),
-            **self._motion_curves(x),
+            **self._motion_curves(x, parts),
         }
 
-    def _motion_curves(self, x: NDArray) -> dict[str, NDArray]:
-        """Closing dynamics of one design against time (display units)."""
-        mo = self.motion(x)
+    def _motion_curves(self, x: NDArray, parts: Parts | None = None) -> dict[str, NDArray]:
+        """Closing dynamics of one design (its ``parts``) against time (display units)."""
+        mo = self.motion(x, parts=parts)
         shown = np.isfinite(mo.time[0])
         return {
             "time_ms": mo.time[0, shown] * TO_MS,

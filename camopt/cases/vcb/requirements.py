@@ -12,6 +12,7 @@ from typing import Any
 from camopt.cases.vcb.config import (
     LATCH_ENERGY_MAX_J,
     LIFT_OFF_FRACTION_MIN,
+    PRELOAD_SETTING_RANGE_MM,
     RELEASE_TORQUE_MARGIN_MIN,
 )
 from camopt.core.requirements import Requirement
@@ -105,6 +106,12 @@ def dynamic_requirements(case: Mapping[str, Any], names: Collection[str]
             upper=float(case["shear_yield_mpa"]),
             source="Eq 31 at the impact's Hertz peak force, band's worst (docs/assumptions.md)",
             failing="the cam's blow on the resting roller yields the contact"))
+    if "preload_setting_mm" in names:
+        reach = float(case.get("preload_setting_range_mm", PRELOAD_SETTING_RANGE_MM))
+        reqs.append(Requirement(
+            "closing springs' factory setting (nut travel)", "preload_setting_mm", "mm",
+            -reach, reach, source="config preload_setting_range_mm (assumed)",
+            failing="the nut cannot set the breaker to its reference closing velocity"))
     if "lift_off_torque_ratio" in names:
         reqs.append(Requirement(
             "least cam torque / mean drive (lift-off)", "lift_off_torque_ratio",
