@@ -75,13 +75,14 @@ VARIANT = "\0variant"
 
 def describe_variants(problem: Problem, X: NDArray, fields: Mapping[str, NDArray],
                       variant: NDArray, size: int | None = None,
-                      progress: RowsDone | None = None) -> Evaluation:
+                      progress: RowsDone | None = None, detail: bool = True) -> Evaluation:
     """``problem.describe_variants`` (capability
     :class:`~camopt.core.capabilities.HasVariants`) of designs ``X`` (n, n_var) with
-    ``fields`` and each row's ``variant`` (n,), in chunks: the same Evaluation as one call."""
+    ``fields`` and each row's ``variant`` (n,), in chunks: the same Evaluation as one call
+    (``detail``: as the capability's)."""
     def call(Xc: NDArray, f: Mapping[str, NDArray]) -> Evaluation:
         return problem.describe_variants(  # type: ignore[attr-defined]
-            Xc, {k: v for k, v in f.items() if k != VARIANT}, f[VARIANT])
+            Xc, {k: v for k, v in f.items() if k != VARIANT}, f[VARIANT], detail=detail)
     return _chunked(call, X, {**fields, VARIANT: np.asarray(variant)},
                     size or chunk_rows(problem), progress)
 

@@ -81,10 +81,12 @@ class HasVariants(Protocol):
         ...
 
     def describe_variants(self, X: NDArray, fields: Mapping[str, NDArray],
-                          variant: NDArray) -> Evaluation:
+                          variant: NDArray, detail: bool = True) -> Evaluation:
         """As ``describe_with(X, fields)`` (``fields`` may be empty), row ``i`` judged
         under variant ``variant[i]`` ((n,) int, an index into :meth:`variants`; -1: every
-        variant at once, the case's own evaluation)."""
+        variant at once, the case's own evaluation). ``detail=False``: the constraints,
+        objective and the metrics ``evaluate`` gives, not the descriptive ones (robust
+        design's draws read only the first two)."""
         ...
 
 

@@ -167,3 +167,16 @@ def test_the_latch_energy_falls_with_friction_at_least_the_bound_of_the_equation
         assert latched.sum() >= 5, form.name  # the property is tested on real closings
         slope = -(energy[latched, 1] - energy[latched, 0]) / (scales[1] - scales[0])
         assert slope.min() >= friction * theta_end * rod_share, (form.name, slope.min())
+
+
+def test_draws_without_the_descriptive_metrics_keep_the_verdict(problem, X):
+    """``detail=False`` (robust design's draws) leaves the descriptive metrics out and
+    every constraint and the objective as they are, row by row."""
+    c = problem.config
+    fields = {"cam_friction_nm": c.cam_friction_nm * np.array([0.9, 1.0, 1.1, 1.2])}
+    variant = np.array([0, 1, 1, 0])
+    full = problem.describe_variants(X, fields, variant)
+    lean = problem.describe_variants(X, fields, variant, detail=False)
+    np.testing.assert_array_equal(lean.g, full.g)
+    np.testing.assert_array_equal(lean.f, full.f)
+    assert "curvature_min_mm" in full.extras and "curvature_min_mm" not in lean.extras

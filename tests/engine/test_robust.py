@@ -363,7 +363,7 @@ class _TwoForms:
             def variants(self):
                 return ("a", "b")
 
-            def describe_variants(self, X, fields, variant):
+            def describe_variants(self, X, fields, variant, detail=True):
                 limit = np.where(np.asarray(variant) == 0, 1.0, 0.8)
                 return Evaluation(X[:, 0].copy(), (X[:, 0] / limit - 1)[:, None])
 

@@ -260,10 +260,11 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         X = np.atleast_2d(np.asarray(X, dtype=float))
         return self._evaluate(X, detail=True, parts=self.parts(len(X), fields))
 
-    def describe_variants(self, X: NDArray, fields: Mapping[str, NDArray], variant: NDArray
-                          ) -> Evaluation:
+    def describe_variants(self, X: NDArray, fields: Mapping[str, NDArray], variant: NDArray,
+                          detail: bool = True) -> Evaluation:
         """As :meth:`describe_with`, each row judged under the sets of its model form
-        ``variants()[variant[i]]`` alone (-1: every form, the case's own evaluation)."""
+        ``variants()[variant[i]]`` alone (-1: every form, the case's own evaluation);
+        ``detail=False``: :meth:`evaluate`'s metrics, not the descriptive ones."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         parts = self.parts(len(X), fields)
         variant = np.asarray(variant, dtype=int)
@@ -271,7 +272,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         for v in np.unique(variant):
             rows = np.flatnonzero(variant == v)
             order.append(rows)
-            pieces.append(self._evaluate(X[rows], detail=True, parts=parts.take(rows),
+            pieces.append(self._evaluate(X[rows], detail=detail, parts=parts.take(rows),
                                          form=None if v < 0 else int(v)))
         if len(pieces) == 1:
             return pieces[0]
