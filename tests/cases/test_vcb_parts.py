@@ -17,9 +17,9 @@ CONFIG = CONFIGS / "vcb_velocity_robust.toml"
 
 @pytest.fixture(scope="module")
 def problem():
-    """The shipped robust case without its factory setting: the parts as made (the
-    setting, which moves the closing springs' compression per breaker, has its own tests:
-    test_vcb_setting.py)."""
+    """The shipped robust case, its breakers as their parts are made (never set at the
+    factory: the setting moves the closing springs' compression per breaker and has its
+    own tests, test_vcb_setting.py)."""
     return _unset(load(CONFIG).case)
 
 

@@ -398,6 +398,27 @@ def test_draws_over_model_variants_give_the_yield_over_both_and_per_form():
     assert checked["yield_low"] <= 0.5 <= checked["yield_high"]
 
 
+def test_the_per_variant_screen_in_a_mixed_batch():
+    """In one batch: x = 0.7 meets both variants (sampled), 1.1 and 1.3 meet neither (not
+    sampled: their yield column is SCREENED plus the nearest variant's violation, a's:
+    0.1 and 0.3), 0.9 meets a alone (sampled). The screen is asked only of the nominally
+    infeasible, and each gets its own variants' verdicts."""
+    from camopt.core.variation import Vary
+
+    base = _TwoForms.build()
+    spec = RobustSection(samples=8, check_samples=100, search_yield=0.5)
+    plan = robust.Plan(spec, (Vary("x", 1.0, True),), ((0.0, True, math.inf),), {},
+                       robust.variants_of(base))
+    problem = robust.RobustProblem(base, plan)
+    problem.reseed(np.random.SeedSequence(3))
+    problem.new_generation()
+    ev = problem.evaluate(np.array([[1.1], [0.7], [1.3], [0.9]]))
+    sampled = ev.g[:, -1] < robust.SCREENED
+    np.testing.assert_array_equal(sampled, [False, True, False, True])
+    np.testing.assert_allclose(ev.g[[0, 2], -1] - robust.SCREENED, [0.1, 0.3], rtol=1e-9)
+    assert np.isnan(ev.extras["yield"][[0, 2]]).all()
+
+
 def test_a_finalist_that_fails_new_draws_leaves():
     """A design kept as a finalist for passing one generation's draws leaves when it is
     evaluated again (a DE parent) and fails; one that passes again stays with its new

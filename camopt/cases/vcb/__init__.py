@@ -118,6 +118,10 @@ def resolve_cam_archive(config: CaseConfig, load: ArchiveLoader) -> CaseConfig:
     if run.kind != "vcb" or run.case.get("step") != "cam" or "a1" not in x:
         raise ConfigError(config.cam_archive, "case.cam_archive",
                           "not a VCB step-1 (cam) run archive")
+    if "velocity_setting_m_s" in x:  # step 2 has no factory setting: it would judge it unset
+        raise ConfigError(config.cam_archive, "case.cam_archive",
+                          "its breakers are set at the factory (velocity_setting_m_s); "
+                          "step 'fourbar' does not model the setting")
     design = CamDesign(a0=run.best.metrics["a0"], a1=x["a1"], a2=x["a2"], a3=x["a3"],
                        a4=x.get("a4", 0.0), a5=x.get("a5", 0.0),
                        release_offset_deg=x.get("release_offset_deg"),

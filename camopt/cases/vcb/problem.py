@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -73,6 +73,43 @@ class Parts:
         return Parts(*(None if v is None else v[rows] for v in
                        (self.link, self.pre, self.opening_k, self.wipe_k, self.friction_scale,
                         self.efficiency_shift, self.profile_rad)))
+
+
+@dataclass(frozen=True)
+class Setting:
+    """A factory setting (:meth:`VcbProblem.as_set`) of n breakers under a form's k + 1
+    parameter sets: the band's other sets' set compressions ``member_pre`` (k n, 2) m,
+    set-major as the band's rows (None without other sets), and the nut travel each set
+    needs, ``needed`` (k + 1, n) m (the fit's first; +inf: none reaches the velocity)."""
+
+    member_pre: NDArray | None
+    needed: NDArray
+
+    @property
+    def longest(self) -> NDArray:
+        """(n,) the needed travel of the set that needs the most, with its sign."""
+        index = np.argmax(np.abs(self.needed), axis=0)
+        return np.take_along_axis(self.needed, index[None], axis=0)[0]
+
+
+def _joined(nominal: MotionParameters, members: MotionParameters | None,
+            efficiency: float) -> MotionParameters:
+    """A form's fit and its other sets as k + 1 parameter sets ((k + 1,) arrays, the fit
+    first), every field resolved (the case's ``efficiency`` where unset)."""
+    def resolved(sets: MotionParameters) -> dict[str, NDArray]:
+        r = replace(sets, efficiency=efficiency if sets.efficiency is None else sets.efficiency,
+                    release_friction_nm=sets.friction_nm if sets.release_friction_nm is None
+                    else sets.release_friction_nm)
+        return {f.name: np.ravel(np.asarray(getattr(r, f.name), dtype=float))
+                for f in fields(r)}
+    first = resolved(nominal)
+    if members is None:
+        return MotionParameters(**first)
+    rest = resolved(members)
+    count = max(len(v) for v in rest.values())
+    return MotionParameters(**{name: np.concatenate([first[name],
+                                                     np.broadcast_to(rest[name], (count,))])
+                               for name in first})
 
 
 @dataclass(frozen=True)
@@ -396,25 +433,25 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         return A
 
     def as_set(self, X: NDArray, parts: Parts | None, form: int | None = None
-               ) -> tuple[Parts | None, NDArray | None]:
+               ) -> tuple[Parts | None, Setting | None]:
         """Each breaker of ``X`` (n rows, its ``parts`` as made) set at the factory, where
         the run has ``velocity_setting_bounds_m_s``: both closing springs' compressions in
         the opened state moved by the same nut travel d until the average closing velocity
-        of the form's fit (``form``'s nominal set; the identified one for the case's own
-        evaluation), what the breaker analyser reads, is the design's
-        ``velocity_setting_m_s``. Returns the parts with the set compressions, d clipped to
-        +- ``preload_setting_range_mm`` (the nut's end), and the d needed (m, (n,); +inf
-        where no compression within reach moves the cam: a stall at both trials); without
-        a setting ``(parts, None)``.
+        (what the breaker analyser reads) is the design's ``velocity_setting_m_s``. The
+        analyser reads the breaker as it is, whichever of the form's parameter sets is
+        true, so d is found under each set of form ``form`` (its fit and the band's other
+        sets; form 0 for the case's own evaluation of a one-form band), and the breaker is
+        judged under each set at that set's d. Returns the parts with the fit's set
+        compressions and the :class:`Setting` (each set's compressions and needed d);
+        without a setting ``(parts, None)``. d is clipped to +- ``preload_setting_range_mm``
+        (the nut's end); the needed d is +inf where neither trial brings the contacts
+        together (a stall at d = 0 and at the trial).
 
         d solves v(d)^2 = v_set^2 by one secant step from d = 0 and 2 mm: the kinetic
         energy at the touch is affine in d (the springs' energy is linear in their
         compression), so v^2 is nearly so, and the step leaves < 1e-3 m/s, twenty times
-        inside the analyser's 2 % (6e-5 on 2,000 draws of the shipped design, up to 8e-4
-        on random designs: tests/cases/test_vcb_setting.py); a second step (3e-8) cost a
-        third more. The setting is judged with the form's fit: the band's other sets keep
-        their spread about it (a measurement would narrow it: conservative,
-        docs/tolerance.md, "VCB: factory setting")."""
+        inside the analyser's 2 % (up to 8e-4 on random designs:
+        tests/cases/test_vcb_setting.py); a second step (3e-8) cost a third more."""
         if self.setting_column is None:
             return parts, None
         c, m = self.config, self.model
@@ -425,22 +462,28 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             [c.kc1_precompression_mm * MM, c.kc2_precompression_mm * MM], (n, 1))
         A, kc, link = self.designs(X, parts.link)
         A = self._profiled(A, parts)
-        params = self._as_made(self.forms[form or 0].nominal, 1, n, self._moved(X, n), parts)
-        loads = self.loads(parts)
-        target = X[:, self.setting_column] ** 2
+        every = self.forms[form or 0]
+        k = every.count + 1  # the fit, then the band's other sets of the form
+        sets = _joined(every.nominal, every.members, c.efficiency)
+        params = self._as_made(sets, k, n, self._moved(X, n), parts)
+        A_rows, kc_rows, link_rows = (np.tile(a, (k, 1)) for a in (A, kc, link))
+        loads, base_rows = self.loads(parts).tiled(k), np.tile(base, (k, 1))
+        target = np.tile(X[:, self.setting_column], k) ** 2
 
         def squared_speed(d: NDArray) -> NDArray:
-            ev = closing_events(m, A, kc, link, self.rod_offset, loads, params,
-                                c.dynamics_steps, pre=base + d[:, None])
+            ev = closing_events(m, A_rows, kc_rows, link_rows, self.rod_offset, loads,
+                                params, c.dynamics_steps, pre=base_rows + d[:, None])
             return np.nan_to_num(ev.closing_velocity_avg, nan=0.0) ** 2
 
-        d_a, d_b = np.zeros(n), np.full(n, SETTING_TRIAL_MM * MM)
+        d_a, d_b = np.zeros(k * n), np.full(k * n, SETTING_TRIAL_MM * MM)
         w_a, w_b = squared_speed(d_a), squared_speed(d_b)  # the breaker as made, and a trial
         with np.errstate(divide="ignore", invalid="ignore"):
             needed = d_b + (target - w_b) * (d_b - d_a) / (w_b - w_a)
         needed = np.where(np.isfinite(needed), needed, np.inf)
         reach = c.preload_setting_range_mm * MM
-        return replace(parts, pre=base + np.clip(needed, -reach, reach)[:, None]), needed
+        pre = base_rows + np.clip(needed, -reach, reach)[:, None]
+        return replace(parts, pre=pre[:n]), Setting(pre[n:] if k > 1 else None,
+                                                    needed.reshape(k, n))
 
     def release_offset(self, X: NDArray) -> NDArray | float:
         """Where the closing latch holds the charged spring crank, past its dead centre,
@@ -452,10 +495,13 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         return np.atleast_2d(np.asarray(X, dtype=float))[:, self.release_column]
 
     def motion_band(self, X: NDArray, nominal: ClosingMotion, link: NDArray | None = None,
-                    parts: Parts | None = None, form: int | None = None) -> MotionBand:
+                    parts: Parts | None = None, form: int | None = None,
+                    member_pre: NDArray | None = None) -> MotionBand:
         """The closing of each row under every parameter set of ``dynamics_band`` (or of
         model form ``form``'s) and the nominal one (``nominal``, already computed): the
-        extremes per design. One vectorised call over (sets x designs) rows."""
+        extremes per design. One vectorised call over (sets x designs) rows;
+        ``member_pre`` (sets x n, 2) m: each set's own closing-spring compressions (a
+        breaker set at the factory under that set, :meth:`as_set`), else the parts'."""
         members, k = ((self.band, len(np.ravel(self.band.cam_kg_m2))) if self.band is not None
                       else (None, 0)) if form is None else (
             self.forms[form].members, self.forms[form].count)
@@ -468,9 +514,15 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         # a design's latch moved from the identified offset moves every set's with it: the
         # sets keep their spread (what the ADAMS data leave open) about the design's
         sets = self._as_made(members, k, n, self._moved(X, n), parts)
-        events = closing_events(self.model, A, kc, link, self.rod_offset, self.loads(parts),
-                                sets, self.config.dynamics_steps, sets=k,
-                                pre=None if parts is None else parts.pre)
+        if member_pre is not None:  # each set's breaker set with its own nut travel
+            events = closing_events(self.model, np.tile(A, (k, 1)), np.tile(kc, (k, 1)),
+                                    np.tile(link, (k, 1)), self.rod_offset,
+                                    self.loads(parts).tiled(k), sets,
+                                    self.config.dynamics_steps, pre=member_pre)
+        else:
+            events = closing_events(self.model, A, kc, link, self.rod_offset,
+                                    self.loads(parts), sets, self.config.dynamics_steps,
+                                    sets=k, pre=None if parts is None else parts.pre)
         return MotionBand.of(nominal, events, k)
 
     def _evaluate(self, X: NDArray, detail: bool, parts: Parts | None = None,
@@ -494,8 +546,11 @@ class VcbProblem(Problem, VariesCase, HasVariants):
                   phi_top=phi_max(A, end, zeros) / DEG,  # exact, not the sampled maximum
                   tau_max=hertz.max_shear_stress(sigma_max),  # Eq 31
                   motion=motion,
-                  band=self.motion_band(X, motion, parts=parts, form=form)
-                  if motion is not None else None, setting=setting,
+                  band=self.motion_band(X, motion, parts=parts, form=form,
+                                        member_pre=None if setting is None
+                                        else setting.member_pre)
+                  if motion is not None else None,
+                  setting=None if setting is None else setting.longest,
                   setting_velocity=None if setting is None else X[:, self.setting_column])
         G = np.column_stack([con.g(q) for con in self.constraints])
         G = np.where(np.isnan(G), np.inf, G)
@@ -510,7 +565,8 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             "surplus_work_j": bal.surplus, "rod_travel_mm": q.travel / MM,
         }
         if setting is not None:  # the nut travel the factory setting needs (+inf: none)
-            extras["preload_setting_mm"] = setting / MM
+            extras["preload_setting_mm"] = setting.longest / MM  # the set needing most
+            extras["preload_setting_fit_mm"] = setting.needed[0] / MM  # the form's fit
         if motion is not None:
             spread = q.spread
             closes = np.isfinite(spread.high["touch_time"])  # every set touches
