@@ -17,14 +17,7 @@ CONFIG = CONFIGS / "vcb_velocity_robust.toml"
 
 @pytest.fixture(scope="module")
 def problem():
-    """The shipped robust case, its breakers as their parts are made (never set at the
-    factory: the setting moves the closing springs' compression per breaker and has its
-    own tests, test_vcb_setting.py)."""
-    return _unset(load(CONFIG).case)
-
-
-def _unset(case):
-    return build_problem(case.model_copy(update={"velocity_setting_bounds_m_s": None}))
+    return build_problem(load(CONFIG).case)
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +61,7 @@ def test_nominal_parts_change_nothing(problem, X):
 def test_a_part_per_row_is_a_config_with_that_value(problem, X, field, value):
     """Row by row the same as a case file with the part's value: the springs' energy,
     torque and loads take one value per design."""
-    made = _unset(load(CONFIG, f"case.{field}={value}").case)
+    made = build_problem(load(CONFIG, f"case.{field}={value}").case)
     ev = problem.describe_with(X, {field: np.full(len(X), value)})
     _close(ev, made.describe(X))
 
