@@ -449,9 +449,9 @@ class VcbProblem(Problem, VariesCase, HasVariants):
 
         d solves v(d)^2 = v_set^2 by one secant step from d = 0 and 2 mm: the kinetic
         energy at the touch is affine in d (the springs' energy is linear in their
-        compression), so v^2 is nearly so, and the step leaves < 1e-3 m/s, twenty times
-        inside the analyser's 2 % (up to 8e-4 on random designs:
-        tests/cases/test_vcb_setting.py); a second step (3e-8) cost a third more."""
+        compression), so v^2 is nearly so, and the step leaves < 1e-3 m/s under every
+        set, twenty times inside the analyser's 2 % (tests/cases/test_vcb_setting.py, on
+        random designs and parts); a second step cost a third more."""
         if self.setting_column is None:
             return parts, None
         c, m = self.config, self.model
