@@ -88,28 +88,24 @@ class Setting:
     @property
     def longest(self) -> NDArray:
         """(n,) the needed travel of the set that needs the most, with its sign."""
-        index = np.argmax(np.abs(self.needed), axis=0)
-        return np.take_along_axis(self.needed, index[None], axis=0)[0]
+        return _longest(self.needed)
 
 
-def _joined(nominal: MotionParameters, members: MotionParameters | None,
-            efficiency: float) -> MotionParameters:
+def _longest(travels: NDArray) -> NDArray:
+    """(n,) each column's entry of largest magnitude, with its sign, of ``travels`` (k, n)."""
+    index = np.argmax(np.abs(travels), axis=0)
+    return np.take_along_axis(travels, index[None], axis=0)[0]
+
+
+def _joined(form: FormSets, efficiency: float) -> MotionParameters:
     """A form's fit and its other sets as k + 1 parameter sets ((k + 1,) arrays, the fit
-    first), every field resolved (the case's ``efficiency`` where unset)."""
-    def resolved(sets: MotionParameters) -> dict[str, NDArray]:
-        r = replace(sets, efficiency=efficiency if sets.efficiency is None else sets.efficiency,
-                    release_friction_nm=sets.friction_nm if sets.release_friction_nm is None
-                    else sets.release_friction_nm)
-        return {f.name: np.ravel(np.asarray(getattr(r, f.name), dtype=float))
-                for f in fields(r)}
-    first = resolved(nominal)
-    if members is None:
-        return MotionParameters(**first)
-    rest = resolved(members)
-    count = max(len(v) for v in rest.values())
-    return MotionParameters(**{name: np.concatenate([first[name],
-                                                     np.broadcast_to(rest[name], (count,))])
-                               for name in first})
+    first), every field resolved as :meth:`MotionParameters.columns` resolves it."""
+    columns = [form.nominal.columns(1, efficiency)]
+    if form.members is not None:
+        columns.append(form.members.columns(form.count, efficiency))
+    return MotionParameters(**{f.name: np.concatenate([getattr(c, f.name)[:, 0]
+                                                       for c in columns])
+                               for f in fields(MotionParameters)})
 
 
 @dataclass(frozen=True)
@@ -464,7 +460,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         A = self._profiled(A, parts)
         every = self.forms[form or 0]
         k = every.count + 1  # the fit, then the band's other sets of the form
-        sets = _joined(every.nominal, every.members, c.efficiency)
+        sets = _joined(every, c.efficiency)
         params = self._as_made(sets, k, n, self._moved(X, n), parts)
         A_rows, kc_rows, link_rows = (np.tile(a, (k, 1)) for a in (A, kc, link))
         loads, base_rows = self.loads(parts).tiled(k), np.tile(base, (k, 1))
@@ -644,8 +640,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
                 if key in ("band_sets", "band_sets_not_latched"):
                     extras[key] = stack.sum(axis=0)
                 elif key == "preload_setting_mm":
-                    extras[key] = np.take_along_axis(
-                        stack, np.argmax(np.abs(stack), axis=0)[None], axis=0)[0]
+                    extras[key] = _longest(stack)
                 elif "_low" in key or key in _WORST_LOW:
                     extras[key] = np.nanmin(stack, axis=0)
                 elif "_high" in key or key in _WORST_HIGH:
