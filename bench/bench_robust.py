@@ -6,7 +6,8 @@ generations"; goal <= 10x), or, where the nominal solver stops on evaluations (c
 the robust search's candidate evaluations (population x generations). CPU time
 (``time.process_time``), not wall time: the host is shared, and CPU is what the goal is
 about. One run each, in one process, one after the
-other; racing's saving is shown by the draws evaluated with and without it.
+other; racing's saving is shown by the draws evaluated with and without it, the yield
+centring's cost (``centre_generations``) by the same run without it.
 
 ``python -m bench.bench_robust [CONFIG ...] [--generations N]``: only those robust
 configs (e.g. ``vcb_velocity_robust``), and every run at N generations (a reduced budget
@@ -69,6 +70,13 @@ def main(argv: list[str] | None = None) -> None:
                 f"{nominal_name}.toml at {budget} {shipped_s:.1f} s: "
                 f"{robust_s / shipped_s:.1f}x (goal <= 10x)")
         print(line, flush=True)
+        if cfg.robust.centre_generations:
+            # the yield centring is a stage after the search: its share apart
+            search_s, _ = _cpu(dataclasses.replace(cfg, robust=cfg.robust.model_copy(
+                update={"centre_generations": 0})))
+            print(f"  without its {cfg.robust.centre_generations} generations of yield "
+                  f"centring: {search_s:.1f} s CPU ({search_s / shipped_s:.1f}x); the "
+                  f"centring {robust_s - search_s:.1f} s", flush=True)
         if cfg.robust.race:
             unraced_s, unraced_draws = _cpu(unraced)
             print(f"  without racing: {unraced_s:.1f} s CPU, {unraced_draws} candidate draws "

@@ -248,6 +248,16 @@ class RobustSection(Strict):
     chunk_rows: int | None = Field(None, ge=1, le=10_000_000, description="rows "
                                    "(candidates x samples) per vectorised call (unset: "
                                    "camopt.core.batch's default): memory and speed, never results")
+    centre_generations: int = Field(0, ge=0, le=MAX_ITERATIONS, description="yield "
+                                    "centring after the search: generations of a local "
+                                    "CMA-ES that moves the repeat's result to where the "
+                                    "most of centre_samples fixed draws pass (smoothed); "
+                                    "kept only if more of the selection's fresh draws pass "
+                                    "(docs/tolerance.md, \"Yield centring\"); 0: none")
+    centre_samples: int = Field(256, ge=2, le=MAX_ROBUST_SAMPLES, description="fixed draws "
+                                "of the yield centring")
+    centre_step: float = Field(0.002, gt=0, le=1, description="the centring's initial step, "
+                               "a fraction of each variable's range")
 
 
 class SolverOptions(Strict):

@@ -103,6 +103,9 @@ class Stochastic(Protocol):
     parents again on each generation's draws, so that a trial and its parent are compared
     on the same parts (docs/tolerance.md, "Parents on the same parts")."""
 
+    notes: tuple[str, ...]
+    """What the last ``select`` did beyond choosing, for the repeat's notes."""
+
     def reseed(self, seed: np.random.SeedSequence) -> None:
         """Start a repeat: its own draws from ``seed``, nothing carried over."""
         ...

@@ -102,7 +102,8 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
         converged_nit=converged_iteration(np.array(best_f), np.array(best_v)),
         nfev_to_target=nfev_to_target(history, target),
         wall_s=time.perf_counter() - start, history=history, g=bev.g[0],
-        notes=tuple(solver.notes()), table=solver.table(),
+        notes=(*solver.notes(), *(stochastic.notes if stochastic else ())),
+        table=solver.table(),
         nominal_x=None if stochastic is None else stochastic.nominal_design(),
     )
 

@@ -326,6 +326,8 @@ class RobustProblem(Problem, Stochastic):
         self.finalists: tuple[NDArray, NDArray] = (np.empty((0, self.n_var)), np.empty(0))
         """Designs (m, n_var) that met the target on their generation's draws, lowest
         objective (m,) first: checked again at the end of the repeat (:meth:`select`)."""
+        self.notes: tuple[str, ...] = ()
+        """What the last :meth:`select` did beyond choosing (the yield centring)."""
 
     def reseed(self, seed: np.random.SeedSequence) -> None:
         """Start a repeat: its own draws, nothing carried over from another repeat."""
@@ -427,10 +429,41 @@ class RobustProblem(Problem, Stochastic):
         unit = unit_draws(np.random.default_rng(seed), spec.check_samples,
                           len(self.plan.varies), self.plan.distribution)
         X = np.vstack([x[None, :], self.finalists[0]])
-        ev = self.evaluate_at(X, unit, confident_index(spec.yield_target, len(unit),
-                                                       spec.confidence))
+        k = confident_index(spec.yield_target, len(unit), spec.confidence)
+        ev = self.evaluate_at(X, unit, k)
         i = deb_best(ev.f, ev.violation)
-        return X[i].copy(), ev.take(i)
+        self.notes = ()
+        if not spec.centre_generations:
+            return X[i].copy(), ev.take(i)
+        return self._centred(X[i].copy(), ev.take(i), unit, k, seed)
+
+    def _centred(self, x: NDArray, ev: Evaluation, unit: NDArray, k: int,
+                 seed: np.random.SeedSequence) -> tuple[NDArray, Evaluation]:
+        """Yield centring of the selected ``x`` (:mod:`camopt.engine.centring`) on its own
+        draws (spawn key ``(*seed.spawn_key, 0)``: none of the search's or the
+        selection's), kept if more of the selection's draws ``unit`` pass it than ``x``
+        (a tie keeps ``x``); both shares go to the repeat's notes."""
+        from camopt.engine.centring import centre
+
+        spec, base, plan = self.plan.spec, self.base, self.plan
+        rng = np.random.default_rng(np.random.SeedSequence(seed.entropy,
+                                                           spawn_key=(*seed.spawn_key, 0)))
+        fixed = unit_draws(rng, spec.centre_samples, len(plan.varies), plan.distribution)
+
+        def draws(X: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+            s = sample(base, plan, X, fixed)
+            return s.g, s.f, base.evaluate(X).violation
+
+        c = centre(base, draws, x, spec.centre_generations, spec.centre_step, rng)
+        both = sample(base, plan, np.vstack([x, c.x]), unit).feasible.mean(axis=1)
+        kept = bool(both[1] > both[0])
+        self.notes = (f"yield centring ({c.generations} generations, {len(fixed)} fixed "
+                      f"draws): pass share {c.passed_start:.4f} -> {c.passed:.4f} on its "
+                      f"draws, {both[0]:.4f} -> {both[1]:.4f} on the selection's "
+                      f"{len(unit)}: {'kept' if kept else 'not kept'}",)
+        if not kept:
+            return x, ev
+        return c.x, self.evaluate_at(c.x[None, :], unit, k)
 
     def nominal_design(self) -> NDArray | None:
         return None if self.nominal_best is None else self.nominal_best[0]
