@@ -48,7 +48,8 @@ TAU_FLOOR = 1e-3
 
 Draws = Callable[[NDArray], tuple[NDArray, NDArray, NDArray]]
 """Designs (n, n_var), SI, to their constraints (n, S, n_constr) and objectives (n, S) on
-the stage's fixed draws, and their nominal designs' violations (n,; 0: feasible)."""
+the stage's fixed draws, and their nominal designs' violations (n,; 0: feasible, +inf for
+a non-finite nominal objective)."""
 
 
 @dataclass(frozen=True)
@@ -95,15 +96,18 @@ def passed(g: NDArray, f: NDArray) -> NDArray:
 def centre(problem: Problem, draws: Draws, x0: NDArray, generations: int, step: float,
            rng: np.random.Generator) -> Centred:
     """Minimise F from ``x0`` (n_var,), SI, for ``generations`` CMA-ES generations of
-    the default population (integer variables rounded), initial step ``step`` (a
-    fraction of each variable's range).
-    Returns the nominally feasible design with the least F seen (``x0`` if none beat it)."""
+    the default population, initial step ``step`` (a fraction of each variable's range;
+    integer variables are rounded, so with a small step they stay where they are).
+    Returns the nominally feasible design with the least F seen: ``x0`` if none beat it,
+    or, when ``x0`` is itself refused at nominal, if the walk met no feasible design."""
     from camopt.solvers.base import snap  # the solvers' modules, on first use
     from camopt.solvers.cmaes import CMACore
 
-    g0, f0, _ = draws(x0[None, :])
+    g0, f0, v0 = draws(x0[None, :])
     tau = spread(g0[0])
-    best_x, best_F = x0.copy(), float(smoothed_failure(g0, f0, tau)[0])
+    # a start the case refuses at nominal sets no bar: any feasible design replaces it
+    best_x = x0.copy()
+    best_F = float(smoothed_failure(g0, f0, tau)[0]) if v0[0] == 0 else np.inf
     best_passed = start = float(passed(g0, f0)[0])
     core = CMACore(np.clip(problem.to_unit(x0[None, :])[0], 0.0, 1.0), step, rng)
     for _ in range(generations):

@@ -441,8 +441,9 @@ class RobustProblem(Problem, Stochastic):
                  seed: np.random.SeedSequence) -> tuple[NDArray, Evaluation]:
         """Yield centring of the selected ``x`` (:mod:`camopt.engine.centring`) on its own
         draws (spawn key ``(*seed.spawn_key, 0)``: none of the search's or the
-        selection's), kept if more of the selection's draws ``unit`` pass it than ``x``
-        (a tie keeps ``x``); both shares go to the repeat's notes."""
+        selection's), kept if the case accepts it at nominal and not ``x``, or if both
+        are judged alike there and more of the selection's draws ``unit`` pass it than
+        ``x`` (a tie keeps ``x``); both shares go to the repeat's notes."""
         from camopt.engine.centring import centre
 
         spec, base, plan = self.plan.spec, self.base, self.plan
@@ -451,12 +452,14 @@ class RobustProblem(Problem, Stochastic):
         fixed = unit_draws(rng, spec.centre_samples, len(plan.varies), plan.distribution)
 
         def draws(X: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-            s = sample(base, plan, X, fixed)
-            return s.g, s.f, base.evaluate(X).violation
+            s, nominal = sample(base, plan, X, fixed), base.evaluate(X)
+            return s.g, s.f, np.where(np.isfinite(nominal.f), nominal.violation, np.inf)
 
         c = centre(base, draws, x, spec.centre_generations, spec.centre_step, rng)
         both = sample(base, plan, np.vstack([x, c.x]), unit).feasible.mean(axis=1)
-        kept = bool(both[1] > both[0])
+        ok = base.evaluate(np.vstack([x, c.x])).feasible
+        # the case's nominal verdict first, then more of the selection's draws passing
+        kept = bool((ok[1] and not ok[0]) or (ok[1] == ok[0] and both[1] > both[0]))
         self.notes = (f"yield centring ({c.generations} generations, {len(fixed)} fixed "
                       f"draws): pass share {c.passed_start:.4f} -> {c.passed:.4f} on its "
                       f"draws, {both[0]:.4f} -> {both[1]:.4f} on the selection's "

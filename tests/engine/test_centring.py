@@ -1,6 +1,9 @@
 """Yield centring (camopt/engine/centring.py, RobustProblem.select): the smoothed failure
-against the pass count it smooths, a design moved off its limit to the known centre of a
-tolerance window, reproducibility, and a centring that does not help is not kept."""
+against the sigmoids it is made of, a design moved off its limit to the known centre of a
+tolerance window, the case's nominal verdict kept, the keep decided on the selection's
+draws (not the centring's own, which are others), reproducibility, and a centring that
+does not help is not kept (review of 9c22e93 by a helper session: the tests it found
+missing)."""
 
 from __future__ import annotations
 
@@ -32,7 +35,7 @@ class _Window(Problem):
 
 def _robust(centre_generations=40, **spec):
     base = _Window()
-    section = RobustSection(samples=16, check_samples=2000,
+    section = RobustSection(samples=16, check_samples=2000, objective="margin",
                             centre_generations=centre_generations, **spec)
     varies = (Vary("x", 10.0, True), Vary("y", 10.0, True))
     plan = robust.Plan(section, varies, ((0.0, True, math.inf),) * 2, {})
@@ -122,20 +125,93 @@ class _Guarded(Problem):
         return Evaluation(X[:, 0].copy(), np.column_stack([X[:, 0] / limit - 1, floor]))
 
 
-def test_the_centred_design_meets_its_cases_nominal_verdict():
-    """Candidates the case refuses at nominal rank behind every accepted one however many
-    draws they pass: the centring ends at the nominal floor (0.75), not below it."""
+def _guarded():
     from camopt.core.capabilities import HasVariants
 
     class Guarded(_Guarded, HasVariants):
         pass
 
     base = Guarded()
-    section = RobustSection(samples=16, check_samples=2000, centre_generations=40,
-                            centre_step=0.02)
+    section = RobustSection(samples=16, check_samples=2000, objective="margin",
+                            centre_generations=40, centre_step=0.02)
     plan = robust.Plan(section, (Vary("x", 20.0, True),), ((0.0, True, math.inf),), {},
                        robust.variants_of(base))
-    problem = robust.RobustProblem(base, plan)
-    x, _ = problem.select(np.array([0.79]), np.random.SeedSequence(2))
+    return robust.RobustProblem(base, plan)
+
+
+def test_the_centred_design_meets_its_cases_nominal_verdict():
+    """A design the case refuses at nominal is no result however many draws it passes:
+    the centring ends at the nominal floor (0.75), not below it."""
+    x, _ = _guarded().select(np.array([0.79]), np.random.SeedSequence(2))
     assert 0.75 <= x[0] < 0.76
-    assert base.evaluate(x[None, :]).feasible[0]
+    assert _Guarded().evaluate(x[None, :]).feasible[0]
+
+
+def test_a_start_the_case_refuses_gives_way_to_a_feasible_design():
+    """From x = 0.74, below the nominal floor (found by the review): the walk crosses
+    0.75..0.8, nominally feasible, and the result is one of those."""
+    x0 = np.array([0.74])
+    assert not _Guarded().evaluate(x0[None, :]).feasible[0]
+    problem = _guarded()
+    x, _ = problem.select(x0, np.random.SeedSequence(2))
+    assert _Guarded().evaluate(x[None, :]).feasible[0], problem.notes
+
+
+def test_smoothed_failure_is_the_product_of_sigmoids_scaled_by_each_spread():
+    """One draw, two constraints of different spreads: F = 1 - sigmoid(-3 g1 / tau1)
+    sigmoid(-3 g2 / tau2), each constraint on its own scale."""
+    g = np.array([[[0.01, -0.5]]])
+    tau = np.array([0.02, 1.0])
+    sig = lambda z: 1 / (1 + np.exp(-z))  # noqa: E731
+    want = 1 - sig(-3 * 0.01 / 0.02) * sig(3 * 0.5 / 1.0)
+    assert centring.smoothed_failure(g, np.zeros((1, 1)), tau)[0] == pytest.approx(want,
+                                                                                 rel=1e-12)
+
+
+def test_the_centring_draws_are_not_the_selections(monkeypatch):
+    """The centring's fixed draws share no row with the selection's 2,000 (its own
+    spawn key), so the keep is judged on draws the centring never saw."""
+    seen = []
+    real = centring.centre
+
+    def spy(problem, draws, x0, generations, step, rng):
+        original = draws
+
+        def recording(X):
+            seen.append(X)
+            return original(X)
+        return real(problem, recording, x0, generations, step, rng)
+
+    monkeypatch.setattr(centring, "centre", spy)
+    captured = {}
+    real_sample = robust.sample
+
+    def sample(problem, plan, X, unit, *a, **k):
+        captured.setdefault(len(unit), unit.copy())
+        return real_sample(problem, plan, X, unit, *a, **k)
+
+    monkeypatch.setattr(robust, "sample", sample)
+    _robust(centre_generations=3).select(np.array([0.98, 0.8]), np.random.SeedSequence(5))
+    fixed, selection = captured[256], captured[2000]
+    assert not (fixed[:, None, :] == selection[None, :, :]).all(axis=2).any()
+    assert seen
+
+
+def test_the_keep_is_decided_on_the_selections_draws(monkeypatch):
+    """A centring whose design passes more of its own draws is still not kept when the
+    selection's draws pass it less: here the stage's result is forced to a design outside
+    the window (every selection draw fails it)."""
+    outside = np.array([1.5, 1.5])
+    monkeypatch.setattr(centring, "centre", lambda *a, **k: centring.Centred(
+        outside, 1.0, 0.5, 1))
+    problem = _robust(centre_generations=1)
+    x, _ = problem.select(np.array([0.98, 0.8]), np.random.SeedSequence(5))
+    np.testing.assert_array_equal(x, [0.98, 0.8])
+    assert problem.notes[0].endswith("not kept")
+
+
+def test_centring_asks_for_the_margin_objective():
+    """The centring maximises the yield, trading the objective for it: with any other
+    objective it is bad input."""
+    with pytest.raises(ValueError, match="objective"):
+        RobustSection(centre_generations=10, objective="mean")
