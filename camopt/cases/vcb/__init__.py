@@ -67,6 +67,21 @@ TOLERANCES = {  # class "standard", docs/tolerance.md, "Tolerance classes"
     # the cam profile's radial error, a CNC-milled profile (the EMB's class "milled")
     "case.cam_profile_error_mm": "±0.03",
 }
+
+
+def _factory_class(spring_pct: float, free_length_mm: float, friction_pct: float,
+                   loss: float) -> dict[str, str]:
+    """The standard class with every spring held to ``spring_pct`` on rate and the closing
+    springs' free lengths to ``free_length_mm``, the friction torque to ``friction_pct``
+    and the loss 1 - eps to ``loss``: the classes of a breaker as built and timed."""
+    springs = ("kc1_n_per_mm", "kc2_n_per_mm", "case.opening_k_n_per_mm",
+               "case.wipe_k_n_per_mm")
+    free = ("case.kc1_precompression_mm", "case.kc2_precompression_mm")
+    return {**TOLERANCES, **{k: f"±{spring_pct:g}%" for k in springs},
+            **{k: f"±{free_length_mm:g}" for k in free},
+            "case.cam_friction_nm": f"±{friction_pct:g}%", "case.efficiency": f"±{loss:g}"}
+
+
 TOLERANCE_CLASSES = {
     "graded": ToleranceClass(
         {**TOLERANCES, "kc1_n_per_mm": "±5%", "kc2_n_per_mm": "±5%"},
@@ -77,10 +92,7 @@ TOLERANCE_CLASSES = {
     # before the timing test, so friction varies as the grease and the fit do, not with
     # temperature and wear over the breaker's life (the other classes' ±25 %)
     "controlled": ToleranceClass(
-        {**TOLERANCES, "kc1_n_per_mm": "±5%", "kc2_n_per_mm": "±5%",
-         "case.kc1_precompression_mm": "±0.75", "case.kc2_precompression_mm": "±0.75",
-         "case.opening_k_n_per_mm": "±5%", "case.wipe_k_n_per_mm": "±5%",
-         "case.cam_friction_nm": "±10%", "case.efficiency": "±0.015"},
+        _factory_class(5, 0.75, 10, 0.015),
         source="every spring graded by force (±5 % on rate, free lengths ±0.75 mm), a "
         "specified grease and a run-in before the factory timing test (friction ±10 %, "
         "the loss 1 - eps ±10 %): the yield as built and timed, not over the breaker's life",
@@ -91,10 +103,7 @@ TOLERANCE_CLASSES = {
     # the factory (the slow-close torque measured; a breaker outside +-5 % re-greased and
     # run in again): the yield of breakers that pass it, as built and timed
     "matched": ToleranceClass(
-        {**TOLERANCES, "kc1_n_per_mm": "±3%", "kc2_n_per_mm": "±3%",
-         "case.kc1_precompression_mm": "±0.5", "case.kc2_precompression_mm": "±0.5",
-         "case.opening_k_n_per_mm": "±3%", "case.wipe_k_n_per_mm": "±3%",
-         "case.cam_friction_nm": "±5%", "case.efficiency": "±0.0075"},
+        _factory_class(3, 0.5, 5, 0.0075),
         source="every spring 100 % load-tested and sorted into ±3 % classes (free lengths "
         "±0.5 mm), and a friction acceptance test at the factory (slow-close torque within "
         "±5 %, the loss 1 - eps ±5 %; outside: re-greased and run in again): the yield of "
