@@ -70,8 +70,11 @@ def figures(run: RunView) -> dict[str, Figure]:
 def _window(a: dict, prefix: str, gap: float) -> tuple[float, float] | None:
     """Times (ms) at which the movable contact has covered 2/3 of its gap and all of it:
     the window the average closing velocity is taken over (the last third of the contact
-    stroke, Sec 2.1), read off the archived travel curve; None if it never gets there."""
-    t, s = a[prefix + "time_ms"], a[prefix + "dyn_contact_travel_mm"]
+    stroke, Sec 2.1), read off the archived rod travel, which the contacts follow until
+    they touch (their curve is min(rod, gap): from the first node after the touch it stays
+    at the gap, so reading the gap off it ends the window at that node, up to one step
+    late); None if it never gets there."""
+    t, s = a[prefix + "time_ms"], a[prefix + "dyn_rod_travel_mm"]
     if not t.size or np.nanmax(s) < gap:
         return None
     first = [int(np.argmax(s >= level)) for level in (2 * gap / 3, gap)]
