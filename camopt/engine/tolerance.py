@@ -6,8 +6,10 @@ nominal value, uniformly within +-X or normally with sigma = X / 3, X relative (
 in the input's own unit. The nominal design, one row per input at each end of its
 tolerance (the tornado chart's one-at-a-time swings) and every sample are evaluated
 together in cache-sized row chunks (``Problem.describe`` through :mod:`camopt.core.batch`):
-memory is the per-sample columns (objective, metrics, constraints: a few hundred MiB at
-10^6 VCB samples) plus one chunk's temporaries, whatever the sample count. Reported: the
+memory is the per-sample columns (inputs, objective, metrics, constraints: ~0.6 GB at
+10^6 VCB samples, metrics constant on every row held once) plus one chunk's temporaries
+and the summary's ranks, whatever the sample count (10^6 VCB samples peak at 0.92 GiB:
+docs/design.md, bench/bench_tolerance.py). Reported: the
 share of feasible samples (yield), the yield of each requirement of the case
 (:mod:`camopt.core.requirements`) and the one that limits it, the 5th/50th/95th percentiles
 of every raw metric (the objective over feasible samples only: elsewhere it holds the
@@ -136,16 +138,22 @@ def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
     problem = problem_of(run)
     nominal = nominal_inputs(run, problem, varies)
     half = np.array([v.half_width(x) for v, x in zip(varies, nominal)])
-    drawn = draw_inputs(seed, samples, nominal, half, distribution)
     k = len(varies)
-    ends = np.tile(nominal, (2 * k, 1))
+    # one array of every row's inputs (nominal, ends, draws) and the draws a view of it:
+    # a stacked copy was 8 k bytes a sample (120 MB at 10^6 draws of 15 inputs)
+    values = np.empty((1 + 2 * k + samples, k))
+    values[0] = nominal
+    ends = values[1:1 + 2 * k]
+    ends[:] = nominal
     ends[np.arange(0, 2 * k, 2), np.arange(k)] -= half
     ends[np.arange(1, 2 * k, 2), np.arange(k)] += half
-    values = np.vstack([nominal, ends, drawn])
+    drawn = values[1 + 2 * k:]
+    drawn[:] = draw_inputs(seed, samples, nominal, half, distribution)
     variants = variants_of(problem)
     variant = assign_variants(samples, len(variants))
     ev, bad = evaluate_inputs(run, problem, varies, values, describe=True, progress=progress,
                               variant=np.r_[np.full(1 + 2 * k, -1), variant])
+    ev = shared_constants(ev)
     result = Tolerance(run.path, list(varies), distribution, seed, nominal, drawn,
                        ev.take(0), ev.take(slice(1, 1 + 2 * k)),
                        ev.take(slice(1 + 2 * k, None)), problem.objective_name,
@@ -154,6 +162,23 @@ def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
                        variant=variant if variants else np.zeros(0, dtype=int))
     result.summary = summarise(result)
     return result
+
+
+def shared_constants(ev: Evaluation) -> Evaluation:
+    """``ev`` with each metric that holds one value on every row, to the bit (a design
+    coefficient no varied input moves, a flag, a quantity the design does not have: NaN),
+    held as that value broadcast to the rows: a read-only view of 8 bytes instead of
+    8 bytes a row (the VCB describes 50 metrics, several of them constant: 8 MB each at
+    10^6 samples; issue #36). Every value read is the same."""
+    extras = {}
+    for name, values in ev.extras.items():
+        a = np.asarray(values)
+        if a.ndim == 1 and a.size > 1 and a.dtype.itemsize in (1, 2, 4, 8):
+            bits = a.view(f"u{a.itemsize}")
+            if np.all(bits == bits[0]):
+                a = np.broadcast_to(a[:1].copy(), a.shape)
+        extras[name] = a
+    return Evaluation(ev.f, ev.g, extras)
 
 
 def draw_inputs(seed: int, samples: int, nominal: NDArray, half: NDArray,
@@ -172,8 +197,9 @@ def evaluate_inputs(run: RunView, problem: Problem, varies: Sequence[Vary], valu
     those rows (rows,) bool. ``progress`` is told the rows done after each chunk;
     ``variant`` (rows,) each row's model variant (-1 or None: every variant)."""
     x0 = problem.from_display(run.best.x)
-    ev = apply(problem, np.tile(x0, (len(values), 1)), varies, values, describe=describe,
-               progress=progress, variant=variant)
+    # apply makes the one full copy it sets the inputs in (a tiled x0 was a second one)
+    ev = apply(problem, np.broadcast_to(x0, (len(values), len(x0))), varies, values,
+               describe=describe, progress=progress, variant=variant)
     ranges = [physical_range(problem, get_case(run.kind).config, v) for v in varies]
     bad = outside(values, ranges)
     return mark(ev, bad), bad
@@ -288,9 +314,11 @@ def spearman_columns(inputs: NDArray, columns: dict[str, NDArray]
     the inputs once per distinct set of dropped rows (most metrics share one: none),
     instead of both columns again for every pair (k x metrics rankings of 10^6 values).
     Metrics are grouped by their dropped rows first, so one group's input ranks (n x k)
-    are held at a time. None where either column is constant (an input at +-0, a metric
-    the inputs do not move) or fewer than 3 rows remain."""
-    rankdata = average_ranks
+    are held at a time, as float32 where that is exact (:func:`centred_ranks`: 4 bytes
+    an input and sample, not 8; issue #36's 10^6 samples under 1 GiB); the products are
+    summed in float64 (:data:`PRODUCT_ROWS` rows at a time). None where either column
+    is constant (an input at +-0, a metric the inputs do not move) or fewer than 3 rows
+    remain."""
     k = inputs.shape[1]
     out: dict[str, list[float | None]] = {}
     groups: dict[bytes, list[str]] = {}  # the kept rows (packed) -> metrics that keep them
@@ -303,22 +331,50 @@ def spearman_columns(inputs: NDArray, columns: dict[str, NDArray]
             groups.setdefault(np.packbits(keep).tobytes(), []).append(name)
     for names in groups.values():
         keep = ~np.isnan(columns[names[0]])
-        r_in = np.empty((int(keep.sum()), k))
+        n = int(keep.sum())
+        r_in = np.empty((n, k), dtype=rank_dtype(n))
+        norm_in = np.empty(k)
         constant = np.empty(k, dtype=bool)
         for j in range(k):  # column by column: one column's sort temporaries at a time
             drawn = inputs[keep, j]
             constant[j] = bool(np.all(drawn == drawn[0]))
-            r_in[:, j] = rankdata(drawn)
-        r_in -= r_in.mean(axis=0)
-        norm_in = np.sqrt(np.einsum("ij,ij->j", r_in, r_in))
+            r = centred_ranks(drawn)
+            norm_in[j] = np.sqrt(r @ r)
+            r_in[:, j] = r
         for name in names:
-            r_m = rankdata(columns[name][keep])
-            r_m -= r_m.mean()
+            r_m = centred_ranks(columns[name][keep])
+            dots = np.zeros(k)
+            for rows in range(0, n, PRODUCT_ROWS):  # float64 products, a block at a time
+                block = slice(rows, rows + PRODUCT_ROWS)
+                dots += r_m[block] @ r_in[block].astype(float)
             with np.errstate(invalid="ignore", divide="ignore"):
-                rho = (r_m @ r_in) / (norm_in * np.sqrt(r_m @ r_m))
+                rho = dots / (norm_in * np.sqrt(r_m @ r_m))
             out[name] = [None if constant[j] else _finite_or_none(float(rho[j]))
                          for j in range(k)]
     return {name: out[name] for name in columns}
+
+
+EXACT_FLOAT32_RANKS = 2**23
+"""Rows up to which centred average ranks are exact in float32: each is a multiple of
+1/2 below n/2 in magnitude, which float32's 24-bit significand holds exactly for
+n <= 2^23 (camopt tolerance draws at most 10^6)."""
+
+
+def rank_dtype(n: int) -> type[np.floating]:
+    """The dtype that holds the centred ranks of ``n`` rows exactly, the narrower first:
+    float32 up to :data:`EXACT_FLOAT32_RANKS` rows, else float64."""
+    return np.float32 if n <= EXACT_FLOAT32_RANKS else np.float64
+
+
+PRODUCT_ROWS = 2**16
+"""Rows of the float32 input ranks turned into float64 at a time for the products with a
+metric's ranks (a 7.9 MB block for 15 inputs)."""
+
+
+def centred_ranks(values: NDArray) -> NDArray:
+    """:func:`average_ranks` of a 1-D array minus their mean, (n+1)/2 (the ranks 1..n sum
+    to n(n+1)/2 whatever the ties): each a whole or half number, exact in float64."""
+    return average_ranks(values) - 0.5 * (values.size + 1)
 
 
 EXPECTED_YIELD_SAMPLES = 300

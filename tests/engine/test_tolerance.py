@@ -346,3 +346,75 @@ def test_average_ranks_are_scipy_rankdata():
     for a in (rng.random(1000), rng.integers(0, 10, 1000).astype(float), np.array([1.0]),
               np.full(3, 2.0), rng.integers(0, 3, 17) * 0.5):
         assert np.array_equal(average_ranks(a), rankdata(a))
+
+
+# --- 10^6 samples under 1 GiB (issue #36) ----------------------------------------------
+from camopt.engine import tolerance as tolerance_module  # noqa: E402
+
+
+@pytest.mark.parametrize("product_rows", [5, 64])
+def test_spearman_columns_sum_every_block_of_products(monkeypatch, product_rows):
+    """The float64 products of the float32 input ranks are summed block by block: with
+    blocks of 5 and 64 rows over 203 rows (ties, NaN rows) rho is scipy's to 1e-12."""
+    monkeypatch.setattr(tolerance_module, "PRODUCT_ROWS", product_rows)
+    rng = np.random.default_rng(11)
+    inputs = np.round(rng.normal(size=(203, 3)), 1)
+    a = inputs[:, 0] + 0.5 * inputs[:, 2] ** 2 + rng.normal(scale=0.2, size=203)
+    columns = {"a": a, "b": np.where(rng.random(203) < 0.3, np.nan, -a)}
+    got = spearman_columns(inputs, columns)
+    for name, values in columns.items():
+        assert np.allclose(got[name], _pairwise(inputs, values), rtol=0, atol=1e-12), name
+
+
+def test_centred_ranks_are_exact_in_float32_up_to_the_limit():
+    """What :data:`EXACT_FLOAT32_RANKS` rests on: centred average ranks are multiples of
+    1/2 below n/2 in magnitude, and every such number up to n = 2^23 survives float32
+    (a half-integer at 2^23 would not); past that limit the ranks are held in float64."""
+    from camopt.engine.tolerance import EXACT_FLOAT32_RANKS, centred_ranks, rank_dtype
+
+    assert rank_dtype(EXACT_FLOAT32_RANKS) is np.float32
+    assert rank_dtype(EXACT_FLOAT32_RANKS + 1) is np.float64
+
+    n = EXACT_FLOAT32_RANKS
+    rng = np.random.default_rng(13)
+    halves = np.r_[rng.integers(-(n - 1), n, 10**5), -(n - 1), n - 1, 0, 1, -1] / 2
+    assert np.array_equal(halves.astype(np.float32).astype(float), halves)
+    past = np.array([(2 * n + 1) / 2])  # 2^23 + 1/2: float32 rounds it
+    assert not np.array_equal(past.astype(np.float32).astype(float), past)
+    tied = np.array([3.0, 1.0, 3.0, 2.0, 3.0])
+    assert np.array_equal(centred_ranks(tied), [1.0, -2.0, 1.0, -1.0, 1.0])
+
+
+def test_inputs_are_the_draws_and_the_ends_rows_of_one_array(vcb_run):
+    """The samples' inputs are :func:`draw_inputs` of the seed, bit for bit, held as a
+    view of the one array of every evaluated row (no stacked copy)."""
+    from camopt.engine.tolerance import draw_inputs, nominal_inputs, problem_of
+
+    run = archive.load_run(vcb_run)
+    varies = [parse_vary("t", v) for v in ("kc1_n_per_mm=±5%", "case.l1_mm=±0.1")]
+    t = analyse(run, varies, 50, 9)
+    nominal = nominal_inputs(run, problem_of(run), varies)
+    half = np.array([v.half_width(x) for v, x in zip(varies, nominal)])
+    assert np.array_equal(t.inputs, draw_inputs(9, 50, nominal, half, Distribution.uniform))
+    assert t.inputs.base is not None and t.inputs.base.shape == (1 + 2 * 2 + 50, 2)
+    assert np.array_equal(t.nominal_inputs, nominal)
+
+
+def test_constant_metrics_are_held_once_and_read_the_same():
+    """A metric with one value on every row, to the bit (NaN included), is one value
+    broadcast to the rows; a metric that differs anywhere, if only in the sign of a
+    zero, keeps its rows."""
+    from camopt.core.problem import Evaluation
+    from camopt.engine.tolerance import shared_constants
+
+    varying = np.array([1.0, 2.0, 1.0])
+    extras = {"coefficient": np.full(3, 0.25), "absent": np.full(3, np.nan),
+              "zeros": np.array([0.0, -0.0, 0.0]), "varying": varying,
+              "flag": np.ones(3, dtype=bool)}
+    ev = shared_constants(Evaluation(np.zeros(3), np.zeros((3, 1)), extras))
+    for name in ("coefficient", "absent", "flag"):
+        column = ev.extras[name]
+        assert column.strides == (0,) and not column.flags.writeable, name
+        assert np.array_equal(column, extras[name], equal_nan=name == "absent"), name
+    assert np.signbit(ev.extras["zeros"]).tolist() == [False, True, False]
+    assert ev.extras["varying"] is varying
