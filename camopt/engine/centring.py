@@ -93,6 +93,15 @@ def passed(g: NDArray, f: NDArray) -> NDArray:
             ).mean(axis=1)
 
 
+def ranking(F: NDArray, violation: NDArray) -> NDArray:
+    """The order (n,) the walk ranks candidates in, best first: by F (n,) plus the
+    nominal design's violation (n,), a refused design behind a feasible one whose F is
+    worse by less than the refusal's violation, a non-finite violation last; ties keep
+    the sampling order. F alone would walk into designs the case refuses, where F is
+    least (the VCB's latch); Deb's rules stalled (module docstring)."""
+    return np.argsort(np.where(np.isfinite(violation), F + violation, np.inf), kind="stable")
+
+
 def centre(problem: Problem, draws: Draws, x0: NDArray, generations: int, step: float,
            rng: np.random.Generator) -> Centred:
     """Minimise F from ``x0`` (n_var,), SI, for ``generations`` CMA-ES generations of
@@ -115,9 +124,7 @@ def centre(problem: Problem, draws: Draws, x0: NDArray, generations: int, step: 
         X = snap(problem, problem.from_unit(U))  # integers rounded, as every solver's
         g, f, violation = draws(X)
         F = smoothed_failure(g, f, tau)
-        order = np.argsort(np.where(np.isfinite(violation), F + violation, np.inf),
-                           kind="stable")
-        core.tell(U, order)
+        core.tell(U, ranking(F, violation))
         i = int(np.argmin(np.where(violation == 0, F, np.inf)))
         if violation[i] == 0 and F[i] < best_F:
             best_x, best_F = X[i].copy(), float(F[i])

@@ -215,3 +215,13 @@ def test_centring_asks_for_the_margin_objective():
     objective it is bad input."""
     with pytest.raises(ValueError, match="objective"):
         RobustSection(centre_generations=10, objective="mean")
+
+
+def test_the_walk_ranks_by_failure_plus_the_nominal_violation():
+    """A design the case refuses ranks behind a feasible one when its violation exceeds
+    its lead in F, ahead of it when it does not; a non-finite violation is last, ties
+    keep the sampling order (ranked by F alone, the walk would enter the refused
+    designs where F is least: review of stop 42's centring, the sixth mutation)."""
+    F = np.array([0.30, 0.10, 0.05, 0.30, 0.00])
+    violation = np.array([0.0, 0.05, 0.40, 0.0, np.inf])
+    assert centring.ranking(F, violation).tolist() == [1, 0, 3, 2, 4]
