@@ -8,8 +8,20 @@ half of its start-up. The entry points of a group (pyproject.toml declares every
 case and solver there, and tests check they agree with the packages) map each name to the
 module that defines it, so a look-up by name imports that module only; a name without
 exactly one entry point (an unknown name, a source checkout without installed metadata,
-two distributions claiming one name) falls back to importing everything, as before, so
-what is found and every error are unchanged. Listing a registry imports everything."""
+two other distributions claiming one name) falls back to importing everything, as before,
+so what is found and every error are unchanged. Listing a registry imports everything.
+
+Where a name is looked up (issue #36, fifth pass): first in camopt's own distribution
+(:data:`DISTRIBUTION`, its one ``entry_points.txt``), then, for a name camopt does not
+declare, in every installed distribution's entry points (reading them opens each
+distribution's metadata, 84 in camopt's development environment: a look-up of a built-in
+name no longer pays for it). A built-in name is camopt's: when another distribution
+declares an entry point under a name camopt declares too (a built-in case kind,
+``cmaes``), a look-up by that name imports camopt's module without reading the other
+distribution, so a plugin cannot replace a built-in case or solver by claiming its
+name. The other entry point is read only when the registry is listed (an unknown name's
+error, ``camopt solvers``), as before: the case registry then reports the kind as
+registered twice, and the solver registry keeps its built-in solver."""
 
 from __future__ import annotations
 
@@ -21,6 +33,22 @@ if TYPE_CHECKING:
     from importlib.metadata import EntryPoint
 
 T = TypeVar("T")
+
+DISTRIBUTION = "camopt"
+"""camopt's distribution name (pyproject.toml ``[project] name``), whose own entry points
+are read first (:func:`entry_point`)."""
+
+
+@functools.cache
+def _own() -> Any:
+    """camopt's own entry points, read once per process from its distribution's metadata
+    (one file); none when camopt is not installed (a source checkout)."""
+    from importlib.metadata import EntryPoints, PackageNotFoundError, distribution
+
+    try:
+        return distribution(DISTRIBUTION).entry_points
+    except PackageNotFoundError:
+        return EntryPoints(())
 
 
 @functools.cache
@@ -38,8 +66,13 @@ def entry_points(group: str) -> list[EntryPoint]:
 
 
 def entry_point(group: str, name: str) -> EntryPoint | None:
-    """The one entry point called ``name`` in ``group``; None when there is none, or more
-    than one (only importing them all tells which registers what)."""
+    """The entry point called ``name`` in ``group``: camopt's own when camopt declares the
+    name (every other distribution unread: a built-in name is camopt's), else the one
+    installed entry point so called; None when there is none, or more than one (only
+    importing them all tells which registers what)."""
+    own = list(_own().select(group=group, name=name))
+    if len(own) == 1:
+        return own[0]
     found = list(_installed().select(group=group, name=name))
     return found[0] if len(found) == 1 else None
 

@@ -95,7 +95,7 @@ import json, sys
 from importlib.metadata import EntryPoints
 import camopt.core.plugins as plugins
 if sys.argv[1] == "no metadata":  # a source checkout: no entry point is installed
-    plugins._installed = lambda: EntryPoints(())
+    plugins._own = plugins._installed = lambda: EntryPoints(())
 from camopt.cases import get_case
 from camopt.solvers import get_solver
 spec, solver = get_case("vcb"), get_solver("cmaes")

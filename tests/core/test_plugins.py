@@ -3,6 +3,8 @@ others, listing finds everything, and entry points are looked up by group and na
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 
 from camopt.core.plugins import OnDemand, entry_point, entry_points
@@ -51,3 +53,61 @@ def test_entry_points_by_group_and_name() -> None:
     assert found is not None and found.value == solvers["cmaes"].value
     assert entry_point("camopt.solvers", "no such solver") is None
     assert entry_point("no such group", "cmaes") is None
+
+
+def _entry_points(*specs: tuple[str, str, str]) -> Any:
+    from importlib.metadata import EntryPoint, EntryPoints
+
+    return EntryPoints(EntryPoint(name, value, group) for group, name, value in specs)
+
+
+@pytest.fixture
+def metadata(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """camopt's own entry points and every installed distribution's, as given here (not
+    this machine's): camopt declares the case ``vcb``; a plugin declares ``escapement``
+    and claims ``vcb`` too. The list records which of the two was read."""
+    import camopt.core.plugins as plugins
+
+    read: list[str] = []
+    own = _entry_points(("camopt.cases", "vcb", "camopt.cases.vcb:VCB"))
+    every = _entry_points(("camopt.cases", "vcb", "camopt.cases.vcb:VCB"),
+                          ("camopt.cases", "vcb", "plugin.impostor:VCB"),
+                          ("camopt.cases", "escapement", "plugin.escapement:SPEC"))
+
+    def reading(name: str, found: Any) -> Any:
+        return lambda: read.append(name) or found
+
+    monkeypatch.setattr(plugins, "_own", reading("own", own))
+    monkeypatch.setattr(plugins, "_installed", reading("installed", every))
+    return read
+
+
+def test_a_built_in_name_is_found_in_camopt_s_own_metadata_alone(metadata: list[str]) -> None:
+    """Issue #36: a name camopt declares is looked up in camopt's own distribution, without
+    reading every installed distribution; another distribution claiming the name does not
+    replace camopt's (nor, as it did before, send the look-up to importing everything)."""
+    found = entry_point("camopt.cases", "vcb")
+    assert found is not None and found.value == "camopt.cases.vcb:VCB"
+    assert metadata == ["own"]
+
+
+def test_a_name_camopt_does_not_declare_is_looked_up_in_every_distribution(
+        metadata: list[str]) -> None:
+    found = entry_point("camopt.cases", "escapement")
+    assert found is not None and found.value == "plugin.escapement:SPEC"
+    assert entry_point("camopt.cases", "no such kind") is None
+    assert metadata == ["own", "installed"] * 2
+    assert [ep.value for ep in entry_points("camopt.cases")] == [  # listing: every one
+        "camopt.cases.vcb:VCB", "plugin.impostor:VCB", "plugin.escapement:SPEC"]
+
+
+def test_camopt_s_own_entry_points_are_its_distribution_s() -> None:
+    """What :func:`camopt.core.plugins._own` reads is camopt's installed metadata: the
+    built-in cases and solvers of pyproject.toml (a source checkout has none)."""
+    from camopt.core.plugins import _own
+
+    own = _own()
+    if not list(own):
+        pytest.skip("camopt's entry points are not installed")
+    assert {ep.name for ep in own.select(group="camopt.solvers")} >= {"cmaes", "de_gr"}
+    assert {ep.name for ep in own.select(group="camopt.cases")} >= {"vcb", "fast_switch"}
