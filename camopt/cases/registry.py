@@ -16,7 +16,6 @@ case: a command that reads one case file or archive starts without the others' m
 from __future__ import annotations
 
 import importlib
-import pkgutil
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -280,6 +279,8 @@ def _load() -> None:
     if _loaded:
         return
     _loaded = True
+    import pkgutil  # listing only: a look-up by name imports one module
+
     package = importlib.import_module("camopt.cases")
     for module in pkgutil.iter_modules(package.__path__, "camopt.cases."):
         if module.ispkg:  # one package per built-in case

@@ -14,7 +14,6 @@ name's entry point names, not every solver; listing (:func:`solvers`) imports th
 from __future__ import annotations
 
 import importlib
-import pkgutil
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
@@ -54,6 +53,8 @@ def _load() -> None:
     if _loaded:
         return
     _loaded = True
+    import pkgutil  # listing only: a look-up by name imports one module
+
     package = importlib.import_module("camopt.solvers")
     for module in pkgutil.iter_modules(package.__path__, "camopt.solvers."):
         importlib.import_module(module.name)  # solver modules register on import

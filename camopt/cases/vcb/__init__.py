@@ -121,11 +121,11 @@ def resolve_reference_cam(config: CaseConfig, load: ArchiveLoader) -> CaseConfig
     """``reference_cam_points`` read into ``reference_law`` (the follower law of the
     points: :func:`camopt.cases.vcb.cam_points.read_cam_points`, over the stroke 0 to the
     last node angle)."""
-    from camopt.cases.vcb.cam_points import read_cam_points
-
     assert isinstance(config, VcbConfig)
     if not config.reference_cam_points:
         return config
+    from camopt.cases.vcb.cam_points import read_cam_points  # its curves: when named only
+
     path = load.locate("case.reference_cam_points", config.reference_cam_points)
     a = read_cam_points(path, config.node_cam_deg[-1] * DEG)
     return config.model_copy(update={"reference_law": [float(v) for v in a]})
