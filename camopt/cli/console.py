@@ -10,8 +10,10 @@ from typing import Any
 from rich.console import Console
 from rich.markup import escape
 
-out = Console()
-err = Console(stderr=True)
+# no emoji codes: rich would print a path such as ':smile:.toml' as an emoji (what
+# camopt prints is file names, quantities and markup it escapes, never an emoji)
+out = Console(emoji=False)
+err = Console(stderr=True, emoji=False)
 
 
 @contextlib.contextmanager

@@ -136,3 +136,13 @@ def invoke_verdict(path: Path) -> str:
     """show's verdict of a run, what `camopt runs` lists."""
     return json.loads(runner.invoke(app, ["show", str(path), "--format", "json"]).stdout)[
         "verdict"]
+
+
+def test_a_file_name_is_printed_as_it_is(tmp_path):
+    """A path holding an emoji code or markup is printed as named, not as an emoji or a
+    style (rich's emoji codes are off, markup is escaped)."""
+    name = ":smile: [bold]x.toml"
+    shutil.copy(CONFIGS / "fast_switch.toml", tmp_path / name)
+    r = runner.invoke(app, ["validate", str(tmp_path / name)])
+    assert r.exit_code == 0, r.output
+    assert f"{name}: case 'fast_switch'" in " ".join(r.stdout.split()), r.stdout
