@@ -17,13 +17,12 @@ runner = CliRunner()
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("config", "span"), [
-    # tau (MPa, minimised) vs closing velocity (m/s, maximised): the identified friction
-    # leaves ~0.03 m/s between the slowest design that latches and 1.1 m/s; >= 0.02 covered
-    pytest.param("vcb_pareto.toml", 0.02, marks=pytest.mark.xfail(
-        strict=True, reason="issue #31's margins (release torque >= 1.2 x friction, "
-        "lift-off >= 5 % of the mean drive, the pick-up impact) leave vcb_pareto's search "
-        "no feasible design, the latch and the quintic law as design variables too: it "
-        "ends on lift-off (-5.1 % of the mean drive; docs/assumptions.md)")),
+    # tau (MPa) vs closing velocity (m/s), both minimised: on the feasible set the least
+    # stress falls as the velocity rises, from ~357 MPa at 0.90 m/s (none found feasible at
+    # 0.85) to ~295 MPa at the 1.10 m/s cap (docs/assumptions.md), a front 0.2 m/s
+    # wide; the config's 20,000 evaluations cover 0.077-0.159 m/s of it over seeds 0-8 and
+    # 2023 (0.140 at 2023): >= 0.05 m/s, a quarter of the physics' span, covered
+    ("vcb_pareto.toml", 0.05),
     # closure time (ms) vs spring stress margin (%): >= 50 % of margin covered
     ("fast_switch_pareto.toml", 50.0),
 ])

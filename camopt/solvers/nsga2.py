@@ -11,9 +11,18 @@ the solver's ``table`` and thereby the archive's ``/table``. ``best`` is the bes
 by the case's own objective seen so far (Deb's rules), so runs, ``show`` and ``compare``
 keep one headline design and the convergence history stays monotone.
 
+With ``cmaes_evaluations`` > 0 a CMA-ES start comes first (the core of
+:mod:`camopt.solvers.cmaes`, from the case's design, else the box's centre, ranked by
+Deb's rules: violation, then the first objective): a feasible set thin in the variables
+(near-equalities such as a travel held within a tolerance, several limits active at once)
+is reached by a search that learns its orientation, where NSGA-II's uniform random
+population and SBX may never land in it. NSGA-II then starts from ``population`` designs
+picked among every design the start evaluated by its own survival (the feasible first,
+by rank and crowding; then the least violation), and runs its ``generations``.
+
 pymoo draws from ``algorithm.random_state``; the plugin hands it the repeat's own
 generator (after ``setup``, which would otherwise seed a fresh one), so the same seed
-gives the same front.
+gives the same front. The CMA-ES start draws from the same generator.
 """
 
 from __future__ import annotations
@@ -29,6 +38,7 @@ from camopt.core.capabilities import Repairable
 from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
 from camopt.solvers.base import BestSoFar, Solver, StopReason, design_rows, snap
+from camopt.solvers.cmaes import CMACore, deb_order
 from camopt.solvers.registry import register_solver
 
 _BAD = 1e12
@@ -56,6 +66,15 @@ class NSGA2Options(SolverOptions):
         False, description="apply the case's corrections (capability 'repair') to every "
         "offspring before it is evaluated, on the case's schedule from the first to the "
         "last generation (as pso's)")
+    cmaes_evaluations: int = Field(
+        0, ge=0, le=1_000_000, description="evaluations of a CMA-ES start before NSGA-II "
+        "(from the case's design, else the box's centre, ranked by violation then the first "
+        "objective); NSGA-II starts from the best population of its designs by its own "
+        "survival. 0: no start, a uniform random population (pymoo's)")
+    cmaes_population: int = Field(32, ge=4, le=MAX_POPULATION,
+                                  description="lambda of the CMA-ES start")
+    cmaes_sigma: float = Field(0.3, gt=0, le=1, description="initial step of the CMA-ES "
+                               "start, fraction of each range")
 
     @model_validator(mode="after")
     def _maximise_among_objectives(self) -> NSGA2Options:
@@ -64,6 +83,9 @@ class NSGA2Options(SolverOptions):
             raise ValueError(f"maximise: {', '.join(stray)} not among the objectives")
         if len(set(self.objectives)) != len(self.objectives):
             raise ValueError("objectives: a metric is named twice")
+        if 0 < self.cmaes_evaluations < self.population:
+            raise ValueError(f"cmaes_evaluations: at least the population "
+                             f"({self.population}), or 0 (no CMA-ES start)")
         return self
 
 
@@ -102,13 +124,34 @@ class NSGA2(Solver):
         self.pproblem = PymooProblem(n_var=problem.n_var, n_obj=len(self.objectives),
                                      n_ieq_constr=n_constr, xl=problem.lower,
                                      xu=problem.upper)
-        self.algorithm = PymooNSGA2(pop_size=options.population,
-                                    crossover=SBX(eta=options.crossover_eta, prob=0.9),
-                                    mutation=PM(eta=options.mutation_eta))
-        self.algorithm.setup(self.pproblem, termination=NoTermination(), verbose=False)
-        self.algorithm.random_state = rng  # the repeat's generator, not a fresh one
+        self._pymoo = (PymooNSGA2, NoTermination, SBX, PM)
+        # the CMA-ES start: its generations, its core and every design it evaluated
+        self.start_generations = -(-options.cmaes_evaluations // options.cmaes_population)
+        self.start: CMACore | None = None
+        self._pool: list[tuple[NDArray, NDArray, NDArray]] = []
+        self.algorithm: Any = None
+        if self.start_generations:
+            initial = problem.initial_x()
+            x0 = ((problem.lower + problem.upper) / 2 if initial is None
+                  else np.asarray(initial, dtype=float))
+            self.start = CMACore(np.clip(problem.to_unit(x0), 0, 1), options.cmaes_sigma,
+                                 rng, options.cmaes_population)
+        else:
+            self.algorithm = self._nsga2(None)
         self._pending: Any = None
         self._best = BestSoFar()
+
+    def _nsga2(self, sampling: NDArray | None) -> Any:
+        """pymoo's NSGA-II set up on the problem, drawing from the repeat's generator;
+        ``sampling``: its first population (None: pymoo's uniform random one)."""
+        nsga2, no_termination, sbx, pm = self._pymoo
+        extra = {} if sampling is None else {"sampling": sampling}
+        algorithm = nsga2(pop_size=self.options.population,
+                          crossover=sbx(eta=self.options.crossover_eta, prob=0.9),
+                          mutation=pm(eta=self.options.mutation_eta), **extra)
+        algorithm.setup(self.pproblem, termination=no_termination(), verbose=False)
+        algorithm.random_state = self.rng  # the repeat's generator, not a fresh one
+        return algorithm
 
     def _check_names(self) -> None:
         """Fail at construction on objective names the case does not report."""
@@ -120,7 +163,7 @@ class NSGA2(Solver):
                               f"case reports {', '.join(known)}")
 
     def max_iterations(self) -> int:
-        return self.options.generations
+        return self.start_generations + self.options.generations
 
     def objective_matrix(self, ev: Evaluation) -> NDArray:
         """The objectives of an evaluation as columns, (n_pop, n_obj), in their own units
@@ -129,11 +172,23 @@ class NSGA2(Solver):
                 for o in self.objectives]
         return np.column_stack([np.asarray(c, dtype=float) for c in cols])
 
+    def pymoo_fg(self, ev: Evaluation) -> tuple[NDArray, NDArray]:
+        """The objectives in minimisation form and the constraints as pymoo takes them,
+        (n_pop, n_obj) and (n_pop, n_constr + 1): non-finite values as :data:`_BAD`, the
+        last constraint whether every objective is finite."""
+        F = self.objective_matrix(ev) * self.sign
+        finite = np.isfinite(F).all(axis=1) & np.isfinite(ev.f)
+        G = np.column_stack([ev.g, np.where(finite, -1.0, 1.0)])
+        return np.where(np.isfinite(F), F, _BAD), np.where(np.isfinite(G), G, _BAD)
+
     def ask(self) -> NDArray:
+        if self.start is not None:
+            return snap(self.problem, self.problem.from_unit(self.start.ask()))
         pop = self.algorithm.ask()
         X = snap(self.problem, np.asarray(pop.get("X"), dtype=float))
         if self.repairer and self.schedule:  # Lamarckian: corrected designs replace offspring
-            frac = self.nit / max(self.options.generations - 1, 1)
+            nit = self.nit - self.start_generations
+            frac = nit / max(self.options.generations - 1, 1)
             prob = {k: a + (b - a) * frac for k, (a, b) in self.schedule.items()}
             X = snap(self.problem, self.repairer.repair(X, self.rng, prob))
         pop.set("X", X)
@@ -144,24 +199,47 @@ class NSGA2(Solver):
         from pymoo.core.evaluator import Evaluator
         from pymoo.problems.static import StaticProblem
 
-        pop, self._pending = self._pending, None
-        F = self.objective_matrix(ev) * self.sign
-        finite = np.isfinite(F).all(axis=1) & np.isfinite(ev.f)
-        G = np.column_stack([ev.g, np.where(finite, -1.0, 1.0)])
-        F = np.where(np.isfinite(F), F, _BAD)
-        G = np.where(np.isfinite(G), G, _BAD)
-        Evaluator().eval(StaticProblem(self.pproblem, F=F, G=G), pop)
-        self.algorithm.tell(infills=pop)
+        F, G = self.pymoo_fg(ev)
         self.nfev += len(X)
         self.nit += 1
         self._best.offer(X, ev)
+        if self.start is not None:
+            self.start.tell(self.problem.to_unit(X), deb_order(F[:, 0],
+                                                               np.maximum(G, 0).sum(axis=1)))
+            self._pool.append((X, F, G))
+            if self.nit >= self.start_generations:
+                self.algorithm = self._nsga2(self._first_population())
+                self.start, self._pool = None, []
+            return
+        pop, self._pending = self._pending, None
+        Evaluator().eval(StaticProblem(self.pproblem, F=F, G=G), pop)
+        self.algorithm.tell(infills=pop)
+
+    def _first_population(self) -> NDArray:
+        """NSGA-II's first population: ``population`` of the CMA-ES start's designs, picked
+        by NSGA-II's own survival (feasible ones by rank and crowding, then the least
+        violation), (population, n_var)."""
+        from pymoo.core.evaluator import Evaluator
+        from pymoo.core.population import Population
+        from pymoo.operators.survival.rank_and_crowding import RankAndCrowding
+        from pymoo.problems.static import StaticProblem
+
+        X, F, G = (np.concatenate(part) for part in zip(*self._pool))
+        pool = Population.new(X=X)
+        Evaluator().eval(StaticProblem(self.pproblem, F=F, G=G), pool)
+        kept = RankAndCrowding().do(self.pproblem, pool, n_survive=self.options.population,
+                                    random_state=self.rng)
+        return np.asarray(kept.get("X"), dtype=float)
 
     def best(self) -> tuple[NDArray, Evaluation]:
         return self._best.get()
 
     def pareto_set(self) -> NDArray:
         """The designs of the final non-dominated set, (n_front, n_var), SI, ordered by the
-        first objective (feasible ones only when any is feasible)."""
+        first objective (feasible ones only when any is feasible); none before NSGA-II
+        has run (within a CMA-ES start)."""
+        if self.algorithm is None or self.algorithm.opt is None:
+            return np.empty((0, self.problem.n_var))
         opt = self.algorithm.opt
         X = np.asarray(opt.get("X"), dtype=float)
         F = np.asarray(opt.get("F"), dtype=float) * self.sign
@@ -169,9 +247,9 @@ class NSGA2(Solver):
 
     def table(self) -> list[dict[str, Any]]:
         """One row per Pareto design: variables, metrics, objective, feasibility."""
-        if self.algorithm.opt is None:
+        if self.algorithm is None or self.algorithm.opt is None:
             return []
         return design_rows(self.problem, self.pareto_set())
 
     def stop_reason(self) -> StopReason | None:
-        return StopReason.BUDGET if self.nit >= self.options.generations else None
+        return StopReason.BUDGET if self.nit >= self.max_iterations() else None

@@ -89,3 +89,42 @@ def test_non_finite_objective_is_infeasible_for_pymoo():
     row = np.flatnonzero((solver.algorithm.pop.get("X") == x0).all(axis=1))
     assert row.size == 0 or G[row[0], -1] > 0
     assert get_solver("nsga2").Options().objectives == []
+
+
+def _loop(solver, problem):
+    """Run a built solver to its stop; the designs of every ask, in order."""
+    asked = []
+    while solver.stop_reason() is None:
+        X = solver.ask()
+        asked.append(X)
+        solver.tell(X, problem.evaluate(X))
+    return asked
+
+
+def test_cmaes_start_comes_first_and_seeds_the_first_population():
+    """10 CMA-ES generations of 20, then NSGA-II's 30 of 40: the first NSGA-II population
+    is 40 of the start's 200 designs (picked by NSGA-II's survival), the budget adds up and
+    the iterations announced are both stages'."""
+    cfg = _config(generations=30, cmaes_evaluations=200, cmaes_population=20)
+    problem, cls = prepare(cfg)
+    solver = build_solver(problem, cls, cfg, np.random.default_rng(0))
+    assert solver.max_iterations() == 40 and solver.algorithm is None
+    asked = _loop(solver, problem)
+    assert [len(X) for X in asked[:10]] == [20] * 10 and len(asked[10]) == 40
+    start = np.concatenate(asked[:10])
+    assert all((start == x).all(axis=1).any() for x in asked[10])
+    assert solver.nfev == 200 + 40 * 30 and solver.nit == 40
+    F = np.array([[r["f"], r["norm"]] for r in solver.table()])
+    assert len(F) and not _dominated(F).any()
+
+
+def test_cmaes_start_same_seed_same_front():
+    _, a = _run(seed=3, cmaes_evaluations=200)
+    _, b = _run(seed=3, cmaes_evaluations=200)
+    _, c = _run(seed=3)
+    assert a.table == b.table and a.table != c.table
+
+
+def test_cmaes_start_shorter_than_a_population_is_refused():
+    with pytest.raises(ValueError, match="cmaes_evaluations: at least the population"):
+        _config(cmaes_evaluations=10)
