@@ -177,7 +177,8 @@ def test_step_two_refuses_a_cam_set_at_the_factory(tmp_path):
     from camopt.engine.driver import execute
 
     run = execute(load(CONFIG, *SET, "run.repeats=1", "solver.population=6", "solver.generations=2",
-                       "robust.samples=2", "robust.check_samples=100", "robust.finalists=1"))
+                       "robust.samples=2", "robust.check_samples=100", "robust.finalists=1",
+                       "robust.centre_generations=0"))
     step1 = archive.write_run(run, tmp_path / "set.h5")
     with pytest.raises(ConfigError, match="set at the factory"):
         archive.resolve_references(load(CONFIGS / "vcb_fourbar.toml",
