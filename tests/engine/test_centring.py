@@ -225,3 +225,12 @@ def test_the_walk_ranks_by_failure_plus_the_nominal_violation():
     F = np.array([0.30, 0.10, 0.05, 0.30, 0.00])
     violation = np.array([0.0, 0.05, 0.40, 0.0, np.inf])
     assert centring.ranking(F, violation).tolist() == [1, 0, 3, 2, 4]
+
+
+def test_the_walk_ranking_is_stable_on_many_ties_and_ties_every_non_finite_violation():
+    """Ties keep the sampling order among many (a default, unstable argsort reorders
+    them) and a NaN violation ties with +inf (both last, in sampling order)."""
+    F = np.tile([0.2, 0.1, 0.3], 20)
+    assert centring.ranking(F, np.zeros(60)).tolist() == np.argsort(F, kind="stable").tolist()
+    order = centring.ranking(np.array([0.0, 0.0, 1.0]), np.array([np.nan, np.inf, 0.0]))
+    assert order.tolist() == [2, 0, 1]

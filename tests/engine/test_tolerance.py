@@ -418,3 +418,66 @@ def test_constant_metrics_are_held_once_and_read_the_same():
         assert np.array_equal(column, extras[name], equal_nan=name == "absent"), name
     assert np.signbit(ev.extras["zeros"]).tolist() == [False, True, False]
     assert ev.extras["varying"] is varying
+
+
+# --- review 74: what the tests above left unpinned ---------------------------------------
+@pytest.mark.parametrize("product_rows", [tolerance_module.PRODUCT_ROWS, 1000])
+def test_spearman_products_are_summed_in_float64(monkeypatch, product_rows):
+    """At 5,000 rows the sums of rank products (~10^10) are past float32's 2^24: rho is
+    still scipy's to 1e-12 (products summed in float32 would be off by ~1e-7), in one
+    block and across block boundaries, with ties and NaN-dropped rows."""
+    monkeypatch.setattr(tolerance_module, "PRODUCT_ROWS", product_rows)
+    rng = np.random.default_rng(17)
+    n = 5000
+    inputs = rng.uniform(-1, 1, (n, 3))
+    inputs[:, 1] = np.round(inputs[:, 1], 1)
+    a = inputs @ [1.0, -0.5, 0.2] + rng.normal(scale=0.3, size=n)
+    columns = {"a": a, "b": np.where(rng.random(n) < 0.3, np.nan, np.round(a, 1))}
+    got = spearman_columns(inputs, columns)
+    for name, values in columns.items():
+        assert np.allclose(got[name], _pairwise(inputs, values), rtol=0, atol=1e-12), name
+
+
+def test_input_ranks_take_the_dtype_rank_dtype_chooses(monkeypatch):
+    """spearman_columns asks :func:`rank_dtype` for each group's kept row count (the
+    float32 limit is not bypassed for large n)."""
+    asked = []
+
+    def spy(n):
+        asked.append(n)
+        return np.float64
+
+    monkeypatch.setattr(tolerance_module, "rank_dtype", spy)
+    rng = np.random.default_rng(3)
+    inputs = rng.normal(size=(40, 2))
+    a = inputs[:, 0] + rng.normal(size=40)
+    b = np.where(np.arange(40) < 10, np.nan, a)
+    spearman_columns(inputs, {"a": a, "b": b})
+    assert sorted(asked) == [30, 40]
+
+
+def test_a_shared_constant_holds_its_own_value_not_the_column():
+    """The broadcast constant is a copy of one value: it keeps no reference to the
+    column's n rows (else the memory it is there to save stays allocated)."""
+    from camopt.core.problem import Evaluation
+    from camopt.engine.tolerance import shared_constants
+
+    column = np.full(1000, 0.25)
+    ev = shared_constants(Evaluation(np.zeros(1000), np.zeros((1000, 1)), {"c": column}))
+    assert ev.extras["c"].strides == (0,) and not np.shares_memory(ev.extras["c"], column)
+
+
+def test_analyse_holds_the_constant_metrics_once(vcb_run):
+    """analyse applies :func:`shared_constants`: every metric that is one value on every
+    evaluated row, to the bit, is a stride-0 column of the samples (the VCB has some)."""
+    run = archive.load_run(vcb_run)
+    varies = [parse_vary("t", v) for v in ("kc1_n_per_mm=±5%", "case.l1_mm=±0.1")]
+    t = analyse(run, varies, 50, 9)
+    constant = []
+    for name, values in t.samples.extras.items():
+        rows = np.concatenate([np.asarray(e.extras[name], dtype=float)
+                               for e in (t.nominal, t.swings, t.samples)])
+        if np.all(rows.view("u8") == rows.view("u8")[0]):
+            constant.append(name)
+            assert values.strides == (0,), name
+    assert constant
