@@ -8,7 +8,7 @@ tolerance (the tornado chart's one-at-a-time swings) and every sample are evalua
 together in cache-sized row chunks (``Problem.describe`` through :mod:`camopt.core.batch`):
 memory is the per-sample columns (inputs, objective, metrics, constraints: ~0.6 GB at
 10^6 VCB samples, metrics constant on every row held once) plus one chunk's temporaries
-and the summary's ranks, whatever the sample count (10^6 VCB samples peak at 0.92 GiB:
+and the summary's ranks, whatever the sample count (10^6 VCB samples peak at 0.90 GiB:
 docs/design.md, bench/bench_tolerance.py). Reported: the
 share of feasible samples (yield), the yield of each requirement of the case
 (:mod:`camopt.core.requirements`) and the one that limits it, the 5th/50th/95th percentiles
@@ -19,6 +19,7 @@ search's penalty), and the Spearman rank correlation of every metric with every 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -133,8 +134,8 @@ def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
     the nominal row and the ends under every variant at once (the case's own verdict)."""
     if not varies:
         raise CamoptError(f"{run.path}: --vary: give at least one input to vary")
-    if samples < 2:
-        raise CamoptError(f"{run.path}: --samples: {samples}: at least 2")
+    if not 2 <= samples <= EXACT_RANK_ROWS:
+        raise CamoptError(f"{run.path}: --samples: {samples}: from 2 to {EXACT_RANK_ROWS}")
     problem = problem_of(run)
     nominal = nominal_inputs(run, problem, varies)
     half = np.array([v.half_width(x) for v, x in zip(varies, nominal)])
@@ -203,10 +204,6 @@ def evaluate_inputs(run: RunView, problem: Problem, varies: Sequence[Vary], valu
     ranges = [physical_range(problem, get_case(run.kind).config, v) for v in varies]
     bad = outside(values, ranges)
     return mark(ev, bad), bad
-
-
-def _finite_or_none(x: float) -> float | None:
-    return float(x) if np.isfinite(x) else None
 
 
 def summarise(t: Tolerance) -> dict[str, Any]:
@@ -314,12 +311,19 @@ def spearman_columns(inputs: NDArray, columns: dict[str, NDArray]
     the inputs once per distinct set of dropped rows (most metrics share one: none),
     instead of both columns again for every pair (k x metrics rankings of 10^6 values).
     Metrics are grouped by their dropped rows first, so one group's input ranks (n x k)
-    are held at a time, as float32 where that is exact (:func:`centred_ranks`: 4 bytes
-    an input and sample, not 8; issue #36's 10^6 samples under 1 GiB); the products are
-    summed in float64 (:data:`PRODUCT_ROWS` rows at a time). None where either column
-    is constant (an input at +-0, a metric the inputs do not move) or fewer than 3 rows
-    remain."""
+    are held at a time.
+
+    The sums are exact (issue #36): twice the centred ranks are integers
+    (:func:`doubled_ranks`), the inputs' held as int32 (4 bytes an input and sample:
+    10^6 samples under 1 GiB) and their products summed in int64 (:data:`EXACT_RANK_ROWS`),
+    so rho is the exact ratio rounded once, whatever the summation order or the BLAS
+    threads (float sums were off by up to 5e-12 at 10^6 rows, 1.0 read 0.9999999999987).
+    None where either column is constant (an input at +-0, a metric the inputs do not
+    move) or fewer than 3 rows remain."""
     k = inputs.shape[1]
+    if len(inputs) > EXACT_RANK_ROWS:
+        raise ValueError(f"{len(inputs)} samples: Spearman's sums are exact for at most "
+                         f"{EXACT_RANK_ROWS}")
     out: dict[str, list[float | None]] = {}
     groups: dict[bytes, list[str]] = {}  # the kept rows (packed) -> metrics that keep them
     for name, values in columns.items():
@@ -331,50 +335,40 @@ def spearman_columns(inputs: NDArray, columns: dict[str, NDArray]
             groups.setdefault(np.packbits(keep).tobytes(), []).append(name)
     for names in groups.values():
         keep = ~np.isnan(columns[names[0]])
-        n = int(keep.sum())
-        r_in = np.empty((n, k), dtype=rank_dtype(n))
-        norm_in = np.empty(k)
-        constant = np.empty(k, dtype=bool)
+        r_in = np.empty((int(keep.sum()), k), dtype=np.int32)
+        squares_in = []
         for j in range(k):  # column by column: one column's sort temporaries at a time
-            drawn = inputs[keep, j]
-            constant[j] = bool(np.all(drawn == drawn[0]))
-            r = centred_ranks(drawn)
-            norm_in[j] = np.sqrt(r @ r)
+            r = doubled_ranks(inputs[keep, j])
+            squares_in.append(int(r @ r))  # 0: a constant input
             r_in[:, j] = r
         for name in names:
-            r_m = centred_ranks(columns[name][keep])
-            dots = np.zeros(k)
-            for rows in range(0, n, PRODUCT_ROWS):  # float64 products, a block at a time
-                block = slice(rows, rows + PRODUCT_ROWS)
-                dots += r_m[block] @ r_in[block].astype(float)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                rho = dots / (norm_in * np.sqrt(r_m @ r_m))
-            out[name] = [None if constant[j] else _finite_or_none(float(rho[j]))
+            r_m = doubled_ranks(columns[name][keep])
+            squares_m = int(r_m @ r_m)
+            products = np.einsum("i,ij->j", r_m, r_in, dtype=np.int64)
+            out[name] = [_correlation(int(products[j]), squares_m, squares_in[j])
                          for j in range(k)]
     return {name: out[name] for name in columns}
 
 
-EXACT_FLOAT32_RANKS = 2**23
-"""Rows up to which centred average ranks are exact in float32: each is a multiple of
-1/2 below n/2 in magnitude, which float32's 24-bit significand holds exactly for
-n <= 2^23 (camopt tolerance draws at most 10^6)."""
+EXACT_RANK_ROWS = 2**21
+"""Rows up to which :func:`spearman_columns` sums exactly in int64: every sum it forms is
+at most the sum of squares of twice the centred ranks 1..n, (n^3 - n) / 3 (ties make it
+less), which stays below 2^63 for n <= 2^21 (``camopt tolerance`` draws at most 10^6)."""
 
 
-def rank_dtype(n: int) -> type[np.floating]:
-    """The dtype that holds the centred ranks of ``n`` rows exactly, the narrower first:
-    float32 up to :data:`EXACT_FLOAT32_RANKS` rows, else float64."""
-    return np.float32 if n <= EXACT_FLOAT32_RANKS else np.float64
+def doubled_ranks(values: NDArray) -> NDArray:
+    """Twice each value's centred average rank, 2 rank - (n + 1), (n,) int64: integers in
+    [-(n - 1), n - 1] (average ranks are whole or half numbers, their mean (n + 1) / 2)."""
+    return (2.0 * average_ranks(values) - (values.size + 1)).astype(np.int64)
 
 
-PRODUCT_ROWS = 2**16
-"""Rows of the float32 input ranks turned into float64 at a time for the products with a
-metric's ranks (a 7.9 MB block for 15 inputs)."""
-
-
-def centred_ranks(values: NDArray) -> NDArray:
-    """:func:`average_ranks` of a 1-D array minus their mean, (n+1)/2 (the ranks 1..n sum
-    to n(n+1)/2 whatever the ties): each a whole or half number, exact in float64."""
-    return average_ranks(values) - 0.5 * (values.size + 1)
+def _correlation(products: int, squares_a: int, squares_b: int) -> float | None:
+    """Pearson's r of two centred integer columns from their exact sums: sum(a b),
+    sum(a^2), sum(b^2); r^2 as the exact ratio rounded once (Python's int division),
+    so a perfect correlation is exactly +-1. None when either column is constant."""
+    if squares_a == 0 or squares_b == 0:
+        return None
+    return math.copysign(math.sqrt(products * products / (squares_a * squares_b)), products)
 
 
 EXPECTED_YIELD_SAMPLES = 300

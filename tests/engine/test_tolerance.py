@@ -352,37 +352,67 @@ def test_average_ranks_are_scipy_rankdata():
 from camopt.engine import tolerance as tolerance_module  # noqa: E402
 
 
-@pytest.mark.parametrize("product_rows", [5, 64])
-def test_spearman_columns_sum_every_block_of_products(monkeypatch, product_rows):
-    """The float64 products of the float32 input ranks are summed block by block: with
-    blocks of 5 and 64 rows over 203 rows (ties, NaN rows) rho is scipy's to 1e-12."""
-    monkeypatch.setattr(tolerance_module, "PRODUCT_ROWS", product_rows)
-    rng = np.random.default_rng(11)
-    inputs = np.round(rng.normal(size=(203, 3)), 1)
-    a = inputs[:, 0] + 0.5 * inputs[:, 2] ** 2 + rng.normal(scale=0.2, size=203)
-    columns = {"a": a, "b": np.where(rng.random(203) < 0.3, np.nan, -a)}
-    got = spearman_columns(inputs, columns)
-    for name, values in columns.items():
-        assert np.allclose(got[name], _pairwise(inputs, values), rtol=0, atol=1e-12), name
+def _exact_rho(x, y):
+    """Spearman's rho of two columns from scipy's average ranks, its sums in Python's
+    exact integers (twice the centred ranks are whole), the ratio rounded once."""
+    import math
+    import operator
+
+    from scipy.stats import rankdata
+
+    rx, ry = ((2 * rankdata(v) - (len(v) + 1)).astype(np.int64).tolist() for v in (x, y))
+    p = sum(map(operator.mul, rx, ry))
+    return math.copysign(math.sqrt(p * p / (sum(map(operator.mul, rx, rx))
+                                            * sum(map(operator.mul, ry, ry)))), p)
 
 
-def test_centred_ranks_are_exact_in_float32_up_to_the_limit():
-    """What :data:`EXACT_FLOAT32_RANKS` rests on: centred average ranks are multiples of
-    1/2 below n/2 in magnitude, and every such number up to n = 2^23 survives float32
-    (a half-integer at 2^23 would not); past that limit the ranks are held in float64."""
-    from camopt.engine.tolerance import EXACT_FLOAT32_RANKS, centred_ranks, rank_dtype
+def test_spearman_sums_are_exact_and_rho_rounded_once():
+    """rho is the exact ratio of the rank sums rounded once, to the bit, over 100,000
+    rows with ties and NaN-dropped rows (sums from scipy's ranks in Python integers)."""
+    rng = np.random.default_rng(21)
+    n = 100_000
+    inputs = np.column_stack([rng.uniform(size=n), np.round(rng.normal(size=n), 1)])
+    a = inputs @ [1.0, 0.3] + rng.normal(scale=0.2, size=n)
+    b = np.where(rng.random(n) < 0.3, np.nan, np.round(a, 2))
+    got = spearman_columns(inputs, {"a": a, "b": b})
+    for name, values in (("a", a), ("b", b)):
+        keep = ~np.isnan(values)
+        assert got[name] == [_exact_rho(inputs[keep, j], values[keep]) for j in range(2)]
 
-    assert rank_dtype(EXACT_FLOAT32_RANKS) is np.float32
-    assert rank_dtype(EXACT_FLOAT32_RANKS + 1) is np.float64
 
-    n = EXACT_FLOAT32_RANKS
-    rng = np.random.default_rng(13)
-    halves = np.r_[rng.integers(-(n - 1), n, 10**5), -(n - 1), n - 1, 0, 1, -1] / 2
-    assert np.array_equal(halves.astype(np.float32).astype(float), halves)
-    past = np.array([(2 * n + 1) / 2])  # 2^23 + 1/2: float32 rounds it
-    assert not np.array_equal(past.astype(np.float32).astype(float), past)
-    tied = np.array([3.0, 1.0, 3.0, 2.0, 3.0])
-    assert np.array_equal(centred_ranks(tied), [1.0, -2.0, 1.0, -1.0, 1.0])
+def test_a_perfect_rank_correlation_over_a_million_rows_is_exactly_one():
+    """At 10^6 rows (``camopt tolerance``'s most) a metric that rises or falls with an
+    input alone has rho exactly +-1: float sums of the rank products, past 2^53, read
+    1.0000000000007 (review 74 found 0.9999999999987 in the CLI)."""
+    x = np.random.default_rng(22).uniform(size=(10**6, 2))
+    got = spearman_columns(x, {"up": 2 * x[:, 0] + 1, "down": -np.exp(x[:, 1])})
+    assert got["up"][0] == 1.0 and got["down"][1] == -1.0
+
+
+def test_spearman_refuses_more_rows_than_its_sums_hold_exactly(monkeypatch):
+    """Past :data:`EXACT_RANK_ROWS` an int64 sum could overflow: refused, not wrapped."""
+    monkeypatch.setattr(tolerance_module, "EXACT_RANK_ROWS", 10)
+    rng = np.random.default_rng(1)
+    with pytest.raises(ValueError, match="exact for at most 10"):
+        spearman_columns(rng.normal(size=(11, 2)), {"a": rng.normal(size=11)})
+    assert spearman_columns(rng.normal(size=(10, 2)), {"a": rng.normal(size=10)})["a"]
+
+
+def test_the_exact_rank_sums_stay_below_int64_up_to_the_limit():
+    """What :data:`EXACT_RANK_ROWS` rests on: the largest sum, of the squared doubled
+    ranks of 1..n without ties, is (n^3 - n) / 3, below 2^63 at n = 2^21 and not at 2^22;
+    doubled ranks are the integers -(n - 1), -(n - 3), ..., n - 1."""
+    from camopt.engine.tolerance import EXACT_RANK_ROWS, doubled_ranks
+
+    def largest(n):
+        return (n**3 - n) // 3
+
+    assert largest(EXACT_RANK_ROWS) < 2**63 <= largest(2 * EXACT_RANK_ROWS)
+    r = doubled_ranks(np.array([0.5, -1.0, 7.0, 2.0]))
+    assert r.dtype == np.int64 and r.tolist() == [-1, -3, 3, 1]
+    assert int(r @ r) == largest(4)
+    tied = doubled_ranks(np.array([3.0, 1.0, 3.0, 2.0, 3.0]))
+    assert tied.tolist() == [2, -4, 2, -2, 2]
 
 
 def test_inputs_are_the_draws_and_the_ends_rows_of_one_array(vcb_run):
@@ -421,12 +451,10 @@ def test_constant_metrics_are_held_once_and_read_the_same():
 
 
 # --- review 74: what the tests above left unpinned ---------------------------------------
-@pytest.mark.parametrize("product_rows", [tolerance_module.PRODUCT_ROWS, 1000])
-def test_spearman_products_are_summed_in_float64(monkeypatch, product_rows):
+def test_spearman_at_5000_rows_is_scipy_s():
     """At 5,000 rows the sums of rank products (~10^10) are past float32's 2^24: rho is
-    still scipy's to 1e-12 (products summed in float32 would be off by ~1e-7), in one
-    block and across block boundaries, with ties and NaN-dropped rows."""
-    monkeypatch.setattr(tolerance_module, "PRODUCT_ROWS", product_rows)
+    still scipy's to 1e-12 (review 74: products summed in float32 were off by ~1e-7),
+    with ties and NaN-dropped rows."""
     rng = np.random.default_rng(17)
     n = 5000
     inputs = rng.uniform(-1, 1, (n, 3))
@@ -436,24 +464,6 @@ def test_spearman_products_are_summed_in_float64(monkeypatch, product_rows):
     got = spearman_columns(inputs, columns)
     for name, values in columns.items():
         assert np.allclose(got[name], _pairwise(inputs, values), rtol=0, atol=1e-12), name
-
-
-def test_input_ranks_take_the_dtype_rank_dtype_chooses(monkeypatch):
-    """spearman_columns asks :func:`rank_dtype` for each group's kept row count (the
-    float32 limit is not bypassed for large n)."""
-    asked = []
-
-    def spy(n):
-        asked.append(n)
-        return np.float64
-
-    monkeypatch.setattr(tolerance_module, "rank_dtype", spy)
-    rng = np.random.default_rng(3)
-    inputs = rng.normal(size=(40, 2))
-    a = inputs[:, 0] + rng.normal(size=40)
-    b = np.where(np.arange(40) < 10, np.nan, a)
-    spearman_columns(inputs, {"a": a, "b": b})
-    assert sorted(asked) == [30, 40]
 
 
 def test_a_shared_constant_holds_its_own_value_not_the_column():
