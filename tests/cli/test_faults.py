@@ -505,7 +505,7 @@ def dask_cluster():
     the OOM killer visited, instead of being restarted by a nanny."""
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=0, processes=True, host="127.0.0.1",
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=":0") as cluster:
         workers = [subprocess.Popen(
             [sys.executable, "-m", "distributed.cli.dask_worker", cluster.scheduler_address,
              "--no-nanny", "--nthreads", "1", "--host", "127.0.0.1", "--no-dashboard"],

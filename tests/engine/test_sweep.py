@@ -115,7 +115,7 @@ def test_dask_local_cluster_matches_local_pool(tmp_path):
     grid = ["--seeds", "0:6", "--grid", "solver.population=10,20"]
     local = sweep(tmp_path, "local.h5", *grid, "--jobs", "1")
     with distributed.LocalCluster(n_workers=4, threads_per_worker=1, processes=True,
-                                  host="127.0.0.1", dashboard_address=None) as cluster:
+                                  host="127.0.0.1", dashboard_address=":0") as cluster:
         dask = sweep(tmp_path, "dask.h5", *grid, "--executor", "dask",
                      "--scheduler", cluster.scheduler_address)
     assert stable_summary(local) == stable_summary(dask)
