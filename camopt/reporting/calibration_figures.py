@@ -11,7 +11,7 @@ from collections.abc import Mapping, Sequence
 from matplotlib.figure import Figure
 
 from camopt.core.calibration import FittedCurve
-from camopt.core.plotting import plt
+from camopt.core.plotting import figure
 from camopt.units import MM, MS
 
 
@@ -22,9 +22,8 @@ def figures(curves: Sequence[FittedCurve], rms_mm: Mapping[str, float]
     out: dict[str, Figure] = {}
     forms = list(dict.fromkeys(c.form for c in curves))
     for form in forms:
-        fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True,
-                                          layout="constrained",
-                                          gridspec_kw={"height_ratios": (2, 1)})
+        fig = figure(figsize=(7, 6), layout="constrained")
+        top, bottom = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": (2, 1)})
         rms = rms_mm.get(form)
         top.set_title(form if rms is None else f"{form}: RMS misfit {rms:.4f} mm")
         for c in (c for c in curves if c.form == form):

@@ -11,7 +11,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from camopt.archive.samples import ToleranceSamples
-from camopt.core.plotting import PAPER_STYLE, new_figure, plt, readable
+from camopt.core.plotting import PAPER_STYLE, figure, new_figure, readable
 from camopt.core.requirements import Requirement
 from camopt.engine.tolerance import Tolerance
 
@@ -26,7 +26,8 @@ def _grid(n: int, title: str) -> tuple[Figure, list]:
     cols = min(3, n)
     rows = math.ceil(n / cols)
     height = 2.6 * rows + 0.6  # inches: the panels and the title
-    fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, height), squeeze=False)
+    fig = figure(figsize=(3.6 * cols, height))
+    axes = fig.subplots(rows, cols, squeeze=False)
     fig.subplots_adjust(left=0.9 / (3.6 * cols), right=1 - 0.3 / (3.6 * cols),
                         bottom=0.55 / height, top=1 - 0.6 / height, wspace=0.35,
                         hspace=0.75)
