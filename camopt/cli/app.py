@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 from typer.core import TyperGroup
 
+from camopt.cli.console import visible
 from camopt.engine import interrupts
 from camopt.errors import CamoptError
 
@@ -159,7 +160,7 @@ def errors() -> Iterator[None]:
     try:
         yield
     except CamoptError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {visible(exc)}", file=sys.stderr)
         raise typer.Exit(2) from None
     except KeyboardInterrupt:
         interrupts.handled()
@@ -174,7 +175,7 @@ def errors() -> Iterator[None]:
             print("error: out of memory", file=sys.stderr)
             raise typer.Exit(2) from None
         if is_validation_error(exc):
-            print(f"error: {str(exc).splitlines()[0]}", file=sys.stderr)
+            print(f"error: {visible(str(exc).splitlines()[0])}", file=sys.stderr)
             raise typer.Exit(2) from None
         # a bug: still one line, never a traceback (tests keep it unused)
         print(internal_error(exc), file=sys.stderr)
@@ -203,7 +204,7 @@ INTERNAL = "error: internal error"
 def internal_error(exc: BaseException) -> str:
     """The one line for an exception camopt did not expect (a bug to report)."""
     first = (str(exc).splitlines() or [""])[0]
-    return f"{INTERNAL}: {type(exc).__name__}: {first} (please report this)"
+    return f"{INTERNAL}: {type(exc).__name__}: {visible(first)} (please report this)"
 
 
 def load_case(case: Path, overrides: Sequence[str] | None = None) -> LoadedConfig:

@@ -16,6 +16,7 @@ import typer
 from typer.core import TyperCommand
 
 from camopt.cli.app import Format, app, errors, load_case
+from camopt.cli.console import visible
 from camopt.errors import ConfigError
 
 RAW = "camopt.raw_args"
@@ -159,11 +160,11 @@ def calibrate(
     if format == Format.json:
         print(json.dumps(jsonable(data), indent=2))
     else:
-        print("\n".join(report.lines()))
+        print("\n".join(visible(line) for line in report.lines()))
     if format != Format.json:
         if out_path is not None:
-            print(f"\ncalibrated values written to {out_path} (a case can extend it)")
+            print(f"\ncalibrated values written to {visible(out_path)} (a case can extend it)")
         if archive_path is not None:
-            print(f"calibration archive: {archive_path} (camopt show / plot / report)")
+            print(f"calibration archive: {visible(archive_path)} (camopt show / plot / report)")
         for p in written:
-            print(f"figure: {p}")
+            print(f"figure: {visible(p)}")

@@ -7,10 +7,9 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 
 from camopt.cli.app import app, errors, load_case
-from camopt.cli.console import out
+from camopt.cli.console import escape, out, visible
 
 
 @app.command()
@@ -28,7 +27,7 @@ def validate(case: Annotated[Path, typer.Argument(help="case file (TOML)")],
         problem, solver_cls = prepare(config)
         build_solver(problem, solver_cls, config, np.random.default_rng(0))  # its own checks
     for warning in target_warnings(config, problem):
-        print(f"warning: {warning}", file=sys.stderr)
+        print(f"warning: {visible(warning)}", file=sys.stderr)
     out.print(f"ok: {escape(str(case))}: case '{config.case.kind}' ({problem.n_var} variables, "
               f"{problem.n_constr} constraints), solver '{solver_cls.name}'")
 

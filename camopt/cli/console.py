@@ -1,5 +1,6 @@
 """The consoles every command prints to (results on stdout, progress and errors on
-stderr) and the one cell format of plain tables."""
+stderr), how names print (:func:`visible`, :func:`escape`) and the one cell format of
+plain tables."""
 
 from __future__ import annotations
 
@@ -8,12 +9,54 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 from rich.console import Console
-from rich.markup import escape
+from rich.markup import escape as markup_escape
+from rich.text import Text
+
+
+def visible(text: object) -> str:
+    """``text`` as camopt prints it: printable characters as they are, every other one
+    (control characters such as ESC, CR, LF and tab, bidirectional overrides such as
+    U+202E, zero-width and other invisible characters) as its Python escape (``\\x1b``,
+    ``\\n``, ``\\u202e``). A name can then neither send a terminal an escape sequence nor
+    break a line; the exact text is in ``--format json`` (docs/reliability.md)."""
+    text = str(text)
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
+# rich's markup.escape is not exact: a backslash before '[' that starts no tag is
+# dropped ('t\[x' printed 't[x'), and one at the end of a name is doubled unless a tag
+# follows. camopt's escape instead puts private-use stand-ins for '[' and '\' (which
+# visible() never lets through) that markup cannot read; the consoles turn them back.
+_STAND_INS = {ord("["): "\ue000", ord("\\"): "\ue001"}
+_BACK = {ord(v): chr(k) for k, v in _STAND_INS.items()}
+
+
+def escape(text: object) -> str:
+    """``text`` (a name: a path, a run, metric or requirement name) for markup printed by
+    :data:`out` or :data:`err`: exactly as :func:`visible` shows it, whatever markup is
+    around it."""
+    return visible(text).translate(_STAND_INS)
+
+
+class NameConsole(Console):
+    """A rich console that prints what :func:`escape` made of a name as the name."""
+
+    def render_str(self, text: str, **options: Any) -> Text:
+        if not any(chr(k) in text for k in _BACK):
+            return super().render_str(text, **options)
+        highlighter = options.pop("highlighter", None) or self.highlighter
+        rich_text = super().render_str(
+            text, highlighter=lambda s: highlighter(str(s).translate(_BACK)), **options)
+        rich_text.plain = rich_text.plain.translate(_BACK)  # same length: styles stay
+        return rich_text
+
 
 # no emoji codes: rich would print a path such as ':smile:.toml' as an emoji (what
 # camopt prints is file names, quantities and markup it escapes, never an emoji)
-out = Console(emoji=False)
-err = Console(stderr=True, emoji=False)
+out = NameConsole(emoji=False)
+err = NameConsole(stderr=True, emoji=False)
 
 
 @contextlib.contextmanager
@@ -26,7 +69,7 @@ def rows_bar(label: str, quiet: bool) -> Iterator[Callable[[int, int], None] | N
         return
     from rich import progress as rp
 
-    with rp.Progress(rp.TextColumn(escape(label)), rp.BarColumn(), rp.MofNCompleteColumn(),
+    with rp.Progress(rp.TextColumn(markup_escape(label)), rp.BarColumn(), rp.MofNCompleteColumn(),
                   rp.TimeElapsedColumn(), rp.TimeRemainingColumn(), console=err,
                   transient=True) as bar:
         task = bar.add_task(label, total=None)

@@ -11,10 +11,10 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
-from rich.markup import escape
+from rich.cells import cell_len
 from rich.table import Table
 
-from camopt.cli.console import fmt, out, plain
+from camopt.cli.console import escape, fmt, out, plain, visible
 
 if TYPE_CHECKING:
     from camopt.core.runview import RunView
@@ -34,7 +34,8 @@ BORDER = 3
 
 
 def _longest_word(text: str) -> int:
-    return max((len(w) for w in text.split()), default=0)
+    """The most terminal cells a word of ``text`` takes, as printed (:func:`visible`)."""
+    return max((cell_len(w) for w in visible(text).split()), default=0)
 
 
 def fits(columns: Sequence[str], rows: Sequence[Sequence[str]], width: int,
@@ -43,7 +44,7 @@ def fits(columns: Sequence[str], rows: Sequence[Sequence[str]], width: int,
     (header included), or its longest cell for a ``numeric`` column (printed unwrapped)."""
     def need(i: int, c: str) -> int:
         whole = i < len(numeric) and numeric[i]
-        cells = [len(r[i]) if whole else _longest_word(r[i]) for r in rows]
+        cells = [cell_len(visible(r[i])) if whole else _longest_word(r[i]) for r in rows]
         return BORDER + max(_longest_word(c), *cells)
 
     total = 1 + sum(need(i, c) for i, c in enumerate(columns)) if rows else 0

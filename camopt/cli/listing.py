@@ -8,10 +8,9 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 
 from camopt.cli.app import Format, app, errors
-from camopt.cli.console import out
+from camopt.cli.console import escape, out
 from camopt.cli.layout import print_table
 
 

@@ -11,6 +11,7 @@ from typing import Annotated
 import typer
 
 from camopt.cli.app import app, errors
+from camopt.cli.console import visible
 from camopt.errors import ArchiveError
 
 
@@ -77,7 +78,7 @@ def plot(paths: Annotated[list[Path], typer.Argument(
         with writing(folder):
             written = plots.save(figures, folder, stem, force, tuple(paths))
     for p in written:
-        print(p)
+        print(visible(p))
 
 
 @app.command()
@@ -105,7 +106,7 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
             written = export_run(view, folder, run_path.stem, format.value, force,
                                  (run_path,), step_deg)
     for p in written:
-        print(p)
+        print(visible(p))
 
 
 @app.command()
@@ -124,7 +125,7 @@ def dashboard(folder: Annotated[Path, typer.Argument(help="folder of archives")]
         target = out or folder / "index.html"
         archive.check_writable(target, force)
         write_text(target, render(folder), force)
-    print(target)
+    print(visible(target))
 
 
 @app.command()
@@ -146,4 +147,4 @@ def report(path: Annotated[Path, typer.Argument(metavar="RUN_OR_SWEEP", help="ar
         archive.check_writable(target, force)
         archive.check_not_input(target, [path])
         write_text(target, render(path), force)
-    print(target)
+    print(visible(target))

@@ -11,7 +11,7 @@ from typing import Annotated, Any
 import typer
 
 from camopt.cli.app import app, errors, load_case
-from camopt.cli.console import err
+from camopt.cli.console import err, visible
 from camopt.engine.interrupts import deferred
 from camopt.errors import ArchiveError
 
@@ -57,19 +57,19 @@ def run(
                     record.expected_yield = expected_yield(record_view(record, str(path)))
                 archive.write_run(record, path, force=force)
     if quiet:
-        print(str(path))  # plain print: a script reads exactly the path, never wrapped
+        print(visible(path))  # plain print: a script reads exactly the path, never wrapped
     else:
         print_show(archive.load_run(path), rows=10)
     kept = f"{len(record.repeats)} finished of {config.run.repeats} repeats in {path}"
     if record.failure:
-        print(f"error: {case}: --jobs: {record.failure}; kept the {kept} (marked "
-              "interrupted)", file=sys.stderr)
+        print(visible(f"error: {case}: --jobs: {record.failure}; kept the {kept} (marked "
+                      "interrupted)"), file=sys.stderr)
         raise typer.Exit(2)
     if record.interrupted:
-        print(f"error: interrupted; kept the {kept} (marked interrupted)", file=sys.stderr)
+        print(visible(f"error: interrupted; kept the {kept} (marked interrupted)"), file=sys.stderr)
         raise typer.Exit(130)
     if signals:
-        print(f"error: interrupted while writing; kept all {kept}", file=sys.stderr)
+        print(visible(f"error: interrupted while writing; kept all {kept}"), file=sys.stderr)
         raise typer.Exit(130)
 
 
@@ -99,11 +99,11 @@ def claim_out(path: Path, force: bool, resuming: bool = False,
     replaced = archive.describe_file(path) if force and not resuming else None
     with archive.claim(path, force) as held:
         for stale in held.stale:
-            print(f"note: removed {stale} (a temporary file left by a killed camopt)",
+            print(f"note: removed {visible(stale)} (a temporary file left by a killed camopt)",
                   file=sys.stderr)
         yield
     if replaced:
-        print(f"note: --force: replaced {path} ({replaced})", file=sys.stderr)
+        print(f"note: --force: replaced {visible(path)} ({replaced})", file=sys.stderr)
 
 
 @contextlib.contextmanager

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from camopt.cli.app import Format, app, errors
-from camopt.cli.console import out
+from camopt.cli.console import out, visible
 from camopt.cli.layout import print_ranking, print_show
 
 if TYPE_CHECKING:
@@ -82,7 +82,7 @@ def show(run_paths: Annotated[list[Path], typer.Argument(
 
             print_tolerance(item)
         elif kind == "calibration":
-            sys.stdout.write("\n".join(calibration_lines(item)) + "\n")
+            sys.stdout.write("\n".join(map(visible, calibration_lines(item))) + "\n")
         else:
             print_show(item)
 

@@ -12,7 +12,7 @@ from typing import Annotated, Any
 import typer
 
 from camopt.cli.app import app, errors, is_validation_error, load_case
-from camopt.cli.console import err, out
+from camopt.cli.console import err, out, visible
 from camopt.cli.layout import print_rows
 from camopt.cli.run import claim_out, default_out
 from camopt.errors import CamoptError
@@ -71,14 +71,14 @@ def sweep(
                         jobs=jobs or os.cpu_count() or 1, executor=executor,
                         scheduler=scheduler, progress=progress)
             except sweep_run.SweepInterrupted as exc:
-                print(f"interrupted: {exc}; finish with: camopt sweep --resume {path}",
+                print(visible(f"interrupted: {exc}; finish with: camopt sweep --resume {path}"),
                       file=sys.stderr)
                 raise typer.Exit(130) from None
     rows = sweep_summary(spec, results.values())
     if not quiet:
         print_rows(f"sweep {path}", rows, list(rows[0]), None)
     else:
-        print(path)  # plain print: a script reads exactly the path
+        print(visible(path))  # plain print: a script reads exactly the path
     if check:
         _check_success(spec, rows)
 
@@ -121,8 +121,8 @@ def _check_success(spec: Any, rows: list[dict[str, Any]]) -> None:
         raise typer.Exit(2)
     failing = [r for r in rows if not r["success_rate"] >= floor]
     for r in failing:
-        print(f"check failed: grid point {r['point']} success rate {r['success_rate']:.0%} "
-              f"< {floor:.0%}", file=sys.stderr)
+        print(f"check failed: grid point {visible(r['point'])} success rate "
+              f"{r['success_rate']:.0%} < {floor:.0%}", file=sys.stderr)
     if failing:
         raise typer.Exit(1)
     out.print(f"check passed: every grid point succeeds in >= {floor:.0%} of runs")

@@ -10,10 +10,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
-from rich.markup import escape
 
 from camopt.cli.app import Format, app, errors
-from camopt.cli.console import fmt, out, rows_bar
+from camopt.cli.console import escape, fmt, out, rows_bar, visible
 from camopt.cli.layout import print_table
 from camopt.errors import CamoptError
 
@@ -106,11 +105,11 @@ def tolerance(
     if format is Format.json:  # stdout holds only the JSON; the figures' paths on stderr
         sys.stdout.write(json.dumps(doc, indent=2) + "\n")
         for p in written:
-            print(p, file=sys.stderr)
+            print(visible(p), file=sys.stderr)
         return
     print_tolerance(doc)
     for p in written:
-        print(p)
+        print(visible(p))
 
 
 def _allocate(run: RunView, target: float | None, samples: int, seed: int,
