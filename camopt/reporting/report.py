@@ -243,8 +243,10 @@ tolerance analysis and a robust run."""
 def next_step(run: RunView, judged: Verdict) -> str:
     """One line saying what to do next, fitting the result: a robust config (a sibling
     ``*_robust.toml`` of the run's case file when there is one), tolerance analysis, more
-    budget, or the report."""
-    path = run.path
+    budget, or the report. Paths are quoted for a shell where they need it (a space, ';')."""
+    import shlex
+
+    path = shlex.quote(run.path)
     robust_yield_doc = robust_yield(run)
     if robust_yield_doc is not None:
         if robust_yield_doc.meets_target is False:
@@ -261,7 +263,7 @@ def next_step(run: RunView, judged: Verdict) -> str:
     y = expected(run)
     if judged.at_limit or (y.get("value") is not None and y["value"] < LOW_YIELD):
         robust_cfg = robust_sibling(run)
-        then = (f"camopt run {robust_cfg}" if robust_cfg
+        then = (f"camopt run {shlex.quote(robust_cfg)}" if robust_cfg
                 else "a [robust] table in the case file (docs/tolerance.md)")
         return f"next: camopt tolerance {path} --samples 2000; for parts made to tolerance: {then}"
     return f"next: camopt report {path} (or camopt export {path} --format dxf)"

@@ -165,6 +165,14 @@ def test_a_sweep_prints_the_name(named, name):
     _check(runner.invoke(app, ["show", base + "-sweep.h5"]), name)
 
 
+def test_next_quotes_a_path_for_the_shell(named):
+    """show's `next: camopt tolerance PATH` is a command to copy: a path with a space is
+    quoted (main printed it bare: two arguments)."""
+    base = named["sp ace"] / "sp ace.h5"
+    out = " ".join(runner.invoke(app, ["show", str(base)]).stdout.split())
+    assert f"camopt tolerance '{base}' --samples 2000" in out, out
+
+
 def test_in_a_terminal_width_nothing_reaches_the_terminal_raw(named):
     """A real process at 80 columns (show, runs, validate of a name holding ESC)."""
     name = "esc\x1b[31mred"
