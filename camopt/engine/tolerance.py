@@ -20,6 +20,7 @@ search's penalty), and the Spearman rank correlation of every metric with every 
 from __future__ import annotations
 
 import math
+import shlex
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -392,7 +393,8 @@ def expected_yield(run: RunView, samples: int = EXPECTED_YIELD_SAMPLES) -> dict[
     from camopt.core.stats import success_rate
 
     seed = int(run.run.get("seed", 0))
-    command = f"camopt tolerance {run.path} --samples {samples} --seed {seed}"
+    # quoted for a shell (a path with a space or ';' pastes as one argument): as show's
+    command = f"camopt tolerance {shlex.quote(run.path)} --samples {samples} --seed {seed}"
     try:
         varies = default_varies(run)
         with np.errstate(all="ignore"):  # a non-assembling draw is data (NaN), not noise

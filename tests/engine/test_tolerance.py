@@ -491,3 +491,17 @@ def test_analyse_holds_the_constant_metrics_once(vcb_run):
             constant.append(name)
             assert values.strides == (0,), name
     assert constant
+
+
+def test_the_expected_yield_command_pastes_as_one_path(vcb_run, tmp_path):
+    """The command the expected yield names (stored, shown in JSON and HTML) quotes the
+    run's path for a shell: a space or ';' in it stays one argument."""
+    import shlex
+    import shutil
+
+    from camopt.engine.tolerance import expected_yield
+
+    path = tmp_path / "sp ace;x.h5"
+    shutil.copy(vcb_run, path)
+    command = expected_yield(archive.load_run(path), samples=20)["command"]
+    assert shlex.split(command)[:3] == ["camopt", "tolerance", str(path)]
