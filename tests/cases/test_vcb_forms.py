@@ -19,7 +19,7 @@ from tests.helpers import load
 
 @pytest.fixture(scope="module")
 def problem():
-    return VcbProblem(load(CONFIGS / "vcb_velocity.toml", "case.dynamics_steps=100").case)
+    return VcbProblem(load(CONFIGS / "reference" / "vcb_velocity_paper.toml", "case.dynamics_steps=100").case)
 
 
 def _vector(form, c):

@@ -44,8 +44,8 @@ def test_quintic_rate_zeros_and_largest_swing_against_dense_sampling():
 
 def test_higher_terms_at_zero_give_the_cubic():
     """A quintic design whose a4 = a5 = 0 evaluates exactly as the cubic one."""
-    cubic = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
-    quintic = VcbProblem(load(CONFIGS / "vcb_velocity.toml", ["case.a4_bounds=[-0.01,0.01]",
+    cubic = VcbProblem(load(CONFIGS / "reference" / "vcb_velocity_paper.toml").case)
+    quintic = VcbProblem(load(CONFIGS / "reference" / "vcb_velocity_paper.toml", ["case.a4_bounds=[-0.01,0.01]",
                                                               "case.a5_bounds=[-0.002,0.002]"]
                               ).case)
     assert [v.name for v in quintic.variables][-2:] == ["a4", "a5"]
@@ -58,4 +58,4 @@ def test_higher_terms_at_zero_give_the_cubic():
 
 def test_a5_without_a4_is_refused():
     with pytest.raises(ConfigError, match="a4_bounds"):
-        load(CONFIGS / "vcb_velocity.toml", ["case.a5_bounds=[-0.002,0.002]"])
+        load(CONFIGS / "reference" / "vcb_velocity_paper.toml", ["case.a5_bounds=[-0.002,0.002]"])

@@ -1,8 +1,9 @@
 """docs/tutorial-my-breaker.md: its shell blocks run as written (in a temporary copy of the
-files they read) and each exits 0."""
+files they read), each exits 0, and each step's verdict is the one the tutorial promises."""
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
@@ -21,6 +22,13 @@ def blocks() -> list[str]:
     return re.findall(r"```sh\n(.*?)```", TUTORIAL.read_text(), flags=re.S)
 
 
+def _json(cwd, env, *args):
+    proc = subprocess.run([sys.executable, "-m", "camopt", *args, "--format", "json"],
+                          cwd=cwd, env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout)
+
+
 @pytest.mark.slow
 def test_the_tutorial_runs_as_written(tmp_path):
     shutil.copytree(ROOT / "tests" / "data" / "curves", tmp_path / "tests" / "data" / "curves")
@@ -28,9 +36,24 @@ def test_the_tutorial_runs_as_written(tmp_path):
            f"{os.environ.get('PATH', '')}", "COLUMNS": "100"}
     found = blocks()
     assert len(found) == 6
+    out = []
     for block in found:
         proc = subprocess.run(["bash", "-e", "-c", block], cwd=tmp_path, env=env,
                               capture_output=True, text=True, timeout=300)
         assert proc.returncode == 0, (block, proc.stderr)
-    assert "release_offset_deg" in (tmp_path / "my_breaker_calibrated.toml").read_text()
+        out.append(proc.stdout)
+    init, validate, calibrate, design, tolerance, export = out
+    assert "[case]" in (tmp_path / "my_breaker.toml").read_text()
+    assert validate.startswith("ok: my_breaker.toml")  # step 2: the case as written is valid
+    # step 3: the calibrated fragment carries the calibrated values and their band
+    fragment = (tmp_path / "my_breaker_calibrated.toml").read_text()
+    assert "release_offset_deg" in fragment and "dynamics_band" in fragment
+    # step 4: "It ends PASS at nominal", and show says so again
+    assert "PASS at nominal" in design
+    shown = _json(tmp_path, env, "show", "my_design.h5")
+    assert shown["verdict"] == "pass", shown["verdict_sentence"]
+    # step 5: "its yield is low (a few per cent here)": below a tenth
+    assert "yield (feasible share)" in tolerance
+    assert shown["expected_yield"]["value"] < 0.1
+    # step 6: the drawing of that (passing) design
     assert (tmp_path / "my_cam" / "my_design.dxf").is_file()

@@ -1,5 +1,5 @@
 """Tolerance analysis (camopt/engine/tolerance.py) and ``camopt tolerance`` on a VCB run with
-its closing dynamics (configs/vcb_velocity.toml, small budget)."""
+its closing dynamics (configs/reference/vcb_velocity_paper.toml, small budget)."""
 
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ def invoke(*args):
 @pytest.fixture(scope="module")
 def vcb_run(tmp_path_factory):
     path = tmp_path_factory.mktemp("tol") / "vcb.h5"
-    r = invoke("run", CONFIGS / "vcb_velocity.toml", "--out", path, "--quiet", "--repeats", 1,
+    r = invoke("run", CONFIGS / "reference" / "vcb_velocity_paper.toml", "--out", path, "--quiet", "--repeats", 1,
                "--set", "solver.generations=120", "--set", "solver.population=40")
     assert r.exit_code == 0, r.output
     return path
