@@ -108,6 +108,22 @@ class OverlayCurve:
 
 
 @dataclass(frozen=True)
+class Adjustment:
+    """A parameter the factory sets on each unit at assembly (a spring's preload nut, a
+    pushrod's length) until a measured quantity reads its target: ``name`` for people;
+    ``metric``, the travel each design needs (signed, in ``unit``; +inf: none reaches
+    the target), as the case's evaluation reports it; ``reach``, the case field with how
+    far it may move either way; ``target``, what it is set to, in words. ``camopt
+    tolerance`` reports its distribution over the draws and the share out of reach."""
+
+    name: str
+    metric: str
+    reach: str
+    unit: str
+    target: str
+
+
+@dataclass(frozen=True)
 class CaseSpec:
     """Everything camopt needs to know about one mechanism.
 
@@ -163,6 +179,8 @@ class CaseSpec:
     reference_values: Mapping[str, Any] = field(default_factory=dict)
     """The reference design's values by the run's names when the case does not report
     them as ``initial_``/``original_`` metrics (a paper's optimum)."""
+    adjustments: tuple[Adjustment, ...] = ()
+    """What the factory sets on each unit at assembly, where a run models it."""
     calibration: str | None = None
     """``"module:function"`` that calibrates the case on measured curves (``camopt
     calibrate``, :mod:`camopt.core.calibration`); None: the case has none."""

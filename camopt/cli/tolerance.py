@@ -193,6 +193,8 @@ def print_tolerance(doc: dict) -> None:
         if doc["limiting"]:
             out.print(f"limits the yield: [bold]{escape(doc['limiting'])}[/] (the tornado's "
                       "default)", highlight=False)
+    for adjustment in doc.get("adjustments", ()):
+        out.print(escape(report.adjustment_text(adjustment)), highlight=False)
     rows = []
     for name, p in doc["metrics"].items():
         top = doc["sensitivity"][name][0]

@@ -249,7 +249,39 @@ def summarise(t: Tolerance) -> dict[str, Any]:
         "objective_over": "feasible samples (infeasible ones carry the search's penalty)",
         "requirements": yields,
         "limiting": _limiting(yields, columns),
+        "adjustments": adjustment_use(t, columns),
     }
+
+
+ADJUSTMENT_BINS = 10
+"""Equal bins of an adjustment's reach in its histogram (``adjustment_use``)."""
+
+
+def adjustment_use(t: Tolerance, columns: dict[str, NDArray]) -> list[dict[str, Any]]:
+    """Each adjustment the case declares and the samples report (its metric): the travel
+    the draws needed, at the 5th, 50th and 95th percentiles of the draws within reach, a
+    histogram of those over the reach (``ADJUSTMENT_BINS`` equal bins), and the share of
+    draws that need more than the reach (or that no travel sets: +inf)."""
+    if t.run is None:
+        return []
+    from camopt.cases.registry import get_case
+
+    out = []
+    for adj in get_case(t.run.kind).adjustments:
+        if adj.metric not in columns or adj.reach not in t.run.case:
+            continue
+        need, reach = columns[adj.metric], float(t.run.case[adj.reach])
+        within = np.abs(need) <= reach  # NaN and +-inf: out of reach
+        used = need[within]
+        p = np.percentile(used, [5, 50, 95]) if used.size else [np.nan] * 3
+        counts, edges = np.histogram(used, bins=ADJUSTMENT_BINS, range=(-reach, reach))
+        out.append({"name": adj.name, "metric": adj.metric, "unit": adj.unit,
+                    "target": adj.target, "reach": reach,
+                    "p05": float(p[0]), "p50": float(p[1]), "p95": float(p[2]),
+                    "histogram": {"edges": [float(e) for e in edges],
+                                  "counts": [int(c) for c in counts]},
+                    "out_of_reach_share": float(np.mean(~within))})
+    return out
 
 
 def _interval(passed: int, samples: int) -> dict[str, float]:
@@ -411,4 +443,5 @@ def expected_yield(run: RunView, samples: int = EXPECTED_YIELD_SAMPLES) -> dict[
             "requirements": [{"name": r["name"], "yield": r["yield"],
                               "half_spread": r["half_spread"]}
                              for r in t.summary["requirements"]],
+            "adjustments": t.summary.get("adjustments", []),
             "command": command}

@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from camopt.cases.registry import (
+    Adjustment,
     ArchiveLoader,
     CaseSpec,
     OverlayCurve,
@@ -173,6 +174,9 @@ VCB = register_case(CaseSpec(
     resolve=resolve, tolerances=TOLERANCES,
     tolerance_classes=TOLERANCE_CLASSES, requirements=requirements,
     reference="vendor, Sec 2.3 and Table 2",
+    adjustments=(Adjustment(
+        "closing springs' preload nut", "preload_setting_mm", "preload_setting_range_mm",
+        "mm", "the analyser's contact velocity to velocity_setting_m_s"),),
     calibration="camopt.cases.vcb.calibration_report:run",
 ))
 VCB_IDENTIFY = register_case(CaseSpec(

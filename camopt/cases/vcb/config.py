@@ -85,7 +85,7 @@ VCB_ROLES: dict[str, FieldRole] = {
     **_roles("requirement", """rod_travel_mm rod_travel_tolerance_mm closing_velocity_m_s
         require_latch pressure_angle_max_deg forbid_lift_off latch_energy_min_j
         latch_energy_max_j release_torque_margin_min lift_off_fraction_min
-        stress_constraint phi_max_deg"""),
+        stress_constraint phi_max_deg life_friction_rise life_spring_relaxation"""),
     **_roles("solver setting", """step cam_archive dynamics_steps objective_form positions penalty
         a1_bounds a2_bounds a3_bounds a4_bounds a5_bounds release_offset_bounds_deg
         velocity_setting_bounds_m_s kc1_bounds_n_per_mm kc2_bounds_n_per_mm l1_bounds_mm
@@ -242,6 +242,16 @@ class VcbMechanism(CaseConfig):
         "at the end of the stroke, the band's greatest (constraint with require_latch; a "
         "requirement always) (assumed: ~the contact springs' work over 1.2 mm of overtravel; "
         "docs/assumptions.md)")
+    life_friction_rise: float = Field(
+        0.0, ge=0.0, le=2.0, description="end of life: every friction torque this share "
+        "higher than as built (0.25: +25 %), the factory setting's nut held; a design is "
+        "judged at the start and at the end of its life, each requirement at its worse "
+        "(0: no life check) (assumed; docs/assumptions.md, \"VCB: life\")")
+    life_spring_relaxation: float = Field(
+        0.0, ge=0.0, lt=0.5, description="end of life: the closing springs' force in the "
+        "charged (opened) state this share lower than as built (relaxation: their "
+        "compression there shortened by the share), with life_friction_rise (assumed; "
+        "docs/assumptions.md, \"VCB: life\")")
     release_torque_margin_min: float = Field(
         RELEASE_TORQUE_MARGIN_MIN, ge=1.0, le=100.0, description="least eps T_s / T_f at "
         "the release, the closing springs' torque on the cam at rest against the friction "

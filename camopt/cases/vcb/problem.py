@@ -97,6 +97,52 @@ def _longest(travels: NDArray) -> NDArray:
     return np.take_along_axis(travels, index[None], axis=0)[0]
 
 
+LIFE_END_METRICS = ("closing_velocity_low_m_s", "closing_velocity_high_m_s",
+                    "latch_kinetic_energy_low_j", "latch_kinetic_energy_high_j",
+                    "release_torque_margin_low", "band_sets_not_latched")
+"""The metrics reported again at the end of life (``life_end_`` + name), where the run
+judges it: the verdict's worst alone does not say when a requirement binds."""
+
+
+def _worst_of(each: list[Evaluation], penalty: float, sum_counts: bool = False,
+              life_end: Evaluation | None = None) -> Evaluation:
+    """One verdict over several judgements of the same breakers (every model form, or the
+    start and end of life): each constraint at its worst, the objective the first's with
+    the worst violation's penalty, the band's lower ends the least and higher ends the
+    greatest, the setting the longest nut travel, the other metrics the first's. With
+    ``sum_counts`` the band's set counts add up (different sets); else they take their
+    worst. ``life_end``: its :data:`LIFE_END_METRICS` reported as ``life_end_*``."""
+    g = np.max([e.g for e in each], axis=0)
+    violation = np.clip(g, 0, None).sum(axis=1)
+    first = each[0]
+    own = np.clip(first.g, 0, None).sum(axis=1)
+    with np.errstate(invalid="ignore"):  # inf - inf: no finite objective either way
+        base = np.where(own == 0, first.f, first.f - penalty * own)
+    f = np.where(np.isfinite(base) & np.isfinite(violation), base + penalty * violation,
+                 np.inf)
+    extras = dict(first.extras)
+    counts = ("band_sets", "band_sets_not_latched")
+    for key in extras:
+        stack = np.array([e.extras[key] for e in each], dtype=float)
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns stay NaN
+            name = key.removeprefix("life_end_")
+            if name in counts:
+                extras[key] = stack.sum(axis=0) if sum_counts else stack.max(axis=0)
+            elif name == "preload_setting_mm":
+                extras[key] = _longest(stack)
+            elif name.startswith("closing_velocity_"):  # NaN: a set that never closes
+                extras[key] = (np.max if "_high" in name else np.min)(stack, axis=0)
+            elif "_low" in name or name in _WORST_LOW:
+                extras[key] = np.nanmin(stack, axis=0)
+            elif "_high" in name or name in _WORST_HIGH:
+                extras[key] = np.nanmax(stack, axis=0)
+    if life_end is not None:
+        extras.update({f"life_end_{k}": life_end.extras[k] for k in LIFE_END_METRICS
+                       if k in life_end.extras})
+    return Evaluation(f=f, g=g, extras=extras)
+
+
 def _joined(form: FormSets, efficiency: float) -> MotionParameters:
     """A form's fit and its other sets as k + 1 parameter sets ((k + 1,) arrays, the fit
     first), every field resolved as :meth:`MotionParameters.columns` resolves it."""
@@ -525,8 +571,49 @@ class VcbProblem(Problem, VariesCase, HasVariants):
                   form: int | None = None) -> Evaluation:
         if form is None and self.setting_column is not None and len(self.forms) > 1:
             return self._worst_form(X, detail, parts)
-        c, m = self.config, self.model
         parts, setting = self.as_set(X, parts, form)
+        start = self._judge(X, detail, parts, setting, form)
+        if not self.ages:
+            return start
+        aged_parts, aged_setting = self._aged(len(start.f), parts, setting)
+        end = self._judge(X, detail, aged_parts, aged_setting, form)
+        if "preload_setting" in self.constraint_names:  # the nut is set once, as built
+            column = self.constraint_names.index("preload_setting")
+            end = replace(end, g=end.g.copy())
+            end.g[:, column] = start.g[:, column]
+        return _worst_of([start, end], self.config.penalty, life_end=end)
+
+    @property
+    def ages(self) -> bool:
+        """Whether a design is judged at the end of its life too (``life_friction_rise``
+        or ``life_spring_relaxation``): only where the dynamics run, which it changes."""
+        c = self.config
+        return self.search_dynamics and (c.life_friction_rise > 0
+                                         or c.life_spring_relaxation > 0)
+
+    def _aged(self, n: int, parts: Parts | None, setting: Setting | None
+              ) -> tuple[Parts, Setting | None]:
+        """n breakers as built (``parts``, set at the factory by ``setting``) at the end of
+        their life: every friction torque times 1 + ``life_friction_rise``, and the closing
+        springs relaxed, their compression in the charged (opened) state times 1 -
+        ``life_spring_relaxation`` (their force there that share lower); the setting's nut
+        stays where the factory left it (each set's own compressions, likewise relaxed)."""
+        c = self.config
+        parts = Parts() if parts is None else parts
+        keep, rise = 1.0 - c.life_spring_relaxation, 1.0 + c.life_friction_rise
+        pre = parts.pre if parts.pre is not None else np.tile(
+            [c.kc1_precompression_mm * MM, c.kc2_precompression_mm * MM], (n, 1))
+        scale = (np.ones(n) if parts.friction_scale is None else parts.friction_scale) * rise
+        aged = replace(parts, pre=pre * keep, friction_scale=scale)
+        if setting is None or setting.member_pre is None:
+            return aged, setting
+        return aged, replace(setting, member_pre=setting.member_pre * keep)
+
+    def _judge(self, X: NDArray, detail: bool, parts: Parts | None, setting: Setting | None,
+               form: int | None) -> Evaluation:
+        """Objective, constraints and metrics of n breakers with their ``parts`` (set at
+        the factory by ``setting``, where the run sets them) under form ``form``'s sets."""
+        c, m = self.config, self.model
         A, kc, link = self.designs(X, None if parts is None else parts.link)
         A = self._profiled(A, parts)
         pre = None if parts is None else parts.pre
@@ -624,28 +711,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         form's (the first), the band's ends and counts over every form's sets: a lower end
         the least, a higher end the greatest, the setting the longest nut travel."""
         each = [self._evaluate(X, detail, parts, form=f) for f in range(len(self.forms))]
-        g = np.max([e.g for e in each], axis=0)
-        violation = np.clip(g, 0, None).sum(axis=1)
-        first = each[0]
-        own = np.clip(first.g, 0, None).sum(axis=1)
-        with np.errstate(invalid="ignore"):  # inf - inf: no finite objective either way
-            base = np.where(own == 0, first.f, first.f - self.config.penalty * own)
-        f = np.where(np.isfinite(base) & np.isfinite(violation),
-                     base + self.config.penalty * violation, np.inf)
-        extras = dict(first.extras)
-        for key in extras:
-            stack = np.array([e.extras[key] for e in each], dtype=float)
-            with np.errstate(invalid="ignore"), warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns stay NaN
-                if key in ("band_sets", "band_sets_not_latched"):
-                    extras[key] = stack.sum(axis=0)
-                elif key == "preload_setting_mm":
-                    extras[key] = _longest(stack)
-                elif "_low" in key or key in _WORST_LOW:
-                    extras[key] = np.nanmin(stack, axis=0)
-                elif "_high" in key or key in _WORST_HIGH:
-                    extras[key] = np.nanmax(stack, axis=0)
-        return Evaluation(f=f, g=g, extras=extras)
+        return _worst_of(each, self.config.penalty, sum_counts=True)
 
     # ---- single-design output ----------------------------------------------------
     def _metrics_of(self, x: NDArray) -> dict[str, object]:
