@@ -80,7 +80,10 @@ def test_a_stall_at_either_end_is_no_velocity():
     def ev(v, k):
         return Evaluation(f=np.zeros(2), g=np.zeros((2, 1)),
                           extras={"closing_velocity_low_m_s": np.array(v),
+                                  "closing_velocity_avg_m_s": np.array(v),
                                   "latch_kinetic_energy_low_j": np.array(k)})
     out = _worst_of([ev([0.9, 0.8], [3.0, np.nan]), ev([np.nan, 0.7], [2.0, 1.0])], 1e6)
     np.testing.assert_array_equal(out.extras["closing_velocity_low_m_s"], [np.nan, 0.7])
     np.testing.assert_array_equal(out.extras["latch_kinetic_energy_low_j"], [2.0, 1.0])
+    # the identified set's own value is the first judgement's, not a band end
+    np.testing.assert_array_equal(out.extras["closing_velocity_avg_m_s"], [0.9, 0.8])

@@ -131,7 +131,9 @@ def _worst_of(each: list[Evaluation], penalty: float, sum_counts: bool = False,
                 extras[key] = stack.sum(axis=0) if sum_counts else stack.max(axis=0)
             elif name == "preload_setting_mm":
                 extras[key] = _longest(stack)
-            elif name.startswith("closing_velocity_"):  # NaN: a set that never closes
+            elif name.startswith("closing_velocity_") and ("_low" in name
+                                                         or "_high" in name):
+                # NaN: a set that never closes, so the band has no velocity
                 extras[key] = (np.max if "_high" in name else np.min)(stack, axis=0)
             elif "_low" in name or name in _WORST_LOW:
                 extras[key] = np.nanmin(stack, axis=0)
