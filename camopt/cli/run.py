@@ -28,6 +28,9 @@ def run(
     force: Annotated[bool, typer.Option(help="overwrite an existing --out")] = False,
     quiet: Annotated[bool, typer.Option(help="no progress bar or summary; print the path")]
     = False,
+    verbose: Annotated[bool, typer.Option(
+        "--verbose", "-v", help="print the whole summary (as camopt show), not the short one")]
+    = False,
     jobs: Annotated[int, typer.Option(min=1, max=256, help="worker processes for the "
                                       "repeats (or one repeat's starts); same results")] = 1,
 ) -> None:
@@ -59,7 +62,7 @@ def run(
     if quiet:
         print(visible(path))  # plain print: a script reads exactly the path, never wrapped
     else:
-        print_show(archive.load_run(path), rows=10)
+        print_show(archive.load_run(path), rows=10, brief=not verbose)
     kept = f"{len(record.repeats)} finished of {config.run.repeats} repeats in {path}"
     if record.failure:
         print(visible(f"error: {case}: --jobs: {record.failure}; kept the {kept} (marked "

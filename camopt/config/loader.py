@@ -314,9 +314,13 @@ def load_config(
             hint = did_you_mean(key.split(".")[0], SECTIONS)
             raise ConfigError("--set", key, f"unknown section{hint}; expected one of {expected}")
         apply_override(data, key, value)
-    loaded = validate_data(data, solvers, cases, source, text, tuple(overrides),
-                           {key for key, _ in parsed})
-    return replace(loaded, bases=bases)
+    loaded = replace(validate_data(data, solvers, cases, source, text, tuple(overrides),
+                                   {key for key, _ in parsed}), bases=bases)
+    if loaded.run.next_config is not None and loaded.inherited("run", "next_config"):
+        # a base's pointer to the config that requires more names this file, or its sibling
+        loaded.data.get("run", {}).pop("next_config", None)
+        loaded = replace(loaded, run=loaded.run.model_copy(update={"next_config": None}))
+    return loaded
 
 
 def validate_data(

@@ -49,7 +49,7 @@ def test_verdict_names_what_fails_in_words():
     assert sentence(checks) == ("FAIL: does not latch; shear stress 1300 MPa, required "
                                 "<= 1194 MPa")
     ok = check([LATCH, TRAVEL], {"latched": 1.0, "rod_travel_mm": 18.0})
-    assert verdict(ok) == "pass" and sentence(ok) == "PASS: meets all 2 requirements"
+    assert verdict(ok) == "pass" and sentence(ok) == "PASS at nominal: meets all 2 requirements"
 
 
 def test_a_quantity_not_reported_is_not_judged():
@@ -84,7 +84,8 @@ def test_the_headline_names_what_is_at_its_limit():
                    spreads)
     assert [c.at_limit for c in checks] == [True, False]
     assert verdict(checks) == "pass"
-    assert sentence(checks) == "PASS at nominal: 1 requirement at its limit (rod travel)"
+    assert sentence(checks) == ("PASS at nominal: meets all 2 requirements, 1 at its limit "
+                                "(rod travel)")
     doc = checks[0].as_dict()
     assert doc["at_limit"] is True and doc["margin_share"] == pytest.approx(1e-5, rel=1e-3)
     assert checks[1].as_dict()["margin_share"] is None  # one-sided: no band
