@@ -19,6 +19,7 @@ from camopt.core.requirements import (
     Spread,
     check,
     margin_text,
+    positional,
     sentence,
     value_text,
 )
@@ -412,8 +413,10 @@ def _margin_cell(c: Check, flag: bool, unit: str) -> str:
         return "-"
     share = c.margin_share
     text = margin_text(c.requirement, float(margin)) + unit
-    return text + (f" ({100 * share:.2g}%)" if share is not None and text != "0" + unit
-                   else "")
+    if share is None or text == "0" + unit:
+        return text
+    pct = float(f"{100 * share:.2g}")  # 2 significant digits, positional
+    return text + f" ({positional(pct, 1 - math.floor(math.log10(abs(pct))) if pct else 0)}%)"
 
 
 def _pass_cell(c: Check) -> str:
