@@ -259,12 +259,13 @@ def next_step(run: RunView, judged: Verdict) -> str:
                     f"more budget (--set {budget_key(run)}=...)")
         return f"next: camopt report {path} (or camopt export {path} --format dxf)"
     if not run.best.feasible:
-        worst = ", ".join(run.best.violated[:2]) or "the solver found no design"
+        why = (f"violates {', '.join(run.best.violated[:2])}" if run.best.violated
+               else status(run).removeprefix("INFEASIBLE: "))
         if len(run.repeats) > 1:
-            return (f"next: every repeat ended infeasible (violates {worst}): more budget "
+            return (f"next: every repeat ended infeasible ({why}): more budget "
                     f"rarely helps; for parts made to tolerance: {robust_run}, else a wider "
                     "bound on the variables the constraints push against")
-        return (f"next: no feasible design (violates {worst}): more budget (--set "
+        return (f"next: no feasible design ({why}): more budget (--set "
                 f"{budget_key(run)}=... or --repeats) or a wider bound on the variables "
                 "the constraints push against")
     if judged.verdict != "pass":
