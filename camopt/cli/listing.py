@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -60,10 +60,11 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
                 numeric=[False, False, False, True, True, False], styles=styles)
 
 
-def yield_cell(row: dict) -> str:
+def yield_cell(row: dict[str, Any]) -> str:
     """``96.3 %``, ``1.3 % < 95 %`` below the yield target, ``-`` without an estimate."""
     value, target = row.get("expected_yield"), row.get("yield_target")
     if value is None:
         return "-"
-    below = target is not None and value < target
-    return f"{100 * value:.1f} %" + (f" < {100 * target:g} %" if below else "")
+    if target is not None and value < target:
+        return f"{100 * value:.1f} % < {100 * target:g} %"
+    return f"{100 * value:.1f} %"
