@@ -138,3 +138,33 @@ def test_runs_and_dashboard_grade_as_show(archives):
     assert len(green) == len(passes)
     for r in passes:
         assert r["expected_yield"] >= r["yield_target"]
+
+
+@pytest.mark.slow
+def test_compare_report_and_export_grade_as_show(archives, tmp_path):
+    """compare (table and JSON), the HTML report and export's JSON carry show's grade: the
+    report's verdict is green (class ok) only for a green pass, every pass has its
+    expected yield beside it."""
+    from camopt.reporting.html_report import render
+
+    grades = {}
+    for path in sorted(archives.glob("*.h5")):
+        show = json.loads(runner.invoke(app, ["show", str(path), "--format", "json"]).stdout)
+        grades[path.stem] = show["verdict_grade"]
+        r = runner.invoke(app, ["export", str(path), "--format", "json", "--out",
+                                str(tmp_path / path.stem)])
+        assert r.exit_code == 0, r.output
+        exported = json.loads(Path(r.stdout.split()[0]).read_text())
+        assert exported["verdict_grade"] == show["verdict_grade"]
+    for stem in [s for s, g in grades.items() if g != "fail"] + ["vcb", "opening_spring_pp4"]:
+        page = render(archives / f"{stem}.h5")
+        cls, words = re.search(r'<p class="(\w*)" id="verdict-sentence">([^<]*)</p>',
+                               page).groups()
+        assert cls == {"pass": "ok", "pass at nominal": "limit", "fail": "bad"}[grades[stem]]
+        if words.startswith("PASS"):
+            assert "expected yield" in words, stem
+    pair = [str(archives / "vcb.h5"), str(archives / "vcb_initial.h5")]
+    doc = json.loads(runner.invoke(app, ["compare", *pair, "--format", "json"]).stdout)
+    assert doc["verdict_grade"] == [grades["vcb"], grades["vcb_initial"]]
+    text = runner.invoke(app, ["compare", *pair]).stdout
+    assert "PASS" not in text or "expected yield" in text
