@@ -246,8 +246,10 @@ def pareto_title(doc: Mapping[str, Any]) -> str:
         return ("Pareto front: none stored (the run's table is empty); the verdict is the "
                 "headline design's alone")
     if not doc["front_size"]:
-        return (f"Pareto front: none of the {doc['designs']} final designs is feasible; the "
-                "verdict is the headline design's (the best the search saw)")
+        which = ("the final design is" if doc["designs"] == 1
+                 else f"none of the {doc['designs']} final designs is")
+        return (f"Pareto front: empty ({which} not feasible); the verdict is the headline "
+                "design's (the best the search saw)")
     return f"Pareto front: {doc['front_size']} feasible of {doc['designs']} designs"
 
 
