@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -75,14 +73,13 @@ def meets(value_cell: str, limit: str) -> bool | None:
 
 @pytest.fixture(scope="module")
 def archives(tmp_path_factory):
-    """Small runs of every shipped config (a second process: the CLI as a user runs it)."""
+    """Small runs of every shipped config."""
     folder = tmp_path_factory.mktemp("shipped")
     for config in SHIPPED:
         sets = [a for o in small_overrides(config, folder) for a in ("--set", o)]
-        r = subprocess.run([sys.executable, "-m", "camopt", "run", str(config), "--out",
-                            str(folder / f"{config.stem}.h5"), "--quiet", *sets],
-                           capture_output=True, text=True)
-        assert r.returncode == 0, (config, r.stderr)
+        r = runner.invoke(app, ["run", str(config), "--out", str(folder / f"{config.stem}.h5"),
+                                "--quiet", *sets])
+        assert r.exit_code == 0, (config, r.output)
     return folder
 
 
