@@ -414,8 +414,6 @@ class Comparison:
         doc: Json = {
             "runs": list(self.runs), "objective_name": self.objective_name,
             "verdict": [v.verdict for v in self.verdicts],
-            "verdict_grade": [v.grade for v in self.verdicts],
-            "verdict_headline": [v.headline for v in self.verdicts],
             "verdict_sentence": [v.sentence for v in self.verdicts],
             "requirements": [v.requirements for v in self.verdicts],
             "config_differences": self.config_differences,
@@ -426,6 +424,9 @@ class Comparison:
             "labels": list(self.labels), "tests": list(self.tests)}
         if self.hypervolume:
             doc["hypervolume"] = self.hypervolume
+        doc.update(verdict_grade=[v.grade for v in self.verdicts],  # after the older keys
+                   verdict_headline=[v.headline for v in self.verdicts],
+                   yield_target=[v.yield_target for v in self.verdicts])
         return jsonable(doc)
 
 
