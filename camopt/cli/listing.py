@@ -12,7 +12,6 @@ import typer
 from camopt.cli.app import Format, app, errors
 from camopt.cli.console import escape, out
 from camopt.cli.layout import print_table
-from camopt.core.requirements import GRADE_STYLES
 
 
 @app.command(name="runs")
@@ -26,6 +25,7 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
     from camopt import archive
     from camopt.archive.listing import list_archives
     from camopt.errors import CamoptError
+    from camopt.core.requirements import GRADE_STYLES
     from camopt.reporting.report import format_value, judged_yield, verdict
 
     with errors():
