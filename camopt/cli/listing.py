@@ -24,8 +24,8 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
     objective and date."""
     from camopt import archive
     from camopt.archive.listing import list_archives
-    from camopt.errors import CamoptError
     from camopt.core.requirements import GRADE_STYLES
+    from camopt.errors import CamoptError
     from camopt.reporting.report import format_value, judged_yield, verdict
 
     with errors():
