@@ -36,7 +36,8 @@ is when fewer than :data:`AT_LIMIT_YIELD` of the draws keep it.
 
 **Vocabulary** (every command, page and JSON): ``PASS at nominal`` (the nominal design
 meets every requirement) always with the expected yield beside it, and green only when
-that yield reaches the case's yield target (:func:`grade`); else amber; ``FAIL`` in red.
+the yield's 95 % interval lies at or above the case's yield target and no requirement is
+at its limit (:func:`grade`); else amber; ``FAIL`` in red.
 """
 
 from __future__ import annotations
