@@ -51,5 +51,5 @@ def test_a_mistyped_command_gets_a_did_you_mean():
 
 def test_help_has_examples():
     r = camopt("--help")
-    assert r.returncode == 0 and "Examples:" in r.stdout and "camopt run configs/vcb.toml" \
+    assert r.returncode == 0 and "Examples:" in r.stdout and "camopt run configs/CASE.toml" \
         in r.stdout
