@@ -37,7 +37,9 @@ def test_run_prints_summary_and_writes_archive(tmp_path):
     out = tmp_path / "fs.h5"
     r = invoke("run", FAST, "--out", out)
     assert r.exit_code == 0, r.output
-    assert out.is_file() and "best design" in r.stdout and "closure_time_ms" in r.stdout
+    assert out.is_file() and "verdict: " in r.stdout and "camopt show" in r.stdout
+    r = invoke("run", FAST, "--out", out, "--force", "--verbose")  # the whole summary
+    assert "best design" in r.stdout and "closure_time_ms" in r.stdout
 
 
 def test_default_archive_path_is_runs_name_timestamp(tmp_path, monkeypatch):
@@ -55,7 +57,8 @@ def test_show_json_has_exactly_the_documented_keys(two_runs):
     doc = json.loads(r.stdout)
     assert list(doc) == ["verdict", "verdict_sentence", "requirements", "at_limit",
                          "expected_yield", "next", "case", "solver", "best", "repeats",
-                         "table", "reference"]
+                         "table", "reference", "verdict_grade", "verdict_headline",
+                         "yield_target"]
     assert doc["verdict"] == "pass"  # Eq 92's optimum meets R1-R21 and its ratings
     assert doc["reference"]["label"] == "reference: paper's optimum, Eq 92"
     assert doc["reference"]["values"]["coils"] == 7

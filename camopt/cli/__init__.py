@@ -18,8 +18,17 @@ def main() -> None:
     (:func:`camopt.core.perf.one_blas_thread_on_load`); SIGTERM handled like Ctrl-C;
     whatever escapes a command (a closed pipe, a bug) is still one line, never a
     traceback."""
+    import warnings
+
     perf.one_blas_thread_on_load()
     interrupts.install()
+    # a design that does not assemble is data (NaN), judged by the verdict: numpy's
+    # 'invalid value' warnings, with source paths, are no message to a user
+    warnings.simplefilter("ignore", RuntimeWarning)
+    unknown = unknown_command(sys.argv[1:])
+    if unknown:
+        print(unknown, file=sys.stderr)
+        sys.exit(2)
     load_commands(sys.argv[1:])
     try:
         app(standalone_mode=True)
@@ -35,6 +44,28 @@ def main() -> None:
     except Exception as exc:
         print(internal_error(exc), file=sys.stderr)
         sys.exit(2)
+
+
+SYNONYMS = {"verify": "validate", "check": "validate", "list": "runs", "optimise": "run",
+            "optimize": "run", "summary": "show", "html": "report", "dxf": "export"}
+"""Words a user may type for a command (the did-you-mean of a mistyped one)."""
+
+
+def unknown_command(args: list[str]) -> str | None:
+    """One ``error:`` line for a mistyped command (``camopt verfy``) with the nearest
+    command names (difflib), or None when the first argument is a command or an option."""
+    import difflib
+
+    from camopt.cli.app import COMMANDS
+
+    if not args or args[0].startswith("-") or args[0] in COMMANDS:
+        return None
+    words = {**{c: c for c in COMMANDS}, **SYNONYMS}
+    near = list(dict.fromkeys(words[w] for w in difflib.get_close_matches(
+        args[0], sorted(words), n=3, cutoff=0.5)))[:2]
+    hint = (f"; did you mean {' or '.join(repr(n) for n in near)}?" if near
+            else f"; commands: {', '.join(sorted(COMMANDS))}")
+    return f"error: camopt: {args[0]}: unknown command{hint} (camopt --help)"
 
 
 __all__ = ["app", "main"]

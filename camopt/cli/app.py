@@ -128,7 +128,12 @@ def load_commands(args: Sequence[str] | None = None) -> None:
 app = CommandsOnDemand(cls=WorkflowGroup, rich_markup_mode="rich", no_args_is_help=True,
                   add_completion=True,
                   context_settings={"help_option_names": ["-h", "--help"]},
-                  help="Batch optimiser for spring-actuated mechanisms.")
+                  help="Batch optimiser for spring-actuated mechanisms.",
+                  epilog="Examples: [bold]camopt run configs/CASE.toml[/] (the verdict and "
+                  "next: end the output; --verbose for all of it) | [bold]camopt show "
+                  "runs/NAME-*.h5[/] | [bold]camopt validate my_case.toml[/] | [bold]camopt "
+                  "init KIND > my_case.toml[/] | [bold]camopt tolerance RUN.h5 --samples "
+                  "2000[/] | [bold]camopt report RUN.h5[/] | [bold]camopt runs[/]")
 
 
 def _print_version(value: bool) -> None:

@@ -104,10 +104,13 @@ def cell(value: Any) -> str:
     return escape(report.format_value(value))
 
 
-def print_show(view: RunView, rows: int | None = None) -> None:
+def print_show(view: RunView, rows: int | None = None, brief: bool = False) -> None:
     """The run summary: what ran, the best design beside the reference design (two
-    columns, units in the names), the repeats (the first ``rows``) and the solver's table.
-    Fits 80 columns: numbers are never wrapped, names fold when they must."""
+    columns, units in the names), the repeats (the first ``rows``) and the solver's table,
+    and the verdict again as the last lines with the next step (:func:`print_closing`).
+    Fits 80 columns: numbers are never wrapped, names fold when they must. ``brief``
+    (``run`` without ``--verbose``): the requirements not met or at their limit, the
+    repeats in a line, the closing lines (:func:`print_brief`)."""
     from camopt.reporting import report
 
     doc = report.show(view)
@@ -119,6 +122,9 @@ def print_show(view: RunView, rows: int | None = None) -> None:
               f"{done} repeats, seed {view.run.get('seed', '-')}", highlight=False)
     if view.interrupted:
         out.print("[bold red]interrupted[/]: the archive holds the finished repeats only")
+    if brief:
+        print_brief(view, doc)
+        return
     print_verdict(doc.verdict, robust_yield=doc.robust_yield,
                   expected_yield=doc.expected_yield, reference=doc.reference)
     if doc.pareto_summary:
@@ -142,7 +148,49 @@ def print_show(view: RunView, rows: int | None = None) -> None:
         columns = ["label", *doc.best.x, view.objective_name, "feasible", "active",
                    "violated"]
         print_fitted("solver's table", report.jsonable(doc.table), columns, rows)
-    out.print(f"[bold]{escape(doc.next)}[/]", highlight=False)
+    print_closing(doc.verdict.short, doc.verdict.style, doc.next, doc.robust_yield)
+
+
+def print_brief(view: RunView, doc: ShowView) -> None:
+    """``run``'s short summary: the requirements the best design fails or meets only at
+    their limit (all of them: ``camopt show``), a Pareto run's front size, the run's
+    constraints and the repeats in a line each, then the closing lines."""
+    import shlex
+
+    from camopt.reporting import report
+
+    judged = doc.verdict
+    keep = [i for i, c in enumerate(judged.checks) if c.passed is False or c.at_limit]
+    rows = report.verdict_rows(judged.checks)
+    styles = ["red" if judged.checks[i].passed is False else "yellow" for i in keep]
+    if keep:
+        print_table(f"requirements not met or at their limit ({len(keep)} of "
+                    f"{len(rows)})", report.VERDICT_COLUMNS, [rows[i] for i in keep],
+                    numeric=[False, True, True, False, True], styles=styles)
+    if doc.pareto_summary:
+        p = doc.pareto_summary
+        out.print(escape(pareto_title(p)), highlight=False)
+    style = "green" if view.best.feasible else "bold red"
+    out.print(f"run's constraints: [{style}]{escape(report.status(view))}[/]", highlight=False)
+    print_repeats(doc, 0)
+    out.print(escape(f"details (design, metrics, repeats, reference): camopt show "
+                     f"{shlex.quote(view.path)}"), highlight=False)
+    print_closing(judged.short, judged.style, doc.next, doc.robust_yield)
+
+
+def print_closing(headline: str, style: str, next_line: str,
+                  robust_yield: RobustYield | None = None) -> None:
+    """The last lines of ``run``, ``show`` (and any command ending in a verdict): a rule,
+    the verdict in a line (its grade's colour), a robust run's yield against its target,
+    and the ``next:`` step."""
+    from camopt.reporting import report
+
+    out.rule(style="dim")
+    tone = f"bold {style}" if style else "bold"
+    out.print(f"[{tone}]verdict: {escape(headline)}[/]", highlight=False)
+    if robust_yield is not None:
+        out.print(escape(report.robust_text(robust_yield)), highlight=False)
+    out.print(f"[bold]{escape(next_line)}[/]", highlight=False)
 
 
 def print_verdict(judged: Verdict, title: str = "best design", *,
@@ -159,11 +207,9 @@ def print_verdict(judged: Verdict, title: str = "best design", *,
         style = "bold green" if met else "bold red" if met is False else "bold"
         out.print(f"[{style}]{escape(report.robust_text(robust_yield))}[/]",
                   highlight=False)
-    plain_pass = judged.verdict == "pass" and not judged.at_limit
-    style = ("bold green" if plain_pass else "bold yellow" if judged.verdict == "pass"
-             else "bold red")
-    out.print(f"[{style}]{escape(judged.sentence)}[/]", highlight=False)
-    if expected_yield:
+    style = f"bold {judged.style}" if judged.style else "bold"
+    out.print(f"[{style}]{escape(judged.headline)}[/]", highlight=False)
+    if expected_yield and judged.verdict != "pass":
         out.print(escape(report.yield_text(report.jsonable(expected_yield))),
                   highlight=False)
     rows = report.verdict_rows(judged.checks)
@@ -183,7 +229,7 @@ def print_pareto(doc: Mapping[str, Any]) -> None:
     """A Pareto run's front: objectives, extent and knee, and what the headline is."""
     from camopt.reporting import report
 
-    print_table(f"Pareto front: {doc['front_size']} feasible of {doc['designs']} designs",
+    print_table(pareto_title(doc),
                 report.PARETO_COLUMNS, report.pareto_rows(doc),
                 numeric=[False, False, True, True, True])
     if doc["knee"]:
@@ -191,6 +237,20 @@ def print_pareto(doc: Mapping[str, Any]) -> None:
         out.print(f"knee (nearest the ideal, objectives normalised): {escape(knee)}",
                   highlight=False)
     out.print(f"headline design below: {escape(doc['headline'])}", highlight=False)
+
+
+def pareto_title(doc: Mapping[str, Any]) -> str:
+    """``Pareto front: 12 feasible of 40 designs``, or what an empty front means beside
+    the headline design's verdict."""
+    if not doc["designs"]:
+        return ("Pareto front: none stored (the run's table is empty); the verdict is the "
+                "headline design's alone")
+    if not doc["front_size"]:
+        which = ("the final design is" if doc["designs"] == 1
+                 else f"none of the {doc['designs']} final designs is")
+        return (f"Pareto front: empty ({which} not feasible); the verdict is the headline "
+                "design's (the best the search saw)")
+    return f"Pareto front: {doc['front_size']} feasible of {doc['designs']} designs"
 
 
 def print_best(summary: Summary) -> None:
@@ -233,7 +293,7 @@ def print_repeats(doc: ShowView, rows: int | None) -> None:
         line += (f"; objective best {cell(min(stats))}, median "
                  f"{cell(float(sorted(stats)[len(stats) // 2]))}, worst {cell(max(stats))}")
     out.print(line, highlight=False)
-    if len(reps) <= 1:
+    if len(reps) <= 1 or rows == 0:
         return
     shown = reps if rows is None else reps[:rows]
     title = "repeats (repeat k: child k of SeedSequence(run.seed))"
@@ -281,18 +341,18 @@ def print_fitted(title: str, rows: list[dict[str, Any]], columns: list[str],
 def print_verdicts(verdicts: Sequence[Verdict], names: Sequence[str]) -> None:
     """Each run's verdict in words, then requirement | limit | one value per run (3
     significant digits, with pass, FAIL or at limit)."""
-    from camopt.core.requirements import engineering
+    from camopt.core.requirements import value_text
     from camopt.reporting import report
 
     for name, judged in zip(names, verdicts):
-        style = "green" if judged.verdict == "pass" else "bold red"
-        out.print(f"{escape(name)}: [{style}]{escape(judged.sentence)}[/]", highlight=False)
+        style = f"bold {judged.style}" if judged.style else "bold"
+        out.print(f"{escape(name)}: [{style}]{escape(judged.headline)}[/]", highlight=False)
     rows: dict[str, list[str]] = {}
     for k, judged in enumerate(verdicts):
         for c, cells in zip(judged.checks, report.verdict_rows(judged.checks)):
             row = rows.setdefault(cells[0], [cells[0], cells[1], *("-" for _ in names)])
             value = c.value
-            shown = (f"{engineering(value)} {c.requirement.unit}".strip()
+            shown = (f"{value_text(c.requirement, value)} {c.requirement.unit}".strip()
                      if isinstance(value, float) and c.requirement.limit != "yes"
                      and value == value else cells[2])
             row[2 + k] = f"{shown} {cells[4]}"

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -19,12 +19,14 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
               format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
               ) -> None:
     """List the archives in a folder (default runs/), newest first: case, verdict (a run's
-    best design against its case's requirements, pass or fail; a sweep's cells done),
+    best design against its case's requirements: PASS at nominal, green at or above its
+    yield target and amber below it, or FAIL; a sweep's cells done), expected yield,
     objective and date."""
     from camopt import archive
     from camopt.archive.listing import list_archives
+    from camopt.core.requirements import GRADE_STYLES
     from camopt.errors import CamoptError
-    from camopt.reporting.report import format_value, verdict
+    from camopt.reporting.report import format_value, judged_yield, verdict
 
     with errors():
         rows = list_archives(folder)
@@ -32,7 +34,11 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
             if row["archive"] != "run" or row["verdict"].startswith(("file:", "damaged")):
                 continue
             try:  # the requirements' verdict (show's first line); feasibility when unreadable
-                row["verdict"] = verdict(archive.load_run(row["path"])).verdict or "-"
+                view = archive.load_run(row["path"])
+                judged = verdict(view)
+                y = judged_yield(view) or {}
+                row.update(verdict=judged.verdict or "-", verdict_grade=judged.grade,
+                           expected_yield=y.get("value"), yield_target=judged.yield_target)
             except CamoptError:
                 pass
     if format is Format.json:
@@ -41,10 +47,24 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
     if not rows:
         out.print(f"no archives in {escape(str(folder))}")
         return
+    words = {"pass": "PASS at nominal", "pass at nominal": "PASS at nominal", "fail": "FAIL"}
     cells = [[Path(r["path"]).name + ("" if r["archive"] == "run" else f" ({r['archive']})"),
-              r["case"], r["verdict"], format_value(r["objective"]),
+              r["case"], words.get(r.get("verdict_grade") or "", r["verdict"]),
+              yield_cell(r), format_value(r["objective"]),
               r["created"][:16].replace("T", " ")] for r in rows]
+    styles = [GRADE_STYLES.get(r.get("verdict_grade") or "") for r in rows]
     # columns when every name fits, else one archive per heading (never a split name)
-    print_table(f"{folder}: {len(rows)} archives, newest first (times UTC)",
-                ["archive", "case", "verdict", "objective", "created"], cells,
-                numeric=[False, False, False, True, False])
+    print_table(f"{folder}: {len(rows)} archives, newest first (times UTC; green: passes "
+                "at nominal with its yield at or above target, amber: below it)",
+                ["archive", "case", "verdict", "yield", "objective", "created"], cells,
+                numeric=[False, False, False, True, True, False], styles=styles)
+
+
+def yield_cell(row: dict[str, Any]) -> str:
+    """``96.3 %``, ``1.3 % < 95 %`` below the yield target, ``-`` without an estimate."""
+    value, target = row.get("expected_yield"), row.get("yield_target")
+    if value is None:
+        return "-"
+    if target is not None and value < target:
+        return f"{100 * value:.1f} % < {100 * target:g} %"
+    return f"{100 * value:.1f} %"

@@ -28,6 +28,9 @@ def run(
     force: Annotated[bool, typer.Option(help="overwrite an existing --out")] = False,
     quiet: Annotated[bool, typer.Option(help="no progress bar or summary; print the path")]
     = False,
+    verbose: Annotated[bool, typer.Option(
+        "--verbose", "-v", help="print the whole summary (as camopt show), not the short one")]
+    = False,
     jobs: Annotated[int, typer.Option(min=1, max=256, help="worker processes for the "
                                       "repeats (or one repeat's starts); same results")] = 1,
 ) -> None:
@@ -59,7 +62,7 @@ def run(
     if quiet:
         print(visible(path))  # plain print: a script reads exactly the path, never wrapped
     else:
-        print_show(archive.load_run(path), rows=10)
+        print_show(archive.load_run(path), rows=10, brief=not verbose)
     kept = f"{len(record.repeats)} finished of {config.run.repeats} repeats in {path}"
     if record.failure:
         print(visible(f"error: {case}: --jobs: {record.failure}; kept the {kept} (marked "
@@ -106,34 +109,74 @@ def claim_out(path: Path, force: bool, resuming: bool = False,
         print(f"note: --force: replaced {visible(path)} ({replaced})", file=sys.stderr)
 
 
+PLAIN_EVERY_S = 60.0
+"""Without a terminal (a pipe, a log file), one plain progress line this often."""
+
+
+def progress_line(p: Any, elapsed: float) -> str:
+    """``repeat 2/5: 43 % of the budget (evaluations), about 3 min left; best objective_j
+    0.0123`` (or ``infeasible, worst: <constraint>``): the share done on the binding
+    budget over all repeats, and a time left from the time so far."""
+    frac = p.fraction
+    if frac is None:
+        return f"repeat {p.repeat + 1}/{p.repeats}: iteration {p.iteration}; {p.best_text}"
+    done = (p.repeat + frac) / max(p.repeats, 1)
+    left = elapsed * (1 - done) / done if done > 0 else None
+    eta = "" if left is None else f", about {_duration(left)} left"
+    return (f"repeat {p.repeat + 1}/{p.repeats}: {100 * done:.0f} % of the budget"
+            f"{eta}; {p.best_text}")
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
 @contextlib.contextmanager
 def progress(quiet: bool) -> Iterator[Any]:
-    """Rich progress bars on stderr when it is a terminal: the search (repeats x
-    iterations) and a robust run's final check (designs x draws, rows). Yields the two
-    callbacks (None, None with ``--quiet`` or without a terminal); one live display."""
-    if quiet or not err.is_terminal:
+    """Progress on stderr, measured on the binding budget (iterations, evaluations or
+    seconds: ``Progress.fraction``) over all repeats, with the time left and the best
+    feasible value so far or ``infeasible, worst: <constraint>``: a rich bar when stderr is
+    a terminal, else one plain line a minute (:data:`PLAIN_EVERY_S`). Yields the search's
+    callback and a robust run's final-check callback (None, None with ``--quiet``)."""
+    import time
+
+    if quiet:
         yield None, None
+        return
+    start = time.monotonic()
+    if not err.is_terminal:
+        last = [start]
+
+        def plain(p: Any) -> None:
+            now = time.monotonic()
+            if now - last[0] >= PLAIN_EVERY_S:
+                last[0] = now
+                print(f"camopt run: {progress_line(p, now - start)}", file=sys.stderr,
+                      flush=True)
+
+        yield plain, None
         return
     from rich import progress as rp
 
-    columns = (rp.TextColumn("{task.description}"), rp.BarColumn(), rp.MofNCompleteColumn(),
-               rp.TextColumn("best {task.fields[best]}"), rp.TimeElapsedColumn())
-    # the objective named: a robust run's is the normalised yield margin (<= 0 met), not
-    # the case's quantity
+    columns = (rp.TextColumn("{task.description}"), rp.BarColumn(),
+               rp.TaskProgressColumn(), rp.TextColumn("{task.fields[best]}"),
+               rp.TimeElapsedColumn(), rp.TimeRemainingColumn())
     with rp.Progress(*columns, console=err, transient=True) as bar:
-        task = bar.add_task("solving", total=None, best="-")
+        task = bar.add_task("solving", total=None, best="")
 
         def callback(p: Any) -> None:
-            total = p.repeats * (p.max_iterations or 1)
-            done = p.repeat * (p.max_iterations or 1) + p.iteration
-            bar.update(task, total=total, completed=done,
-                       best=f"{p.objective_name} {p.best_objective:.6g}",
-                       description=f"repeat {p.repeat + 1}/{p.repeats}")
+            frac = p.fraction
+            done = None if frac is None else (p.repeat + frac) / max(p.repeats, 1)
+            bar.update(task, total=None if done is None else 1000,
+                       completed=0 if done is None else round(1000 * done),
+                       best=p.best_text, description=f"repeat {p.repeat + 1}/{p.repeats}")
 
         def check(done: int, total: int) -> None:
-            bar.update(task, total=total, completed=done, best="-",
+            bar.update(task, total=total, completed=done, best="",
                        description="robust final check (samples)")
 
         yield callback, check
-
-

@@ -178,7 +178,7 @@ def _read(path: Path) -> tuple[str, dict[str, Any]]:
 
 def _validate(
     model: type[BaseModel], data: Any, section: str, source: str, overridden: set[str],
-    context: dict[str, Any] | None = None,
+    context: dict[str, Any] | None = None, origin: str = "--set",
 ) -> Any:
     try:
         return model.model_validate(data, context=context)
@@ -197,8 +197,8 @@ def _validate(
             if ("input" in error and error["type"] not in ("model_type", "dict_type")
                     and not isinstance(error["input"], dict) and len(shown) <= 80):
                 what += f" (got {shown})"
-        origin = "--set" if any(loc == k or loc.startswith(k + ".") for k in overridden) else source
-        raise ConfigError(origin, loc, what) from None
+        blamed = any(loc == k or loc.startswith(k + ".") for k in overridden)
+        raise ConfigError(origin if blamed else source, loc, what) from None
 
 
 def _keys_at(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
@@ -314,9 +314,13 @@ def load_config(
             hint = did_you_mean(key.split(".")[0], SECTIONS)
             raise ConfigError("--set", key, f"unknown section{hint}; expected one of {expected}")
         apply_override(data, key, value)
-    loaded = validate_data(data, solvers, cases, source, text, tuple(overrides),
-                           {key for key, _ in parsed})
-    return replace(loaded, bases=bases)
+    loaded = replace(validate_data(data, solvers, cases, source, text, tuple(overrides),
+                                   {key for key, _ in parsed}), bases=bases)
+    if loaded.run.next_config is not None and loaded.inherited("run", "next_config"):
+        # a base's pointer to the config that requires more names this file, or its sibling
+        loaded.data.get("run", {}).pop("next_config", None)
+        loaded = replace(loaded, run=loaded.run.model_copy(update={"next_config": None}))
+    return loaded
 
 
 def validate_data(
@@ -327,8 +331,11 @@ def validate_data(
     text: str = "",
     overrides: tuple[str, ...] = (),
     overridden: set[str] | None = None,
+    origin: str = "--set",
 ) -> LoadedConfig:
-    """Validate already-parsed case-file data (a sweep cell's config, for instance)."""
+    """Validate already-parsed case-file data (a sweep cell's config, for instance); an
+    error in an ``overridden`` key is blamed on ``origin`` (the option that set it:
+    ``--set``, ``--grid``), not on the file."""
     overridden = overridden or set()
     for key in data:
         if key not in SECTIONS:
@@ -346,10 +353,13 @@ def validate_data(
         text=text,
         overrides=overrides,
         case=_validate(case_model, data["case"], "case", source, overridden,
-                       {PLAUSIBILITY_KEY: plausible}),
-        solver=_validate(solver_model, data["solver"], "solver", source, overridden),
-        run=_validate(RunSection, data.get("run", {}), "run", source, overridden),
+                       {PLAUSIBILITY_KEY: plausible}, origin),
+        solver=_validate(solver_model, data["solver"], "solver", source, overridden,
+                         origin=origin),
+        run=_validate(RunSection, data.get("run", {}), "run", source, overridden,
+                      origin=origin),
         data=data,
         robust=(None if data.get("robust") is None else
-                _validate(RobustSection, data["robust"], "robust", source, overridden)),
+                _validate(RobustSection, data["robust"], "robust", source, overridden,
+                          origin=origin)),
     )

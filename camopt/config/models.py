@@ -189,6 +189,10 @@ class RunSection(Strict):
     check_plausibility: bool = Field(
         True, description="reject case values outside the physical ranges of the case's "
         "config model (false: accept them)")
+    next_config: str | None = Field(
+        None, description="a case file (path relative to this one) that requires what this "
+        "run's search leaves out: show's next: line names it when the best design fails a "
+        "requirement (not inherited through extends)")
 
     @field_validator("name")
     @classmethod

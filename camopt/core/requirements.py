@@ -11,20 +11,33 @@ The requirements are not the run's constraints: a run may leave a requirement ou
 search (the paper's VCB problem does not ask the cam to latch) and then its optimum fails
 the requirement; the verdict says so in words.
 
-**One feasibility rule** (docs/design.md, "Feasibility"): a quantity meets its limit when it
-lies beyond it by no more than :data:`~camopt.core.problem.FEASIBILITY_TOL` times its scale
-(:attr:`Requirement.tol_scale`: the unit the run's normalised constraint divides by, by
-default the limit's magnitude and at least 1). The run's constraints are normalised so that
-their scale is 1 (``g <= FEASIBILITY_TOL``), and success (``sweep --check``) is built on the
-same feasibility, so a requirement that mirrors a constraint passes exactly when the
-constraint holds. A quantity the design does not reach (NaN: a stroke never finished) is
-"n/a" and fails.
+**One feasibility rule, at the printed resolution**: a requirement is judged at the
+resolution its value is printed with, :data:`RESOLUTION_DIGITS` significant digits of its
+scale (:attr:`Requirement.tol_scale`: by default the limit's magnitude, at least 1 in the
+unit; 100 for a percentage). A quantity meets its limit when it lies beyond it by less than
+half that resolution (:attr:`Requirement.resolution`): 0.00005 mm on an 18 ± 0.2 mm rod
+travel, 0.0005 MPa on a 1194 MPa stress, 0.000005 m/s on a 1.1 m/s velocity, far below
+anything a workshop or an analyser measures; a count (:attr:`Requirement.count`) is
+judged exactly. So a value printed at that resolution meets its printed limit exactly when
+it passes: never a FAIL whose printed value meets its limit, never a margin in ``e-``
+notation (:func:`value_text`, :func:`margin_text`). The run's own constraints are
+normalised and held to :data:`~camopt.core.problem.FEASIBILITY_TOL` (1e-9 of their
+scale, round-off), which is stricter: a design the run calls feasible meets every
+requirement that mirrors one of its constraints. The expected yield judges every draw by
+the same rule (:func:`all_pass`). A quantity the design does not reach (NaN: a stroke
+never finished) is "n/a" and fails.
 
 **At limit**: a passing requirement whose margin is smaller than half the 5-95 % spread of
 its quantity under the case's default tolerances (the run's expected-yield estimate), or,
 without that spread, smaller than :data:`AT_LIMIT_SHARE` of its allowed band (a two-sided
 limit) or of its scale (a one-sided one), is flagged "at limit": met at nominal, not by
-parts made to tolerance.
+parts made to tolerance. A count is never at its limit (``0 <= 0`` is met exactly); a flag
+is when fewer than :data:`AT_LIMIT_YIELD` of the draws keep it.
+
+**Vocabulary** (every command, page and JSON): ``PASS at nominal`` (the nominal design
+meets every requirement) always with the expected yield beside it, and green only when
+the yield's 95 % interval lies at or above the case's yield target and no requirement is
+at its limit (:func:`grade`); else amber; ``FAIL`` in red.
 """
 
 from __future__ import annotations
@@ -37,11 +50,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.core.problem import FEASIBILITY_TOL
-
-PASS_TOL = FEASIBILITY_TOL
-"""Round-off allowance relative to the requirement's scale: a design exactly at its limit
-(an active constraint, solved to machine precision) passes; the run's constraints' rule."""
+RESOLUTION_DIGITS = 6
+"""Significant digits of a requirement's scale it is judged and printed at (module
+docstring): the resolution of the tables' values."""
+DEFAULT_YIELD_TARGET = 0.95
+"""The yield target of a case without a ``[robust]`` table (``robust.yield_target``'s
+default): below it a design that passes at nominal is amber, not green."""
 AT_LIMIT_SHARE = 0.01
 """Without a tolerance spread, a margin below 1 % of the allowed band (or of the scale of a
 one-sided limit) counts as at the limit: nothing a workshop can hold is that fine."""
@@ -52,6 +66,19 @@ tolerance draws keep it."""
 
 def _fmt(value: float) -> str:
     return f"{value:.6g}"
+
+
+def positional(value: float, decimals: int) -> str:
+    """``value`` with ``decimals`` decimals, never in ``e`` notation, trailing zeros
+    dropped (``1.10000`` -> ``1.1``, ``-0.0`` -> ``0``)."""
+    text = f"{value:.{max(0, decimals)}f}"
+    if "." in text:
+        text = text.rstrip("0").rstrip(".")
+    return "0" if text in ("-0", "") else text
+
+
+def _decimals(step: float) -> int:
+    return max(0, -math.floor(math.log10(step)))
 
 
 def engineering(value: float) -> str:
@@ -79,10 +106,22 @@ class Requirement:
     scale: float | None = None
     """The quantity's scale in ``unit`` (what the run's normalised constraint on it divides
     by: 100 for a percentage); None: the limit's magnitude, at least 1."""
+    count: bool = False
+    """The quantity is a whole number (parameter sets that fail, coils): judged exactly,
+    never "at limit"."""
+
+    @property
+    def resolution(self) -> float:
+        """The step the requirement is judged and printed at, in ``unit``: one unit of the
+        :data:`RESOLUTION_DIGITS`-th significant digit of :attr:`tol_scale` (1 for a
+        count)."""
+        if self.count:
+            return 1.0
+        return 10.0 ** (math.floor(math.log10(self.tol_scale)) - (RESOLUTION_DIGITS - 1))
 
     @property
     def tol_scale(self) -> float:
-        """The scale :data:`PASS_TOL` is relative to (see :attr:`scale`)."""
+        """The scale the resolution is relative to (see :attr:`scale`)."""
         if self.scale is not None:
             return float(self.scale)
         return max([1.0, *(abs(b) for b in (self.lower, self.upper) if math.isfinite(b))])
@@ -125,7 +164,7 @@ class Requirement:
         """Bool array: the value meets the requirement (NaN fails)."""
         m = self.margin(value)
         with np.errstate(invalid="ignore"):
-            return m >= -PASS_TOL * self.tol_scale
+            return m >= -0.5 * self.resolution
 
     def at_limit(self, margin: float, spread: float | None = None,
                  sampled_yield: float | None = None) -> bool:
@@ -136,9 +175,46 @@ class Requirement:
         :data:`AT_LIMIT_YIELD`."""
         if self.flag:
             return sampled_yield is not None and sampled_yield < AT_LIMIT_YIELD
+        if self.count:
+            return False
         if spread is not None and math.isfinite(spread) and spread > 0:
             return margin < spread
         return margin < AT_LIMIT_SHARE * (self.band or self.tol_scale)
+
+
+def value_text(r: Requirement, value: float) -> str:
+    """``value`` as the verdict prints it, without unit: at the requirement's resolution
+    (so it meets the printed limit exactly when it passes), or, for a small value well
+    inside its limit, to 3 significant digits (``0.0000181``); never in ``e`` notation;
+    ``inf``, ``n/a`` for NaN."""
+    if math.isnan(value):
+        return "n/a"
+    if math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    if r.count:
+        return positional(value, 0)
+    res = r.resolution
+    text = positional(round(value / res) * res, _decimals(res))
+    inside = float(r.margin(value)) > res
+    if value and inside and abs(value) < 100 * res:  # '0.00002' says less than '0.0000181'
+        return positional(float(f"{value:.3g}"), 2 - math.floor(math.log10(abs(value))))
+    return text
+
+
+def margin_text(r: Requirement, margin: float) -> str:
+    """A margin to 3 significant digits, never in ``e`` notation and never rounded to 0
+    unless it is below half the requirement's resolution (a pass at its limit): a failing
+    margin shows its excess (``-0.0000061``)."""
+    if math.isnan(margin):
+        return "n/a"
+    if math.isinf(margin):
+        return "inf" if margin > 0 else "-inf"
+    if abs(margin) < 0.5 * r.resolution:
+        return "0"
+    if r.count:
+        return positional(margin, 0)
+    digits = 2 - math.floor(math.log10(abs(margin)))
+    return positional(float(f"{margin:.3g}"), digits)
 
 
 @dataclass(frozen=True)
@@ -180,7 +256,7 @@ class Check:
             return r.failing or f"not {r.name}"
         unit = f" {r.unit}" if r.unit else ""
         value = ("n/a (the design does not reach it)" if self.value is None
-                 or math.isnan(self.value) else f"{_fmt(self.value)}{unit}")
+                 or math.isnan(self.value) else f"{value_text(r, self.value)}{unit}")
         text = f"{r.name} {value}, required {r.limit}"
         return f"{r.failing}: {text}" if r.failing else text
 
@@ -221,20 +297,59 @@ def verdict(checks: Sequence[Check]) -> str:
     return "pass" if evaluated and all(c.passed for c in evaluated) else "fail"
 
 
-def sentence(checks: Sequence[Check]) -> str:
-    """The verdict in words: ``PASS: meets all 6 requirements`` or ``FAIL: does not latch;
-    closing velocity 1.31 m/s, required 0.9 ± 0.2 m/s``."""
+def sentence(checks: Sequence[Check], nominal: bool = True) -> str:
+    """The verdict in words: ``PASS at nominal: meets all 6 requirements`` (``PASS`` when
+    not ``nominal``: a sweep's success rates), ``PASS at nominal: meets all 6
+    requirements, 2 at their limit (...)`` or ``FAIL: does not latch; closing velocity
+    1.31 m/s, required 0.9 ± 0.2 m/s``."""
     failed = [c for c in checks if c.passed is False]
     evaluated = sum(c.passed is not None for c in checks)
     if not evaluated:
         return "FAIL: no requirement could be evaluated"
     if not failed:
+        head = "PASS at nominal" if nominal else "PASS"
+        n = f"meets {'all ' if evaluated > 1 else ''}{evaluated} requirement" + (
+            "s" if evaluated > 1 else "")
         close = [c.requirement.name for c in checks if c.at_limit]
         if close:
-            return (f"PASS at nominal: {len(close)} requirement{'s' if len(close) > 1 else ''}"
-                    f" at {'their' if len(close) > 1 else 'its'} limit ({', '.join(close)})")
-        return f"PASS: meets all {evaluated} requirements"
+            return (f"{head}: {n}, {len(close)} at {'their' if len(close) > 1 else 'its'} "
+                    f"limit ({'; '.join(close)})")
+        return f"{head}: {n}"
     return "FAIL: " + "; ".join(c.words for c in failed)
+
+
+def short_sentence(checks: Sequence[Check]) -> str:
+    """The verdict in one short line, the requirements named only: ``FAIL: 3 of 14
+    requirements (cam latches at the end of the stroke, ...)`` or ``PASS at nominal:
+    meets all 6 requirements``."""
+    failed = [c.requirement.name for c in checks if c.passed is False]
+    evaluated = sum(c.passed is not None for c in checks)
+    if not evaluated or not failed:
+        return sentence(checks).split(" (", 1)[0]
+    return f"FAIL: {len(failed)} of {evaluated} requirements ({'; '.join(failed)})"
+
+
+GRADES = ("pass", "pass at nominal", "fail")
+"""The verdict's grades (JSON ``verdict_grade``): ``pass`` (green: meets every requirement
+at nominal, none at its limit, expected yield at or above the yield target), ``pass at
+nominal`` (amber: meets them at nominal, but at a limit, below the target or with no
+yield estimate) and ``fail`` (red)."""
+GRADE_STYLES = {"pass": "green", "pass at nominal": "yellow", "fail": "red"}
+"""The grades' colours on a terminal (amber is rich's ``yellow``)."""
+
+
+def grade(verdict: str | None, at_limit: bool, expected: float | None,
+          target: float | None) -> str | None:
+    """The verdict's grade (:data:`GRADES`) from the nominal ``verdict`` ("pass"/"fail"),
+    whether a requirement is at its limit, the ``expected`` yield (None: not estimated) and
+    the yield ``target``; None when not judged."""
+    if verdict is None:
+        return None
+    if verdict != "pass":
+        return "fail"
+    if at_limit or expected is None or target is None or expected < target:
+        return "pass at nominal"
+    return "pass"
 
 
 def yields(requirements: Sequence[Requirement], samples: Mapping[str, NDArray],

@@ -50,6 +50,32 @@ class Progress:
     max_iterations: int | None
     best_objective: float
     objective_name: str = "objective"  # the problem's (a robust run's: yield_margin)
+    nfev: int = 0
+    max_nfev: int | None = None
+    """The evaluation budget: ``run.max_evaluations`` or the solver's ``evaluations``."""
+    elapsed_s: float = 0.0
+    max_seconds: float | None = None
+    feasible: bool = True
+    """Whether the best design so far is feasible; else ``worst`` names the constraint it
+    violates most."""
+    worst: str = ""
+
+    @property
+    def fraction(self) -> float | None:
+        """This repeat's share done on its binding budget (iterations, evaluations or
+        seconds: whichever is nearest its end); None when no budget is known."""
+        shares = [self.iteration / self.max_iterations if self.max_iterations else None,
+                  self.nfev / self.max_nfev if self.max_nfev else None,
+                  self.elapsed_s / self.max_seconds if self.max_seconds else None]
+        known = [x for x in shares if x is not None]
+        return min(1.0, max(known)) if known else None
+
+    @property
+    def best_text(self) -> str:
+        """``best objective_j 0.0123`` or ``infeasible, worst: rod_travel``."""
+        if not self.feasible:
+            return f"infeasible, worst: {self.worst or '-'}"
+        return f"best {self.objective_name} {self.best_objective:.6g}"
 
 
 def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
@@ -85,8 +111,14 @@ def run_repeat(problem: Problem, solver_cls: type[Solver], config: LoadedConfig,
         best_v.append(float(bev.violation[0]))
         mean_f.append(float(finite.mean()) if finite.size else np.inf)
         if callback:
+            g = np.asarray(bev.g, dtype=float).reshape(-1)
+            feasible = bool(bev.feasible[0])
+            worst = (problem.constraint_names[int(np.nanargmax(g))]
+                     if not feasible and g.size and np.isfinite(g).any() else "")
             callback(Progress(index, repeats, solver.nit, solver.max_iterations(), best_f[-1],
-                              problem.objective_name))
+                              problem.objective_name, solver.nfev,
+                              max_nfev or getattr(solver.options, "evaluations", None),
+                              time.perf_counter() - start, max_s, feasible, worst))
     x, bev = solver.best()
     if stochastic is not None:  # the solver's best and the finalists on fresh draws
         x, bev = stochastic.select(x, robust.repeat_seed(child, 1))

@@ -31,9 +31,12 @@ def load(path: str | Path, overrides: Sequence[str] = ()) -> LoadedConfig:
     return load_config(path, solver_options(), case_configs(), overrides)
 
 
-def validate(data: dict[str, Any], source: str = "<data>") -> LoadedConfig:
-    """Validate parsed case-file data (a sweep cell's) against the registries."""
-    return validate_data(data, solver_options(), case_configs(), source)
+def validate(data: dict[str, Any], source: str = "<data>", grid: Sequence[str] = ()
+             ) -> LoadedConfig:
+    """Validate parsed case-file data (a sweep cell's) against the registries; an error in
+    one of the ``grid``'s keys is blamed on ``--grid``."""
+    return validate_data(data, solver_options(), case_configs(), source,
+                         overridden=set(grid), origin="--grid")
 
 
 def prepare(config: LoadedConfig) -> tuple[Problem, type[Solver]]:

@@ -55,17 +55,19 @@ def validate_spec(spec: SweepSpec) -> list[LoadedConfig]:
         raise ConfigError("--grid", "cells", f"{n_cells} grid points x seeds; at most "
                           f"{MAX_CELLS} cells in one sweep (every cell is held in "
                           "memory)")
-    return [_prepared(spec.point_data(point), spec.source)[0] for point in spec.points()]
+    return [_prepared(spec.point_data(point), spec.source, tuple(point))[0]
+            for point in spec.points()]
 
 
-def _prepared(data: dict, source: str) -> tuple[LoadedConfig, Problem, type[Solver]]:
+def _prepared(data: dict, source: str, grid: tuple[str, ...] = ()
+              ) -> tuple[LoadedConfig, Problem, type[Solver]]:
     """The validated config, problem and solver class of a grid point, built once per
     process (cells of one point share them; problems hold no run state): validating the
     spec builds them in the parent, whose forked workers inherit them."""
     key = json.dumps([source, data], sort_keys=True, default=str)
     hit = _PREPARED.get(key)
     if hit is None:
-        cfg = validate(data, source)
+        cfg = validate(data, source, grid)
         problem, solver_cls = prepare(cfg)
         hit = _PREPARED[key] = (cfg, problem, solver_cls)
         if len(_PREPARED) > _PREPARED_MAX:

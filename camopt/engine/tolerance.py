@@ -434,7 +434,10 @@ def expected_yield(run: RunView, samples: int = EXPECTED_YIELD_SAMPLES) -> dict[
     except CamoptError as exc:
         return {"value": None, "low": None, "high": None, "samples": 0, "seed": seed,
                 "reason": str(exc).split(": ", 2)[-1], "requirements": []}
-    columns = {**t.metric_columns(t.samples), "feasible": t.samples.feasible.astype(float)}
+    # tied to the nominal verdict: a best design the run itself calls infeasible (a
+    # solver's own verdict, such as Newton's unconverged starts) fails in every draw
+    feasible = t.samples.feasible & bool(run.best.feasible)
+    columns = {**t.metric_columns(t.samples), "feasible": feasible.astype(float)}
     ok = all_pass(run_requirements(run), columns) & ~t.outside
     rate = success_rate(int(ok.sum()), samples)
     return {"value": rate["rate"], "low": rate["ci_low"], "high": rate["ci_high"],

@@ -45,6 +45,19 @@ class DashboardRow:
     seed: int | None
     report: str | None
     values: dict[str, str] = field(default_factory=dict)
+    grade: str | None = None
+    """``pass`` (green), ``pass at nominal`` (amber: below the yield target or at a limit),
+    ``fail`` (red); None when not a judged run (:attr:`camopt.reporting.views.Verdict.grade`)."""
+    yield_target: float | None = None
+    headline: str = ""
+    """The verdict in words with the expected yield beside a pass (the cell's tooltip)."""
+
+    @property
+    def verdict_text(self) -> str:
+        """The verdict cell: ``PASS at nominal`` or ``FAIL`` for a judged run, else the
+        listing's words (a sweep's cells done, why a file cannot be read)."""
+        return {"pass": "PASS at nominal", "pass at nominal": "PASS at nominal",
+                "fail": "FAIL"}.get(self.grade or "", self.verdict)
 
 
 def flatten(prefix: str, value: Any, out: dict[str, str]) -> dict[str, str]:
@@ -72,13 +85,14 @@ def _finite(x: Any) -> float | None:
 
 
 def expected_yield(view: Any) -> float | None:
-    """The run's expected yield: an ``expected_yield`` the archive stores, else a robust
-    run's yield on its final check's fresh draws; None when it has neither."""
-    stored = getattr(view, "expected_yield", None)
-    if isinstance(stored, (int, float)):
-        return float(stored)
-    check = (view.robust_check or {}).get("robust") or {}
-    return _finite(check.get("yield"))
+    """The run's expected yield: a robust run's yield on its final check's fresh draws,
+    else the ``expected_yield`` the archive stores (its ``value``); None when it has
+    neither (:func:`camopt.reporting.report.judged_yield`, what the verdict is graded
+    on)."""
+    from camopt.reporting.report import judged_yield
+
+    judged = judged_yield(view) or {}
+    return _finite(judged.get("value"))
 
 
 def run_row(path: Path, listed: dict[str, Any]) -> DashboardRow:
@@ -104,7 +118,8 @@ def run_row(path: Path, listed: dict[str, Any]) -> DashboardRow:
         verdict=judged.verdict or listed["verdict"], expected_yield=expected_yield(view),
         objective_name=view.objective_name, objective=_finite(view.best.objective),
         created=view.created[:16].replace("T", " "), seed=view.run.get("seed"),
-        report=_report(path), values=values)
+        report=_report(path), values=values, grade=judged.grade,
+        yield_target=judged.yield_target, headline=judged.headline)
 
 
 def _report(path: Path) -> str | None:
@@ -149,4 +164,5 @@ def render(folder: Path) -> str:
 
     env.filters["num"] = format_value
     return env.get_template("dashboard.html.j2").render(
-        folder=str(folder), rows=found, data=[asdict(r) for r in found])
+        folder=str(folder), rows=found,
+        data=[{**asdict(r), "verdict_text": r.verdict_text} for r in found])

@@ -99,7 +99,9 @@ def verdict_context(judged: Verdict, robust: RobustYield | None = None,
     (``judged``: a run's or a sweep's verdict)."""
     classes = ["bad" if c.passed is False else "at-limit" if c.at_limit else ""
                for c in judged.checks]
-    return {"verdict": judged.verdict, "verdict_sentence": judged.sentence,
+    return {"verdict": judged.verdict, "verdict_sentence": judged.headline,
+            "verdict_class": {"pass": "ok", "pass at nominal": "limit", "fail": "bad"}.get(
+                judged.grade or "", ""),
             "at_limit": judged.at_limit,
             "robust_yield": report.robust_text(robust) if robust else "",
             "robust_met": robust.meets_target if robust else None,

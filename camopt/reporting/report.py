@@ -13,12 +13,15 @@ import numpy as np
 from camopt.cases import run_requirements
 from camopt.core import pareto, stats
 from camopt.core.requirements import (
+    DEFAULT_YIELD_TARGET,
     Check,
     Requirement,
     Spread,
     check,
-    engineering,
+    margin_text,
+    positional,
     sentence,
+    value_text,
 )
 from camopt.core.requirements import verdict as verdict_of
 from camopt.core.runview import RunView, design_values
@@ -250,38 +253,62 @@ def _share(value: float | None) -> float:
     return math.nan if value is None else float(value)
 
 
-LOW_YIELD = 0.9
-"""Below this expected yield a passing design is not ready to build: ``next`` points to
-tolerance analysis and a robust run."""
-
-
 def next_step(run: RunView, judged: Verdict) -> str:
-    """One line saying what to do next, fitting the result: a robust config (a sibling
-    ``*_robust.toml`` of the run's case file when there is one), tolerance analysis, more
-    budget, or the report. Paths are quoted for a shell where they need it (a space, ';')."""
+    """One line saying what to do next, fitting the result: for a failing design, the case
+    file that requires what the search left out (``run.next_config``) or, when every
+    repeat ended infeasible (more budget rarely helps then), the robust config beside the
+    run's (``*_robust.toml``); for a pass below the yield target or at a limit, tolerance
+    analysis and the robust config; for a green pass, the report and the DXF. Paths are
+    quoted for a shell where they need it (a space, ';')."""
     import shlex
 
     path = shlex.quote(run.path)
+    robust_cfg = robust_sibling(run)
+    robust_run = (f"camopt run {shlex.quote(robust_cfg)}" if robust_cfg
+                  else "a [robust] table in the case file (docs/tolerance.md)")
     robust_yield_doc = robust_yield(run)
     if robust_yield_doc is not None:
         if robust_yield_doc.meets_target is False:
-            return (f"next: the robust yield is below its target: more budget (--set "
-                    f"{budget_key(run)}=...), another tolerance_class (camopt tolerance "
-                    f"{path} --allocate), or a lower robust.yield_target")
+            return (f"next: the robust yield is below its target: another tolerance_class "
+                    f"(camopt tolerance {path} --allocate), a lower robust.yield_target or "
+                    f"more budget (--set {budget_key(run)}=...)")
         return f"next: camopt report {path} (or camopt export {path} --format dxf)"
     if not run.best.feasible:
-        return (f"next: no feasible design: more budget (--set {budget_key(run)}=... or "
-                "--repeats) or a wider bound on the variables the constraints push against")
+        why = (f"violates {', '.join(run.best.violated[:2])}" if run.best.violated
+               else status(run).removeprefix("INFEASIBLE: "))
+        if len(run.repeats) > 1:
+            return (f"next: every repeat ended infeasible ({why}): more budget "
+                    f"rarely helps; for parts made to tolerance: {robust_run}, else a wider "
+                    "bound on the variables the constraints push against")
+        return (f"next: no feasible design ({why}): more budget (--set "
+                f"{budget_key(run)}=... or --repeats) or a wider bound on the variables "
+                "the constraints push against")
     if judged.verdict != "pass":
+        required = next_config(run)
+        if required:
+            return (f"next: camopt run {shlex.quote(required)} (requires what this run's "
+                    "search leaves out)")
         return ("next: the run's search leaves out the requirements it fails: run a case "
                 "file that requires them (a config of this kind with them as constraints)")
-    y = expected(run)
-    if judged.at_limit or (y.get("value") is not None and y["value"] < LOW_YIELD):
-        robust_cfg = robust_sibling(run)
-        then = (f"camopt run {shlex.quote(robust_cfg)}" if robust_cfg
-                else "a [robust] table in the case file (docs/tolerance.md)")
-        return f"next: camopt tolerance {path} --samples 2000; for parts made to tolerance: {then}"
+    if judged.grade != "pass":
+        return (f"next: camopt tolerance {path} --samples 2000; for parts made to "
+                f"tolerance: {robust_run}")
     return f"next: camopt report {path} (or camopt export {path} --format dxf)"
+
+
+def next_config(run: RunView) -> str:
+    """The case file the run's ``run.next_config`` names (relative to the run's own case
+    file) when it exists and is not the run's own, else ''."""
+    from pathlib import Path
+
+    name = run.run.get("next_config")
+    if not name or not run.config_path:
+        return ""
+    own = Path(run.config_path)
+    target = own.parent / str(name)
+    if not target.is_file() or target.resolve() == own.resolve():
+        return ""
+    return str(target)
 
 
 def budget_key(run: RunView) -> str:
@@ -297,18 +324,53 @@ def budget_key(run: RunView) -> str:
 
 def robust_sibling(run: RunView) -> str:
     """The robust config beside the run's case file (``configs/vcb_velocity.toml`` ->
-    ``configs/vcb_velocity_robust.toml``, else ``<kind>_robust.toml``) when it exists,
-    else ''."""
+    ``configs/vcb_velocity_robust.toml``; else that of the file it ``extends``, else
+    ``<kind>_robust.toml``) when it exists, else ''."""
+    import sys
     from pathlib import Path
 
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
     if not run.config_path:
         return ""
     p = Path(run.config_path)
-    for stem in (p.stem, run.kind):  # fast_switch_de.toml -> fast_switch_robust.toml
+    stems = [p.stem]
+    try:
+        base = tomllib.loads(p.read_text(encoding="utf-8")).get("extends")
+    except (OSError, ValueError):
+        base = None
+    if isinstance(base, str):
+        stems.append(Path(base).stem)
+    for stem in (*stems, run.kind):  # fast_switch_de.toml -> fast_switch_robust.toml
         sibling = p.with_name(f"{stem}_robust.toml")
-        if sibling.is_file():
+        if sibling.is_file() and sibling.resolve() != p.resolve():
             return str(sibling)
     return ""
+
+
+def yield_target(run: RunView) -> float:
+    """The share of parts the case requires to meet every requirement: a robust run's
+    ``robust.yield_target``, else :data:`~camopt.core.requirements.DEFAULT_YIELD_TARGET`
+    (the same as ``[robust]``'s default)."""
+    target = (run.robust or {}).get("yield_target")
+    return float(target) if isinstance(target, (int, float)) else DEFAULT_YIELD_TARGET
+
+
+def judged_yield(run: RunView) -> dict[str, Any] | None:
+    """The yield a run's verdict is graded on (``value``, ``low``, ``high``,
+    ``samples``): a robust run's final check on fresh draws, else the stored expected
+    yield (or the one :func:`expected` made at show time; never a new one, as
+    :func:`spreads`); None when there is none."""
+    checked = (run.robust_check or {}).get("robust") or {}
+    if checked.get("yield") is not None:
+        return {"value": checked["yield"], "low": checked.get("yield_low"),
+                "high": checked.get("yield_high"), "samples": checked.get("samples")}
+    estimate = run.expected_yield or _ESTIMATED.get(run.path) or {}
+    if estimate.get("value") is None:
+        return None
+    return {k: estimate.get(k) for k in ("value", "low", "high", "samples")}
 
 
 def verdict(run: RunView, values: dict[str, Any] | None = None) -> Verdict:
@@ -319,7 +381,8 @@ def verdict(run: RunView, values: dict[str, Any] | None = None) -> Verdict:
     reqs = run_requirements(run, run.best.violated if values is None else None)
     checks = check(reqs, design_values(run, values), spreads(run) if values is None else None)
     if values is None:
-        return Verdict(tuple(checks), verdict_of(checks), sentence(checks))
+        return Verdict(tuple(checks), verdict_of(checks), sentence(checks),
+                       judged_yield(run), yield_target(run))
     # a reference known by a few reported values: judged on those, incomplete when some
     # requirement's quantity is not among them (verdict None unless it already fails)
     known = [c for c in checks if c.passed is not None]
@@ -347,15 +410,17 @@ def verdict_rows(checks: Sequence[Check]) -> list[list[str]]:
         flag = r.limit == "yes"
         unit = f" {r.unit}" if r.unit and raw is not None else ""
         value = (None if raw is None else bool(raw) if flag else raw)
-        rows.append([r.name, r.limit, _value_cell(value, flag, unit, c.passed),
+        rows.append([r.name, r.limit, _value_cell(c, value, flag, unit),
                      _margin_cell(c, flag, unit), _pass_cell(c)])
     return rows
 
 
-def _value_cell(value: Any, flag: bool, unit: str, passed: bool | None) -> str:
-    if value is None and passed is False:
-        return "n/a"  # NaN: a quantity the design does not reach (a stroke unfinished)
-    return format_value(value) + ("" if flag else unit)
+def _value_cell(c: Check, value: Any, flag: bool, unit: str) -> str:
+    if value is None:
+        return "n/a" if c.passed is False else "-"  # NaN: a quantity never reached
+    if flag:
+        return format_value(value)
+    return value_text(c.requirement, float(value)) + unit
 
 
 def _margin_cell(c: Check, flag: bool, unit: str) -> str:
@@ -363,8 +428,11 @@ def _margin_cell(c: Check, flag: bool, unit: str) -> str:
     if margin is None or flag:
         return "-"
     share = c.margin_share
-    text = engineering(margin) + unit
-    return text + (f" ({100 * share:.2g}%)" if share is not None else "")
+    text = margin_text(c.requirement, float(margin)) + unit
+    if share is None or text == "0" + unit:
+        return text
+    pct = float(f"{100 * share:.2g}")  # 2 significant digits, positional
+    return text + f" ({positional(pct, 1 - math.floor(math.log10(abs(pct))) if pct else 0)}%)"
 
 
 def _pass_cell(c: Check) -> str:
@@ -593,9 +661,10 @@ def rank_sweep(spec: Any, results: dict) -> SweepRanking:
             for r in ranking] if floor is not None else []
     checks = [check([q], {"success_rate": r.row["success_rate"]})[0]
               for q, r in zip(reqs, ranking)]
-    judged = Verdict(tuple(checks), verdict_of(checks), sentence(checks)) if checks \
+    judged = Verdict(tuple(checks), verdict_of(checks), sentence(checks, nominal=False),
+                     nominal=False) if checks \
         else Verdict((), None, "not judged: run.min_success_rate is not set (the sweep's "
-                     "--check needs it)")
+                     "--check needs it)", nominal=False)
     return SweepRanking(judged, spec.source, spec.grid, tuple(spec.seeds), tuple(ranking))
 
 

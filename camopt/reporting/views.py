@@ -20,7 +20,13 @@ from typing import Any
 
 import numpy as np
 
-from camopt.core.requirements import Check
+from camopt.core.requirements import (
+    GRADE_STYLES,
+    Check,
+    grade,
+    positional,
+    short_sentence,
+)
 from camopt.core.runview import BestView
 from camopt.core.stats import RunStatistics
 
@@ -46,11 +52,75 @@ def jsonable(value: Any) -> Any:
 @dataclass(frozen=True)
 class Verdict:
     """Requirements judged on one design: the checks (in the case's order), the overall
-    verdict (``"pass"``, ``"fail"``, or None: not judged) and the sentence saying it."""
+    verdict (``"pass"``, ``"fail"``, or None: not judged) and the sentence saying it; for
+    a run's best design, the expected yield (``value``, ``low``, ``high``, ``samples``:
+    the stored estimate, or a robust run's final check) and the yield target that grade
+    it (:func:`camopt.core.requirements.grade`); ``nominal`` False for a verdict on
+    something other than a design (a sweep's success rates: graded by its verdict)."""
 
     checks: tuple[Check, ...]
     verdict: str | None
     sentence: str
+    expected_yield: Mapping[str, Any] | None = None
+    yield_target: float | None = None
+    nominal: bool = True
+
+    @property
+    def yield_low(self) -> float | None:
+        """The low end of the expected yield's 95 % interval (what the grade compares with
+        the target), or None."""
+        y = self.expected_yield or {}
+        low = y.get("low", y.get("value"))
+        return None if low is None else float(low)
+
+    @property
+    def grade(self) -> str | None:
+        """``pass`` (green), ``pass at nominal`` (amber) or ``fail`` (red); None when not
+        judged. A pass is green only when no requirement is at its limit and the yield's
+        95 % interval lies at or above the target."""
+        if not self.nominal:
+            return self.verdict
+        return grade(self.verdict, bool(self.at_limit), self.yield_low, self.yield_target)
+
+    @property
+    def style(self) -> str:
+        """The grade's terminal colour (``green``, ``yellow`` for amber, ``red``)."""
+        return GRADE_STYLES.get(self.grade or "", "")
+
+    @property
+    def yield_words(self) -> str:
+        """``expected yield 1.3 % [0.4, 3.4] (target 95 %, below it)``; '' when not a
+        design's verdict."""
+        if not self.nominal:
+            return ""
+        y = self.expected_yield or {}
+        if y.get("value") is None:
+            return "expected yield not estimated"
+        text = f"expected yield {100 * float(y['value']):.1f} %"
+        if y.get("low") is not None and y.get("high") is not None:
+            text += f" [{100 * float(y['low']):.1f}, {100 * float(y['high']):.1f}]"
+        if self.yield_target is not None:
+            below = self.yield_low is not None and self.yield_low < self.yield_target
+            text += (f" (target {positional(100 * self.yield_target, 1)} %"
+                     f"{', below it' if below else ''})")
+        return text
+
+    @property
+    def headline(self) -> str:
+        """The verdict with the expected yield beside any pass: ``PASS at nominal: meets
+        all 6 requirements; expected yield 1.3 % [0.4, 3.4] (target 95 %, below it)``."""
+        if self.verdict == "pass" and self.nominal:
+            return f"{self.sentence}; {self.yield_words}"
+        return self.sentence
+
+    @property
+    def short(self) -> str:
+        """:attr:`headline` with the failing requirements named only (a run's last
+        lines)."""
+        words = short_sentence(self.checks) if self.checks else self.sentence
+        if self.verdict == "pass" and self.nominal:
+            return f"{words}; {self.yield_words}"
+        return words
 
     @property
     def requirements(self) -> list[Json]:
@@ -64,7 +134,8 @@ class Verdict:
 
     def to_json(self) -> Json:
         return jsonable({"requirements": self.requirements, "verdict": self.verdict,
-                         "sentence": self.sentence})
+                         "verdict_grade": self.grade, "sentence": self.sentence,
+                         "headline": self.headline, "yield_target": self.yield_target})
 
 
 @dataclass(frozen=True)
@@ -254,6 +325,10 @@ class ShowView:
         if self.robust is not None:
             doc["robust"] = self.robust
             doc["robust_yield"] = self.robust_yield
+        # the grade (green pass, amber pass at nominal, red fail) and the headline with the
+        # yield beside a pass: after the older keys, whose order scripts rely on
+        doc.update(verdict_grade=self.verdict.grade, verdict_headline=self.verdict.headline,
+                   yield_target=self.verdict.yield_target)
         # a case's findings under their own names, never over the contract's keys
         doc.update({k: v for k, v in self.findings.items() if k not in doc})
         return jsonable(doc)
@@ -349,6 +424,9 @@ class Comparison:
             "labels": list(self.labels), "tests": list(self.tests)}
         if self.hypervolume:
             doc["hypervolume"] = self.hypervolume
+        doc.update(verdict_grade=[v.grade for v in self.verdicts],  # after the older keys
+                   verdict_headline=[v.headline for v in self.verdicts],
+                   yield_target=[v.yield_target for v in self.verdicts])
         return jsonable(doc)
 
 

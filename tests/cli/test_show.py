@@ -93,7 +93,8 @@ def test_json_keys_unchanged(vcb_run):
     doc = json.loads(invoke("show", vcb_run, "--format", "json").stdout)
     assert list(doc) == ["verdict", "verdict_sentence", "requirements", "at_limit",
                          "expected_yield", "next", "case", "solver", "best", "repeats",
-                         "table", "reference"]
+                         "table", "reference", "verdict_grade", "verdict_headline",
+                         "yield_target"]
     assert doc["best"]["metrics"]["initial_tau_max_mpa"] is None  # inf as null: valid JSON
 
 

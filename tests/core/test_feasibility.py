@@ -81,16 +81,20 @@ def test_no_requirement_is_stricter_than_the_constraint_it_mirrors(path: Path):
         assert found >= 1  # R14/R15 against the spring's stress margin, at least
 
 
-def test_the_rule_is_the_constraints_rule():
-    """At its limit plus FEASIBILITY_TOL x scale a quantity passes; twice that, it fails,
-    as a normalised constraint at g = FEASIBILITY_TOL and 2 FEASIBILITY_TOL does."""
+def test_the_rule_is_the_printed_resolution():
+    """A requirement passes within half its resolution (one unit of the 6th significant
+    digit of its scale) beyond its limit and fails beyond it; that is looser than the
+    run's FEASIBILITY_TOL, so a constraint that holds never fails its requirement."""
     stress = Requirement("stress margin", "m_pct", "%", lower=0.0, scale=100.0)
-    assert bool(stress.passes(-0.99 * FEASIBILITY_TOL * 100))
-    assert not bool(stress.passes(-2 * FEASIBILITY_TOL * 100))
+    assert stress.resolution == pytest.approx(1e-3)  # 100 %: 6 digits, 0.001 %
+    assert bool(stress.passes(-0.49e-3)) and not bool(stress.passes(-0.51e-3))
+    assert bool(stress.passes(-2 * FEASIBILITY_TOL * 100))  # a constraint's round-off
     angle = Requirement("angle", "t_deg", "deg", upper=30.0)  # scale: the limit, 30
-    assert angle.tol_scale == 30.0
-    assert bool(angle.passes(30.0 * (1 + 0.99 * FEASIBILITY_TOL)))
-    assert not bool(angle.passes(30.0 * (1 + 2 * FEASIBILITY_TOL)))
+    assert angle.tol_scale == 30.0 and angle.resolution == pytest.approx(1e-4)
+    assert bool(angle.passes(30.0 + 0.49e-4)) and not bool(angle.passes(30.0 + 0.51e-4))
+    count = Requirement("sets", "n", upper=0.0, count=True)
+    assert bool(count.passes(0.0)) and not bool(count.passes(1.0))
+    assert not count.at_limit(0.0)  # 0 <= 0 is met exactly, never "at limit"
 
 
 @pytest.mark.slow

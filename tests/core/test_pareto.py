@@ -51,7 +51,8 @@ def test_show_json_has_pareto_rows_of_objectives_and_feasible(fronts):
     doc = json.loads(r.stdout)
     assert list(doc) == ["verdict", "verdict_sentence", "requirements", "at_limit",
                          "expected_yield", "next", "case", "solver", "best", "repeats",
-                         "table", "pareto", "pareto_summary"]
+                         "table", "pareto", "pareto_summary", "verdict_grade",
+                         "verdict_headline", "yield_target"]
     assert len(doc["pareto"]) == 20
     assert all(list(row) == ["f", "norm", "feasible"] for row in doc["pareto"])
     assert [row["f"] for row in doc["pareto"]] == [row["f"] for row in doc["table"]]

@@ -49,7 +49,7 @@ def test_verdict_names_what_fails_in_words():
     assert sentence(checks) == ("FAIL: does not latch; shear stress 1300 MPa, required "
                                 "<= 1194 MPa")
     ok = check([LATCH, TRAVEL], {"latched": 1.0, "rod_travel_mm": 18.0})
-    assert verdict(ok) == "pass" and sentence(ok) == "PASS: meets all 2 requirements"
+    assert verdict(ok) == "pass" and sentence(ok) == "PASS at nominal: meets all 2 requirements"
 
 
 def test_a_quantity_not_reported_is_not_judged():
@@ -84,7 +84,8 @@ def test_the_headline_names_what_is_at_its_limit():
                    spreads)
     assert [c.at_limit for c in checks] == [True, False]
     assert verdict(checks) == "pass"
-    assert sentence(checks) == "PASS at nominal: 1 requirement at its limit (rod travel)"
+    assert sentence(checks) == ("PASS at nominal: meets all 2 requirements, 1 at its limit "
+                                "(rod travel)")
     doc = checks[0].as_dict()
     assert doc["at_limit"] is True and doc["margin_share"] == pytest.approx(1e-5, rel=1e-3)
     assert checks[1].as_dict()["margin_share"] is None  # one-sided: no band
@@ -106,3 +107,21 @@ def test_all_pass_joins_the_sampled_requirements():
     samples = {"rod_travel_mm": np.array([18.0, 18.3, 18.1]),
                "tau_max_mpa": np.array([100.0, 100.0, 1300.0])}
     assert all_pass([TRAVEL, STRESS, LATCH], samples).tolist() == [True, False, False]
+
+
+def test_values_and_margins_print_at_the_judging_resolution():
+    """A value printed at its requirement's resolution meets the printed limit exactly
+    when it passes; margins show the excess and are never in e- notation."""
+    from camopt.core.requirements import margin_text, value_text
+
+    v = Requirement("closing velocity", "v", "m/s", upper=1.1)  # resolution 1e-5 m/s
+    assert v.passes(1.1000000011) and value_text(v, 1.1000000011) == "1.1"
+    assert margin_text(v, -1.1e-9) == "0"  # round-off at the limit: met, margin 0
+    assert not v.passes(1.100006) and value_text(v, 1.100006) == "1.10001"
+    assert margin_text(v, -6e-6) == "-0.000006"  # the excess shown, positional
+    assert margin_text(v, 0.0473) == "0.0473" and margin_text(v, 987.46) == "987"
+    e = Requirement("latch energy", "e", "J", upper=5.0)
+    assert value_text(e, 1.81389e-05) == "0.0000181"  # small, well inside: 3 digits
+    for value in (1.1 - 4e-6, 1.1 + 4e-6, 1.1 + 6e-6, 0.9, 2.0):
+        shown = float(value_text(v, value))
+        assert (shown <= 1.1) is bool(v.passes(value)), value

@@ -250,7 +250,8 @@ def test_yield_per_requirement_raw_metrics_and_json_only_on_stdout(vcb_run, tmp_
     by = {q["quantity"]: q for q in t.summary["requirements"]}
     travel = t.samples.extras["rod_travel_mm"]
     tol = run.case["rod_travel_tolerance_mm"]
-    assert by["rod_travel_mm"]["yield"] == np.mean(np.abs(travel - 18.0) <= tol + 1e-9)
+    # judged at its printed resolution: half a unit of the 6th digit of 18.2 mm
+    assert by["rod_travel_mm"]["yield"] == np.mean(np.abs(travel - 18.0) <= tol + 0.5e-4)
     assert by["feasible"]["yield"] == t.summary["yield"]
     limiting = min((q for q in t.summary["requirements"] if q["quantity"] != "feasible"),
                    key=lambda q: q["yield"])

@@ -3,7 +3,9 @@
 
 ``tests/data/json/`` holds ``show --format json`` of the run and sweep archives in
 ``tests/data/archives/`` and ``compare --format json`` of the run against itself, as the
-dict-based ``report.py`` (70ddf76) printed them; the views must give the same bytes.
+dict-based ``report.py`` (70ddf76) printed them, with the verdict's wording of 28 Nov 2026
+(``meets all N requirements, k at their limit``) and its grade, headline and yield target
+after the older keys; the views must give the same bytes.
 """
 
 from __future__ import annotations

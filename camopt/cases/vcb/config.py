@@ -5,9 +5,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Annotated, ClassVar, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, ValidationInfo, model_validator
 
 from camopt.config.models import (
+    PLAUSIBILITY_KEY,
     Bounds,
     CaseConfig,
     FieldRole,
@@ -20,6 +21,9 @@ from camopt.config.models import (
 # Physical ranges of a medium-voltage breaker mechanism of this family: a value outside is a
 # unit slip (metres into mm) or a typo; run.check_plausibility = false accepts it.
 Length = Annotated[Positive, Plausible(1.0, 2000.0)]  # mm
+FORCE_RATIO = 100.0
+"""A closing spring's preload within this factor of the loads it closes against (either
+way): beyond it a rate was typed in another unit (VcbMechanism._units_agree)."""
 # a link of a 12 kV breaker mechanism: tens to hundreds of mm (Sec 2.3: 70-140 mm; Eq 42
 # searches 70-150 mm); below 20 mm it is a length typed in cm (14.8 for 148 mm)
 LinkLength = Annotated[Positive, Plausible(20.0, 2000.0)]  # mm
@@ -291,6 +295,38 @@ class VcbMechanism(CaseConfig):
             raise ValueError("node_fractions: increasing fractions of the stroke in [0, 1]")
         if self.reference_cam_points is not None and not self.reference_cam_points.strip():
             raise ValueError("reference_cam_points: an empty file name")
+        return self
+
+    @model_validator(mode="after")
+    def _units_agree(self, info: ValidationInfo) -> VcbMechanism:
+        """Typed units checked against each other (each value alone may be in range): a
+        base circle below half the roller radius or half the follower stroke is centimetres
+        typed (``rb_mm = 2.3``); a closing spring whose preload force is more than
+        :data:`FORCE_RATIO` times the loads it closes against (opening spring and contact
+        springs at the closed state), or less than 1/:data:`FORCE_RATIO` of them, is N/m
+        or kN/mm typed (``kc1_n_per_mm = 7720``). ``run.check_plausibility = false``
+        accepts them."""
+        if (info.context or {}).get(PLAUSIBILITY_KEY) is False:
+            return self
+        least = max(self.rf_mm, self.s1_bar_mm) / 2
+        if self.rb_mm < least:
+            raise ValueError(
+                f"rb_mm: {self.rb_mm:g} mm is below half the roller radius (rf_mm "
+                f"{self.rf_mm:g}) or half the follower stroke (s1_bar_mm {self.s1_bar_mm:g}): "
+                f"no cam that small drives this roller (centimetres typed? {10 * self.rb_mm:g}"
+                f" mm); set run.{PLAUSIBILITY_KEY} = false to accept it")
+        load = (self.opening_k_n_per_mm * self.opening_stretch_closed_mm
+                + self.wipe_count * self.wipe_k_n_per_mm * self.wipe_compression_closed_mm)
+        for key in ("kc1", "kc2"):
+            rate = getattr(self, f"{key}_n_per_mm")
+            force = rate * getattr(self, f"{key}_precompression_mm")
+            if not load / FORCE_RATIO <= force <= load * FORCE_RATIO:
+                hint = "N/m typed?" if force > load else "kN/mm typed?"
+                raise ValueError(
+                    f"{key}_n_per_mm: {rate:g} N/mm preloads the spring to {force:.0f} N, "
+                    f"against {load:.0f} N of opening and contact springs at the closed state "
+                    f"(more than {FORCE_RATIO:g} times apart: {hint}); set "
+                    f"run.{PLAUSIBILITY_KEY} = false to accept it")
         return self
 
     @model_validator(mode="after")

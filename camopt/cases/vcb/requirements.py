@@ -81,7 +81,7 @@ def dynamic_requirements(case: Mapping[str, Any], names: Collection[str]
     if "band_sets_not_latched" in names:
         reqs.append(Requirement(
             "band sets in which the cam does not close",
-            "band_sets_not_latched", upper=0.0,
+            "band_sets_not_latched", upper=0.0, count=True,
             source="every kept model form and set (docs/assumptions.md)",
             failing="the closing depends on which model form or parameter set is right"))
     high = "latch_kinetic_energy_high_j" in names
