@@ -1,5 +1,5 @@
 """The compiled closing events (camopt/cases/vcb/kernel.py) against the numpy reference
-(closing_state then events_of) to 1e-12 relative, on random designs under the band's
+(closing_state then events_of, CAMOPT_NUMBA=0) to 1e-12 relative, on random designs under the band's
 parameter sets and at the near-balance release; the fallback when numba is absent."""
 
 from __future__ import annotations
@@ -36,7 +36,15 @@ def _band_args(problem: VcbProblem, X: np.ndarray) -> tuple:
             problem.config.dynamics_steps)
 
 
-def test_kernel_matches_numpy_on_random_designs_under_the_band():
+def _reference(monkeypatch, *args, **kwargs) -> dyn.ClosingEvents:
+    """The numpy path's events (closing_state then events_of, with the free rotation and
+    the first zero in numpy too: ``CAMOPT_NUMBA=0``)."""
+    with monkeypatch.context() as m:
+        m.setenv("CAMOPT_NUMBA", "0")
+        return dyn.events_of(dyn.closing_state(*args, **kwargs))
+
+
+def test_kernel_matches_numpy_on_random_designs_under_the_band(monkeypatch):
     p = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
     rng = np.random.default_rng(36)
     # random designs (most stall), and the vendor's neighbourhood (most close and latch)
@@ -45,7 +53,7 @@ def test_kernel_matches_numpy_on_random_designs_under_the_band():
     X = np.clip(X, p.lower, p.upper)
     args = _band_args(p, X)
     sets = len(np.ravel(p.band.cam_kg_m2))
-    ref = dyn.events_of(dyn.closing_state(*args, sets=sets))
+    ref = _reference(monkeypatch, *args, sets=sets)
     new = dyn.compiled_events(kernel.band_events, *args, sets=sets)
     assert ref.latched.any() and not ref.latched.all()  # both branches covered
     assert np.isfinite(ref.touch_time).any() and np.isinf(ref.touch_time).any()
@@ -53,14 +61,14 @@ def test_kernel_matches_numpy_on_random_designs_under_the_band():
 
 
 @pytest.mark.parametrize("ratio", [0.999, 1.001])
-def test_kernel_matches_numpy_at_the_near_balance_release(ratio):
+def test_kernel_matches_numpy_at_the_near_balance_release(ratio, monkeypatch):
     """Friction set so that eps T_s / T_f at the release is 0.999 (the cam never starts)
     or 1.001 (it starts slowly), as in test_vcb_dynamics."""
     p = vcb_ode.problem_at_release_ratio(ratio)
     X = p.vendor_x()[None, :]
     A, kc, link = p.designs(X, None)
     args = (p.model, A, kc, link, p.rod_offset, p.load, p.dynamics, p.config.dynamics_steps)
-    ref = dyn.events_of(dyn.closing_state(*args))
+    ref = _reference(monkeypatch, *args)
     new = dyn.compiled_events(kernel.band_events, *args)
     assert ref.release_torque_ratio[0] == pytest.approx(ratio, rel=1e-12)
     assert np.isinf(ref.cam_contact_time[0]) == (ratio < 1)
@@ -89,7 +97,7 @@ def test_validate_does_not_import_numba():
     assert out.stdout.strip().splitlines()[-1] == "False"
 
 
-def test_kernel_matches_numpy_with_parts_per_design():
+def test_kernel_matches_numpy_with_parts_per_design(monkeypatch):
     """A drawn breaker's own parts (closing-spring compressions, opening and contact spring
     rates per design: what tolerance and robust runs evaluate) through the kernel and the
     numpy path alike, the pick-up impact included."""
@@ -108,7 +116,7 @@ def test_kernel_matches_numpy_with_parts_per_design():
                     wipe_k=loads.wipe_k * (1 + 0.1 * rng.standard_normal((n, 1))))
     k = len(np.ravel(p.band.cam_kg_m2))
     args = (model, A, kc, link, rod_offset, loads, sets, steps)
-    ref = dyn.events_of(dyn.closing_state(*args, sets=k, pre=pre))
+    ref = _reference(monkeypatch, *args, sets=k, pre=pre)
     new = dyn.compiled_events(kernel.band_events, *args, sets=k, pre=pre)
     assert np.isfinite(ref.pickup_loss).all() and (ref.pickup_loss > 0).any()
     _same(ref, new)

@@ -208,3 +208,73 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
         out[6, r] = loss
         out[7, r] = 1.0 if latched else 0.0
         out[8, r] = 1.0 if latched else (0.0 if math.isnan(stall) else stall) / end
+
+
+@njit(cache=True, error_model="numpy")
+def first_zero_rows(x: NDArray, energy: NDArray, slope: NDArray, out: NDArray) -> None:
+    """:func:`camopt.cases.vcb.dynamics.first_zero` of every row into ``out`` (n,):
+    ``x`` (1, m) shared or (n, m) per row."""
+    shared = x.shape[0] == 1
+    for r in range(energy.shape[0]):
+        out[r] = _first_zero(x[0] if shared else x[r], energy[r], slope[r])
+
+
+@njit(cache=True, error_model="numpy")
+def _net(turn: float, a0: float, length0: float, l8: float,
+         gx: float, gy: float, kc1: float, kc2: float, f1: float, f2: float, eps: float,
+         friction: float) -> tuple[float, float]:
+    """The free rotation's net torque and kinetic energy ``turn`` past the release, as
+    :meth:`VcbModel.closing_spring_travel` and ``dynamics.free_rotation`` compute them."""
+    angle = a0 + turn
+    length = math.hypot(gx - l8 * math.cos(angle), gy - l8 * math.sin(angle))
+    mid = a0 + 0.5 * turn
+    squares = 4 * l8 * math.sin(0.5 * turn) * (gx * math.sin(mid) - gy * math.cos(mid))
+    gained = squares / (length + length0)
+    rate = l8 * (gx * math.sin(angle) - gy * math.cos(angle)) / length
+    torque = (kc1 * (f1 - gained) + kc2 * (f2 - gained)) * rate
+    work = gained * (kc1 * (f1 - 0.5 * gained) + kc2 * (f2 - 0.5 * gained))
+    return eps * torque - friction, eps * work - friction * turn
+
+
+@njit(cache=True, error_model="numpy")
+def free_rotation(start: NDArray, kc1: NDArray, kc2: NDArray, p1: NDArray, p2: NDArray,
+                  eps: NDArray, friction: NDArray, inertia: NDArray, u: NDArray,
+                  weights: NDArray, l8: float, gx: float, gy: float, base: float,
+                  open_length: float, out: NDArray) -> None:
+    """:func:`camopt.cases.vcb.dynamics.free_rotation`'s speed at the roller, time and
+    whether the energy reaches zero on the way, per row into ``out`` (3, rows): the same
+    sinh grid and Simpson sum, one row at a time (rows (rows,) each, the grid ``u`` and
+    Simpson's ``weights`` (steps + 1,))."""
+    m = len(u)
+    steps = m - 1
+    turn = np.empty(m)
+    kinetic = np.empty(m)
+    torque = np.empty(m)
+    for r in range(len(start)):
+        span = -start[r]
+        a0 = base + start[r]
+        length0 = math.hypot(gx - l8 * math.cos(a0), gy - l8 * math.sin(a0))
+        ext0 = length0 - open_length
+        f1, f2 = p1[r] - ext0, p2[r] - ext0
+        args = (a0, length0, l8, gx, gy, kc1[r], kc2[r], f1, f2, eps[r],
+                friction[r])
+        h = 1e-3 * span
+        a = _net(0.0, *args)[0]
+        curve = (_net(h, *args)[0] - a) / h
+        c = 2 * a / curve if (a > 0 and curve > 0 and 2 * a < curve * span) else span
+        s_end = math.asinh(math.sqrt(span / c))
+        total = 0.0
+        for j in range(m):
+            s = s_end * u[j]
+            x = span if j == m - 1 else c * math.sinh(s) ** 2
+            turn[j] = x
+            torque[j], kinetic[j] = _net(x, *args)
+            omega = math.sqrt(max(2 * kinetic[j] / inertia[r], 0.0))
+            if j == 0:
+                g = 2 * s_end * math.sqrt(c * inertia[r] / (2 * a))
+            else:
+                g = c * math.sinh(2 * s) * s_end / omega
+            total += g * weights[j]
+        out[0, r] = math.sqrt(max(2 * kinetic[m - 1] / inertia[r], 0.0))
+        out[1, r] = total / (3 * steps)
+        out[2, r] = 1.0 if math.isfinite(_first_zero(turn, kinetic, torque)) else 0.0
