@@ -54,8 +54,8 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from types import ModuleType
 from dataclasses import dataclass, fields, replace
+from types import ModuleType
 
 import numpy as np
 from numpy.typing import NDArray
