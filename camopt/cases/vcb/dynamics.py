@@ -367,9 +367,15 @@ def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps:
     in x alone misses it: 12 % short at a ratio of 1.00001). c is the whole turn where
     2 a / b exceeds it or b <= 0 (a plain square-root grading). ``pre`` (n, 2) m: each
     row's spring compressions in the opened state (else the config's)."""
+    return rotation_of(model, kc, params.columns(len(kc), model.c.efficiency), steps, pre)
+
+
+def rotation_of(model: VcbModel, kc: NDArray, p: ParameterColumns, steps: int,
+                pre: NDArray | None = None) -> tuple[NDArray, NDArray]:
+    """:func:`free_rotation` with the parameters already as columns (what the closing
+    has at hand)."""
     n = len(kc)
     steps += steps % 2  # Simpson's rule: an even number of intervals
-    p = params.columns(n, model.c.efficiency)
     # cam angle theta_c of the release: negative, measured back from the roller contact
     start = model.dead_centre + p.release_offset_rad - model.contact_crank_angle
     u = np.linspace(0.0, 1.0, steps + 1)
@@ -522,7 +528,7 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     eps, friction = p.efficiency, p.friction_nm
     follower = p.follower_kg_m2 * dphi * dphi  # J_f phi'^2
     # 1. free rotation, then the plastic impact of the cam on the roller at rest
-    omega_free, t_free = free_rotation(model, kc, params, free_steps(steps), pre=pre)
+    omega_free, t_free = rotation_of(model, kc, p, free_steps(steps), pre=pre)
     moving = p.rod_kg + p.contacts_kg
     j_before = p.cam_kg_m2 + follower + moving * ds1 * ds1
     omega0 = np.ravel(p.cam_kg_m2 * omega_free[:, None] / j_before[:, :1])
@@ -678,8 +684,7 @@ def compiled_events(band_events: Callable[..., None], model: VcbModel, A: NDArra
     inputs = closing_inputs(model, A, kc, link, rod_offset, loads, theta, pre)
     kc_rows = np.tile(kc, (sets, 1)) if sets > 1 else kc
     pre_rows = None if pre is None else np.tile(pre, (sets, 1)) if sets > 1 else pre
-    omega_free, t_free = free_rotation(model, kc_rows, params, free_steps(steps),
-                                       pre=pre_rows)
+    omega_free, t_free = rotation_of(model, kc_rows, p, free_steps(steps), pre=pre_rows)
     # the pick-up impact as closing_state has it (the same operations: the same bits)
     dphi0, ds1_0 = (np.tile(inputs[i][:, 0], sets) for i in (0, 2))
     j0 = (p.cam_kg_m2[:, 0] + p.follower_kg_m2[:, 0] * dphi0 * dphi0
