@@ -18,6 +18,11 @@ inside :func:`~camopt.cases.vcb.dynamics.closing_events`; ``validate`` and ``sho
 do). Importing this module raises ImportError where numba is not installed: the caller
 then takes the numpy path.
 
+Beside it, the free rotation from the release (:func:`free_rotation`, the sinh grid and
+Simpson sum of :func:`camopt.cases.vcb.dynamics.free_rotation`) and the first zero of the
+kinetic energy for any rows (:func:`first_zero_rows`), which the numpy path takes where
+:func:`camopt.cases.vcb.dynamics.compiled` gives this module.
+
 Inputs per design (``nd`` rows, set-major rows ``r = set * nd + design`` read design
 ``r % nd``): the geometry of :func:`~camopt.cases.vcb.dynamics.closing_inputs`; per row:
 the resolved parameter columns, the free rotation's speed and time and the resistant
