@@ -416,7 +416,7 @@ def test_release_decision_matches_an_ode_at_torque_ratios_either_side_of_one(rat
     turning; Coulomb friction holds the cam at rest while eps T <= T_f; DOP853, rtol 1e-11)
     decides as camopt does: at 0.999 the cam never leaves the release (no contact, no
     latch), at 1.001 it meets the roller at the ODE's time within 1e-6 (the free
-    rotation's sinh grid gives 1e-8 here: the slow start is resolved)."""
+    rotation's sinh grid gives 1.5e-7 here: the slow start is resolved)."""
     p = vcb_ode.problem_at_release_ratio(ratio)
     m, c, friction = p.model, p.config, p.config.cam_friction_nm
     _, kc, _ = p.designs(p.vendor_x())
@@ -451,10 +451,11 @@ def test_closing_time_near_balance_matches_an_ode(ratio):
     the release to the latch, of the curves (numpy) and of the events (what a band
     member gives, compiled where numba is), equals the test's own ODE of every phase
     (tests/cases/vcb_ode.py: DOP853, rtol 1e-11, each phase ended by an event) within
-    2e-4 (the issue asks 0.5 %; at 400 steps it is 4e-5 and 5e-5, the driven closing's
-    trapezoid times; the cam contact 2e-8), and doubling ``dynamics_steps`` moves it by
-    less than 1e-4 (measured 4.5e-5, 3.3e-5). Before the free rotation's sinh grid the
-    cam contact at 1.00001 came 12 % early on the fixed 64-interval grid."""
+    2e-4 (the issue asks 0.5 %; at 400 steps it is 3.8e-5 and 5.0e-5, the driven
+    closing's trapezoid times), the cam contact within 2e-6 (measured 6e-7 and 2e-7), and
+    doubling ``dynamics_steps`` moves the closing time by less than 1e-4 (measured 3.3e-5,
+    4.3e-5). Before the free rotation's sinh grid the cam contact at 1.00001 came 12 %
+    early on the fixed 64-interval grid."""
     p = vcb_ode.problem_released_at_ratio(ratio)
     _, kc, _ = p.designs(p.vendor_x())
     ode = vcb_ode.simulate(p, tuple(kc[0] / N_PER_MM), vcb_ode.truth_of(p), rtol=1e-11)
@@ -467,7 +468,7 @@ def test_closing_time_near_balance_matches_an_ode(ratio):
                                 steps)
         assert mo.release_torque_ratio[0] == pytest.approx(ratio, rel=1e-9)
         assert mo.latched[0] and events.latched[0]
-        assert mo.cam_contact_time[0] == pytest.approx(ode.cam_contact_time, rel=1e-6)
+        assert mo.cam_contact_time[0] == pytest.approx(ode.cam_contact_time, rel=2e-6)
         assert mo.closing_time[0] == pytest.approx(ode.closing_time, rel=2e-4)
         assert events.closing_time[0] == pytest.approx(mo.closing_time[0], rel=1e-12)
         times[steps] = mo.closing_time[0]

@@ -20,12 +20,20 @@ from tests.helpers import load
 kernel = pytest.importorskip("camopt.cases.vcb.kernel", reason="numba not installed")
 
 
+ENERGIES = {"final_kinetic", "touch_loss", "pickup_loss"}
+"""Events that are differences of energies of some J: a latch energy of 1e-4 J is such a
+residue, so they are held to 1e-12 J besides 1e-12 relative (the kernel's free rotation
+takes its angles by the addition theorems, numpy by sin and cos: last-bit differences)."""
+
+
 def _same(ref: dyn.ClosingEvents, new: dyn.ClosingEvents) -> None:
-    """Every field equal to 1e-12 relative, with the same NaN and inf."""
+    """Every field equal to 1e-12 relative (energies also to 1e-12 J), with the same NaN
+    and inf."""
     for f in fields(ref):
         a = np.asarray(getattr(ref, f.name), dtype=float)
         b = np.asarray(getattr(new, f.name), dtype=float)
-        np.testing.assert_allclose(b, a, rtol=1e-12, atol=0, err_msg=f.name)
+        np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12 if f.name in ENERGIES else 0,
+                                   err_msg=f.name)
 
 
 def _band_args(problem: VcbProblem, X: np.ndarray) -> tuple:

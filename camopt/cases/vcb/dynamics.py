@@ -344,13 +344,14 @@ def _row_torque(model: VcbModel, kc: NDArray, ext: NDArray, rate: NDArray,
 
 
 def free_steps(steps: int) -> int:
-    """The free rotation's intervals for a closing on ``steps``: an eighth of them (50 at
-    the default 400), at least 16, so ``dynamics_steps`` refines both. Its time is then
-    within 1e-7 of an ODE's at torque ratios 1.00001-1.2 (``free_rotation``)."""
-    return max(16, steps // 8)
+    """The free rotation's intervals for a closing on ``steps``: a sixteenth of them (26
+    at the default 400, made even), at least 16, so ``dynamics_steps`` refines both. Its
+    time is then within 1e-6 of an ODE's at torque ratios 1.00001-1.2, against the
+    driven closing's 4e-5 (``free_rotation``, docs/design.md)."""
+    return max(16, steps // 16)
 
 
-def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps: int = 50,
+def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps: int = 26,
                   pre: NDArray | None = None) -> tuple[NDArray, NDArray]:
     """Cam speed (rad/s) and time (s) when the freely turning cam meets the roller, (n,):
     from rest, the crank ``release_offset`` past its dead centre, to the crank angle
@@ -365,15 +366,17 @@ def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps:
     b its slope), on which dt/ds is constant for c = 2 a / b, so the integrand stays
     smooth however close the torque ratio is to 1 (the time grows as log(1 / a); a grid
     in x alone misses it: 12 % short at a ratio of 1.00001). c is the whole turn where
-    2 a / b exceeds it or b <= 0 (a plain square-root grading). ``pre`` (n, 2) m: each
-    row's spring compressions in the opened state (else the config's)."""
+    2 a / b exceeds it or b <= 0 (a plain square-root grading). Compiled
+    (``kernel.free_rotation``) where :func:`compiled` gives the kernel. ``pre`` (n, 2) m:
+    each row's spring compressions in the opened state (else the config's)."""
     return rotation_of(model, kc, params.columns(len(kc), model.c.efficiency), steps, pre)
 
 
 def rotation_of(model: VcbModel, kc: NDArray, p: ParameterColumns, steps: int,
-                pre: NDArray | None = None) -> tuple[NDArray, NDArray]:
-    """:func:`free_rotation` with the parameters already as columns (what the closing
-    has at hand)."""
+                pre: NDArray | None = None, ratio: NDArray | None = None
+                ) -> tuple[NDArray, NDArray]:
+    """:func:`free_rotation` with the parameters already as columns and, if given, the
+    :func:`release_torque_ratio` (what the closing has at hand)."""
     n = len(kc)
     steps += steps % 2  # Simpson's rule: an even number of intervals
     # cam angle theta_c of the release: negative, measured back from the roller contact
@@ -381,8 +384,9 @@ def rotation_of(model: VcbModel, kc: NDArray, p: ParameterColumns, steps: int,
     u = np.linspace(0.0, 1.0, steps + 1)
     weights = np.ones(steps + 1)
     weights[1:-1:2], weights[2:-1:2] = 4.0, 2.0
-    starts = (p.release_offset_rad[:, 0] > 0) & (start[:, 0] < 0) & (
-        release_torque_ratio(model, kc, p, pre) > 1)
+    if ratio is None:
+        ratio = release_torque_ratio(model, kc, p, pre)
+    starts = (p.release_offset_rad[:, 0] > 0) & (start[:, 0] < 0) & (ratio > 1)
     kernel = compiled()
     if kernel is not None:
         pair = (np.broadcast_to(v, (n, 1))[:, 0] for v in model.precompressions(pre))
@@ -528,7 +532,8 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     eps, friction = p.efficiency, p.friction_nm
     follower = p.follower_kg_m2 * dphi * dphi  # J_f phi'^2
     # 1. free rotation, then the plastic impact of the cam on the roller at rest
-    omega_free, t_free = rotation_of(model, kc, p, free_steps(steps), pre=pre)
+    release_ratio = release_torque_ratio(model, kc, p, pre)
+    omega_free, t_free = rotation_of(model, kc, p, free_steps(steps), pre, release_ratio)
     moving = p.rod_kg + p.contacts_kg
     j_before = p.cam_kg_m2 + follower + moving * ds1 * ds1
     omega0 = np.ravel(p.cam_kg_m2 * omega_free[:, None] / j_before[:, :1])
@@ -592,7 +597,7 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     reached = touched & ~(stall_theta <= theta_touch)
     return ClosingState(
         theta=theta, dtheta_du=dtheta_du, du=du, gap=gap, s1=s1, ds1=ds1, drive=drive, p=p,
-        t_free=t_free, release_ratio=release_torque_ratio(model, kc, p, pre),
+        t_free=t_free, release_ratio=release_ratio,
         omega_before=omega_before, omega_after=omega_after, kinetic=kinetic, after=after,
         k=k, touched=reached, v_touch=v_touch, loss=loss, t_before=t_before,
         t_touch=t_touch, t_k=t_touch + first_cell, cells=cells, stall_theta=stall_theta,
@@ -684,7 +689,9 @@ def compiled_events(band_events: Callable[..., None], model: VcbModel, A: NDArra
     inputs = closing_inputs(model, A, kc, link, rod_offset, loads, theta, pre)
     kc_rows = np.tile(kc, (sets, 1)) if sets > 1 else kc
     pre_rows = None if pre is None else np.tile(pre, (sets, 1)) if sets > 1 else pre
-    omega_free, t_free = rotation_of(model, kc_rows, p, free_steps(steps), pre=pre_rows)
+    release_ratio = release_torque_ratio(model, kc_rows, p, pre_rows)
+    omega_free, t_free = rotation_of(model, kc_rows, p, free_steps(steps), pre_rows,
+                                     release_ratio)
     # the pick-up impact as closing_state has it (the same operations: the same bits)
     dphi0, ds1_0 = (np.tile(inputs[i][:, 0], sets) for i in (0, 2))
     j0 = (p.cam_kg_m2[:, 0] + p.follower_kg_m2[:, 0] * dphi0 * dphi0
@@ -707,7 +714,7 @@ def compiled_events(band_events: Callable[..., None], model: VcbModel, A: NDArra
         cam_contact_time=out[0], touch_time=out[1], touch_velocity=out[2],
         closing_velocity_avg=out[3], closing_time=out[4], final_kinetic=out[5],
         touch_loss=out[6], latched=out[7] > 0, reach=out[8],
-        release_torque_ratio=release_torque_ratio(model, kc_rows, p, pre_rows),
+        release_torque_ratio=release_ratio,
         pickup_loss=pickup_loss)
 
 

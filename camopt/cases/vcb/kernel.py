@@ -225,17 +225,24 @@ def first_zero_rows(x: NDArray, energy: NDArray, slope: NDArray, out: NDArray) -
 
 
 @njit(cache=True, error_model="numpy")
-def _net(turn: float, a0: float, length0: float, l8: float,
-         gx: float, gy: float, kc1: float, kc2: float, f1: float, f2: float, eps: float,
+def _net(turn: float, cos0: float, sin0: float, length0: float, l8: float, gx: float,
+         gy: float, kc1: float, kc2: float, f1: float, f2: float, eps: float,
          friction: float) -> tuple[float, float]:
-    """The free rotation's net torque and kinetic energy ``turn`` past the release, as
-    :meth:`VcbModel.closing_spring_travel` and ``dynamics.free_rotation`` compute them."""
-    angle = a0 + turn
-    length = math.hypot(gx - l8 * math.cos(angle), gy - l8 * math.sin(angle))
-    mid = a0 + 0.5 * turn
-    squares = 4 * l8 * math.sin(0.5 * turn) * (gx * math.sin(mid) - gy * math.cos(mid))
+    """The free rotation's net torque and kinetic energy ``turn`` past the release (crank
+    angle a0, its cosine and sine ``cos0``, ``sin0``), as
+    :meth:`VcbModel.closing_spring_travel` and ``dynamics.free_rotation`` compute them,
+    the angles a0 + turn / 2 and a0 + turn by the addition theorems from one sine and
+    cosine of turn / 2 (two trigonometric calls a node, not eight)."""
+    sh = math.sin(0.5 * turn)
+    ch = math.cos(0.5 * turn)
+    sin_mid = sin0 * ch + cos0 * sh
+    cos_mid = cos0 * ch - sin0 * sh
+    sin_a = sin_mid * ch + cos_mid * sh
+    cos_a = cos_mid * ch - sin_mid * sh
+    length = math.hypot(gx - l8 * cos_a, gy - l8 * sin_a)
+    squares = 4 * l8 * sh * (gx * sin_mid - gy * cos_mid)
     gained = squares / (length + length0)
-    rate = l8 * (gx * math.sin(angle) - gy * math.cos(angle)) / length
+    rate = l8 * (gx * sin_a - gy * cos_a) / length
     torque = (kc1 * (f1 - gained) + kc2 * (f2 - gained)) * rate
     work = gained * (kc1 * (f1 - 0.5 * gained) + kc2 * (f2 - 0.5 * gained))
     return eps * torque - friction, eps * work - friction * turn
@@ -258,10 +265,11 @@ def free_rotation(start: NDArray, kc1: NDArray, kc2: NDArray, p1: NDArray, p2: N
     for r in range(len(start)):
         span = -start[r]
         a0 = base + start[r]
-        length0 = math.hypot(gx - l8 * math.cos(a0), gy - l8 * math.sin(a0))
+        cos0, sin0 = math.cos(a0), math.sin(a0)
+        length0 = math.hypot(gx - l8 * cos0, gy - l8 * sin0)
         ext0 = length0 - open_length
         f1, f2 = p1[r] - ext0, p2[r] - ext0
-        args = (a0, length0, l8, gx, gy, kc1[r], kc2[r], f1, f2, eps[r],
+        args = (cos0, sin0, length0, l8, gx, gy, kc1[r], kc2[r], f1, f2, eps[r],
                 friction[r])
         h = 1e-3 * span
         a = _net(0.0, *args)[0]
@@ -270,15 +278,15 @@ def free_rotation(start: NDArray, kc1: NDArray, kc2: NDArray, p1: NDArray, p2: N
         s_end = math.asinh(math.sqrt(span / c))
         total = 0.0
         for j in range(m):
-            s = s_end * u[j]
-            x = span if j == m - 1 else c * math.sinh(s) ** 2
+            sinh = math.sinh(s_end * u[j])
+            x = span if j == m - 1 else c * sinh ** 2
             turn[j] = x
             torque[j], kinetic[j] = _net(x, *args)
             omega = math.sqrt(max(2 * kinetic[j] / inertia[r], 0.0))
             if j == 0:
                 g = 2 * s_end * math.sqrt(c * inertia[r] / (2 * a))
-            else:
-                g = c * math.sinh(2 * s) * s_end / omega
+            else:  # sinh(2 s) = 2 sinh(s) cosh(s)
+                g = c * 2 * sinh * math.sqrt(1 + sinh * sinh) * s_end / omega
             total += g * weights[j]
         out[0, r] = math.sqrt(max(2 * kinetic[m - 1] / inertia[r], 0.0))
         out[1, r] = total / (3 * steps)
