@@ -13,7 +13,7 @@ import pytest
 
 from camopt.cases.registry import get_case
 from camopt.cases.vcb.config import CamDesign
-from camopt.cases.vcb.dynamics import free_rotation
+from camopt.cases.vcb.dynamics import free_rotation, free_steps
 from camopt.cases.vcb.problem import VcbProblem
 from camopt.core.variation import applicable_defaults
 from camopt.engine.driver import load
@@ -69,8 +69,10 @@ def test_the_band_moves_with_the_design_latch():
     moved = replace(p.band, release_offset_rad=np.ravel(p.band.release_offset_rad)
                     + (16.5 - 14.07) * DEG)
     k = len(np.ravel(p.band.cam_kg_m2))
-    _, times = free_rotation(p.model, np.tile(kc, (k, 1)), moved)
-    _, nominal = free_rotation(p.model, kc, replace(p.dynamics, release_offset_rad=16.5 * DEG))
+    steps = free_steps(p.config.dynamics_steps)
+    _, times = free_rotation(p.model, np.tile(kc, (k, 1)), moved, steps)
+    _, nominal = free_rotation(p.model, kc, replace(p.dynamics, release_offset_rad=16.5 * DEG),
+                               steps)
     assert ev.extras["cam_contact_time_high_ms"][0] == pytest.approx(
         max(times.max(), nominal[0]) * 1e3, rel=1e-12)
     assert ev.extras["cam_contact_time_low_ms"][0] == pytest.approx(

@@ -46,11 +46,41 @@ LATCH_DELAY_S = 3.4e-3
 NOISE_M = 0.02e-3
 
 
+@dataclass(frozen=True)
+class Closing:
+    """What :func:`simulate` gives: rod travel (m) as a function of the time from the
+    release (s), the times (s) of the cam meeting the roller, the contacts' touch and the
+    latch, and the average velocity over the last third of the contact stroke (m/s)."""
+
+    rod: object
+    cam_contact_time: float
+    touch_time: float
+    closing_time: float
+    closing_velocity_avg: float
+
+
 def closing(problem: VcbProblem, kc_n_per_mm: tuple[float, float], truth: Truth = TRUTH,
             a: np.ndarray | None = None):
     """Rod travel (m) as a function of the time from the release (s), and the touch time
     and the average velocity over the last third of the contact stroke (m/s), of the
     problem's reference cam (or follower law ``a``) with spring rates ``kc_n_per_mm``."""
+    sim = simulate(problem, kc_n_per_mm, truth, a)
+    return sim.rod, sim.touch_time, sim.closing_velocity_avg
+
+
+def truth_of(problem: VcbProblem) -> Truth:
+    """The problem's own motion parameters (its config's) as a :class:`Truth`."""
+    c = problem.config
+    return Truth(cam_kg_m2=c.cam_inertia_kg_m2, rod_kg=c.rod_mass_kg,
+                 contacts_kg=c.contacts_mass_kg, release_offset_deg=c.release_offset_deg,
+                 friction_nm=c.cam_friction_nm, follower_kg_m2=c.follower_inertia_kg_m2)
+
+
+def simulate(problem: VcbProblem, kc_n_per_mm: tuple[float, float], truth: Truth = TRUTH,
+             a: np.ndarray | None = None, rtol: float = 1e-10) -> Closing:
+    """The closing of the problem's reference cam (or follower law ``a``) with spring
+    rates ``kc_n_per_mm`` under ``truth``, integrated phase by phase (DOP853, ``rtol``,
+    each phase ended by an event)."""
     m: VcbModel = problem.model
     c, loads = problem.config, problem.load
     A = (m.vendor_a if a is None else np.asarray(a))[None, :]
@@ -81,7 +111,7 @@ def closing(problem: VcbProblem, kc_n_per_mm: tuple[float, float], truth: Truth 
                     / inertia(theta, mass)]
         return rhs
 
-    tol = dict(method="DOP853", rtol=1e-10, atol=1e-12, dense_output=True)
+    tol = dict(method="DOP853", rtol=rtol, atol=1e-12, dense_output=True)
     # 1. free rotation from rest at the release
     start = m.dead_centre + truth.release_offset_deg * DEG - m.contact_crank_angle
 
@@ -124,7 +154,7 @@ def closing(problem: VcbProblem, kc_n_per_mm: tuple[float, float], truth: Truth 
         kin = m.kinematics(A, link, problem.rod_offset, np.r_[0.0, theta.ravel()])
         return kin.s1[0, 1:].reshape(t.shape)
 
-    return rod, t1, v_avg
+    return Closing(rod, t0, t1, t2, v_avg)
 
 
 def sample(rod, delay: float = LATCH_DELAY_S, noise: float = NOISE_M, seed: int = 0,
@@ -171,3 +201,28 @@ def problem_at_release_ratio(ratio: float) -> VcbProblem:
     friction = float(c.efficiency * spring / ratio)
     return VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]",
                            f"case.cam_friction_nm={friction!r}").case)
+
+
+def problem_released_at_ratio(ratio: float) -> VcbProblem:
+    """configs/vcb.toml (identified set alone) with the closing latch moved so that eps T_s
+    / T_f at the release crank angle is ``ratio``: the identified friction throughout, so
+    the driven closing is the identified one and latches; only the release is near
+    balance (the offset found by brentq on the springs' torque, which grows away from the
+    dead centre)."""
+    from scipy.optimize import brentq
+
+    from tests.conftest import CONFIGS
+    from tests.helpers import load
+
+    base = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]").case)
+    m, c = base.model, base.config
+    _, kc, _ = base.designs(base.vendor_x())
+
+    def excess(offset_deg: float) -> float:
+        start = m.dead_centre + offset_deg * DEG - m.contact_crank_angle
+        spring = m.closing_torque(kc, m.closing_spring_geometry(np.array([start])))[0, 0]
+        return c.efficiency * spring / c.cam_friction_nm - ratio
+
+    offset = brentq(excess, 0.5, c.release_offset_deg, xtol=1e-14, rtol=1e-15)
+    return VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]",
+                           f"case.release_offset_deg={offset!r}").case)

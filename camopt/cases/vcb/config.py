@@ -225,7 +225,8 @@ class VcbMechanism(CaseConfig):
         "(configs/vcb_identify_dynamics.toml, its band.sets)")
     dynamics_steps: int = Field(
         400, ge=50, le=100_000, description="graded cam-angle intervals of the work-energy "
-        "integration (independent of positions) (camopt option)")
+        "integration (independent of positions; a sixteenth of them, at least 16, for the "
+        "free rotation from the release) (camopt option)")
     closing_velocity_m_s: VelocityBand = Field(
         None, description="bounds on the average closing velocity (constraint; Sec 2.1 asks "
         "0.9 +- 0.2 m/s); none: reported only")

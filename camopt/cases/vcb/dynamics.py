@@ -55,6 +55,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, fields, replace
+from types import ModuleType
 
 import numpy as np
 from numpy.typing import NDArray
@@ -185,6 +186,19 @@ class OpeningMotion:
     opening_velocity_avg: NDArray
 
 
+def compiled() -> ModuleType | None:
+    """:mod:`camopt.cases.vcb.kernel` where numba is installed and ``CAMOPT_NUMBA`` is not
+    ``0`` (imported here, at the first evaluation, never by a command that evaluates no
+    VCB); else None: the numpy path, the reference, with no error."""
+    if os.environ.get("CAMOPT_NUMBA", "1") == "0":
+        return None
+    try:
+        from camopt.cases.vcb import kernel
+    except ImportError:  # numba not installed
+        return None
+    return kernel
+
+
 def graded_grid(end: float, steps: int) -> tuple[NDArray, NDArray]:
     """theta = end (3 u^2 - 2 u^3) on u = 0..1 in ``steps`` intervals, and dtheta/du,
     (steps + 1,): fine at both ends, where the motion starts and may come almost to rest
@@ -252,7 +266,15 @@ def first_zero(x: NDArray, energy: NDArray, slope: NDArray) -> NDArray:
     at :data:`HERMITE_POINTS` points, so a zero between nodes is found even where both
     nodes are positive (the cam comes to rest and would be pushed on again: it stays);
     the root is then bisected on the cubic. A start at rest with a positive slope (the
-    release) is not a zero."""
+    release) is not a zero. Compiled (``kernel.first_zero_rows``, the same scan and
+    bisection row by row) where :func:`compiled` gives the kernel."""
+    kernel = compiled()
+    if kernel is not None and len(energy):
+        root = np.empty(len(energy))
+        kernel.first_zero_rows(np.ascontiguousarray(np.atleast_2d(x), dtype=float),
+                               np.ascontiguousarray(energy, dtype=float),
+                               np.ascontiguousarray(slope, dtype=float), root)
+        return root
     x = np.broadcast_to(x, energy.shape)
     h = x[:, 1:] - x[:, :-1]
     e0, d0, e1, d1 = energy[:, :-1], slope[:, :-1], energy[:, 1:], slope[:, 1:]
@@ -271,6 +293,9 @@ def first_zero(x: NDArray, energy: NDArray, slope: NDArray) -> NDArray:
     e[:, -1] = ends[3]  # the right node itself exactly
     below = e <= 0
     zero = below.any(axis=1)
+    root = np.full(len(energy), np.nan)
+    if not zero.any():  # no row comes to rest (the usual case): nothing to bisect
+        return root
     # each row's first candidate interval that holds a zero (candidates are row-major)
     first_rows, first = np.unique(rows[zero], return_index=True)
     pick = np.flatnonzero(zero)[first]
@@ -281,7 +306,6 @@ def first_zero(x: NDArray, energy: NDArray, slope: NDArray) -> NDArray:
         mid = 0.5 * (lo + hi)
         positive = _hermite(mid, *args) > 0
         lo, hi = np.where(positive, mid, lo), np.where(positive, hi, mid)
-    root = np.full(len(energy), np.nan)
     root[first_rows] = x[first_rows, cells[pick]] + hi * args[0]
     return root
 
@@ -319,7 +343,15 @@ def _row_torque(model: VcbModel, kc: NDArray, ext: NDArray, rate: NDArray,
     return (k1 * (p1 - ext) + k2 * (p2 - ext)) * rate
 
 
-def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps: int = 64,
+def free_steps(steps: int) -> int:
+    """The free rotation's intervals for a closing on ``steps``: a sixteenth of them (26
+    at the default 400, made even), at least 16, so ``dynamics_steps`` refines both. Its
+    time is then within 1e-6 of an ODE's at torque ratios 1.00001-1.2, against the
+    driven closing's 4e-5 (``free_rotation``, docs/design.md)."""
+    return max(16, steps // 16)
+
+
+def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps: int = 26,
                   pre: NDArray | None = None) -> tuple[NDArray, NDArray]:
     """Cam speed (rad/s) and time (s) when the freely turning cam meets the roller, (n,):
     from rest, the crank ``release_offset`` past its dead centre, to the crank angle
@@ -328,40 +360,86 @@ def free_rotation(model: VcbModel, kc: NDArray, params: MotionParameters, steps:
     release itself (:func:`release_torque_ratio` > 1, not at a node); it stops on the way
     (infinite time) if its kinetic energy reaches zero between the release and the roller
     (:func:`first_zero`, between nodes too). The speed is exact (the energy at the
-    contact); the time, on ``steps`` intervals graded toward the release, is within 4e-5
-    of 12,800 intervals at the vendor's latch (14.07 deg) and 1e-5 at 18.8 deg: 64 rather
-    than more, because with the latch a design variable every sampled part has its own
-    path and this geometry is a third of a band's cost. ``pre`` (n, 2) m: each row's
-    spring compressions in the opened state (else the config's)."""
-    p = params.columns(len(kc), model.c.efficiency)
+    contact). The time t = integral dx / omega(x) over the turn x from the release is
+    taken on x = c sinh^2(s), s uniform on ``steps`` (even) intervals, by Simpson's rule:
+    near the release the energy is a x + b x^2 / 2 (a = eps T - T_f the net torque there,
+    b its slope), on which dt/ds is constant for c = 2 a / b, so the integrand stays
+    smooth however close the torque ratio is to 1 (the time grows as log(1 / a); a grid
+    in x alone misses it: 12 % short at a ratio of 1.00001). c is the whole turn where
+    2 a / b exceeds it or b <= 0 (a plain square-root grading). Compiled
+    (``kernel.free_rotation``) where :func:`compiled` gives the kernel. ``pre`` (n, 2) m:
+    each row's spring compressions in the opened state (else the config's)."""
+    return rotation_of(model, kc, params.columns(len(kc), model.c.efficiency), steps, pre)
+
+
+def rotation_of(model: VcbModel, kc: NDArray, p: ParameterColumns, steps: int,
+                pre: NDArray | None = None, ratio: NDArray | None = None
+                ) -> tuple[NDArray, NDArray]:
+    """:func:`free_rotation` with the parameters already as columns and, if given, the
+    :func:`release_torque_ratio` (what the closing has at hand)."""
+    n = len(kc)
+    steps += steps % 2  # Simpson's rule: an even number of intervals
     # cam angle theta_c of the release: negative, measured back from the roller contact
     start = model.dead_centre + p.release_offset_rad - model.contact_crank_angle
-    u = np.linspace(0.0, 1.0, steps + 1)[None, :]
-    # the path depends on the release offset alone (a handful of values: one per
-    # parameter set), the energy on it linearly on the rates: geometry once per offset
-    offsets, which = np.unique(start[:, 0], return_inverse=True)
-    theta = offsets[:, None] * (1 - u * u)  # graded toward the release, at rest there
-    extension, rate = model.closing_spring_geometry(theta)
-    # per N/m of a spring compressed p in the opened state: the energy given up from the
-    # release, 1/2 ((p - e0)^2 - (p - e)^2) = p (e - e0) - 1/2 (e^2 - e0^2), and the
-    # torque (p - e) rate: linear in p, so a compression per row costs no geometry
-    moved = extension - extension[:, :1]
-    squares = 0.5 * (extension * extension - extension[:, :1] ** 2)
+    u = np.linspace(0.0, 1.0, steps + 1)
+    weights = np.ones(steps + 1)
+    weights[1:-1:2], weights[2:-1:2] = 4.0, 2.0
+    if ratio is None:
+        ratio = release_torque_ratio(model, kc, p, pre)
+    starts = (p.release_offset_rad[:, 0] > 0) & (start[:, 0] < 0) & (ratio > 1)
+    kernel = compiled()
+    if kernel is not None:
+        pair = (np.broadcast_to(v, (n, 1))[:, 0] for v in model.precompressions(pre))
+        out = np.empty((3, n))
+        kernel.free_rotation(*(np.ascontiguousarray(v, dtype=float) for v in (
+            start[:, 0], kc[:, 0], kc[:, 1], *pair, p.efficiency[:, 0],
+            p.release_friction_nm[:, 0], p.cam_kg_m2[:, 0], u, weights)),
+            *model.spring_crank(), out)
+        omega_end, time, stops = out[0], out[1], out[2] > 0
+    else:
+        omega_end, time, stops = _free_rotation(model, kc, p, start, u, weights, pre)
+    stuck = ~starts | stops | ~np.isfinite(time)
+    return np.where(stuck, 0.0, omega_end), np.where(stuck, np.inf, time)
+
+
+def _free_rotation(model: VcbModel, kc: NDArray, p: ParameterColumns, start: NDArray,
+                   u: NDArray, weights: NDArray, pre: NDArray | None
+                   ) -> tuple[NDArray, NDArray, NDArray]:
+    """:func:`free_rotation` in numpy (the reference): the speed at the roller, the time
+    and whether the energy reaches zero on the way, (n,) each, before the start decision."""
+    eps, friction, inertia = p.efficiency, p.release_friction_nm, p.cam_kg_m2
+    span = -start  # the turn to the roller (n, 1)
     p1, p2 = model.precompressions(pre)
-    work = (kc[:, :1] * (p1 * moved[which] - squares[which])
-            + kc[:, 1:2] * (p2 * moved[which] - squares[which]))
-    torque = (kc[:, :1] * (p1 - extension[which]) + kc[:, 1:2] * (p2 - extension[which])
-              ) * rate[which]
-    eps, friction = p.efficiency, p.release_friction_nm
-    kinetic = eps * work - friction * (theta[which] - start)
+
+    def net_torque(turn: NDArray) -> tuple[NDArray, NDArray]:
+        """eps T - T_f and the energy eps W - T_f x at ``turn``."""
+        ext0, gained, rate = model.closing_spring_travel(start, turn)
+        free1, free2 = p1 - ext0, p2 - ext0  # the springs' compressions at the release
+        torque = (kc[:, :1] * (free1 - gained) + kc[:, 1:2] * (free2 - gained)) * rate
+        # the work given up, 1/2 ((f - 0)^2 - (f - g)^2) = g (f - g / 2) per N/m: no
+        # difference of two energies, so it is exact for a turn however small
+        work = gained * (kc[:, :1] * (free1 - 0.5 * gained) + kc[:, 1:2] * (free2 - 0.5 * gained))
+        return eps * torque - friction, eps * work - friction * turn
+
+    # the net torque at the release and its slope set the grid's scale c = 2 a / b
+    h = 1e-3 * span
+    ends, _ = net_torque(np.hstack([np.zeros_like(h), h]))
+    a = ends[:, :1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        curve = (ends[:, 1:] - a) / h
+        c = np.where((a > 0) & (curve > 0) & (2 * a < curve * span), 2 * a / curve, span)
+    s_end = np.arcsinh(np.sqrt(span / c))
+    s = s_end * u[None, :]
+    turn = c * np.sinh(s) ** 2
+    turn[:, -1:] = span  # the roller exactly
+    torque, kinetic = net_torque(turn)
     with np.errstate(invalid="ignore", divide="ignore"):
-        omega = np.sqrt(np.maximum(2 * kinetic / p.cam_kg_m2, 0.0))
-    time = _cumulative_time(-2 * start * u, omega, 1.0 / steps)[:, -1]
-    starts = (p.release_offset_rad[:, 0] > 0) & (start[:, 0] < 0) & (
-        release_torque_ratio(model, kc, p, pre) > 1)
-    stops = np.isfinite(first_zero(theta[which], kinetic, eps * torque - friction))
-    stuck = ~starts | stops
-    return np.where(stuck, 0.0, omega[:, -1]), np.where(stuck, np.inf, time)
+        omega = np.sqrt(np.maximum(2 * kinetic / inertia, 0.0))
+        g = c * np.sinh(2 * s) * s_end / omega  # dt/du
+        # at the release x ~ c s^2 and K ~ a x: dt/du -> 2 s_end sqrt(c J / (2 a))
+        g[:, :1] = 2 * s_end * np.sqrt(c * inertia / (2 * a))
+    time = g @ weights / (3 * (len(u) - 1))
+    return omega[:, -1], time, np.isfinite(first_zero(turn, kinetic, torque))
 
 
 @dataclass(frozen=True)
@@ -454,7 +532,8 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     eps, friction = p.efficiency, p.friction_nm
     follower = p.follower_kg_m2 * dphi * dphi  # J_f phi'^2
     # 1. free rotation, then the plastic impact of the cam on the roller at rest
-    omega_free, t_free = free_rotation(model, kc, params, pre=pre)
+    release_ratio = release_torque_ratio(model, kc, p, pre)
+    omega_free, t_free = rotation_of(model, kc, p, free_steps(steps), pre, release_ratio)
     moving = p.rod_kg + p.contacts_kg
     j_before = p.cam_kg_m2 + follower + moving * ds1 * ds1
     omega0 = np.ravel(p.cam_kg_m2 * omega_free[:, None] / j_before[:, :1])
@@ -518,7 +597,7 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     reached = touched & ~(stall_theta <= theta_touch)
     return ClosingState(
         theta=theta, dtheta_du=dtheta_du, du=du, gap=gap, s1=s1, ds1=ds1, drive=drive, p=p,
-        t_free=t_free, release_ratio=release_torque_ratio(model, kc, p, pre),
+        t_free=t_free, release_ratio=release_ratio,
         omega_before=omega_before, omega_after=omega_after, kinetic=kinetic, after=after,
         k=k, touched=reached, v_touch=v_touch, loss=loss, t_before=t_before,
         t_touch=t_touch, t_k=t_touch + first_cell, cells=cells, stall_theta=stall_theta,
@@ -589,14 +668,10 @@ def closing_events(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     (:mod:`camopt.cases.vcb.kernel`, the same arithmetic in one loop per row) where numba
     is installed and ``CAMOPT_NUMBA`` is not ``0``; else, and as the reference,
     :func:`closing_state` then :func:`events_of`."""
-    if os.environ.get("CAMOPT_NUMBA", "1") != "0":
-        try:
-            from camopt.cases.vcb import kernel
-        except ImportError:  # numba not installed: the numpy path, no error
-            pass
-        else:
-            return compiled_events(kernel.band_events, model, A, kc, link, rod_offset,
-                                   loads, params, steps, sets, pre)
+    kernel = compiled()
+    if kernel is not None:
+        return compiled_events(kernel.band_events, model, A, kc, link, rod_offset, loads,
+                               params, steps, sets, pre)
     return events_of(closing_state(model, A, kc, link, rod_offset, loads, params, steps,
                                    sets, pre))
 
@@ -614,7 +689,9 @@ def compiled_events(band_events: Callable[..., None], model: VcbModel, A: NDArra
     inputs = closing_inputs(model, A, kc, link, rod_offset, loads, theta, pre)
     kc_rows = np.tile(kc, (sets, 1)) if sets > 1 else kc
     pre_rows = None if pre is None else np.tile(pre, (sets, 1)) if sets > 1 else pre
-    omega_free, t_free = free_rotation(model, kc_rows, params, pre=pre_rows)
+    release_ratio = release_torque_ratio(model, kc_rows, p, pre_rows)
+    omega_free, t_free = rotation_of(model, kc_rows, p, free_steps(steps), pre_rows,
+                                     release_ratio)
     # the pick-up impact as closing_state has it (the same operations: the same bits)
     dphi0, ds1_0 = (np.tile(inputs[i][:, 0], sets) for i in (0, 2))
     j0 = (p.cam_kg_m2[:, 0] + p.follower_kg_m2[:, 0] * dphi0 * dphi0
@@ -637,7 +714,7 @@ def compiled_events(band_events: Callable[..., None], model: VcbModel, A: NDArra
         cam_contact_time=out[0], touch_time=out[1], touch_velocity=out[2],
         closing_velocity_avg=out[3], closing_time=out[4], final_kinetic=out[5],
         touch_loss=out[6], latched=out[7] > 0, reach=out[8],
-        release_torque_ratio=release_torque_ratio(model, kc_rows, p, pre_rows),
+        release_torque_ratio=release_ratio,
         pickup_loss=pickup_loss)
 
 

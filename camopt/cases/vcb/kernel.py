@@ -18,6 +18,11 @@ inside :func:`~camopt.cases.vcb.dynamics.closing_events`; ``validate`` and ``sho
 do). Importing this module raises ImportError where numba is not installed: the caller
 then takes the numpy path.
 
+Beside it, the free rotation from the release (:func:`free_rotation`, the sinh grid and
+Simpson sum of :func:`camopt.cases.vcb.dynamics.free_rotation`) and the first zero of the
+kinetic energy for any rows (:func:`first_zero_rows`), which the numpy path takes where
+:func:`camopt.cases.vcb.dynamics.compiled` gives this module.
+
 Inputs per design (``nd`` rows, set-major rows ``r = set * nd + design`` read design
 ``r % nd``): the geometry of :func:`~camopt.cases.vcb.dynamics.closing_inputs`; per row:
 the resolved parameter columns, the free rotation's speed and time and the resistant
@@ -208,3 +213,81 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
         out[6, r] = loss
         out[7, r] = 1.0 if latched else 0.0
         out[8, r] = 1.0 if latched else (0.0 if math.isnan(stall) else stall) / end
+
+
+@njit(cache=True, error_model="numpy")
+def first_zero_rows(x: NDArray, energy: NDArray, slope: NDArray, out: NDArray) -> None:
+    """:func:`camopt.cases.vcb.dynamics.first_zero` of every row into ``out`` (n,):
+    ``x`` (1, m) shared or (n, m) per row."""
+    shared = x.shape[0] == 1
+    for r in range(energy.shape[0]):
+        out[r] = _first_zero(x[0] if shared else x[r], energy[r], slope[r])
+
+
+@njit(cache=True, error_model="numpy")
+def _net(turn: float, cos0: float, sin0: float, length0: float, l8: float, gx: float,
+         gy: float, kc1: float, kc2: float, f1: float, f2: float, eps: float,
+         friction: float) -> tuple[float, float]:
+    """The free rotation's net torque and kinetic energy ``turn`` past the release (crank
+    angle a0, its cosine and sine ``cos0``, ``sin0``), as
+    :meth:`VcbModel.closing_spring_travel` and ``dynamics.free_rotation`` compute them,
+    the angles a0 + turn / 2 and a0 + turn by the addition theorems from one sine and
+    cosine of turn / 2 (two trigonometric calls a node, not eight)."""
+    sh = math.sin(0.5 * turn)
+    ch = math.cos(0.5 * turn)
+    sin_mid = sin0 * ch + cos0 * sh
+    cos_mid = cos0 * ch - sin0 * sh
+    sin_a = sin_mid * ch + cos_mid * sh
+    cos_a = cos_mid * ch - sin_mid * sh
+    length = math.hypot(gx - l8 * cos_a, gy - l8 * sin_a)
+    squares = 4 * l8 * sh * (gx * sin_mid - gy * cos_mid)
+    gained = squares / (length + length0)
+    rate = l8 * (gx * sin_a - gy * cos_a) / length
+    torque = (kc1 * (f1 - gained) + kc2 * (f2 - gained)) * rate
+    work = gained * (kc1 * (f1 - 0.5 * gained) + kc2 * (f2 - 0.5 * gained))
+    return eps * torque - friction, eps * work - friction * turn
+
+
+@njit(cache=True, error_model="numpy")
+def free_rotation(start: NDArray, kc1: NDArray, kc2: NDArray, p1: NDArray, p2: NDArray,
+                  eps: NDArray, friction: NDArray, inertia: NDArray, u: NDArray,
+                  weights: NDArray, l8: float, gx: float, gy: float, base: float,
+                  open_length: float, out: NDArray) -> None:
+    """:func:`camopt.cases.vcb.dynamics.free_rotation`'s speed at the roller, time and
+    whether the energy reaches zero on the way, per row into ``out`` (3, rows): the same
+    sinh grid and Simpson sum, one row at a time (rows (rows,) each, the grid ``u`` and
+    Simpson's ``weights`` (steps + 1,))."""
+    m = len(u)
+    steps = m - 1
+    turn = np.empty(m)
+    kinetic = np.empty(m)
+    torque = np.empty(m)
+    for r in range(len(start)):
+        span = -start[r]
+        a0 = base + start[r]
+        cos0, sin0 = math.cos(a0), math.sin(a0)
+        length0 = math.hypot(gx - l8 * cos0, gy - l8 * sin0)
+        ext0 = length0 - open_length
+        f1, f2 = p1[r] - ext0, p2[r] - ext0
+        args = (cos0, sin0, length0, l8, gx, gy, kc1[r], kc2[r], f1, f2, eps[r],
+                friction[r])
+        h = 1e-3 * span
+        a = _net(0.0, *args)[0]
+        curve = (_net(h, *args)[0] - a) / h
+        c = 2 * a / curve if (a > 0 and curve > 0 and 2 * a < curve * span) else span
+        s_end = math.asinh(math.sqrt(span / c))
+        total = 0.0
+        for j in range(m):
+            sinh = math.sinh(s_end * u[j])
+            x = span if j == m - 1 else c * sinh ** 2
+            turn[j] = x
+            torque[j], kinetic[j] = _net(x, *args)
+            omega = math.sqrt(max(2 * kinetic[j] / inertia[r], 0.0))
+            if j == 0:
+                g = 2 * s_end * math.sqrt(c * inertia[r] / (2 * a))
+            else:  # sinh(2 s) = 2 sinh(s) cosh(s)
+                g = c * 2 * sinh * math.sqrt(1 + sinh * sinh) * s_end / omega
+            total += g * weights[j]
+        out[0, r] = math.sqrt(max(2 * kinetic[m - 1] / inertia[r], 0.0))
+        out[1, r] = total / (3 * steps)
+        out[2, r] = 1.0 if math.isfinite(_first_zero(turn, kinetic, torque)) else 0.0

@@ -207,6 +207,39 @@ class VcbModel:
         rate = -(gx * (-l8 * sin) + gy * (l8 * cos)) / length
         return length - np.hypot(*(self.G - q_open)), rate
 
+    def spring_crank(self) -> tuple[float, float, float, float, float]:
+        """The closing springs' crank as numbers: l8 (m), G's x and y (m), the crank angle
+        QOX + theta0 at theta_c = 0 (rad) and the springs' length in the opened state (m)
+        (what :meth:`closing_spring_travel` and its compiled twin compute from)."""
+        c = self.c
+        l8 = c.crank_l8_mm * MM
+        q_open = l8 * np.array([np.cos(c.preset_qox_deg * DEG),
+                                np.sin(c.preset_qox_deg * DEG)])
+        return (l8, float(self.G[0]), float(self.G[1]),
+                c.preset_qox_deg * DEG + c.theta0_deg * DEG, float(np.hypot(*(self.G - q_open))))
+
+    def closing_spring_travel(self, start: NDArray, turn: NDArray
+                              ) -> tuple[NDArray, NDArray, NDArray]:
+        """The closing springs from cam angle ``start`` (n, 1) turned on by ``turn``
+        (n, m) rad: their extension at ``start`` from the opened state (n, 1) m, the
+        extension gained since ``start`` (n, m) m and the rate dL/dtheta (n, m) m/rad at
+        ``start + turn`` (as :meth:`closing_spring_geometry`). The gain is computed
+        without subtracting two lengths (L^2 - L0^2 from the half-angle products, over
+        L + L0), so it keeps its relative precision however small the turn: what the
+        energy of a cam that barely leaves its release needs."""
+        l8, gx, gy, base, open_length = self.spring_crank()
+        a0 = base + start
+        angle = a0 + turn
+        length0 = np.hypot(gx - l8 * np.cos(a0), gy - l8 * np.sin(a0))
+        length = np.hypot(gx - l8 * np.cos(angle), gy - l8 * np.sin(angle))
+        mid = a0 + 0.5 * turn
+        # L^2 = |G|^2 + l8^2 - 2 l8 (Gx cos a + Gy sin a); cos a - cos a0 and
+        # sin a - sin a0 as products with sin(turn / 2)
+        squares = 4 * l8 * np.sin(0.5 * turn) * (gx * np.sin(mid) - gy * np.cos(mid))
+        gained = squares / (length + length0)
+        rate = l8 * (gx * np.sin(angle) - gy * np.cos(angle)) / length
+        return length0 - open_length, gained, rate
+
     def phi0(self) -> float:
         """Follower angle at theta_c = 0 with the node clearance (Eq 8)."""
         rp = self.rb + self.rf + self.c.node_clearance_mm * MM
