@@ -115,7 +115,7 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
         with writing(folder):
             written = export_run(view, folder, run_path.stem, format.value, force,
                                  (run_path,), step_deg, chord_error_mm)
-        warning = failed_warning(view)
+        warning = failed_warning(view, format.value)
     if warning:
         print(f"warning: {visible(warning)}", file=sys.stderr)
     for p in written:

@@ -356,16 +356,17 @@ def title_sheet(run: RunView, spec: CaseSpec, tolerance_mm: float | None,
     return Sheet(tuple(rows), failed, judged.sentence, release)
 
 
-def failed_warning(run: RunView) -> str:
+def failed_warning(run: RunView, fmt: str = "dxf") -> str:
     """One line for a design that fails its requirements at nominal (else ''): the
-    export goes ahead (a failing design is looked at in CAD too), its drawing marked."""
+    export goes ahead (a failing design is looked at in CAD too), a drawing marked."""
     judged = report.verdict(run)
     failed = [c.requirement.name for c in judged.checks if c.passed is False]
     if not failed:
         return ""
+    marked = ", the drawing marked NOT FOR RELEASE" if fmt == "dxf" else ""
     return (f"{run.path}: the design fails {len(failed)} requirement"
             f"{'s' if len(failed) > 1 else ''} at nominal ({'; '.join(failed)}): exported "
-            "for review, the drawing marked NOT FOR RELEASE")
+            f"for review{marked}")
 
 
 def _short(text: str, width: int) -> str:
