@@ -105,7 +105,8 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
 
     A design that fails its requirements at nominal is exported with a one-line warning
     on stderr; its drawing's title block and notes say NOT FOR RELEASE and list the failed
-    requirements (docs/archive.md, "Export")."""
+    requirements: exported for review, never unmarked (docs/design.md, "A drawing a CAM
+    programmer can release")."""
     from camopt import archive
     from camopt.reporting.export import export_run, failed_warning
 
