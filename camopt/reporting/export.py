@@ -457,7 +457,7 @@ def _rotation_arrow(msp: Any, radius: float, sense: str) -> None:
     a0, a1 = ARROW_DEG
     msp.add_arc((0.0, 0.0), radius, a0, a1, dxfattribs={"layer": "rotation"})
     clockwise = sense == "clockwise"
-    at = np.radians(a0 if clockwise else a1)
+    at = (a0 if clockwise else a1) * DEG
     tip = radius * np.array([np.cos(at), np.sin(at)])
     ahead = np.array([np.sin(at), -np.cos(at)]) * (1 if clockwise else -1)  # tangent
     side = np.array([np.cos(at), np.sin(at)])
@@ -468,7 +468,7 @@ def _rotation_arrow(msp: Any, radius: float, sense: str) -> None:
                   dxfattribs={"layer": "rotation"})
     from ezdxf.enums import TextEntityAlignment
 
-    far = np.radians(a1 + 8)  # beyond the arc's left end, the text ending there
+    far = (a1 + 8) * DEG  # beyond the arc's left end, the text ending there
     msp.add_text(f"ROTATION {sense.upper()}", height=TITLE_MM,
                  dxfattribs={"layer": "rotation"}).set_placement(
         (radius * np.cos(far), radius * np.sin(far)), align=TextEntityAlignment.BOTTOM_RIGHT)

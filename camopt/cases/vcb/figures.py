@@ -13,7 +13,7 @@ from camopt.cases.vcb.requirements import CLOSING_VELOCITY_M_S
 from camopt.core.plotting import PAPER_STYLE, log_scale_if_spread, new_figure
 from camopt.core.runview import RunView
 from camopt.mechanics.cam_outline import CamOutline
-from camopt.units import MM
+from camopt.units import DEG, MM, TO_DEG
 
 DESIGNS = (("", "optimum", "-"), ("initial_", "reference: vendor", ":"))
 
@@ -66,10 +66,10 @@ def figures(run: RunView) -> dict[str, Figure]:
             if whole is None:
                 continue
             closure = whole.closure()
-            values = (np.degrees(whole.pressure_angle) if key == "pressure_angle_deg"
+            values = (whole.pressure_angle * TO_DEG if key == "pressure_angle_deg"
                       else whole.curvature / MM)
             # the closure only: the bold actuated stroke is the archived curve
-            ax.plot(np.degrees(whole.theta), np.where(closure, values, np.nan), style,
+            ax.plot(whole.theta * TO_DEG, np.where(closure, values, np.nan), style,
                     lw=0.9, color=colour, label=f"{label}, closing the turn")
             everything.append(values)
         if mark is not None:
@@ -118,14 +118,14 @@ def _cam_torque(a: dict) -> Figure:
     fig, ax = new_figure("Cam torque against cam angle", "cam angle theta_c (deg)",
                          "torque (N m)")
     for prefix, label, style in DESIGNS:
-        theta = np.radians(a[prefix + "cam_angle_deg"])
+        theta = a[prefix + "cam_angle_deg"] * DEG
         for key, what in (("driving_work_j", "spring drive"),
                           ("resistant_work_j", "load resistance")):
             work = a.get(prefix + key)
             if work is not None and np.size(work) == theta.size and theta.size > 2:
                 with np.errstate(all="ignore"):
                     torque = np.gradient(work, theta)
-                ax.plot(np.degrees(theta), torque, style, label=f"{what} (quasi-static), "
+                ax.plot(theta * TO_DEG, torque, style, label=f"{what} (quasi-static), "
                         f"{label}", color="tab:blue" if what == "spring drive" else "tab:red")
         t_angle, torque = a.get(prefix + "dyn_cam_angle_deg"), a.get(prefix + "dyn_cam_torque_nm")
         if t_angle is not None and torque is not None and np.size(torque):
