@@ -166,6 +166,10 @@ class CaseSpec:
     tolerance_classes: Mapping[str, ToleranceClass] = field(default_factory=dict)
     """Other classes the parts can be ordered to, by name (``case.tolerance_class`` or
     ``camopt tolerance --class``); each lists every input it tolerances."""
+    profile_tolerance: str | None = None
+    """The tolerance key (``"case.FIELD"`` or a design variable) whose ``±X`` in the run's
+    tolerance class is the cam profile's radial tolerance in mm, noted on the DXF and
+    bounding its chord error (``camopt export --chord-error-mm``); None: not stated."""
     equivalence: float | None = None
     """``compare``'s practical-equivalence threshold in the objective's unit: medians of
     two runs closer than this are one result whatever the p-value; None: 0.1 % of the
@@ -207,6 +211,20 @@ class CaseSpec:
             raise ConfigError(source, key, f"{name!r}: not a tolerance class of case "
                               f"'{self.kind}' (classes: {', '.join(self.class_names())})")
         return self.tolerance_classes[name].tolerances
+
+    def profile_tolerance_mm(self, run: RunView) -> float | None:
+        """The cam profile's radial tolerance (mm, the ``±X`` of :attr:`profile_tolerance`
+        in the run's ``case.tolerance_class``); None when the case states none or its
+        class gives it as a percentage."""
+        if self.profile_tolerance is None:
+            return None
+        text = self.tolerances_of(run.case.get("tolerance_class"), run.path).get(
+            self.profile_tolerance, "")
+        value = text.strip().removeprefix("±").removeprefix("+-")
+        try:
+            return None if value.endswith("%") else abs(float(value))
+        except ValueError:
+            return None
 
     def build(self, config: CaseConfig) -> Problem:
         """The case's Problem for a validated config of this kind."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import enum
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Annotated
@@ -89,22 +90,35 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
            force: Annotated[bool, typer.Option(help="replace existing files of these names")]
            = False,
            step_deg: Annotated[float, typer.Option(
-               "--step-deg", help="angle step of the dxf's CNC points table (deg)")] = 1.0
+               "--step-deg", help="angle step of the dxf's CNC points table (deg)")] = 1.0,
+           chord_error_mm: Annotated[float | None, typer.Option(
+               "--chord-error-mm", help="largest distance of the dxf's outline from the "
+               "exact profile (mm, 0.0005 to 0.05 and below the case's profile tolerance; "
+               "default 0.005); sets the polyline's point spacing")] = None,
            ) -> None:
     """Export the summary and analysis curves (csv or json) or, for the workshop, the cam
-    as a DXF drawing in mm (dxf: the closed full-turn outline where the case has one, base
-    circle, roller and its path, pivots, datum and notes) with its curves' point files
+    as a DXF drawing in mm (dxf: the closed full-turn outline where the case has one, within
+    --chord-error-mm of the exact profile, base circle, roller and its path, pivots, datum,
+    rotation arrow and sense, a title block and notes) with its curves' point files
     (x,y,z in mm) and a CNC points table (polar and Cartesian, mm, every --step-deg).
-    The formats write distinct files, so all can go into one folder."""
+    The formats write distinct files, so all can go into one folder.
+
+    A design that fails its requirements at nominal is exported with a one-line warning
+    on stderr; its drawing's title block and notes say NOT FOR RELEASE and list the failed
+    requirements: exported for review, never unmarked (docs/design.md, "A drawing a CAM
+    programmer can release")."""
     from camopt import archive
-    from camopt.reporting.export import export_run
+    from camopt.reporting.export import export_run, failed_warning
 
     with errors():
         view = archive.load_run(run_path)
         folder = out_dir or run_path.parent
         with writing(folder):
             written = export_run(view, folder, run_path.stem, format.value, force,
-                                 (run_path,), step_deg)
+                                 (run_path,), step_deg, chord_error_mm)
+        warning = failed_warning(view, format.value)
+    if warning:
+        print(f"warning: {visible(warning)}", file=sys.stderr)
     for p in written:
         print(visible(p))
 

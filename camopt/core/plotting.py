@@ -25,11 +25,24 @@ def figure(**kwargs: Any) -> Figure:
     return Figure(**kwargs)
 
 
+TITLE_CHARS = 64
+"""Longest title line (characters) a 7-inch figure shows whole at the default font."""
+
+
+def wrapped(title: str, width: int = TITLE_CHARS) -> str:
+    """A title broken into lines of at most ``width`` characters (its own line breaks
+    kept), so none is cut at the figure's edge."""
+    import textwrap
+
+    return "\n".join(part for line in title.splitlines()
+                     for part in textwrap.wrap(line, width) or [""])
+
+
 def new_figure(title: str, xlabel: str, ylabel: str) -> tuple[Figure, Any]:
-    """A figure with one labelled axes and a light grid."""
+    """A figure with one labelled axes and a light grid; a long title wraps."""
     fig = figure(figsize=(7, 4.5), layout="constrained")
     ax = fig.subplots()
-    ax.set_title(title)
+    ax.set_title(wrapped(title))
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)

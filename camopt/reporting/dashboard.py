@@ -51,6 +51,9 @@ class DashboardRow:
     yield_target: float | None = None
     headline: str = ""
     """The verdict in words with the expected yield beside a pass (the cell's tooltip)."""
+    design: dict[str, float] = field(default_factory=dict)
+    """The best design's variables (display units, finite ones): the parallel
+    coordinates' axes."""
 
     @property
     def verdict_text(self) -> str:
@@ -119,7 +122,8 @@ def run_row(path: Path, listed: dict[str, Any]) -> DashboardRow:
         objective_name=view.objective_name, objective=_finite(view.best.objective),
         created=view.created[:16].replace("T", " "), seed=view.run.get("seed"),
         report=_report(path), values=values, grade=judged.grade,
-        yield_target=judged.yield_target, headline=judged.headline)
+        yield_target=judged.yield_target, headline=judged.headline,
+        design={k: float(v) for k, v in view.best.x.items() if _finite(v) is not None})
 
 
 def _report(path: Path) -> str | None:
@@ -152,6 +156,185 @@ def rows(folder: Path) -> list[DashboardRow]:
     return out
 
 
+VERDICT_COLOURS = {"pass": "#1b6e1b", "fail": "#b00020"}
+"""Marker colours by verdict (the table's); any other verdict grey."""
+
+
+@dataclass(frozen=True)
+class Chart:
+    """One inline SVG chart: its heading, the SVG markup (escaped here, drawn as is) and
+    a note of what it leaves out."""
+
+    title: str
+    svg: str
+    note: str = ""
+    kind: str = "scatter"
+    """``scatter`` or ``parallel`` (the page gives the latter the full width)."""
+
+
+def _ticks(lo: float, hi: float, n: int = 5) -> list[float]:
+    """About ``n`` round tick values covering lo..hi."""
+    import numpy as np
+
+    if not hi > lo:
+        return [lo]
+    step = 10 ** math.floor(math.log10((hi - lo) / n))
+    for m in (1, 2, 2.5, 5, 10):
+        if (hi - lo) / (m * step) <= n:
+            step *= m
+            break
+    first = math.ceil(lo / step) * step
+    return [float(v) for v in np.arange(first, hi + step * 1e-9, step)]
+
+
+def _span(values: list[float]) -> tuple[float, float]:
+    """The values' range, padded 5 % (a single value: +-1 or +-5 % of it)."""
+    lo, hi = min(values), max(values)
+    if hi == lo:
+        pad = abs(lo) * 0.05 or 1.0
+        return lo - pad, hi + pad
+    pad = 0.05 * (hi - lo)
+    return lo - pad, hi + pad
+
+
+def _fmt(v: float) -> str:
+    from camopt.reporting.report import format_value
+
+    return str(format_value(v))
+
+
+def scatter(case: str, found: list[DashboardRow]) -> Chart:
+    """Objective against expected yield of one case's runs: a point per run with both,
+    coloured by verdict, its name beside it and in its tooltip."""
+    from html import escape
+
+    drawn = [r for r in found if r.objective is not None and r.expected_yield is not None]
+    objectives = [float(r.objective) for r in drawn if r.objective is not None]
+    lo, hi = _span(objectives) if objectives else (0.0, 1.0)
+    labels = [_fmt(t) for t in _ticks(lo, hi)]
+    # room for the longest tick label (11 px text: ~6.5 px a character) and the axis name
+    width, height, right, top, bottom = 480, 300, 16, 14, 44
+    left = 30 + int(6.5 * max(len(t) for t in labels))
+    objective_name = next((r.objective_name for r in found if r.objective_name), "objective")
+    parts = [f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {width} {height}" '
+             f'role="img" class="chart scatter" data-case="{escape(case)}" '
+             f'aria-label="{escape(case)}: {escape(objective_name)} against expected yield">']
+    x0, x1 = left, width - right
+    y0, y1 = height - bottom, top
+    parts.append(f'<rect x="{x0}" y="{y1}" width="{x1 - x0}" height="{y0 - y1}" '
+                 'fill="none" stroke="#999"/>')
+
+    def px(y: float) -> float:  # yield 0..1 to the x pixel
+        return x0 + y * (x1 - x0)
+
+    def py(v: float) -> float:
+        return y0 - (v - lo) / (hi - lo) * (y0 - y1)
+
+    for t in (0.0, 0.25, 0.5, 0.75, 1.0):
+        parts.append(f'<line x1="{px(t):.1f}" y1="{y0}" x2="{px(t):.1f}" y2="{y0 + 4}" '
+                     'stroke="#999"/>'
+                     f'<text x="{px(t):.1f}" y="{y0 + 16}" text-anchor="middle" '
+                     f'font-size="11">{100 * t:.0f} %</text>')
+    for t in _ticks(lo, hi):
+        parts.append(f'<line x1="{x0 - 4}" y1="{py(t):.1f}" x2="{x0}" y2="{py(t):.1f}" '
+                     'stroke="#999"/>'
+                     f'<text x="{x0 - 6}" y="{py(t) + 4:.1f}" text-anchor="end" '
+                     f'font-size="11">{escape(_fmt(t))}</text>')
+    parts.append(f'<text x="{(x0 + x1) / 2}" y="{height - 6}" text-anchor="middle" '
+                 'font-size="12">expected yield</text>')
+    parts.append(f'<text x="12" y="{(y0 + y1) / 2}" text-anchor="middle" font-size="12" '
+                 f'transform="rotate(-90 12 {(y0 + y1) / 2})">{escape(objective_name)}</text>')
+    for r in drawn:
+        assert r.objective is not None and r.expected_yield is not None
+        cx, cy = px(r.expected_yield), py(r.objective)
+        colour = VERDICT_COLOURS.get(r.verdict, "#777")
+        tip = (f"{r.name}: {r.verdict}, yield {100 * r.expected_yield:.1f} %, "
+               f"{r.objective_name} {_fmt(r.objective)}")
+        anchor = "end" if cx > (x0 + x1) / 2 else "start"
+        dx = -8 if anchor == "end" else 8
+        parts.append(f'<g class="point" data-name="{escape(r.name)}"><circle cx="{cx:.1f}" '
+                     f'cy="{cy:.1f}" r="5" fill="{colour}" fill-opacity="0.8">'
+                     f'<title>{escape(tip)}</title></circle>'
+                     f'<text x="{cx + dx:.1f}" y="{cy - 7:.1f}" text-anchor="{anchor}" '
+                     f'font-size="10">{escape(r.name)}</text></g>')
+    parts.append("</svg>")
+    left_out = len(found) - len(drawn)
+    note = (f"{left_out} run{'s' if left_out > 1 else ''} without an objective or an "
+            "expected yield not drawn" if left_out else "")
+    return Chart(f"{case}: {objective_name} against expected yield", "".join(parts), note)
+
+
+def parallel(case: str, found: list[DashboardRow]) -> Chart:
+    """Parallel coordinates of one case's runs: an axis per design variable, then the
+    objective and the expected yield, each scaled to its range over these runs; a line
+    per run, coloured by verdict (a value a run lacks breaks its line there)."""
+    from html import escape
+
+    names = sorted({k for r in found for k in r.design})
+    objective_name = next((r.objective_name for r in found if r.objective_name), "objective")
+    axes: list[tuple[str, list[float | None]]] = [
+        (n, [r.design.get(n) for r in found]) for n in names]
+    axes.append((objective_name, [r.objective for r in found]))
+    axes.append(("expected yield (0-1)", [r.expected_yield for r in found]))
+    gap, left, top, bottom = 78, 48, 30, 70
+    width = left * 2 + gap * (len(axes) - 1)
+    height = 300
+    y0, y1 = height - bottom, top
+    parts = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
+             f'viewBox="0 0 {width} {height}" role="img" class="chart parallel" '
+             f'data-case="{escape(case)}" aria-label="{escape(case)}: designs in parallel '
+             'coordinates">']
+    spans = []
+    for i, (name, values) in enumerate(axes):
+        x = left + gap * i
+        known = [v for v in values if v is not None]
+        lo, hi = (0.0, 1.0) if i == len(axes) - 1 or not known else _span(known)
+        spans.append((lo, hi))
+        parts.append(f'<line x1="{x}" y1="{y0}" x2="{x}" y2="{y1}" stroke="#999"/>'
+                     f'<text x="{x}" y="{y1 - 8}" text-anchor="middle" font-size="10">'
+                     f'{escape(_fmt(hi))}</text>'
+                     f'<text x="{x}" y="{y0 + 14}" text-anchor="middle" font-size="10">'
+                     f'{escape(_fmt(lo))}</text>'
+                     f'<text x="{x}" y="{y0 + 26}" text-anchor="end" font-size="10" '
+                     f'transform="rotate(-30 {x} {y0 + 26})">{escape(name)}</text>')
+    for k, r in enumerate(found):
+        points = []
+        for i, ((_, values), (lo, hi)) in enumerate(zip(axes, spans)):
+            v = values[k]
+            points.append(None if v is None else
+                          (left + gap * i, y0 - (v - lo) / (hi - lo) * (y0 - y1)))
+        colour = VERDICT_COLOURS.get(r.verdict, "#777")
+        runs_of = [[]]  # type: list[list[tuple[float, float]]]
+        for p in points:
+            if p is None:
+                runs_of.append([])
+            else:
+                runs_of[-1].append(p)
+        path = " ".join("M" + " L".join(f"{x:.1f},{y:.1f}" for x, y in seg)
+                        for seg in runs_of if len(seg) > 1)
+        dots = "".join(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="2.5" fill="{colour}"/>'
+                       for seg in runs_of for x, y in seg)
+        parts.append(f'<g class="line" data-name="{escape(r.name)}"><title>'
+                     f'{escape(r.name)}: {escape(r.verdict)}</title>'
+                     + (f'<path d="{path}" fill="none" stroke="{colour}" stroke-width="1.6" '
+                        'stroke-opacity="0.75"/>' if path else "") + dots + "</g>")
+    parts.append("</svg>")
+    return Chart(f"{case}: designs in parallel coordinates", "".join(parts), kind="parallel")
+
+
+def charts(found: list[DashboardRow]) -> list[Chart]:
+    """Per case with readable runs: the objective against the expected yield and the
+    designs in parallel coordinates (inline SVG: no script, no network)."""
+    by_case: dict[str, list[DashboardRow]] = {}
+    for r in found:
+        if r.archive == "run" and r.objective_name:  # a run read whole
+            by_case.setdefault(r.case, []).append(r)
+    out = []
+    for case, group in sorted(by_case.items()):
+        out += [scatter(case, group), parallel(case, group)]
+    return out
+
+
 def render(folder: Path) -> str:
     """The dashboard page of ``folder``'s archives."""
     import jinja2
@@ -165,4 +348,5 @@ def render(folder: Path) -> str:
     env.filters["num"] = format_value
     return env.get_template("dashboard.html.j2").render(
         folder=str(folder), rows=found,
-        data=[{**asdict(r), "verdict_text": r.verdict_text} for r in found])
+        data=[{**asdict(r), "verdict_text": r.verdict_text} for r in found],
+        charts=charts(found))

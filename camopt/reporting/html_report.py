@@ -42,6 +42,9 @@ def _figures(figures: dict[str, Any]) -> list[dict[str, str]]:
     out = []
     for name, fig in figures.items():
         title = fig.axes[0].get_title() if fig.axes else name
+        if not title and fig._suptitle is not None:  # stacked axes: the figure's title
+            title = fig._suptitle.get_text()
+        title = " ".join(title.split())  # a wrapped title is one line of text here
         out.append({"name": name, "title": title or name, "uri": svg_uri(fig)})
     return out
 

@@ -13,8 +13,9 @@ from matplotlib.figure import Figure
 
 from camopt.cases import get_case
 from camopt.core import pareto
-from camopt.core.plotting import PAPER_STYLE, close, new_figure, readable
+from camopt.core.plotting import PAPER_STYLE, close, figure, new_figure, readable, wrapped
 from camopt.core.runview import RunView
+from camopt.mechanics.cam_outline import CamOutline
 
 
 def _band(histories: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -98,8 +99,52 @@ def run_figures(run: RunView) -> dict[str, Figure]:
         violations={"repeats": run.histories("best_violation")})}
     if len(pareto.objectives(run)[0]) >= 2:
         figs["pareto"] = pareto_front(run)
-    figs.update(get_case(run.kind).draw(run))
+    spec = get_case(run.kind)
+    figs.update(spec.draw(run))
+    outline = spec.cam_outline(run) if spec.outline is not None else None
+    if outline is not None:
+        figs["motion"] = motion_diagram(outline)
     return figs
+
+
+def motion_diagram(outline: CamOutline) -> Figure:
+    """The follower's S-V-A-J diagram over the cam's full turn: displacement (deg),
+    velocity, acceleration and jerk (derivatives per cam angle, rad/rad, 1/rad, 1/rad^2)
+    against cam angle, the actuated stroke shaded and each segment named. Jerk is the
+    acceleration's numerical derivative (the C2 outline's jerk steps at the joints)."""
+    from camopt.units import TO_DEG
+
+    theta = outline.theta * TO_DEG
+    with np.errstate(all="ignore"):
+        jerk = np.gradient(outline.ddphi, outline.theta)
+    fig = figure(figsize=(7, 8), layout="constrained")
+    axes = fig.subplots(4, 1, sharex=True)
+    fig.suptitle(wrapped("Follower motion over the full turn (S-V-A-J): the design's law "
+                         "on the actuated stroke (shaded), closed by the outline"))
+    rows = ((outline.phi * TO_DEG, "displacement\nphi (deg)"),
+            (outline.dphi, "velocity\nd phi / d theta (rad/rad)"),
+            (outline.ddphi, "acceleration\nd2 phi / d theta2 (1/rad)"),
+            (jerk, "jerk\nd3 phi / d theta3 (1/rad2)"))
+    for ax, (values, label) in zip(axes, rows):
+        ax.plot(theta, values, color="tab:blue", label="follower")
+        ax.set_ylabel(label, fontsize=8)
+        ax.grid(alpha=0.3)
+        for seg in outline.segments:
+            if seg.name == "rise":
+                ax.axvspan(seg.start * TO_DEG, seg.end * TO_DEG, color="tab:orange",
+                           alpha=0.12, label="actuated stroke")
+            else:
+                ax.axvline(seg.start * TO_DEG, color="grey", lw=0.5, ls=":")
+    for seg in outline.segments:  # names along the top, at each segment's middle
+        narrow = (seg.end - seg.start) * TO_DEG < 25  # inside the axes, upright
+        axes[0].annotate(seg.name, ((seg.start + seg.end) / 2 * TO_DEG,
+                                    0.97 if narrow else 1.0),
+                         xycoords=("data", "axes fraction"), ha="center",
+                         va="top" if narrow else "bottom", rotation=90 if narrow else 0,
+                         fontsize=7)
+    axes[-1].set_xlabel("cam angle theta_c (deg; 0: start of the actuated stroke)")
+    axes[0].legend(fontsize=7, loc="lower right")
+    return fig
 
 
 def pareto_front(run: RunView) -> Figure:
@@ -156,13 +201,28 @@ def _value(v: Any) -> str:
     return "unknown"
 
 
+OUTLINE_CURVES = {"cam-profile": "profile", "cam-pitch-curve": "pitch"}
+"""Profile curves drawn from a case's closed outline (its attribute) when it has one."""
+
+
+def design_letters(labels: list[str]) -> list[str]:
+    """``A: <label>``, ``B: <label>``, ...: the legend's names of overlaid designs (the
+    titles say ``A vs B``; a run's name, often a timestamp, stays in the legend)."""
+    import string
+
+    letters = string.ascii_uppercase
+    return [f"{letters[i % 26]}{'' if i < 26 else i // 26}: {label}"
+            for i, label in enumerate(labels)]
+
+
 def overlay_figures(runs: list[RunView], labels: list[str]) -> dict[str, Figure]:
     """Several runs of one case kind on the same axes: each cam profile (the case's
     ``profiles``, equal aspect, the cam pivot at the origin; the closed full-turn outline
     where the case has one) and each of the case's
-    ``overlays`` (travel and velocity against time), one line per run labelled by
-    ``labels``; a curve some run's archive lacks is drawn for the others. Runs of
-    different kinds are bad input (ConfigError)."""
+    ``overlays`` (travel and velocity against time), one line per run named A, B, ... in
+    the title and ``A: <label>`` in the legend (:func:`design_letters`); a curve some
+    run's archive lacks is drawn for the others. Runs of different kinds are bad input
+    (ConfigError)."""
     from camopt.errors import ConfigError
 
     kinds = {r.kind for r in runs}
@@ -170,24 +230,29 @@ def overlay_figures(runs: list[RunView], labels: list[str]) -> dict[str, Figure]
         raise ConfigError(runs[1].path, "RUN", f"case '{runs[1].kind}' cannot be overlaid "
                           f"on case '{runs[0].kind}': give runs of one case kind")
     spec = get_case(runs[0].kind)
-    title = " vs ".join(labels)
+    labels = design_letters(labels)
+    title = " vs ".join(n.split(":", 1)[0] for n in labels)
     figs: dict[str, Figure] = {}
     from camopt.units import MM
 
+    outlines = [spec.cam_outline(run) for run in runs]
     for curve in spec.profiles:
-        fig, ax = new_figure(f"{curve.name}: {title}", "x (mm)", "y (mm)")
-        for run, label in zip(runs, labels):
+        which = OUTLINE_CURVES.get(curve.name)
+        turn = ", full turn" if which and any(o is not None for o in outlines) else ""
+        fig, ax = new_figure(f"{curve.name.replace('-', ' ').capitalize()}{turn}: {title}",
+                             "x (mm)", "y (mm)")
+        for run, label, outline in zip(runs, labels, outlines):
             a = run.analysis
-            outline = spec.cam_outline(run) if curve.name == "cam-profile" else None
-            if outline is not None:  # the full turn the workshop cuts (export --format dxf)
-                closed = np.vstack([outline.profile, outline.profile[:1]]) / MM
+            if outline is not None and which:  # the full turn the workshop cuts (dxf)
+                points = getattr(outline, which)
+                closed = np.vstack([points, points[:1]]) / MM
                 ax.plot(closed[:, 0], closed[:, 1], label=f"{label} (full turn)")
             elif all(k in a for k in (*curve.x, *curve.y)):
                 ax.plot(np.concatenate([a[k] for k in curve.x]),
                         np.concatenate([a[k] for k in curve.y]), label=label)
         ax.plot([0], [0], "k+", markersize=12, label="cam pivot")
         ax.set_aspect("equal", adjustable="datalim")
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
         figs[curve.name] = fig
     for o in spec.overlays:
         fig, ax = new_figure(f"{o.title}: {title}", o.xlabel, o.ylabel)

@@ -11,7 +11,13 @@ from typer.testing import CliRunner
 
 from camopt.cli import app
 from tests.conftest import CONFIGS
-from tests.reporting.test_html_report import EXTERNAL, needs_browser, open_in_browser
+from tests.reporting.test_html_report import (
+    EXTERNAL,
+    WINDOWS,
+    check_layout,
+    needs_browser,
+    open_in_browser,
+)
 
 runner = CliRunner()
 # the shipped configs, with small budgets (the page, not the optimum, is under test)
@@ -101,3 +107,57 @@ def test_dashboard_sorts_filters_and_compares_in_chromium(folder, tmp_path, wind
     assert shot.stat().st_size > 5000
     keep = shutil.copy(shot, tmp_path / f"dashboard-{window[0]}x{window[1]}.png")
     print(keep)
+
+
+@needs_browser
+@pytest.mark.parametrize("window", WINDOWS)
+def test_dashboard_charts_and_tables_fit_desktop_and_phone(folder, tmp_path, window):
+    """The dashboard at 1280 x 900 and 390 x 844 with its charts: a scatter and a
+    parallel-coordinates view per case, a point per run with an objective and an expected
+    yield, a line per run; no table column or title cut; the scatter inside the screen.
+    The dashboard's table is wider than a phone: its box scrolls (the probe scrolls it
+    to the last column)."""
+    from camopt.reporting.dashboard import rows
+
+    found = [r for r in rows(folder) if r.archive == "run" and r.objective_name]
+    attrs, shot = check_layout(folder / "index.html", tmp_path, window,
+                               f"dashboard-{window[0]}x{window[1]}")
+    cases = {r.case for r in found}
+    assert int(attrs["scatters"]) == int(attrs["parallels"]) == len(cases)
+    assert int(attrs["points"]) == sum(r.objective is not None and r.expected_yield
+                                       is not None for r in found)
+    assert int(attrs["lines"]) == len(found)
+    assert 0 < int(attrs["scatterright"]) <= int(attrs["innerwidth"]), attrs
+    print(shot)
+
+
+def _rows(yields, objectives):
+    from camopt.reporting.dashboard import DashboardRow
+
+    return [DashboardRow(name=f"r{i}.h5", archive="run", case="c", solver="s",
+                         verdict="pass" if i % 2 else "fail", expected_yield=y,
+                         objective_name="torque_nm", objective=o, created="", seed=0,
+                         report=None, design={"x_mm": float(i)})
+            for i, (y, o) in enumerate(zip(yields, objectives))]
+
+
+def test_scatter_places_points_on_its_axes():
+    """A point's x is its yield on the drawn yield axis (the 0 %, 50 % and 100 % ticks
+    at the points of yield 0, 0.5 and 1, within 0.1 px), a larger objective higher; a
+    run without a yield is left out and said so."""
+    import re
+
+    from camopt.reporting.dashboard import parallel, scatter
+
+    chart = scatter("c", _rows([0.0, 0.5, 1.0, None], [3.0, 1.0, 2.0, 5.0]))
+    cx = [float(v) for v in re.findall(r'<circle cx="([\d.]+)"', chart.svg)]
+    cy = [float(v) for v in re.findall(r'<circle cx="[\d.]+" cy="([\d.]+)"', chart.svg)]
+    ticks = {label: float(x) for x, label in
+             re.findall(r'<text x="([\d.]+)" y="[\d.]+" text-anchor="middle" '
+                        r'font-size="11">(\d+) %</text>', chart.svg)}
+    assert len(cx) == 3 and "1 run" in chart.note
+    assert [cx[0], cx[1], cx[2]] == pytest.approx([ticks["0"], ticks["50"], ticks["100"]],
+                                                  abs=0.1)
+    assert cy[0] < cy[2] < cy[1]  # SVG y grows downwards: objective 3 highest
+    lines = parallel("c", _rows([0.2, 0.9], [1.0, 2.0]))
+    assert lines.svg.count('class="line"') == 2 and "x_mm" in lines.svg

@@ -270,3 +270,101 @@ def test_verdict_columns_fit_a_phone(every_report, name, tmp_path):
     passes = attrs["passtext"].split(",")
     assert passes[0] == "pass" and set(passes[1:]) <= {"pass", "FAIL", "at limit", "-"}, passes
     assert not_blank(shot) > 0.02
+
+
+# after load: every visible table's columns reachable (the table fits the screen, or the
+# box that scrolls it, itself or an ancestor with overflow-x auto/scroll, lies inside the
+# screen and its scroll shows the last column), headings and captions not cut, the
+# page never wider than the screen, and the charts counted
+LAYOUT = """<script>window.addEventListener("load", () => {
+  const d = document.body.dataset, W = window.innerWidth;
+  const cut = [];
+  const scrolling = el => ["auto", "scroll"].includes(getComputedStyle(el).overflowX);
+  document.querySelectorAll("table").forEach((t, i) => {
+    if (!t.offsetParent) return;  // hidden (a comparison not shown)
+    let box = t;
+    while (box && box !== document.body && !scrolling(box)) box = box.parentElement;
+    if (box === document.body) box = null;
+    const name = t.id || `table ${i}`;
+    const rows = [...t.rows].filter(r => r.cells.length && r.offsetParent);
+    const shown = c => getComputedStyle(c).display !== "none";
+    const last = rows.map(r => [...r.cells].filter(shown).pop()).filter(Boolean);
+    if (box) {
+      const edge = Math.min(box.getBoundingClientRect().right, W);
+      if (box.getBoundingClientRect().left < -1 || box.getBoundingClientRect().right > W + 1)
+        cut.push(`${name}: its scrolling box runs off the screen`);
+      box.scrollLeft = box.scrollWidth;  // scrolled to the end: the last column in view
+      if (last.some(c => c.getBoundingClientRect().right > edge + 1))
+        cut.push(`${name}: last column beyond its box when scrolled`);
+      box.scrollLeft = 0;
+    } else if (last.some(c => c.getBoundingClientRect().right > W + 1) ||
+               t.scrollWidth > t.clientWidth + 1) {
+      cut.push(`${name}: cut and no scrolling box`);
+    }
+  });
+  document.querySelectorAll("h1, h2, h3, figcaption").forEach(h => {
+    const r = h.getBoundingClientRect();
+    if (h.offsetParent && (h.scrollWidth > h.clientWidth + 1 || r.right > W + 1 || r.left < -1))
+      cut.push(`title cut: ${h.textContent.slice(0, 40)}`);
+  });
+  d.cut = cut.join(" | ");
+  d.tables = document.querySelectorAll("table").length;
+  d.scatters = document.querySelectorAll("svg.scatter").length;
+  d.parallels = document.querySelectorAll("svg.parallel").length;
+  d.points = document.querySelectorAll("svg.scatter g.point").length;
+  d.lines = document.querySelectorAll("svg.parallel g.line").length;
+  d.scatterright = Math.round(Math.max(0, ...[...document.querySelectorAll("svg.scatter")]
+    .map(s => s.getBoundingClientRect().right)));
+  d.innerwidth = W;
+  d.scrollwidth = document.documentElement.scrollWidth;
+});</script>"""
+WINDOWS = [(1280, 900), (390, 844)]
+
+
+def probe_at(page: Path, tmp_path: Path, probe: str, window: tuple[int, int], tag: str
+             ) -> tuple[dict[str, str], Path]:
+    """``probe``'s attributes of ``page`` laid out exactly ``window`` wide, and a
+    screenshot at ``window``. Headless Chromium's --dump-dom lays a page out at least
+    500 px wide whatever --window-size says, so the page is probed in an iframe of the
+    window's size, its body's data attributes posted to the wrapper that is dumped."""
+    post = ('<script>window.addEventListener("load", () => setTimeout(() => '
+            'parent.postMessage(Object.assign({}, document.body.dataset), "*")));</script>')
+    probed = tmp_path / f"{tag}-{page.name}"
+    probed.write_text(page.read_text().replace("</body>", probe + post + "</body>"))
+    wrapper = tmp_path / f"{tag}-frame.html"
+    wrapper.write_text(
+        '<!DOCTYPE html><html><body style="margin:0">'
+        f'<iframe src="{probed.name}" width="{window[0]}" height="{window[1]}" '
+        'style="border:0"></iframe><script>window.addEventListener("message", e => '
+        'Object.assign(document.body.dataset, e.data));</script></body></html>')
+    _, attrs, _ = open_in_browser(wrapper, tmp_path, "", (window[0] + 200, window[1] + 50),
+                                  f"{tag}-frame", "--virtual-time-budget=5000")
+    _, _, shot = open_in_browser(page, tmp_path, "", window, tag)
+    return attrs, shot
+
+
+def check_layout(page: Path, tmp_path: Path, window: tuple[int, int], tag: str
+                 ) -> tuple[dict[str, str], Path]:
+    """Open ``page`` at ``window`` with :data:`LAYOUT`: no table column or title cut, the
+    page no wider than the screen, a screenshot that shows something; returns the
+    probe's attributes and the screenshot (kept beside the test's files)."""
+    attrs, shot = probe_at(page, tmp_path, LAYOUT, window, tag)
+    assert int(attrs["innerwidth"]) == window[0], attrs
+    assert attrs.get("cut") == "", attrs.get("cut")
+    assert int(attrs["scrollwidth"]) <= int(attrs["innerwidth"]), attrs
+    assert not_blank(shot) > 0.02
+    return attrs, shot
+
+
+@needs_browser
+@pytest.mark.parametrize("window", WINDOWS)
+@pytest.mark.parametrize("name", ["vcb", "emb"])
+def test_report_tables_and_titles_whole_at_desktop_and_phone(every_report, name, window,
+                                                             tmp_path):
+    """The report at 1280 x 900 and 390 x 844: every table's last column reachable inside
+    its scrolling box, no title cut, nothing wider than the screen (screenshots kept in
+    the test's folder)."""
+    attrs, shot = check_layout(every_report[name], tmp_path, window,
+                               f"layout-{window[0]}x{window[1]}")
+    assert int(attrs["tables"]) >= 2
+    print(shot)

@@ -24,7 +24,8 @@ CASES = {
              "pressure_angle": ("cam angle theta_c (deg)", "pressure angle (deg)"),
              "curvature": ("cam angle theta_c (deg)", "radius of curvature (mm)"),
              "tau_max": ("cam angle theta_c (deg)", "tau_max (MPa)"),
-             "forces": ("rod travel s1 (mm)", "force (N)")}),
+             "forces": ("rod travel s1 (mm)", "force (N)"),
+             "cam_torque": ("cam angle theta_c (deg)", "torque (N m)")}),
     "emb_cam": ("emb.toml", ["solver.iterations=40", "solver.particles=30"],
                 {"torque_force": ("cam rotation angle phi (rad)", "drive torque (N m)"),
                  "profile": ("x (mm)", "y (mm)")}),
@@ -131,7 +132,8 @@ def test_every_figure_is_labelled_with_ticks_and_legends(case_run):
     _, path = case_run
     figs = plots.run_figures(archive.load_run(path))
     for name, fig in figs.items():
-        assert fig.axes[0].get_xlabel(), name  # a twin axes shares the first one's x
+        # a twin axes shares the first one's x, stacked axes the bottom one's
+        assert any(ax.get_xlabel() for ax in fig.axes), name
         for ax in fig.axes:
             if not ax.get_visible():
                 continue
@@ -226,10 +228,16 @@ def test_plot_overlays_two_runs_of_one_case(case_run, tmp_path):
     figs = plots.overlay_figures(runs, [path.stem, "other"])
     assert {"cam-profile", "closing_travel", "closing_velocity", "rod_travel"} <= set(figs)
     travel = figs["rod_travel"].axes[0]
-    assert [line.get_label() for line in travel.lines] == [path.stem, "other"]
+    assert [line.get_label() for line in travel.lines] == [f"A: {path.stem}", "B: other"]
+    for fig in figs.values():  # titles name the designs by letter, whole
+        title = fig.axes[0].get_title()
+        assert title.endswith(": A vs B") and path.stem not in title
     for line, run in zip(travel.lines, runs):
         assert np.array_equal(line.get_ydata(), run.analysis["rod_travel_mm"])
     profile = figs["cam-profile"].axes[0]
+    for name in ("cam-profile", "cam-pitch-curve"):
+        lines = figs[name].axes[0].lines
+        assert len([line for line in lines if line.get_label().endswith("(full turn)")]) == 2
     closed = [line for line in profile.lines if line.get_label().endswith("(full turn)")]
     assert len(closed) == 2
     for line in closed:  # closed: the first point again at the end
@@ -246,3 +254,38 @@ def test_plot_overlays_two_runs_of_one_case(case_run, tmp_path):
     bad = runner.invoke(app, ["plot", str(path), str(fs), "--out", str(tmp_path / "x")])
     assert bad.exit_code == 2 and "cannot be overlaid" in bad.stderr
     assert not (tmp_path / "x").exists()
+
+
+def test_vcb_motion_diagram_and_full_turn(case_run):
+    """The S-V-A-J diagram spans the full turn (360 deg of cam angle, to one step) in four
+    rows; its velocity is the displacement's slope (a second code path: the outline's
+    phi' against the numerical derivative of its phi, to 1 % of the peak, the sampling's
+    error) and its jerk starts and ends at rest on the base circle. The cam profile,
+    pressure angle and curvature figures draw the full turn too."""
+    name, path = case_run
+    if name != "vcb":
+        pytest.skip("the VCB has a closed outline")
+    from camopt.cases import get_case
+
+    run = archive.load_run(path)
+    figs = plots.run_figures(run)
+    motion = figs["motion"]
+    assert len(motion.axes) == 4
+    assert [ax.get_ylabel().split("\n")[0] for ax in motion.axes] == [
+        "displacement", "velocity", "acceleration", "jerk"]
+    disp, vel = (ax.lines[0] for ax in motion.axes[:2])
+    theta = np.radians(disp.get_xdata())
+    assert theta[-1] - theta[0] == pytest.approx(2 * np.pi, abs=np.radians(1.5))
+    slope = np.gradient(np.radians(disp.get_ydata()), theta)
+    assert np.max(np.abs(slope - vel.get_ydata())) < 0.01 * np.max(np.abs(vel.get_ydata()))
+    outline = get_case("vcb").cam_outline(run)
+    for fig_name in ("pressure_angle", "curvature"):
+        xs = np.concatenate([line.get_xdata() for line in figs[fig_name].axes[0].lines
+                             if line.get_label() == "optimum, closing the turn"])
+        assert xs.max() - xs.min() == pytest.approx(360, abs=1.5)
+    profile = figs["cam_profile"].axes[0]
+    drawn = [np.column_stack([line.get_xdata(), line.get_ydata()]) for line in profile.lines
+             if line.get_label() == "profile, optimum"]
+    assert len(drawn) == 1 and len(drawn[0]) == len(outline.theta) + 1
+    for fig in figs.values():
+        close(fig)

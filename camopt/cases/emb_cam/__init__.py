@@ -39,6 +39,7 @@ SPEC = register_case(CaseSpec(
     profiles=(ProfileCurve("cam-profile", ("profile_x_mm", "nonworking_x_mm"),
                            ("profile_y_mm", "nonworking_y_mm")),),
     circles=(ProfileCircle("base-circle", "r_st_mm"),),
+    profile_tolerance="r1_mm",  # every key radius is held alike
     tolerances=TOLERANCES, tolerance_classes=TOLERANCE_CLASSES, requirements=requirements,
     reference="paper, Sec 4.4",
     reference_values={k: PAPER[k] for k in ("peak_torque_nm", "clearance_angle_rad")},

@@ -163,6 +163,7 @@ VCB = register_case(CaseSpec(
     circles=(ProfileCircle("base-circle", "rb_mm"),
              ProfileCircle("roller", "rf_mm", ("pitch_x_mm", "pitch_y_mm"))),
     outline="camopt.cases.vcb.outline:outline",
+    profile_tolerance="case.cam_profile_error_mm",
     overlays=tuple(OverlayCurve(f"closing_{what}", f"Closing: movable contact {what}",
                                 "time_ms", f"dyn_contact_{key}",
                                 "time from the springs' release (ms)", label)

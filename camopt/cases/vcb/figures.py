@@ -3,6 +3,8 @@ forces along the stroke, each for the optimum beside the vendor's design."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from matplotlib.figure import Figure
 
@@ -10,6 +12,8 @@ from camopt.cases.vcb.paper import PAPER
 from camopt.cases.vcb.requirements import CLOSING_VELOCITY_M_S
 from camopt.core.plotting import PAPER_STYLE, log_scale_if_spread, new_figure
 from camopt.core.runview import RunView
+from camopt.mechanics.cam_outline import CamOutline
+from camopt.units import DEG, MM, TO_DEG
 
 DESIGNS = (("", "optimum", "-"), ("initial_", "reference: vendor", ":"))
 
@@ -21,34 +25,60 @@ def figures(run: RunView) -> dict[str, Figure]:
     if "profile_x_mm" not in a:
         return {}
     figs = {}
-    fig, ax = new_figure("Cam profile and pitch curve (actuated portion)", "x (mm)", "y (mm)")
-    for prefix, label, style in DESIGNS:
-        ax.plot(a[prefix + "profile_x_mm"], a[prefix + "profile_y_mm"], style,
-                label=f"profile, {label}")
-        ax.plot(a[prefix + "pitch_x_mm"], a[prefix + "pitch_y_mm"], style, alpha=0.6,
-                label=f"pitch curve, {label}")
+    outlines = {prefix: _outline(run, prefix) for prefix, _, _ in DESIGNS}
+    fig, ax = new_figure("Cam profile and pitch curve, full turn (bold: actuated stroke)",
+                         "x (mm)", "y (mm)")
+    for (prefix, label, style), colour in zip(DESIGNS, ("tab:blue", "dimgrey")):
+        whole = outlines[prefix]
+        for curve, alpha in (("profile", 1.0), ("pitch", 0.45)):
+            name = "profile" if curve == "profile" else "pitch curve"
+            if whole is not None:  # the full turn the workshop cuts, closed
+                xy = getattr(whole, curve) / MM
+                xy = np.vstack([xy, xy[:1]])
+                ax.plot(xy[:, 0], xy[:, 1], style, lw=0.9, alpha=alpha, color=colour,
+                        label=f"{name}, {label}")
+            ax.plot(a[f"{prefix}{curve}_x_mm"], a[f"{prefix}{curve}_y_mm"], style, lw=2.4,
+                    alpha=alpha, color=colour, label=f"{name}, {label}, actuated stroke"
+                    if whole is None else "_actuated")
     ax.plot([0], [0], "k+", markersize=12, label="cam pivot O")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3)
     figs["cam_profile"] = fig
     for key, title, ylabel, mark, mark_label in (
-        ("pressure_angle_deg", "Pressure angle", "pressure angle (deg)",
-         PAPER["max_pressure_angle_deg"], "allowable 45 deg (paper)"),
-        ("curvature_mm", "Radius of curvature of the cam profile", "radius of curvature (mm)",
+        ("pressure_angle_deg", "Pressure angle over the full turn (actuated stroke bold)",
+         "pressure angle (deg)", PAPER["max_pressure_angle_deg"], "allowable 45 deg (paper)"),
+        ("curvature_mm", "Radius of curvature of the cam profile over the full turn "
+         "(actuated stroke bold)", "radius of curvature (mm)",
          PAPER["roller_radius_mm"], "roller radius rf (undercut below)"),
         ("tau_max_mpa", "Maximum shear stress beneath the cam surface", "tau_max (MPa)",
          PAPER["shear_yield_mpa"], "shear yield 1194 MPa (paper)"),
         ("sigma_max_mpa", "Maximum Hertz contact stress", "sigma_max (MPa)", None, ""),
     ):
         fig, ax = new_figure(title, "cam angle theta_c (deg)", ylabel)
-        ax.plot(a["cam_angle_deg"], a[key], label="optimum")
-        ax.plot(a["initial_cam_angle_deg"], a["initial_" + key], ":", label="reference: vendor")
+        geometric = key in ("pressure_angle_deg", "curvature_mm")
+        ax.plot(a["cam_angle_deg"], a[key], lw=2.2 if geometric else None, label="optimum")
+        ax.plot(a["initial_cam_angle_deg"], a["initial_" + key], ":",
+                lw=2.2 if geometric else None, label="reference: vendor")
+        everything = [a[key], a["initial_" + key]]
+        for (prefix, label, style), colour in zip(DESIGNS if geometric else (),
+                                                  ("tab:blue", "tab:orange")):
+            whole = outlines[prefix]
+            if whole is None:
+                continue
+            closure = whole.closure()
+            values = (whole.pressure_angle * TO_DEG if key == "pressure_angle_deg"
+                      else whole.curvature / MM)
+            # the closure only: the bold actuated stroke is the archived curve
+            ax.plot(whole.theta * TO_DEG, np.where(closure, values, np.nan), style,
+                    lw=0.9, color=colour, label=f"{label}, closing the turn")
+            everything.append(values)
         if mark is not None:
             ax.axhline(mark, label=mark_label, **PAPER_STYLE)
         if key in ("tau_max_mpa", "sigma_max_mpa", "curvature_mm"):
-            log_scale_if_spread(ax, np.r_[a[key], a["initial_" + key]])
-        ax.legend()
+            log_scale_if_spread(ax, np.concatenate(everything))
+        ax.legend(fontsize=8)
         figs[key.rsplit("_", 1)[0]] = fig
+    figs["cam_torque"] = _cam_torque(a)
     fig, ax = new_figure("General output force Fo and resistant force Fr along the stroke",
                          "rod travel s1 (mm)", "force (N)")
     for prefix, label, style in DESIGNS:
@@ -65,6 +95,48 @@ def figures(run: RunView) -> dict[str, Figure]:
     if "time_ms" in a:
         figs.update(_dynamics(a, run))
     return figs
+
+
+def _outline(run: RunView, prefix: str) -> CamOutline | None:
+    """The closed full-turn outline of the optimum (``prefix`` '') or of the vendor's
+    design (``initial_``: its law's coefficients ``initial_a0..``); None without a law."""
+    from camopt.cases.vcb.outline import outline
+
+    metrics = run.best.metrics
+    law = {f"a{k}": metrics.get(f"{prefix}a{k}") for k in range(6)}
+    best = replace(run.best, metrics={k: v for k, v in law.items() if v is not None})
+    try:
+        return outline(replace(run, best=best))
+    except ValueError:  # a law whose closure needs more than a turn: the stroke only
+        return None
+
+
+def _cam_torque(a: dict) -> Figure:
+    """Torque on the cam against cam angle: the closing springs' drive and the load's
+    resistance along the stroke (quasi-static, the slopes of the archived works, N m per
+    rad), and the torque the cam passes to the roller during the closing (dynamics)."""
+    fig, ax = new_figure("Cam torque against cam angle", "cam angle theta_c (deg)",
+                         "torque (N m)")
+    for prefix, label, style in DESIGNS:
+        theta = a[prefix + "cam_angle_deg"] * DEG
+        for key, what in (("driving_work_j", "spring drive"),
+                          ("resistant_work_j", "load resistance")):
+            work = a.get(prefix + key)
+            if work is not None and np.size(work) == theta.size and theta.size > 2:
+                with np.errstate(all="ignore"):
+                    torque = np.gradient(work, theta)
+                ax.plot(theta * TO_DEG, torque, style, label=f"{what} (quasi-static), "
+                        f"{label}", color="tab:blue" if what == "spring drive" else "tab:red")
+        t_angle, torque = a.get(prefix + "dyn_cam_angle_deg"), a.get(prefix + "dyn_cam_torque_nm")
+        if t_angle is not None and torque is not None and np.size(torque):
+            ax.plot(t_angle, torque, style, color="tab:green",
+                    label=f"to the roller while closing (dynamics), {label}")
+    if not any(np.size(a.get(p + "dyn_cam_torque_nm", [])) for p, _, _ in DESIGNS[:1]):
+        ax.text(0.01, 0.01, "optimum: no closing dynamics (the design does not close)",
+                transform=ax.transAxes, fontsize=7, color="dimgrey")
+    ax.axhline(0.0, color="k", lw=0.6)
+    ax.legend(fontsize=7)
+    return fig
 
 
 def _window(a: dict, prefix: str, gap: float) -> tuple[float, float] | None:
