@@ -21,6 +21,8 @@ else:  # pragma: no cover
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(__file__).resolve().parent / "data"
 CONFIGS = ROOT / "configs"
+VELOCITY_PAPER = CONFIGS / "reference" / "vcb_velocity_paper.toml"
+"""The VCB velocity design in the paper's space (tests that pin its behaviour)."""
 
 
 @pytest.fixture(scope="session")

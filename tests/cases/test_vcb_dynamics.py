@@ -20,7 +20,7 @@ from camopt.cases.vcb.identify import (
 from camopt.engine.driver import execute
 from camopt.units import MS, N_PER_MM
 from tests.cases import vcb_ode
-from tests.conftest import CONFIGS
+from tests.conftest import CONFIGS, VELOCITY_PAPER
 from tests.helpers import load
 
 TABLE6 = np.array([0.238432, 0.000226, -0.011492, 9315.336, 7788.183])  # Table 6 DE-gr
@@ -355,7 +355,7 @@ def test_band_is_the_extremes_over_the_parameter_sets():
     where the contacts never meet in some set the band's velocities are undefined (NaN:
     "n/a, fails" in the verdict, issue #34)."""
     assert all(row[6] == row[5] for row in load(CONFIGS / "vcb.toml").case.dynamics_band)
-    p = VcbProblem(load(CONFIGS / "reference" / "vcb_velocity_paper.toml").case)
+    p = VcbProblem(load(VELOCITY_PAPER).case)
     rng = np.random.default_rng(5)
     X = np.vstack([p.vendor_x(), p.lower + rng.random((6, p.n_var)) * (p.upper - p.lower)])
     ev = p.describe(X)
@@ -366,7 +366,7 @@ def test_band_is_the_extremes_over_the_parameter_sets():
             f"case.follower_inertia_kg_m2={row[1]}", f"case.rod_mass_kg={row[2]}",
             f"case.contacts_mass_kg={row[3]}", f"case.release_offset_deg={row[4]}",
             f"case.cam_friction_nm={row[5]}", f"case.efficiency={row[7]}")
-        one = VcbProblem(load(CONFIGS / "reference" / "vcb_velocity_paper.toml", *sets).case).motion(X)
+        one = VcbProblem(load(VELOCITY_PAPER, *sets).case).motion(X)
         v.append(one.closing_velocity_avg)
         latched.append(one.latched)
         closed.append(one.closing_time)

@@ -13,13 +13,13 @@ from camopt.cases.vcb.dynamics import closing_motion
 from camopt.cases.vcb.forms import FORMS, get_form
 from camopt.cases.vcb.requirements import requirements
 from camopt.errors import ConfigError
-from tests.conftest import CONFIGS
+from tests.conftest import VELOCITY_PAPER
 from tests.helpers import load
 
 
 @pytest.fixture(scope="module")
 def problem():
-    return VcbProblem(load(CONFIGS / "reference" / "vcb_velocity_paper.toml", "case.dynamics_steps=100").case)
+    return VcbProblem(load(VELOCITY_PAPER, "case.dynamics_steps=100").case)
 
 
 def _vector(form, c):

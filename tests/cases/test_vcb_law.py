@@ -15,6 +15,7 @@ from camopt.engine.driver import load
 from camopt.errors import ConfigError
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+VELOCITY_PAPER = CONFIGS / "reference" / "vcb_velocity_paper.toml"
 END = 140 * np.pi / 180
 
 
@@ -44,8 +45,8 @@ def test_quintic_rate_zeros_and_largest_swing_against_dense_sampling():
 
 def test_higher_terms_at_zero_give_the_cubic():
     """A quintic design whose a4 = a5 = 0 evaluates exactly as the cubic one."""
-    cubic = VcbProblem(load(CONFIGS / "reference" / "vcb_velocity_paper.toml").case)
-    quintic = VcbProblem(load(CONFIGS / "reference" / "vcb_velocity_paper.toml", ["case.a4_bounds=[-0.01,0.01]",
+    cubic = VcbProblem(load(VELOCITY_PAPER).case)
+    quintic = VcbProblem(load(VELOCITY_PAPER, ["case.a4_bounds=[-0.01,0.01]",
                                                               "case.a5_bounds=[-0.002,0.002]"]
                               ).case)
     assert [v.name for v in quintic.variables][-2:] == ["a4", "a5"]
@@ -58,4 +59,4 @@ def test_higher_terms_at_zero_give_the_cubic():
 
 def test_a5_without_a4_is_refused():
     with pytest.raises(ConfigError, match="a4_bounds"):
-        load(CONFIGS / "reference" / "vcb_velocity_paper.toml", ["case.a5_bounds=[-0.002,0.002]"])
+        load(VELOCITY_PAPER, ["case.a5_bounds=[-0.002,0.002]"])

@@ -21,15 +21,16 @@ from camopt.errors import ConfigError
 from camopt.units import DEG
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+VELOCITY_PAPER = CONFIGS / "reference" / "vcb_velocity_paper.toml"
 LATCH = "case.release_offset_bounds_deg=[14.0,19.0]"
 
 
 def latch_problem(*overrides: str) -> VcbProblem:
-    return VcbProblem(load(CONFIGS / "reference" / "vcb_velocity_paper.toml", [LATCH, *overrides]).case)
+    return VcbProblem(load(VELOCITY_PAPER, [LATCH, *overrides]).case)
 
 
 def test_the_identified_offset_evaluates_as_the_case_without_the_variable():
-    fixed = VcbProblem(load(CONFIGS / "reference" / "vcb_velocity_paper.toml").case)
+    fixed = VcbProblem(load(VELOCITY_PAPER).case)
     free = latch_problem()
     assert free.names[-1] == "release_offset_deg"
     x = fixed.vendor_x()
@@ -100,7 +101,7 @@ def test_designs_with_different_latches_evaluate_together_as_alone():
 
 
 def test_step_two_takes_the_step_one_design_latch():
-    c = load(CONFIGS / "reference" / "vcb_velocity_paper.toml").case
+    c = load(VELOCITY_PAPER).case
     design = CamDesign(a1=0.24, a2=0.01, a3=-0.017, kc1_n_per_mm=7.72, kc2_n_per_mm=9.33,
                        release_offset_deg=16.0)
     step2 = VcbProblem(c.model_copy(update={"step": "fourbar", "cam_design": design}))
@@ -114,14 +115,14 @@ def test_the_default_tolerances_hold_the_latch_where_it_is_a_variable():
     tolerances = get_case("vcb").tolerances
     with_latch = {v.name for v in applicable_defaults(latch_problem(), tolerances, "t")}
     without = {v.name for v in applicable_defaults(
-        VcbProblem(load(CONFIGS / "reference" / "vcb_velocity_paper.toml").case), tolerances, "t")}
+        VcbProblem(load(VELOCITY_PAPER).case), tolerances, "t")}
     assert with_latch - without == {"release_offset_deg"}
 
 
 @pytest.mark.parametrize("bounds", ["[0.0,10.0]", "[10.0,90.0]", "[-5.0,10.0]"])
 def test_a_latch_not_past_its_dead_centre_is_refused(bounds):
     with pytest.raises(ConfigError, match="release_offset_bounds_deg"):
-        load(CONFIGS / "reference" / "vcb_velocity_paper.toml", [f"case.release_offset_bounds_deg={bounds}"])
+        load(VELOCITY_PAPER, [f"case.release_offset_bounds_deg={bounds}"])
 
 
 @pytest.mark.parametrize("field, value", [("release_offset_bounds_deg", "[14.0,19.0]"),

@@ -17,7 +17,7 @@ from camopt.core.plotting import readable
 from camopt.engine.driver import validate
 from camopt.engine.tolerance import Distribution, analyse, average_ranks, parse_vary
 from camopt.reporting.tolerance_figures import figures
-from tests.conftest import CONFIGS
+from tests.conftest import VELOCITY_PAPER
 
 runner = CliRunner()
 VARY = ["--vary", "kc1_n_per_mm=±5%", "--vary", "case.l1_mm=±0.1"]
@@ -30,7 +30,7 @@ def invoke(*args):
 @pytest.fixture(scope="module")
 def vcb_run(tmp_path_factory):
     path = tmp_path_factory.mktemp("tol") / "vcb.h5"
-    r = invoke("run", CONFIGS / "reference" / "vcb_velocity_paper.toml", "--out", path, "--quiet", "--repeats", 1,
+    r = invoke("run", VELOCITY_PAPER, "--out", path, "--quiet", "--repeats", 1,
                "--set", "solver.generations=120", "--set", "solver.population=40")
     assert r.exit_code == 0, r.output
     return path
