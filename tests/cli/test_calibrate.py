@@ -58,6 +58,13 @@ def test_every_model_form_is_fitted_and_reported_with_which_are_kept(two):
         for p in f["parameters"]:
             assert p["low"] <= p["value"] <= p["high"], (name, p)
     assert data["kept_forms"] == [n for n, f in forms.items() if f["kept"]]
+    assert data["verdict"] == "explained" and "efficiency_coulomb" in data["explained_by"]
+    assert isinstance(data["warnings"], list)
+    for name, f in forms.items():  # the residual test and the bound flag, every form
+        assert f["explains"] == (f["kept"] and f["rms_ratio"] <= 1.5
+                                 and f["structure_z"] <= 3), name
+        assert f["noise_mm"] == pytest.approx(0.02, rel=0.1) and f["durbin_watson"] > 0
+        assert all(isinstance(p["at_bound"], bool) for p in f["parameters"])
     assert forms["efficiency_coulomb"]["kept"]
     assert not forms["driven_coulomb"]["kept"]
     assert not forms["efficiency_driven_coulomb"]["kept"]
@@ -177,3 +184,32 @@ def test_an_existing_archive_is_refused_before_the_fit(tmp_path):
     assert result.exit_code == 2
     assert result.stderr == f"error: {path}: --archive: exists; pass --force to overwrite\n"
     assert path.read_text() == "keep"
+
+
+def test_unexplained_curves_withhold_out_unless_allowed(tmp_path):
+    """Curves of the independent ODE with the closing springs' own mass (1.2 kg each),
+    two spring sets: NOT EXPLAINED leads and ends the report, --out is not written (one
+    line on stderr, exit 1); with --allow-unexplained it is, its first line saying so."""
+    from camopt.cases.vcb.problem import VcbProblem
+    from tests.cases import vcb_ode
+
+    problem = VcbProblem(load(VCB).case)
+    paths = []
+    for seed, name in enumerate(("vendor", "stiff")):
+        rod, _, _ = vcb_ode.closing(problem, SPRING_SETS[name], spring_kg=1.2)
+        paths.append(tmp_path / f"{name}.csv")
+        vcb_ode.write_csv(paths[-1], *vcb_ode.sample(rod, seed=seed + 10, noise=0.03e-3))
+    out = tmp_path / "cal.toml"
+    args = ["calibrate", VCB, "--curve", str(paths[0]), "--curve", str(paths[1]), "--set",
+            f"kc1_n_per_mm={KC[0]}", "--set", f"kc2_n_per_mm={KC[1]}", "--form", "coulomb",
+            "--out", str(out)]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 1
+    lines = result.stdout.strip().splitlines()
+    assert lines[0].startswith("verdict: NOT EXPLAINED") and lines[-1] == lines[0]
+    assert result.stderr.startswith(f"error: {out}: --out: not written")
+    assert result.stderr.count("\n") == 1 and not out.exists()
+    result = runner.invoke(app, [*args, "--allow-unexplained", "--format", "json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["verdict"] == "not explained"
+    assert out.read_text().startswith("# NOT EXPLAINED")

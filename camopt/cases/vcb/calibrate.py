@@ -205,6 +205,7 @@ class ParameterEstimate:
     low: float
     high: float
     identified: bool
+    at_bound: bool = False
 
 
 @dataclass(frozen=True)
@@ -224,7 +225,8 @@ class Prediction:
 @dataclass(frozen=True)
 class CurveFit:
     """One curve's fit: its source, the samples' time (s) and measured and fitted travel
-    (m), the RMS misfit (m) and the analyser's quantities of both curves."""
+    (m), the RMS misfit (m), the analyser's quantities of both curves and the curve's
+    noise level (m)."""
 
     source: str
     design: str
@@ -235,6 +237,103 @@ class CurveFit:
     rms: float
     measured_quantities: AnalyserQuantities
     fitted_quantities: AnalyserQuantities
+    noise: float = 0.0
+
+
+RMS_RATIO_LIMIT = 1.5
+"""A form explains the curves only if the RMS of its residuals, in units of each curve's
+noise (winsorised at :data:`WINSOR` noise levels: a few analyser spikes do not count), is
+at most this: the keep rule's noise floor. 1.5 rather than 1.1: the noise estimate is a
+median of second differences, exact for Gaussian noise but up to ~1.4 times low for
+heavier-tailed noise (Laplace), and the structure test catches a smooth misfit below it."""
+STRUCTURE_Z_LIMIT = 3.0
+"""... and only if its residuals show no serial structure: the Durbin-Watson statistic d
+(pooled over the curves) is not below 2 by more than this many of its standard errors
+under white noise, 2 / sqrt(N) (one-sided, p ~ 0.0013: with a dozen forms and curves a
+correct form is rarely flagged by chance)."""
+WINSOR = 5.0
+"""Residuals beyond this many noise levels count as this many in the residual test."""
+NEAR_BOUND_FACTOR = 1.5
+"""A positive parameter is at its search bound when its fitted value is within this
+factor of it or a tenth of its search range's log, whichever is less (an efficiency's
+0.2..1 gives 1.17); the latch delay within :data:`NEAR_BOUND_DELAY_MS`."""
+NEAR_BOUND_DELAY_MS = 0.1
+
+
+def near_bound(q: float, lower: float, upper: float, log: bool) -> bool:
+    """Whether a fitted coordinate ``q`` is at or near its search bounds (``log``: the log
+    of a positive parameter, near: :data:`NEAR_BOUND_FACTOR`; else the latch delay
+    in ms, within :data:`NEAR_BOUND_DELAY_MS`). A parameter there is not measured by the
+    curves but held by the search: often a form standing in for physics it lacks."""
+    room = (min(np.log(NEAR_BOUND_FACTOR), 0.1 * (upper - lower)) if log
+            else NEAR_BOUND_DELAY_MS)
+    return bool(q - lower <= room or upper - q <= room)
+
+
+@dataclass(frozen=True)
+class ResidualTest:
+    """A form's residuals against the curves' noise (:func:`residual_test`): ``noise``
+    the curves' RMS noise level (m, each curve's estimated from its own samples,
+    :func:`camopt.cases.vcb.curves.noise_level`), ``rms_ratio`` the residuals' RMS in
+    noise levels (winsorised), ``durbin_watson`` d = sum (e_i - e_i-1)^2 / sum e_i^2 of
+    the normalised residuals within each curve, pooled (2 for white residuals, toward 0
+    for a smooth misfit), ``structure_z`` = (2 - d) sqrt(N) / 2 its distance below 2 in
+    standard errors, and the number of samples N."""
+
+    noise: float
+    rms_ratio: float
+    durbin_watson: float
+    structure_z: float
+    samples: int
+
+    def passes(self) -> bool:
+        """Residuals at the noise (:data:`RMS_RATIO_LIMIT`) and without structure
+        (:data:`STRUCTURE_Z_LIMIT`)."""
+        return self.rms_ratio <= RMS_RATIO_LIMIT and self.structure_z <= STRUCTURE_Z_LIMIT
+
+
+def residual_test(residuals: Sequence[NDArray], sigma: Sequence[float]) -> ResidualTest:
+    """The test of a fit's residuals (m, one array per curve) against each curve's noise
+    ``sigma`` (m): :class:`ResidualTest`. Normalised by the noise and winsorised at
+    :data:`WINSOR`; the Durbin-Watson sums run within each curve (no difference across
+    two curves) and are pooled."""
+    e = [np.clip(np.asarray(r) / s, -WINSOR, WINSOR) for r, s in zip(residuals, sigma)]
+    n = sum(len(x) for x in e)
+    squares = sum(float(np.sum(x * x)) for x in e)
+    steps = sum(float(np.sum(np.diff(x) ** 2)) for x in e)
+    counts = np.array([len(x) for x in e])
+    noise = float(np.sqrt(np.sum(counts * np.square(sigma)) / max(n, 1)))
+    d = steps / squares if squares > 0 else 2.0
+    return ResidualTest(noise, float(np.sqrt(squares / max(n, 1))), d,
+                        (2.0 - d) * np.sqrt(n) / 2.0, n)
+
+
+def missing_physics(fit: FormFit, gap: float) -> str:
+    """Where a form's misfit lies along the closing and what typically shows there: the
+    residuals' excess over the noise (sum of squares less N sigma^2) before the motion,
+    in the stroke to the touch and from the touch on. A reading, not a fit: a smooth
+    misfit of the moving part fits several missing effects alike (a distributed mass and
+    a dashpot both leave an S-shaped residual across the touch), so it names them all."""
+    parts = {"before the motion": 0.0, "in the stroke to the touch": 0.0,
+             "from the touch to the latch": 0.0}
+    for c in fit.curves:
+        r = c.fitted - c.measured
+        moving = c.measured > 0.05 * np.max(c.measured)
+        first = int(np.argmax(moving)) if moving.any() else len(r)
+        touched = c.measured >= gap
+        t_touch = int(np.argmax(touched)) if touched.any() else len(r)
+        for name, z in zip(parts, (slice(0, first), slice(first, t_touch),
+                                   slice(t_touch, len(r)))):
+            seg = r[z]
+            parts[name] += max(float(np.sum(seg * seg)) - seg.size * c.noise**2, 0.0)
+    where = max(parts, key=lambda k: parts[k])
+    if where == "before the motion":
+        return ("the misfit is largest before the motion: a latch delay that differs "
+                "between the curves (give each its measured latch_delay_ms), a release "
+                "that is not instantaneous, or a transducer offset")
+    return (f"the misfit is largest {where}: likely missing from the rigid model with "
+            "Coulomb losses: the closing springs' own mass (inertia along the stroke), "
+            "viscous damping (a dashpot or buffer on the rod), the contacts' compliance")
 
 
 @dataclass(frozen=True)
@@ -243,8 +342,10 @@ class FormFit:
     parameters (the form's, then the fitted latch delay in ms, if any), their correlation
     matrix at the optimum (linearised: (J^T J)^-1 s^2), the curves, the predictions,
     ``band``: the form's parameter rows met on the profiles inside the intervals, the fit
-    first, whether the form is ``kept`` (:func:`keep`) and how its ``intervals`` were
-    found (``profile``: profile likelihood; ``linearised``: a form not kept)."""
+    first, whether the form is ``kept`` (:func:`keep`), how its ``intervals`` were
+    found (``profile``: profile likelihood; ``linearised``: a form not kept), the test of
+    its residuals against the curves' noise (:func:`residual_test`) and whether it
+    ``explains`` the curves (kept, and its residuals pass: :meth:`ResidualTest.passes`)."""
 
     form: str
     description: str
@@ -256,6 +357,8 @@ class FormFit:
     band: NDArray = field(repr=False)
     kept: bool = True
     intervals: str = "profile"
+    residuals: ResidualTest | None = None
+    explains: bool = False
 
 
 @dataclass(frozen=True)
@@ -507,7 +610,9 @@ class Calibration:
             identified = bool(profiled and lo_q is not None and hi_q is not None and (
                 reach <= IDENTIFIED_WITHIN * abs(value) if self.log[j]
                 else reach <= IDENTIFIED_DELAY_MS))
-            ests.append(ParameterEstimate(name, unit, value, low, high, identified))
+            ests.append(ParameterEstimate(name, unit, value, low, high, identified,
+                                          near_bound(q[j], self.lower[j], self.upper[j],
+                                                     bool(self.log[j]))))
         P_band, _ = self.values(np.array(members))
         return FormFit(self.form.name, self.form.summary, o.rms, tuple(ests), corr,
                        self._curve_fits(q), (), P_band,
@@ -587,7 +692,7 @@ class Calibration:
                 c.curve.source, c.design.label, float(delays[0, i]), t, meas, s[0],
                 float(np.sqrt(np.mean((s[0] - meas) ** 2))),
                 analyse(t, meas, gap, self.points),
-                analyse(t, s[0], gap, self.points, rebounds=False)))
+                analyse(t, s[0], gap, self.points, rebounds=False), float(self.sigma[i])))
         return tuple(out)
 
     def predict(self, fit: FormFit, designs: Sequence[Design], best: NDArray
@@ -681,8 +786,68 @@ def calibrate(config: VcbConfig, curves: Sequence[CurveCase],
         fit = cal.fit(opt, profiled=k)
         best = np.array([p.value for p in fit.parameters[:cal.n_form]])
         designs = list(predict) or _unique(cal.designs)
-        out.append(replace(fit, predictions=cal.predict(fit, designs, best), kept=k))
+        test = residual_test([c.fitted - c.measured for c in fit.curves], list(cal.sigma))
+        out.append(replace(fit, predictions=cal.predict(fit, designs, best), kept=k,
+                           residuals=test, explains=k and test.passes()))
     return tuple(out)
+
+
+PREDICTION_SPREAD = 0.02
+"""Forms that explain the curves but predict a design's closing velocity further apart
+than this (relative) are told apart by no curve: a warning says so."""
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Whether any form explains the curves (``explained``, those ``forms``), the
+    one-line ``headline`` a report leads and ends with, and ``warnings``: parameters at a
+    search bound, explaining forms whose predictions disagree."""
+
+    explained: bool
+    forms: tuple[str, ...]
+    headline: str
+    warnings: tuple[str, ...]
+
+
+def verdict(fits: Sequence[FormFit], gap: float) -> Verdict:
+    """The verdict on fitted forms (:func:`calibrate`'s) of curves whose contact gap is
+    ``gap`` (m): explained by the forms that explain them (:attr:`FormFit.explains`),
+    else NOT EXPLAINED with the best form's residual test and where its misfit lies
+    (:func:`missing_physics`)."""
+    good = [f for f in fits if f.explains]
+    warn: list[str] = []
+    for f in fits:
+        if not f.kept:
+            continue
+        for p in f.parameters:
+            if p.at_bound:
+                warn.append(f"form {f.form}: {p.name} = {p.value:.4g} {p.unit} is at its "
+                            "search bound: the curves do not measure it (the form may "
+                            "stand in for physics it lacks)")
+    if good:
+        by_design: dict[str, list[float]] = {}
+        for f in good:
+            for pr in f.predictions:
+                by_design.setdefault(pr.design, []).append(pr.closing_velocity)
+        for design, v in by_design.items():
+            lo, hi = float(np.nanmin(v)), float(np.nanmax(v))
+            if len(v) > 1 and hi - lo > PREDICTION_SPREAD * abs(hi):
+                warn.append(f"design {design}: the forms that explain the curves predict a "
+                            f"closing velocity of {lo:.3f} to {hi:.3f} m/s: the curves do "
+                            "not tell them apart (a curve with other springs does)")
+        names = ", ".join(f.form for f in good)
+        head = (f"verdict: explained by form{'s' if len(good) > 1 else ''} {names} "
+                "(residuals at the curves' noise, without structure)")
+        return Verdict(True, tuple(f.form for f in good), head, tuple(warn))
+    best = min(fits, key=lambda f: f.rms)
+    t = best.residuals
+    detail = "" if t is None else (
+        f"best form {best.form}: residual RMS {t.rms_ratio:.2f} x the noise "
+        f"({t.noise / MM:.4f} mm), Durbin-Watson {t.durbin_watson:.2f} "
+        f"({t.structure_z:.1f} standard errors below 2)")
+    head = (f"verdict: NOT EXPLAINED: no model form fits the curves to their noise; {detail}; "
+            f"{missing_physics(best, gap)}")
+    return Verdict(False, (), head, tuple(warn))
 
 
 def _unique(designs: Sequence[Design]) -> list[Design]:

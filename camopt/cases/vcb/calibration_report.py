@@ -22,10 +22,14 @@ import numpy as np
 
 from camopt.cases.vcb.calibrate import (
     KEEP_RATIO,
+    RMS_RATIO_LIMIT,
+    STRUCTURE_Z_LIMIT,
     CurveCase,
     Design,
     FormFit,
+    Verdict,
     calibrate,
+    verdict,
 )
 from camopt.cases.vcb.cam_points import read_cam_points
 from camopt.cases.vcb.config import VcbConfig
@@ -46,6 +50,9 @@ LINEARISED = ("linearised, 95 % (+-1.96 standard deviations of (J^T J)^-1 s^2 in
               "coordinates): a form not kept is not profiled")
 KEEP_RULE = (f"kept: RMS misfit at most {KEEP_RATIO:g} x the best form's or the curves' "
              "noise, whichever is larger")
+EXPLAINS_RULE = (f"explains: kept, residual RMS at most {RMS_RATIO_LIMIT:g} x the noise "
+                 f"and Durbin-Watson not below 2 by more than {STRUCTURE_Z_LIMIT:g} "
+                 "standard errors")
 
 
 def _settings(items: Sequence[str], keys: Sequence[str], where: str
@@ -151,17 +158,31 @@ class VcbCalibrationReport:
     fits: tuple[FormFit, ...]
     points: VelocityPoints
     config: VcbConfig
+    notes: tuple[str, ...] = ()
+
+    @property
+    def verdict(self) -> Verdict:
+        """Whether a form explains the curves (:func:`~camopt.cases.vcb.calibrate.
+        verdict`), with the curves' own warnings (``notes``) among its warnings."""
+        v = verdict(self.fits, self.config.contact_gap_mm * MM)
+        return Verdict(v.explained, v.forms, v.headline, (*self.notes, *v.warnings))
 
     def to_json(self) -> dict[str, Any]:
         forms = []
         for f in self.fits:
             names = [p.name for p in f.parameters]
+            t = f.residuals
             forms.append({
                 "form": f.form, "description": f.description, "rms_mm": f.rms / MM,
-                "kept": f.kept,
+                "kept": f.kept, "explains": f.explains,
+                "noise_mm": None if t is None else t.noise / MM,
+                "rms_ratio": None if t is None else t.rms_ratio,
+                "durbin_watson": None if t is None else t.durbin_watson,
+                "structure_z": None if t is None else t.structure_z,
                 "intervals": INTERVALS if f.intervals == "profile" else LINEARISED,
                 "parameters": [{"name": p.name, "unit": p.unit, "value": p.value,
-                                "low": p.low, "high": p.high, "identified": p.identified}
+                                "low": p.low, "high": p.high, "identified": p.identified,
+                                "at_bound": p.at_bound}
                                for p in f.parameters],
                 "correlation": {"names": names, "matrix": np.round(f.correlation, 4).tolist()},
                 "curves": [{"file": c.source, "design": c.design,
@@ -179,16 +200,27 @@ class VcbCalibrationReport:
                                      "high": p.touch_time_high / MS}}
                                 for p in f.predictions],
             })
-        return {"velocity_points_mm": [self.points.low / MM, self.points.high / MM],
-                "keep_rule": KEEP_RULE, "kept_forms": [f.form for f in self.fits if f.kept],
-                "forms": forms}
+        v = self.verdict
+        return {"verdict": "explained" if v.explained else "not explained",
+                "verdict_line": v.headline, "explained_by": list(v.forms),
+                "warnings": list(v.warnings),
+                "velocity_points_mm": [self.points.low / MM, self.points.high / MM],
+                "keep_rule": KEEP_RULE, "explains_rule": EXPLAINS_RULE,
+                "kept_forms": [f.form for f in self.fits if f.kept], "forms": forms}
 
     def lines(self) -> list[str]:
-        out = [f"contact velocity between {self.points.low / MM:.3g} and "
-               f"{self.points.high / MM:.3g} mm of travel; intervals: {INTERVALS}", "",
-               f"{'model form':<28}{'RMS mm':>10}  kept ({KEEP_RULE})"]
-        out += [f"{f.form:<28}{f.rms / MM:>10.4f}  {'yes' if f.kept else 'no'}"
-                for f in self.fits]
+        v = self.verdict
+        out = [v.headline] + [f"warning: {w}" for w in v.warnings] + [
+            "", f"contact velocity between {self.points.low / MM:.3g} and "
+            f"{self.points.high / MM:.3g} mm of travel; intervals: {INTERVALS}", "",
+            f"{'model form':<28}{'RMS mm':>10}{'x noise':>9}{'D-W':>7}  kept  explains",
+        ]
+        for f in self.fits:
+            t = f.residuals
+            ratio = "" if t is None else f"{t.rms_ratio:>9.2f}{t.durbin_watson:>7.2f}"
+            out.append(f"{f.form:<28}{f.rms / MM:>10.4f}{ratio}  {'yes ' if f.kept else 'no  '}"
+                       f"  {'yes' if f.explains else 'no'}")
+        out += [f"({KEEP_RULE}; {EXPLAINS_RULE})"]
         for f in self.fits:
             out += ["", f"form {f.form}: {f.description}",
                     f"  RMS misfit {f.rms / MM:.4f} mm over {len(f.curves)} curve(s); "
@@ -197,7 +229,8 @@ class VcbCalibrationReport:
                     f"  {'parameter':<22}{'value':>12}{'low':>12}{'high':>12}  identified"]
             for p in f.parameters:
                 out.append(f"  {p.name:<22}{p.value:>12.5g}{p.low:>12.5g}{p.high:>12.5g}  "
-                           f"{_identified(p.identified, f.kept)}")
+                           f"{_identified(p.identified, f.kept)}"
+                           + ("  AT SEARCH BOUND" if p.at_bound else ""))
             names = [p.name for p in f.parameters]
             k = len(names)
             pairs = sorted(((abs(f.correlation[i, j]), names[i], names[j], f.correlation[i, j])
@@ -216,7 +249,7 @@ class VcbCalibrationReport:
                            f"{d.closing_velocity_low:>8.4f}{d.closing_velocity_high:>8.4f}"
                            f"{d.touch_time / MS:>12.3f}{d.touch_time_low / MS:>8.3f}"
                            f"{d.touch_time_high / MS:>8.3f}")
-        return out
+        return out + ["", v.headline]
 
     def curves(self) -> tuple[FittedCurve, ...]:
         return tuple(FittedCurve(f.form, c.source, c.design, c.time, c.measured, c.fitted)
@@ -226,7 +259,12 @@ class VcbCalibrationReport:
         kept = [f for f in self.fits if f.kept] or list(self.fits)
         best = min(kept, key=lambda f: f.rms)
         form = get_form(best.form)
-        lines = [f"# camopt calibrate: form {best.form} ({best.description}),",
+        v = self.verdict
+        first = ([] if v.explained else [
+            "# NOT EXPLAINED: no model form fits these curves to their noise; the values "
+            "below are the best form's all the same (written with --allow-unexplained)",
+            "# " + v.headline.replace("\n", " ")])
+        lines = first + [f"# camopt calibrate: form {best.form} ({best.description}),",
                  f"# RMS misfit {best.rms / MM:.4f} mm on "
                  + ", ".join(c.source for c in best.curves) + ".",
                  f"# intervals: {INTERVALS}.",
