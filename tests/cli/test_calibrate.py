@@ -133,7 +133,7 @@ def test_bad_curve_files_are_one_line_naming_the_file(tmp_path):
     result = runner.invoke(app, ["calibrate", VCB, "--curve", str(path)])
     assert result.exit_code == 2
     assert result.stderr == f"error: {path}: line 1: no header: a header naming time_ms " \
-        "or time_s and travel_mm or travel_m\n"
+        "or time_s and travel_mm or travel_cm or travel_m\n"
 
 
 def test_an_existing_out_is_refused_before_the_fit(tmp_path):
@@ -213,3 +213,23 @@ def test_unexplained_curves_withhold_out_unless_allowed(tmp_path):
     assert result.exit_code == 0, result.output
     assert json.loads(result.stdout)["verdict"] == "not explained"
     assert out.read_text().startswith("# NOT EXPLAINED")
+
+
+@pytest.mark.parametrize("scale, header, message", [
+    ((1e-3, 1.0), "time_ms,travel_mm", "time_ms: the curve lasts 4.49e-05 s, less than 5 ms"),
+    ((1.0, 0.1), "time_ms,travel_mm", "travel_mm: the curve travels 1.8"),
+    ((1.0, 1.0), "time_ms,travel_m", "millimetres in a _m column"),
+])
+def test_unit_mix_ups_are_refused_before_the_fit(tmp_path, scale, header, message):
+    """The shipped curve with seconds under time_ms, centimetres under travel_mm or
+    millimetres under travel_m: one line naming the file and column, exit 2."""
+    import numpy as np
+
+    data = np.loadtxt(VENDOR, delimiter=",", skiprows=1)
+    path = tmp_path / "mixed.csv"
+    path.write_text(header + "\n" + "".join(f"{a * scale[0]!r},{b * scale[1]!r}\n"
+                                            for a, b in data.tolist()))
+    result = runner.invoke(app, ["calibrate", VCB, "--curve", str(path)])
+    assert result.exit_code == 2, result.output
+    assert result.stderr.startswith(f"error: {path}: ") and message in result.stderr
+    assert result.stderr.count("\n") == 1

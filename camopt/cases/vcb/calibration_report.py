@@ -33,13 +33,13 @@ from camopt.cases.vcb.calibrate import (
 )
 from camopt.cases.vcb.cam_points import read_cam_points
 from camopt.cases.vcb.config import VcbConfig
-from camopt.cases.vcb.curves import AnalyserQuantities, VelocityPoints, read_curve
+from camopt.cases.vcb.curves import AnalyserQuantities, VelocityPoints, check_scale, read_curve
 from camopt.cases.vcb.forms import BAND_COLUMNS, FORM_NAMES, FORMS, get_form
 from camopt.cases.vcb.model import VcbModel
 from camopt.config.models import CaseConfig
 from camopt.core.calibration import CalibrationRequest, FittedCurve
 from camopt.errors import ConfigError
-from camopt.units import MM, MS, N_PER_MM
+from camopt.units import DEG, MM, MS, N_PER_MM
 
 DESIGN_KEYS = ("kc1_n_per_mm", "kc2_n_per_mm", "a1", "a2", "a3", "cam_points", "label")
 CURVE_KEYS = (*DESIGN_KEYS, "latch_delay_ms")
@@ -114,20 +114,6 @@ def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport
         raise ConfigError("--form", unknown[0], f"unknown model form; known: "
                           f"{', '.join(FORM_NAMES)}")
     model = VcbModel(config)
-    curves = []
-    for c in request.curves:
-        where = str(c.path)
-        settings = _settings(c.settings, CURVE_KEYS, where)
-        delay = settings.pop("latch_delay_ms", None)
-        curves.append(CurveCase(read_curve(c.path), design_of(config, model, settings, where),
-                                None if delay is None
-                                else _number(delay, "latch_delay_ms", where, False) * MS))
-    designs = [design_of(config, model, {}, "case")] + [c.design for c in curves] + [
-        design_of(config, model, _settings(p.split(","), DESIGN_KEYS, "--predict"),
-                  "--predict") for p in request.predict]
-    unique: dict[str, Design] = {}
-    for d in designs:
-        unique.setdefault(d.label, d)
     points = None
     if request.velocity_points_mm is not None:
         low, high = request.velocity_points_mm
@@ -135,10 +121,33 @@ def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport
             raise ConfigError("--velocity-points", f"{low:g},{high:g}",
                               "need 0 < low < high (travel in mm)")
         points = VelocityPoints(low * MM, high * MM)
+    used = points or VelocityPoints.last_third(config.contact_gap_mm * MM)
+    curves = []
+    for c in request.curves:
+        where = str(c.path)
+        settings = _settings(c.settings, CURVE_KEYS, where)
+        delay = settings.pop("latch_delay_ms", None)
+        curve, design = read_curve(c.path), design_of(config, model, settings, where)
+        check_scale(curve, stroke(model, design), used)
+        curves.append(CurveCase(curve, design, None if delay is None
+                                else _number(delay, "latch_delay_ms", where, False) * MS))
+    designs = [design_of(config, model, {}, "case")] + [c.design for c in curves] + [
+        design_of(config, model, _settings(p.split(","), DESIGN_KEYS, "--predict"),
+                  "--predict") for p in request.predict]
+    unique: dict[str, Design] = {}
+    for d in designs:
+        unique.setdefault(d.label, d)
     forms = [get_form(f) for f in dict.fromkeys(request.forms)] or list(FORMS)
     fits = calibrate(config, curves, forms, list(unique.values()), points)
-    used = points or VelocityPoints.last_third(config.contact_gap_mm * MM)
     return VcbCalibrationReport(fits, used, config)
+
+
+def stroke(model: VcbModel, design: Design) -> float:
+    """The rod's stroke (m) of a design: its travel at the cam's last angle, the case's
+    linkage."""
+    kin = model.kinematics(design.a[None, :], model.vendor_link[None, :],
+                           model.c.rod_arm_offset_deg * DEG)
+    return float(kin.s1[0, -1])
 
 
 def _quantities(q: AnalyserQuantities) -> dict[str, Any]:
