@@ -172,9 +172,9 @@ def test_show_and_report_of_the_calibration_archive(two):
     for name in FORM_NAMES:
         assert f'id="form-{name}"' in page and f'id="figure-fit-{name}"' in page
     assert "contact_velocity_m_s" in page and "release_offset_deg" in page
-    import html as html_module
+    from markupsafe import escape  # Jinja2's own escaping
 
-    line = html_module.escape(data["verdict_line"])
+    line = escape(data["verdict_line"])
     assert f'<p id="verdict" class="ok">{line}</p>' in page
     result = runner.invoke(app, ["plot", str(path), "--out", str(out.parent / "png")])
     assert result.exit_code == 0, result.output
