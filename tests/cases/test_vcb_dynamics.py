@@ -211,7 +211,7 @@ def test_zero_surplus_stalls_before_the_latch():
     x = np.array([0.0728521, 0.101742, -0.0259065, 4050.72, 4814.89])
     ev = p.describe(x[None, :])
     assert abs(ev.extras["surplus_work_j"][0]) < 0.05
-    assert ev.extras["latched"][0] == 0 and np.isinf(ev.extras["closing_time_ms"][0])
+    assert ev.extras["latched"][0] == 0 and np.isinf(ev.extras["release_to_latch_ms"][0])
 
 
 @pytest.fixture(scope="module")
@@ -386,7 +386,7 @@ def test_band_is_the_extremes_over_the_parameter_sets():
                                   np.sum(~np.array(latched), axis=0))
     assert np.all(ev.extras["band_sets"] == len(latched))
     # the members' times come from the events-only path, the nominal's from the curves
-    for name, values in (("closing_time", closed), ("touch_time", touched)):
+    for name, values in (("release_to_latch", closed), ("touch_time", touched)):
         np.testing.assert_allclose(ev.extras[f"{name}_low_ms"], np.min(values, axis=0) / MS,
                                    rtol=1e-12, atol=1e-12)
         np.testing.assert_allclose(ev.extras[f"{name}_high_ms"], np.max(values, axis=0) / MS,

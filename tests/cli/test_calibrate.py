@@ -110,6 +110,35 @@ def test_the_fragment_extends_the_case_with_the_calibrated_values(two, tmp_path)
     assert case.cam_friction_nm == pytest.approx(params["cam_friction_nm"], rel=1e-5)
     assert case.l1_mm == load(VCB).case.l1_mm  # the rest from the case file
     assert 2 <= len(case.dynamics_band) <= 64
+    assert case.latch_delay_ms == pytest.approx(params["latch_delay_ms"], rel=1e-5)
+
+
+def test_a_design_run_on_the_fragment_reports_the_analysers_closing_time(two):
+    """A case extending the fragment reports closing_time_ms, command to touch: the
+    calibrated latch delay plus the touch time from the release (band ends too), and
+    the release-to-latch time under its own name; the vendor's reference closing time
+    agrees with calibrate's prediction for the reference design (within 0.05 ms: the
+    design run's band is the fragment's rows, calibrate's the profiles' envelope)."""
+    import numpy as np
+
+    from camopt.cases.vcb.problem import VcbProblem
+
+    data, out = two
+    design = out.parent / "design2.toml"
+    design.write_text(f'extends = "{out.name}"\n[solver]\nname = "de_gr"\n')
+    case = load(design).case
+    problem = VcbProblem(case)
+    ev = problem.describe(problem.vendor_x()[None, :])
+    e = ev.extras
+    for end in ("", "_low", "_high"):
+        np.testing.assert_allclose(e[f"closing_time{end}_ms"],
+                                   case.latch_delay_ms + e[f"touch_time{end}_ms"], rtol=1e-12)
+    assert np.all(e["release_to_latch_ms"] > e["touch_time_ms"])
+    (best,) = [f for f in data["forms"] if f["form"] == "efficiency_coulomb"]
+    (ref,) = [p for p in best["predictions"] if p["design"] == "reference"]
+    assert e["closing_time_ms"][0] == pytest.approx(ref["closing_time_ms"]["value"], abs=0.05)
+    plain = VcbProblem(load(VCB).case).describe(problem.vendor_x()[None, :]).extras
+    assert "closing_time_ms" not in plain and "release_to_latch_ms" in plain
 
 
 @pytest.mark.parametrize("args, message", [

@@ -181,6 +181,7 @@ class VcbCalibrationReport:
         for f in self.fits:
             names = [p.name for p in f.parameters]
             t = f.residuals
+            delay = _delay_ms(f)
             forms.append({
                 "form": f.form, "description": f.description, "rms_mm": f.rms / MM,
                 "kept": f.kept, "explains": f.explains,
@@ -206,7 +207,11 @@ class VcbCalibrationReport:
                                                           "high": p.closing_velocity_high},
                                  "touch_time_from_release_ms": {
                                      "value": p.touch_time / MS, "low": p.touch_time_low / MS,
-                                     "high": p.touch_time_high / MS}}
+                                     "high": p.touch_time_high / MS},
+                                 "closing_time_ms": None if delay is None else {
+                                     "value": delay + p.touch_time / MS,
+                                     "low": delay + p.touch_time_low / MS,
+                                     "high": delay + p.touch_time_high / MS}}
                                 for p in f.predictions],
             })
         v = self.verdict
@@ -251,13 +256,19 @@ class VcbCalibrationReport:
                            f"residual {np.max(np.abs(c.fitted - c.measured)) / MM:.4f} mm, "
                            f"latch delay {c.latch_delay / MS:.3f} ms")
                 out += _side_by_side(c.measured_quantities, c.fitted_quantities)
+            delay = _delay_ms(f)
+            zero = 0.0 if delay is None else delay
+            which = ("touch from the release" if delay is None else
+                     f"closing time: command to touch, latch delay {delay:.3f} ms")
             out.append(f"  {'prediction':<22}{'v_close m/s':>12}{'low':>8}{'high':>8}"
-                       f"{'t_touch ms':>12}{'low':>8}{'high':>8}  (touch: from the release)")
+                       f"{'closing ms' if delay is not None else 't_touch ms':>12}{'low':>8}"
+                       f"{'high':>8}  ({which})")
             for d in f.predictions:
                 out.append(f"  {d.design:<22}{d.closing_velocity:>12.4f}"
                            f"{d.closing_velocity_low:>8.4f}{d.closing_velocity_high:>8.4f}"
-                           f"{d.touch_time / MS:>12.3f}{d.touch_time_low / MS:>8.3f}"
-                           f"{d.touch_time_high / MS:>8.3f}")
+                           f"{zero + d.touch_time / MS:>12.3f}"
+                           f"{zero + d.touch_time_low / MS:>8.3f}"
+                           f"{zero + d.touch_time_high / MS:>8.3f}")
         return out + ["", v.headline]
 
     def curves(self) -> tuple[FittedCurve, ...]:
@@ -287,6 +298,9 @@ class VcbCalibrationReport:
             else:
                 lines.append(f"# {p.name} = {p.value:.6g} (95 %: {p.low:.4g} .. "
                              f"{p.high:.4g} {p.unit}; not a case field){mark}")
+        delay = _delay_ms(best)
+        if delay is not None and "latch_delay_ms" not in {p.name for p in best.parameters}:
+            lines.append(f"latch_delay_ms = {delay:.6g}    # measured (--set latch_delay_ms)")
         # what the form fixes rather than fits, where it differs from the case's
         if form.efficiency == "none":
             lines.append("efficiency = 1.0    # the form has no efficiency (Coulomb alone)")
@@ -303,6 +317,13 @@ class VcbCalibrationReport:
         lines += [f"  [{', '.join(f'{v:.6g}' for v in r)}]," for r in rows]
         lines.append("]")
         return "\n".join(lines) + "\n"
+
+
+def _delay_ms(fit: FormFit) -> float | None:
+    """The latch delay (ms) of a fit's predictions: the curves' (fitted, shared, or
+    measured), None where measured delays differ between curves."""
+    delays = {round(c.latch_delay / MS, 9) for c in fit.curves}
+    return delays.pop() if len(delays) == 1 else None
 
 
 def _toml_string(text: str) -> str:

@@ -580,6 +580,10 @@ class VcbProblem(Problem, VariesCase, HasVariants):
                 extras[name] = getattr(motion, field) / scale
                 extras[name.replace(unit, "_low" + unit)] = spread.low[field] / scale
                 extras[name.replace(unit, "_high" + unit)] = spread.high[field] / scale
+            if c.latch_delay_ms is not None:  # the analyser's closing time: command to touch
+                for end in ("", "_low", "_high"):
+                    extras[f"closing_time{end}_ms"] = (c.latch_delay_ms
+                                                       + extras[f"touch_time{end}_ms"])
             extras.update({
                 "latch_kinetic_energy_j": motion.final_kinetic,
                 "latch_kinetic_energy_low_j": spread.kinetic_low,
