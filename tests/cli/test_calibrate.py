@@ -7,7 +7,7 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from camopt.cases.vcb.forms import FORM_NAMES, get_form
+from camopt.cases.vcb.forms import CURVE_FORM_NAMES, get_form
 from camopt.cli import app
 from camopt.cli.calibrate import pair_sets
 from tests.cases.vcb_ode import CURVES, LATCH_DELAY_S, SPRING_SETS, TRUTH
@@ -50,7 +50,7 @@ def test_every_model_form_is_fitted_and_reported_with_which_are_kept(two):
     levels and is not."""
     data, _ = two
     forms = {f["form"]: f for f in data["forms"]}
-    assert list(forms) == list(FORM_NAMES)
+    assert list(forms) == list(CURVE_FORM_NAMES)
     for name, f in forms.items():
         assert f["rms_mm"] > 0 and isinstance(f["kept"], bool), name
         params = {p["name"] for p in f["parameters"]}
@@ -188,7 +188,7 @@ def test_show_and_report_of_the_calibration_archive(two):
     path = out.parent / "cal.h5"
     shown = runner.invoke(app, ["show", str(path)])
     assert shown.exit_code == 0, shown.output
-    for name in FORM_NAMES:
+    for name in CURVE_FORM_NAMES:
         assert name in shown.stdout
     assert "analyser quantity" in shown.stdout and "latch_delay_ms" in shown.stdout
     doc = json.loads(runner.invoke(app, ["show", str(path), "--format", "json"]).stdout)
@@ -198,7 +198,7 @@ def test_show_and_report_of_the_calibration_archive(two):
     result = runner.invoke(app, ["report", str(path), "--out", str(html)])
     assert result.exit_code == 0, result.output
     page = html.read_text()
-    for name in FORM_NAMES:
+    for name in CURVE_FORM_NAMES:
         assert f'id="form-{name}"' in page and f'id="figure-fit-{name}"' in page
     assert "contact_velocity_m_s" in page and "release_offset_deg" in page
     from markupsafe import escape  # Jinja2's own escaping
@@ -207,7 +207,7 @@ def test_show_and_report_of_the_calibration_archive(two):
     assert f'<p id="verdict" class="ok">{line}</p>' in page
     result = runner.invoke(app, ["plot", str(path), "--out", str(out.parent / "png")])
     assert result.exit_code == 0, result.output
-    assert len(list((out.parent / "png").glob("*.png"))) == len(FORM_NAMES)
+    assert len(list((out.parent / "png").glob("*.png"))) == len(CURVE_FORM_NAMES)
 
 
 def test_an_existing_archive_is_refused_before_the_fit(tmp_path):

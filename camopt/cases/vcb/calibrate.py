@@ -56,7 +56,7 @@ from camopt.cases.vcb.curves import (
     analyse,
 )
 from camopt.cases.vcb.dynamics import ClosingMotion
-from camopt.cases.vcb.forms import FORMS, ModelForm
+from camopt.cases.vcb.forms import CURVE_FORMS, ModelForm
 from camopt.cases.vcb.model import Kinematics, Loads, VcbModel
 from camopt.units import DEG, MM, MS
 
@@ -350,7 +350,8 @@ class FormFit:
     first, whether the form is ``kept`` (:func:`keep`), how its ``intervals`` were
     found (``profile``: profile likelihood; ``linearised``: a form not kept), the test of
     its residuals against the curves' noise (:func:`residual_test`) and whether it
-    ``explains`` the curves (kept, and its residuals pass: :meth:`ResidualTest.passes`)."""
+    ``explains`` the curves (kept, and its residuals pass: :meth:`ResidualTest.passes`),
+    and why a form with more physics is not kept (``kept_note``: :func:`nested_keep`)."""
 
     form: str
     description: str
@@ -364,6 +365,7 @@ class FormFit:
     intervals: str = "profile"
     residuals: ResidualTest | None = None
     explains: bool = False
+    kept_note: str = ""
 
 
 @dataclass(frozen=True)
@@ -720,18 +722,38 @@ class Calibration:
                 float(self.sigma[i])))
         return tuple(out)
 
-    def predict(self, fit: FormFit, designs: Sequence[Design], best: NDArray
-                ) -> tuple[Prediction, ...]:
+    def predict(self, fit: FormFit, designs: Sequence[Design], best: NDArray,
+                opt: Optimum | None = None) -> tuple[Prediction, ...]:
         """Closing velocity and touch time of ``designs`` at the fitted form parameters
-        ``best`` (P,) and their envelope over the fit's band."""
+        ``best`` (P,): low and high the wider of their envelope over the fit's band and,
+        given the optimum ``opt``, the linearised 95 % interval +-1.96 sqrt(g^T C g)
+        (g the prediction's gradient in the fitted coordinates by forward differences, C
+        the optimum's covariance). The envelope alone is the profiles' extremes along
+        each parameter's axis; a prediction that moves with several parameters at once
+        lies off those axes, and the envelope alone covered a third design's true
+        velocity in too few noisy curves (tests/cases/test_vcb_calibrate.py's coverage
+        study)."""
         P = np.vstack([best, fit.band])
         v, t = velocity(self.form, self.model, designs, P, self.steps)
+        sd_v = sd_t = np.zeros(len(designs))
+        if opt is not None:
+            h = 1e-6 * np.maximum(1.0, np.abs(opt.q))
+            Q = np.vstack([opt.q, opt.q + np.diag(h)])
+            vq, tq = velocity(self.form, self.model, designs, self.values(Q)[0], self.steps)
+            with np.errstate(invalid="ignore"):
+                gv, gt = (vq[1:] - vq[:1]) / h[:, None], (tq[1:] - tq[:1]) / h[:, None]
+                sd_v = np.sqrt(np.einsum("in,ij,jn->n", gv, opt.cov, gv))
+                sd_t = np.sqrt(np.einsum("in,ij,jn->n", gt, opt.cov, gt))
+        z = np.sqrt(CHI2_95_1DOF)
         with np.errstate(invalid="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: never touches
-            return tuple(Prediction(d.label, float(v[0, i]), float(np.nanmin(v[:, i])),
-                                    float(np.nanmax(v[:, i])), float(t[0, i]),
-                                    float(np.nanmin(t[:, i])), float(np.nanmax(t[:, i])))
-                         for i, d in enumerate(designs))
+            return tuple(Prediction(
+                d.label, float(v[0, i]),
+                float(np.nanmin(np.r_[v[:, i], v[0, i] - z * sd_v[i]])),
+                float(np.nanmax(np.r_[v[:, i], v[0, i] + z * sd_v[i]])), float(t[0, i]),
+                float(np.nanmin(np.r_[t[:, i], t[0, i] - z * sd_t[i]])),
+                float(np.nanmax(np.r_[t[:, i], t[0, i] + z * sd_t[i]])))
+                for i, d in enumerate(designs))
 
 
 def _robust_cost(R: NDArray) -> NDArray:
@@ -793,27 +815,61 @@ def keep(rms: Sequence[float], noise: float) -> list[bool]:
     return [r <= limit for r in rms]
 
 
+CHI2_99_1DOF = 6.634896601021214
+"""chi-square quantile, 1 degree of freedom, 0.99 (scipy.stats.chi2.ppf(0.99, 1))."""
+
+
+def nested_keep(forms: Sequence[ModelForm], optima: Sequence[Optimum], kept: Sequence[bool]
+                ) -> list[tuple[bool, str]]:
+    """The keep rule for a form that adds one term to a ``base`` form fitted beside it:
+    kept only where the term improves the fit beyond chance, the likelihood ratio
+    2 (cost_base - cost) / s^2 at least chi2(1, 0.99) = 6.63 (s^2 the form's reduced
+    chi-square, at least 1). A term the curves do not need fits them as well as the base
+    (its parameter at its lower bound, the ratio ~0) and is kept out: its extra freedom
+    would only widen the predictions. Returns (kept, why not) per form."""
+    names = [f.name for f in forms]
+    out = []
+    for form, opt, k in zip(forms, optima, kept):
+        if form.base is None or form.base not in names or not k:
+            out.append((k, ""))
+            continue
+        ratio = 2 * (optima[names.index(form.base)].cost - opt.cost) / opt.s2
+        out.append((True, "") if ratio >= CHI2_99_1DOF else (
+            False, f"not kept: its {form.extra.replace('_', ' ')} does not improve on "
+            f"{form.base} (likelihood ratio {ratio:.2f} < {CHI2_99_1DOF:.2f})"))
+    return out
+
+
 def calibrate(config: VcbConfig, curves: Sequence[CurveCase],
-              forms: Sequence[ModelForm] = FORMS, predict: Sequence[Design] = (),
+              forms: Sequence[ModelForm] = CURVE_FORMS, predict: Sequence[Design] = (),
               points: VelocityPoints | None = None) -> tuple[FormFit, ...]:
-    """Fit every form (default every form of :data:`~camopt.cases.vcb.forms.FORMS`) to
-    the curves jointly, mark the forms kept (:func:`keep`), find the intervals (profile
-    likelihood for the kept forms, linearised for the others: :meth:`Calibration.fit`)
-    and predict ``predict``'s designs (the curves' designs if empty)."""
+    """Fit every form (default :data:`~camopt.cases.vcb.forms.CURVE_FORMS`) to the curves
+    jointly, mark the forms kept (:func:`keep`, :func:`nested_keep`; where some form
+    explains the curves, a form whose residuals fail the test is not kept), find the
+    intervals (profile likelihood for the kept forms, linearised for the others:
+    :meth:`Calibration.fit`) and predict ``predict``'s designs (the curves' designs if
+    empty)."""
     cals = [Calibration(config, form, curves, points) for form in forms]
     optima = [c.optimum() for c in cals]
     sigma = np.array([max(c.curve.noise, 1e-3 * MM) for c in curves])
     counts = np.array([len(c.curve.time) for c in curves])
     noise = float(np.sqrt(np.sum(counts * sigma**2) / np.sum(counts)))
-    kept = keep([o.rms for o in optima], noise)
+    decided = nested_keep(forms, optima, keep([o.rms for o in optima], noise))
+    tests = [residual_test([s[0] - c.curve.travel for s, c in zip(cal.simulate(o.q), curves)],
+                           list(cal.sigma)) for cal, o in zip(cals, optima)]
+    explaining = [f.name for f, (k, _), t in zip(forms, decided, tests) if k and t.passes()]
+    if explaining:  # forms that explain the curves outrank forms that merely fit as well
+        decided = [(k, why) if not k or t.passes() else (
+            False, f"not kept: its residuals are not the noise (RMS {t.rms_ratio:.2f} x, "
+            f"Durbin-Watson {t.durbin_watson:.2f}) where {', '.join(explaining)} explain "
+            "the curves") for (k, why), t in zip(decided, tests)]
     out = []
-    for cal, opt, k in zip(cals, optima, kept):
+    for cal, opt, (k, why), test in zip(cals, optima, decided, tests):
         fit = cal.fit(opt, profiled=k)
         best = np.array([p.value for p in fit.parameters[:cal.n_form]])
         designs = list(predict) or _unique(cal.designs)
-        test = residual_test([c.fitted - c.measured for c in fit.curves], list(cal.sigma))
-        out.append(replace(fit, predictions=cal.predict(fit, designs, best), kept=k,
-                           residuals=test, explains=k and test.passes()))
+        out.append(replace(fit, predictions=cal.predict(fit, designs, best, opt), kept=k,
+                           residuals=test, explains=k and test.passes(), kept_note=why))
     return tuple(out)
 
 

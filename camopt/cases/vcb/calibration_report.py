@@ -34,7 +34,7 @@ from camopt.cases.vcb.calibrate import (
 from camopt.cases.vcb.cam_points import read_cam_points
 from camopt.cases.vcb.config import VcbConfig
 from camopt.cases.vcb.curves import AnalyserQuantities, VelocityPoints, check_scale, read_curve
-from camopt.cases.vcb.forms import BAND_COLUMNS, FORM_NAMES, FORMS, get_form
+from camopt.cases.vcb.forms import BAND_COLUMNS, CURVE_FORM_NAMES, CURVE_FORMS, get_form
 from camopt.cases.vcb.model import VcbModel
 from camopt.config.models import CaseConfig
 from camopt.core.calibration import CalibrationRequest, FittedCurve
@@ -109,10 +109,10 @@ def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport
     assert isinstance(config, VcbConfig)
     if not request.curves:
         raise ConfigError("--curve", "--curve", "give at least one curve file")
-    unknown = [f for f in request.forms if f not in FORM_NAMES]
+    unknown = [f for f in request.forms if f not in CURVE_FORM_NAMES]
     if unknown:
         raise ConfigError("--form", unknown[0], f"unknown model form; known: "
-                          f"{', '.join(FORM_NAMES)}")
+                          f"{', '.join(CURVE_FORM_NAMES)}")
     model = VcbModel(config)
     points = None
     if request.velocity_points_mm is not None:
@@ -137,7 +137,7 @@ def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport
     unique: dict[str, Design] = {}
     for d in designs:
         unique.setdefault(d.label, d)
-    forms = [get_form(f) for f in dict.fromkeys(request.forms)] or list(FORMS)
+    forms = [get_form(f) for f in dict.fromkeys(request.forms)] or list(CURVE_FORMS)
     fits = calibrate(config, curves, forms, list(unique.values()), points)
     return VcbCalibrationReport(fits, used, config)
 
@@ -184,7 +184,7 @@ class VcbCalibrationReport:
             delay = _delay_ms(f)
             forms.append({
                 "form": f.form, "description": f.description, "rms_mm": f.rms / MM,
-                "kept": f.kept, "explains": f.explains,
+                "kept": f.kept, "kept_note": f.kept_note, "explains": f.explains,
                 "noise_mm": None if t is None else t.noise / MM,
                 "rms_ratio": None if t is None else t.rms_ratio,
                 "durbin_watson": None if t is None else t.durbin_watson,
@@ -227,18 +227,18 @@ class VcbCalibrationReport:
         out = [v.headline] + [f"warning: {w}" for w in v.warnings] + [
             "", f"contact velocity between {self.points.low / MM:.3g} and "
             f"{self.points.high / MM:.3g} mm of travel; intervals: {INTERVALS}", "",
-            f"{'model form':<28}{'RMS mm':>10}{'x noise':>9}{'D-W':>7}  kept  explains",
+            f"{'model form':<32}{'RMS mm':>10}{'x noise':>9}{'D-W':>7}  kept  explains",
         ]
         for f in self.fits:
             t = f.residuals
             ratio = "" if t is None else f"{t.rms_ratio:>9.2f}{t.durbin_watson:>7.2f}"
-            out.append(f"{f.form:<28}{f.rms / MM:>10.4f}{ratio}  {'yes ' if f.kept else 'no  '}"
+            out.append(f"{f.form:<32}{f.rms / MM:>10.4f}{ratio}  {'yes ' if f.kept else 'no  '}"
                        f"  {'yes' if f.explains else 'no'}")
         out += [f"({KEEP_RULE}; {EXPLAINS_RULE})"]
         for f in self.fits:
             out += ["", f"form {f.form}: {f.description}",
                     f"  RMS misfit {f.rms / MM:.4f} mm over {len(f.curves)} curve(s); "
-                    f"{'kept' if f.kept else 'NOT kept'}"
+                    f"{'kept' if f.kept else (f.kept_note or 'NOT kept')}"
                     + ("" if f.intervals == "profile" else f"; intervals {LINEARISED}"),
                     f"  {'parameter':<22}{'value':>12}{'low':>12}{'high':>12}  identified"]
             for p in f.parameters:
@@ -309,6 +309,13 @@ class VcbCalibrationReport:
         if form.friction == "driven":
             lines.append("# the form has no friction in the free rotation from the release: "
                          "only the dynamics_band rows (release_friction_nm = 0) carry that")
+        others = [f.form for f in kept if get_form(f.form).extra != form.extra]
+        if others:
+            lines.append("# not in the band (other physics than the chosen form's; a case "
+                         "has one spring mass and damping): " + ", ".join(others))
+        if form.extra != "none":
+            lines.append(f"# every band row takes the {form.extra.replace('_', ' ')} above "
+                         "(its spread is not in the rows)")
         lines.append("# parameter sets inside the intervals (profiles' extremes), every kept "
                      "form, the chosen form's fit first:")
         lines.append("# (" + ", ".join(BAND_COLUMNS) + ")")
@@ -333,10 +340,12 @@ def _toml_string(text: str) -> str:
 def _band_rows(best: FormFit, kept: Sequence[FormFit], config: VcbConfig
                ) -> list[list[float]]:
     """``dynamics_band`` rows (:data:`~camopt.cases.vcb.forms.BAND_COLUMNS`) of every kept
-    form: each form's fit and its band's extremes per parameter, the chosen form
-    (``best``) first, at most 64 (the case's limit)."""
+    form with the chosen form's physics (``best``'s ``extra``: one case carries one spring
+    mass and one rod damping for every row): each form's fit and its band's extremes per
+    parameter, the chosen form first, at most 64 (the case's limit)."""
     rows: list[list[float]] = []
-    for fit in [best] + [f for f in kept if f is not best]:
+    extra = get_form(best.form).extra
+    for fit in [best] + [f for f in kept if f is not best and get_form(f.form).extra == extra]:
         band = fit.band
         pick = np.unique(np.r_[0, np.argmin(band, axis=0), np.argmax(band, axis=0)])
         rows += get_form(fit.form).band_rows(band[pick], config).tolist()
