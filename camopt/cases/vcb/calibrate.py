@@ -935,7 +935,7 @@ def verdict(fits: Sequence[FormFit], gap: float) -> Verdict:
     best = min(fits, key=lambda f: f.rms)
     t = best.residuals
     detail = "" if t is None else (
-        f"best form {best.form}: residual RMS {t.rms_ratio:.2f} x the noise "
+        f"best form {best.form}: residual RMS {best.rms / t.noise:.2f} x the noise "
         f"({t.noise / MM:.4f} mm), Durbin-Watson {t.durbin_watson:.2f} "
         f"({t.structure_z:.1f} standard errors below 2)")
     head = (f"verdict: NOT EXPLAINED: no model form fits the curves to their noise; {detail}; "

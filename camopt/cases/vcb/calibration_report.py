@@ -231,7 +231,7 @@ class VcbCalibrationReport:
         ]
         for f in self.fits:
             t = f.residuals
-            ratio = "" if t is None else f"{t.rms_ratio:>9.2f}{t.durbin_watson:>7.2f}"
+            ratio = "" if t is None else f"{f.rms / t.noise:>9.2f}{t.durbin_watson:>7.2f}"
             out.append(f"{f.form:<32}{f.rms / MM:>10.4f}{ratio}  {'yes ' if f.kept else 'no  '}"
                        f"  {'yes' if f.explains else 'no'}")
         out += [f"({KEEP_RULE}; {EXPLAINS_RULE})"]
