@@ -503,3 +503,17 @@ def test_spring_mass_and_rod_dashpot_match_the_independent_ode(ode, terms):
     ok = np.isfinite(mo.time[0])
     np.testing.assert_allclose(np.interp(times, mo.time[0][ok], mo.rod[0][ok]), rod(times),
                                atol=1e-6)
+
+
+def test_a_case_with_spring_mass_and_damping_simulates_them_in_every_band_set():
+    """case.spring_mass_kg and case.rod_damping_n_s_per_m reach the design run: the
+    vendor's closing velocity and the band's ends are each slower than the rigid case's
+    (every set carries the terms), by more than 5 % at these values."""
+    rigid = VcbProblem(load(CONFIGS / "vcb.toml").case)
+    x = rigid.vendor_x()[None, :]
+    a = rigid.describe(x).extras
+    for setting in ("case.spring_mass_kg=0.8", "case.rod_damping_n_s_per_m=250"):
+        b = VcbProblem(load(CONFIGS / "vcb.toml", setting).case).describe(x).extras
+        for key in ("closing_velocity_avg_m_s", "closing_velocity_low_m_s",
+                    "closing_velocity_high_m_s"):
+            assert b[key][0] < 0.95 * a[key][0], (setting, key)
