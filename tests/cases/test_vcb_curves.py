@@ -110,7 +110,7 @@ def test_metres_in_a_mm_column_and_a_still_curve_are_refused(tmp_path):
 
 def test_too_long_curves_are_refused(tmp_path):
     t, s = _ramp()
-    with pytest.raises(ConfigError, match="too long a curve"):  # seconds in a _ms column
+    with pytest.raises(ConfigError, match="too long a curve"):  # microseconds in a _ms column
         read_curve(_write(tmp_path / "s.csv", t * 1e3, s))
     n = MAX_SAMPLES + 1
     path = tmp_path / "long.csv"
@@ -180,10 +180,12 @@ def test_an_analyser_export_with_semicolons_and_decimal_commas_reads_as_the_csv(
     assert export.columns == ("time_ms", "travel_mm")
 
 
-def test_seconds_in_a_ms_column_are_refused(tmp_path):
+def test_seconds_in_a_ms_column_and_the_reverse_are_refused_naming_the_mix_up(tmp_path):
     t, s = _ramp()
     with pytest.raises(ConfigError, match="too short for a closing .seconds in a _ms column"):
         read_curve(_write(tmp_path / "s.csv", t / 1e3, s))
+    with pytest.raises(ConfigError, match="too long a curve .milliseconds in a _s column"):
+        read_curve(_write(tmp_path / "m.csv", t, s, "time_s,travel_mm"))
 
 
 @pytest.mark.parametrize("scale, header, message", [

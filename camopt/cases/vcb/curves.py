@@ -168,13 +168,15 @@ def read_curve(path: str | Path) -> TravelCurve:
         raise ConfigError(name, f"line {k + 3}", f"{time_name} {shown[k + 1]:g} {what} "
                           f"{shown[k]:g} on the line before: times must increase")
     if time[-1] - time[0] > MAX_DURATION_S:
+        hint = ("milliseconds in a _s column? name it time_ms" if time_name == "time_s"
+                else "microseconds in a _ms column, or crop it to the closing")
         raise ConfigError(name, time_name, f"the curve lasts {time[-1] - time[0]:g} s, more "
-                          f"than {MAX_DURATION_S:g} s: too long a curve (seconds in a _ms "
-                          "column?)")
+                          f"than {MAX_DURATION_S:g} s: too long a curve ({hint})")
     if time[-1] - time[0] < MIN_DURATION_S:
+        hint = ("seconds in a _ms column? name it time_s" if time_name == "time_ms"
+                else "a closing lasts tens of ms from the command")
         raise ConfigError(name, time_name, f"the curve lasts {time[-1] - time[0]:g} s, less "
-                          f"than {MIN_DURATION_S * 1e3:g} ms: too short for a closing "
-                          "(seconds in a _ms column? name it time_s)")
+                          f"than {MIN_DURATION_S * 1e3:g} ms: too short for a closing ({hint})")
     noise = noise_level(travel)
     start = motion_start(travel, noise)
     span = float(np.max(travel) - np.min(travel))
