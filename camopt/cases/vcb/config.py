@@ -438,7 +438,7 @@ class VcbDynamicsIdentifyConfig(VcbConfig):
         1.71, description="Sec 3.2: average closing velocity of the vendor design")
     closed_by_ms: Positive = Field(
         45.0, description="Sec 3.2 and Table 4: closed when the simulation ends at 45 ms "
-        "(an upper bound on the closing time, not an event)")
+        "(an upper bound on release_to_latch_ms, not an event)")
     velocity_reading_pct: Positive = Field(
         2.0, description="reading error of the reported velocities (band; assumed)")
     time_reading_ms: Positive = Field(
