@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from camopt.errors import ConfigError
-from camopt.units import MM, MS
+from camopt.units import MM, MS, TO_MS
 
 MAX_SAMPLES = 200_000
 """Samples a curve may have (an analyser records a closing at 10-20 kHz for ~0.1 s)."""
@@ -176,7 +176,7 @@ def read_curve(path: str | Path) -> TravelCurve:
         hint = ("seconds in a _ms column? name it time_s" if time_name == "time_ms"
                 else "a closing lasts tens of ms from the command")
         raise ConfigError(name, time_name, f"the curve lasts {time[-1] - time[0]:g} s, less "
-                          f"than {MIN_DURATION_S * 1e3:g} ms: too short for a closing ({hint})")
+                          f"than {MIN_DURATION_S * TO_MS:g} ms: too short for a closing ({hint})")
     noise = noise_level(travel)
     start = motion_start(travel, noise)
     span = float(np.max(travel) - np.min(travel))
@@ -237,7 +237,7 @@ def smoothed(travel: NDArray, noise: float, time: NDArray) -> tuple[NDArray, flo
     n = len(travel)
     dt = float(np.median(np.diff(time))) if n > 1 else 1.0
     cap = n // 4 - (1 - (n // 4) % 2)  # the largest odd number up to a quarter
-    window = min(int(round(1e-3 / dt)) | 1, cap)
+    window = min(int(round(MS / dt)) | 1, cap)
     if noise <= 0 or window < 5:
         return travel, noise
     gain = float(np.sqrt(np.sum(savgol_coeffs(window, 2) ** 2)))
