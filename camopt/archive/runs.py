@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import re
 from collections.abc import Iterator
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -341,10 +342,27 @@ def _read_best(best: h5py.Group, layout: _Layout) -> BestView:
         objective=float(best.attrs["objective"]),
         feasible=bool(best.attrs["feasible"]),
         x=dict(zip(names, (best["x"][()] * layout.to_display).tolist())),
-        metrics={k: _plain(v) for k, v in best["metrics"].attrs.items()},
+        metrics=renamed_metrics({k: _plain(v) for k, v in best["metrics"].attrs.items()}),
         active=[c for c, gi in zip(constraints, g) if abs(gi) <= ACTIVE_TOL],
         violated=[c for c, gi in zip(constraints, g) if not gi <= FEASIBILITY_TOL],
         repeat=int(best.attrs["repeat"]))
+
+
+OLD_NAMES = {"closing_time": "release_to_latch"}
+"""Metrics renamed since: a VCB archive written before the analyser's vocabulary called
+the release-to-latch time ``closing_time_ms`` (with ``_low``/``_high`` and a reference
+prefix); ``closing_time_ms`` now means command to touch."""
+
+
+def renamed_metrics(metrics: dict[str, Any]) -> dict[str, Any]:
+    """An older archive's metrics under today's names (:data:`OLD_NAMES`), told apart by
+    holding the old name without the new one; today's archives unchanged."""
+    for old, new in OLD_NAMES.items():
+        if any(new in k for k in metrics) or not any(f"{old}_" in k for k in metrics):
+            continue
+        metrics = {re.sub(rf"(^|_){old}_(low_|high_)?ms$", rf"\1{new}_\2ms", k): v
+                   for k, v in metrics.items()}
+    return metrics
 
 
 def _load(f: h5py.File, path: str | Path) -> RunView:

@@ -108,6 +108,9 @@ def calibrate(
         "and report")] = None,
     force: Annotated[bool, typer.Option(help="overwrite an existing --out, --archive and "
                                         "--plot's PNGs")] = False,
+    allow_unexplained: Annotated[bool, typer.Option(
+        "--allow-unexplained", help="write --out even when no model form explains the "
+        "curves (the fragment's first line says so)")] = False,
     format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
 ) -> None:
     """Calibrate a case's dynamics on measured travel curves (breaker analyser CSV)."""
@@ -148,7 +151,9 @@ def calibrate(
             with writing(plot):
                 written = save(figures(report.curves(), rms_of(data)), plot, "calibration",
                                force, (case, *curve), key="--plot")
-        if out_path is not None:
+        explained = data.get("verdict") != "not explained"
+        withheld = out_path is not None and not explained and not allow_unexplained
+        if out_path is not None and not withheld:
             extends = os.path.relpath(case.resolve(), out_path.resolve().parent)
             write_files({out_path: report.fragment(Path(extends).as_posix()).encode()},
                         force, inputs=(case, *curve))
@@ -162,9 +167,15 @@ def calibrate(
     else:
         print("\n".join(visible(line) for line in report.lines()))
     if format != Format.json:
-        if out_path is not None:
+        if out_path is not None and not withheld:
             print(f"\ncalibrated values written to {visible(out_path)} (a case can extend it)")
         if archive_path is not None:
             print(f"calibration archive: {visible(archive_path)} (camopt show / plot / report)")
         for p in written:
             print(f"figure: {visible(p)}")
+        if (out_path is not None and not withheld) or archive_path is not None or written:
+            print(visible(data.get("verdict_line", "")))  # the verdict, last
+    if withheld:
+        typer.echo(f"error: {visible(out_path)}: --out: not written: no model form explains "
+                   "the curves (--allow-unexplained writes it all the same)", err=True)
+        raise typer.Exit(1)

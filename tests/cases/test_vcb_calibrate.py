@@ -215,3 +215,163 @@ def test_kept_forms_rule():
     assert keep([0.02, 0.029, 0.031, 0.4], noise=0.01) == [True, True, False, False]
     assert keep([0.005, 0.014, 0.016], noise=0.01) == [True, True, False]
     assert keep([], noise=0.01) == []
+
+
+def test_residual_test_passes_white_noise_and_flags_a_smooth_misfit():
+    """White noise at the stated sigma: RMS ratio within 5 % of 1 (N = 2,000: the ratio's
+    standard error is 1.6 %) and Durbin-Watson within 3 standard errors of 2 (it passes).
+    A smooth misfit of 0.5 sigma (a sine over the curve) under the same noise: its RMS
+    ratio, 1.12, passes, but d falls to 1.6 (2 / 1.25), 9 standard errors below 2: flagged.
+    An analyser spike of 1,000 sigma counts as WINSOR sigma."""
+    from camopt.cases.vcb.calibrate import WINSOR, residual_test
+
+    rng = np.random.default_rng(3)
+    sigma = 0.02e-3
+    white = [sigma * rng.standard_normal(1000) for _ in range(2)]
+    t = residual_test(white, [sigma, sigma])
+    assert t.rms_ratio == pytest.approx(1.0, rel=0.05)
+    assert abs(t.durbin_watson - 2.0) < 3 * 2 / np.sqrt(2000) and t.passes()
+    assert t.noise == pytest.approx(sigma) and t.samples == 2000
+    smooth = [w + 0.5 * sigma * np.sin(np.linspace(0, 3 * np.pi, 1000)) for w in white]
+    s = residual_test(smooth, [sigma, sigma])
+    assert s.rms_ratio < 1.5 and s.structure_z > 3 and not s.passes()
+    spiked = [white[0].copy()]
+    spiked[0][500] = 1000 * sigma
+    one = residual_test(spiked, [sigma])
+    clean = residual_test(white[:1], [sigma])
+    expected = np.sqrt(clean.rms_ratio**2 + (WINSOR**2 - (white[0][500] / sigma) ** 2) / 1000)
+    assert one.rms_ratio == pytest.approx(expected, rel=1e-12)
+
+
+def test_near_bound_rule():
+    """A log parameter within a factor 1.5 (or a tenth of its log range, if less) of a
+    bound is at it; the delay (ms, linear) within 0.1 ms."""
+    from camopt.cases.vcb.calibrate import near_bound
+
+    lo, hi = np.log(0.05), np.log(30.0)  # the rod mass: factor 1.5
+    assert near_bound(np.log(0.07), lo, hi, True) and not near_bound(np.log(0.08), lo, hi, True)
+    lo, hi = np.log(0.2), np.log(1.0)  # the efficiency: a tenth of ln 5, factor 1.175
+    assert near_bound(np.log(0.86), lo, hi, True) and not near_bound(np.log(0.84), lo, hi, True)
+    assert near_bound(0.05, 0.0, 100.0, False) and not near_bound(0.2, 0.0, 100.0, False)
+
+
+def test_in_model_curves_are_explained(two):
+    """The shipped curves (made in this form) are explained: residuals at the noise,
+    d within 3 standard errors of 2, no parameter at a search bound."""
+    t = two.residuals
+    assert two.explains and t.passes()
+    assert t.rms_ratio == pytest.approx(1.0, abs=0.1)
+    assert not any(p.at_bound for p in two.parameters)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("physics, term, truth", [
+    ({"spring_kg": 1.2}, "spring_mass_kg", 0.8),  # a third of each 1.2 kg spring moves
+    ({"dashpot_n_s_per_m": 250.0}, "rod_damping_n_s_per_m", 250.0)])
+def test_curves_with_physics_the_rigid_forms_lack(problem, physics, term, truth):
+    """Curves from the independent ODE with the closing springs' own mass (1.2 kg each)
+    or a rod dashpot (250 N s/m), two spring sets, 0.03 mm noise: the rigid forms do not
+    explain them (Durbin-Watson 1.2 and 1.65: 12 and 5 standard errors below 2); either
+    the verdict is NOT EXPLAINED, or every kept form predicts a third design's closing
+    velocity (the ODE's, same physics) inside its interval. Measured: explained by the
+    form with the missing term, its value within 20 % of the truth (the dashpot's curves
+    are explained by the springs' mass too, both forms' predictions holding the truth)."""
+    from camopt.cases.vcb.calibrate import verdict
+    from camopt.cases.vcb.curves import TravelCurve, noise_level
+    from camopt.cases.vcb.forms import CURVE_FORMS
+
+    curves = []
+    for seed, name in enumerate(("vendor", "stiff")):
+        rod, _, _ = vcb_ode.closing(problem, vcb_ode.SPRING_SETS[name], **physics)
+        t, s = vcb_ode.sample(rod, seed=seed + 10, noise=0.03e-3)
+        curves.append(CurveCase(TravelCurve(name, t, s, noise_level(s)),
+                                _design(problem, name)))
+    third = Design("third", problem.model.vendor_a, np.array([8.5, 8.5]) * N_PER_MM)
+    forms = [f for f in CURVE_FORMS if "driven" not in f.name and f.name != "fitted_efficiency"]
+    fits = {f.form: f for f in calibrate(problem.config, curves, forms, [third])}
+    for name in ("efficiency_coulomb", "coulomb"):
+        assert not fits[name].explains and fits[name].residuals.structure_z > 3, name
+    v = verdict(list(fits.values()), problem.config.contact_gap_mm * MM)
+    if not v.explained:
+        assert "NOT EXPLAINED" in v.headline
+        return
+    _, _, v_true = vcb_ode.closing(problem, (8.5, 8.5), **physics)
+    kept = [f for f in fits.values() if f.kept]
+    assert kept and all(f.explains for f in kept)
+    for f in kept:
+        (p,) = f.predictions
+        assert p.closing_velocity_low <= v_true <= p.closing_velocity_high, (f.form, p)
+    (extended,) = [f for f in kept if any(p.name == term for p in f.parameters)]
+    (value,) = [p for p in extended.parameters if p.name == term]
+    # within 20 % (this noise draw: spring mass 0.92 [0.84, 0.99] for 0.8, an interval
+    # that misses; the dashpot 264 [222, 305] for 250)
+    assert value.value == pytest.approx(truth, rel=0.2)
+
+
+def test_a_200_hz_curve_reads_the_contact_velocity_of_a_10_khz_one(problem, two):
+    """Both spring sets sampled at 200 Hz (one sample between the velocity's calculation
+    points; 60 ms, 0.02 mm noise): the contact velocity is read from the fit (resampled,
+    said in the notes) within 2 % of the 10 kHz curves' reading (linear interpolation
+    between the 200 Hz samples reads ~20 % low)."""
+    curves = []
+    for seed, name in enumerate(("vendor", "stiff")):
+        rod, _, _ = vcb_ode.closing(problem, vcb_ode.SPRING_SETS[name])
+        t, s = vcb_ode.sample(rod, seed=seed + 20, rate_hz=200.0, duration=0.06)
+        from camopt.cases.vcb.curves import TravelCurve, noise_level
+
+        curves.append(CurveCase(TravelCurve(name, t, s, noise_level(s)),
+                                _design(problem, name)))
+    (fit,) = calibrate(problem.config, curves, [FORM])
+    for coarse, fine in zip(fit.curves, two.curves):
+        q = coarse.measured_quantities
+        assert any("resampled from the fit" in n for n in q.notes)
+        assert q.contact_velocity == pytest.approx(
+            fine.measured_quantities.contact_velocity, rel=0.02)
+
+
+COVERAGE_REPLICATES = 20
+
+
+@pytest.mark.slow
+def test_95_percent_intervals_cover_the_truth_in_noisy_model_curves(problem):
+    """A coverage study: COVERAGE_REPLICATES pairs of curves (both spring sets) made by the
+    model itself at known parameters (the form's closing at the truth, a 3.4 ms delay),
+    each with its own 0.02 mm white noise (seeded); every replicate calibrated. The 95 %
+    intervals of the six parameters and of a third design's closing velocity must hold
+    the truth in at least 90 % of the 7 x 20 cases (a 95 % interval holds it in 95 % on
+    average; 90 % leaves room for the chance of 140 draws, ~1.8 % standard error;
+    measured 138 of 140, ~17 s CPU). Curves of the model: the study tests the intervals,
+    not the model."""
+    from camopt.cases.vcb.calibrate import sample_travel, travel
+    from camopt.cases.vcb.curves import TravelCurve
+
+    truth = np.array([TRUTH[name] for name in FORM.parameters])
+    delay = vcb_ode.LATCH_DELAY_S
+    designs = [_design(problem, "vendor"), _design(problem, "stiff")]
+    third = Design("third", problem.model.vendor_a, np.array([8.5, 8.5]) * N_PER_MM)
+    from camopt.cases.vcb.calibrate import _KinematicsMemo, velocity
+
+    model = _KinematicsMemo(problem.config)
+    steps = problem.config.dynamics_steps
+    time, rod = travel(FORM, model, designs, truth[None, :], steps)
+    v_true = velocity(FORM, model, [third], truth[None, :], steps)[0][0, 0]
+    t = np.arange(0.0, 0.045, 1e-4)
+    clean = [sample_travel(time[:, i], rod[:, i], (t - delay)[None, :])[0] for i in range(2)]
+    rng = np.random.default_rng(2046)
+    held, total = 0, 0
+    misses = []
+    for _ in range(COVERAGE_REPLICATES):
+        curves = []
+        for i, d in enumerate(designs):
+            s = clean[i] + vcb_ode.NOISE_M * rng.standard_normal(t.size)
+            curves.append(CurveCase(TravelCurve(d.label, t, s, vcb_ode.NOISE_M), d))
+        (fit,) = calibrate(problem.config, curves, [FORM], [third])
+        for p in fit.parameters:
+            ok = p.low <= TRUTH[p.name] <= p.high
+            held, total = held + ok, total + 1
+            misses += [] if ok else [p.name]
+        (pred,) = fit.predictions
+        ok = pred.closing_velocity_low <= v_true <= pred.closing_velocity_high
+        held, total = held + ok, total + 1
+        misses += [] if ok else ["velocity"]
+    assert held / total >= 0.9, (held, total, misses)

@@ -60,11 +60,18 @@ class Closing:
 
 
 def closing(problem: VcbProblem, kc_n_per_mm: tuple[float, float], truth: Truth = TRUTH,
-            a: np.ndarray | None = None):
+            a: np.ndarray | None = None, spring_kg: float = 0.0, dashpot_n_s_per_m: float = 0.0):
     """Rod travel (m) as a function of the time from the release (s), and the touch time
     and the average velocity over the last third of the contact stroke (m/s), of the
-    problem's reference cam (or follower law ``a``) with spring rates ``kc_n_per_mm``."""
-    sim = simulate(problem, kc_n_per_mm, truth, a)
+    problem's reference cam (or follower law ``a``) with spring rates ``kc_n_per_mm``.
+
+    Physics camopt's model forms leave out, for the calibration's verdict: ``spring_kg``
+    the mass of each of the two closing springs (a uniform coil with one end fixed moves
+    with kinetic energy 1/2 (m/3) L'^2, Rayleigh's third: an inertia (m/3) (dL/dtheta)^2
+    per spring on the cam, in the free rotation too), ``dashpot_n_s_per_m`` a viscous
+    force on the rod (a buffer, c ds1/dt against the motion: a torque c ds1'^2 omega)."""
+    sim = simulate(problem, kc_n_per_mm, truth, a, spring_kg=spring_kg,
+                   dashpot_n_s_per_m=dashpot_n_s_per_m)
     return sim.rod, sim.touch_time, sim.closing_velocity_avg
 
 
@@ -77,7 +84,8 @@ def truth_of(problem: VcbProblem) -> Truth:
 
 
 def simulate(problem: VcbProblem, kc_n_per_mm: tuple[float, float], truth: Truth = TRUTH,
-             a: np.ndarray | None = None, rtol: float = 1e-10) -> Closing:
+             a: np.ndarray | None = None, rtol: float = 1e-10, spring_kg: float = 0.0,
+             dashpot_n_s_per_m: float = 0.0) -> Closing:
     """The closing of the problem's reference cam (or follower law ``a``) with spring
     rates ``kc_n_per_mm`` under ``truth``, integrated phase by phase (DOP853, ``rtol``,
     each phase ended by an event)."""
@@ -93,9 +101,14 @@ def simulate(problem: VcbProblem, kc_n_per_mm: tuple[float, float], truth: Truth
         kin = m.kinematics(A, link, problem.rod_offset, np.array([0.0, theta]))
         return kin.s1[0, 1], kin.ds1[0, 1], kin.dphi[0, 1]
 
+    def springs(theta):  # the closing springs' own inertia on the cam
+        rate = m.closing_spring_geometry(np.array([theta]))[1][0]
+        return 2 * spring_kg / 3 * rate**2
+
     def inertia(theta, mass):
         _, ds1, dphi = state(theta)
-        return truth.cam_kg_m2 + truth.follower_kg_m2 * dphi**2 + mass * ds1**2
+        return (truth.cam_kg_m2 + truth.follower_kg_m2 * dphi**2 + mass * ds1**2
+                + springs(theta))
 
     def torque(theta):
         return m.closing_torque(kc, m.closing_spring_geometry(np.array([theta])))[0, 0]
@@ -107,8 +120,9 @@ def simulate(problem: VcbProblem, kc_n_per_mm: tuple[float, float], truth: Truth
             h = 1e-6
             dj = (inertia(theta + h, mass) - inertia(theta - h, mass)) / (2 * h)
             force = loads.resistant_force(np.array([s1]))[0]
-            return [omega, (eps * torque(theta) - tf - force * ds1 - 0.5 * dj * omega**2)
-                    / inertia(theta, mass)]
+            damping = dashpot_n_s_per_m * ds1 * ds1 * omega
+            return [omega, (eps * torque(theta) - tf - force * ds1 - damping
+                            - 0.5 * dj * omega**2) / inertia(theta, mass)]
         return rhs
 
     tol = dict(method="DOP853", rtol=rtol, atol=1e-12, dense_output=True)
@@ -116,7 +130,10 @@ def simulate(problem: VcbProblem, kc_n_per_mm: tuple[float, float], truth: Truth
     start = m.dead_centre + truth.release_offset_deg * DEG - m.contact_crank_angle
 
     def free(_t, y):
-        return [y[1], (eps * torque(y[0]) - tf) / truth.cam_kg_m2]
+        h = 1e-6
+        dj = (springs(y[0] + h) - springs(y[0] - h)) / (2 * h)
+        return [y[1], (eps * torque(y[0]) - tf - 0.5 * dj * y[1] ** 2)
+                / (truth.cam_kg_m2 + springs(y[0]))]
 
     def roller(_t, y):
         return y[0]
@@ -126,7 +143,7 @@ def simulate(problem: VcbProblem, kc_n_per_mm: tuple[float, float], truth: Truth
     t0, (_, w_free) = s0.t_events[0][0], s0.y_events[0][0]
     # 2. the cam meets the roller: generalised momentum kept
     both = truth.rod_kg + truth.contacts_kg
-    w0 = truth.cam_kg_m2 * w_free / inertia(0.0, both)
+    w0 = (truth.cam_kg_m2 + springs(0.0)) * w_free / inertia(0.0, both)
 
     def touch(_t, y):
         return state(y[0])[0] - loads.gap

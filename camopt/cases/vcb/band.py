@@ -64,8 +64,12 @@ BANDED = {
     "touch_velocity_m_s": ("touch_velocity", "_m_s", 1.0),
     "cam_contact_time_ms": ("cam_contact_time", "_ms", MS),
     "touch_time_ms": ("touch_time", "_ms", MS),
-    "closing_time_ms": ("closing_time", "_ms", MS),
+    "release_to_latch_ms": ("closing_time", "_ms", MS),
     "pickup_impact_energy_j": ("pickup_loss", "_j", 1.0),
 }
 """Reported with their band: extra name -> (ClosingMotion field, the name's unit suffix,
-SI factor); the band's extras insert low/high before the unit (``touch_time_low_ms``)."""
+SI factor); the band's extras insert low/high before the unit (``touch_time_low_ms``).
+Times run from the release of the closing springs: ``touch_time_ms`` to the contacts'
+touch, ``release_to_latch_ms`` to the latch (the motion's field ``closing_time``); the
+analyser's closing time, command to touch (``closing_time_ms``), adds the case's
+``latch_delay_ms`` (:meth:`camopt.cases.vcb.problem.VcbProblem`'s extras)."""

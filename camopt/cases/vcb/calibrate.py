@@ -56,7 +56,7 @@ from camopt.cases.vcb.curves import (
     analyse,
 )
 from camopt.cases.vcb.dynamics import ClosingMotion
-from camopt.cases.vcb.forms import FORMS, ModelForm
+from camopt.cases.vcb.forms import CURVE_FORMS, ModelForm
 from camopt.cases.vcb.model import Kinematics, Loads, VcbModel
 from camopt.units import DEG, MM, MS
 
@@ -72,6 +72,11 @@ value: the truth, inside the interval, is then within 5 %); the latch delay, wit
 IDENTIFIED_DELAY_MS = 0.25
 MAX_DELAY_S = 0.1
 """Upper search bound of a fitted latch delay (s)."""
+FINE_STEP_S = 1e-5
+"""The fitted model's curve is read by the analyser's rules at this step (100 kHz)."""
+MIN_WINDOW_SAMPLES = 10
+"""A measured curve with fewer samples between the contact velocity's calculation points
+reads its closing time and contact velocity from the fit (resampled)."""
 
 
 @dataclass(frozen=True)
@@ -205,6 +210,7 @@ class ParameterEstimate:
     low: float
     high: float
     identified: bool
+    at_bound: bool = False
 
 
 @dataclass(frozen=True)
@@ -224,7 +230,8 @@ class Prediction:
 @dataclass(frozen=True)
 class CurveFit:
     """One curve's fit: its source, the samples' time (s) and measured and fitted travel
-    (m), the RMS misfit (m) and the analyser's quantities of both curves."""
+    (m), the RMS misfit (m), the analyser's quantities of both curves and the curve's
+    noise level (m)."""
 
     source: str
     design: str
@@ -235,6 +242,103 @@ class CurveFit:
     rms: float
     measured_quantities: AnalyserQuantities
     fitted_quantities: AnalyserQuantities
+    noise: float = 0.0
+
+
+RMS_RATIO_LIMIT = 1.5
+"""A form explains the curves only if the RMS of its residuals, in units of each curve's
+noise (winsorised at :data:`WINSOR` noise levels: a few analyser spikes do not count), is
+at most this: the keep rule's noise floor. 1.5 rather than 1.1: the noise estimate is a
+median of second differences, exact for Gaussian noise but up to ~1.4 times low for
+heavier-tailed noise (Laplace), and the structure test catches a smooth misfit below it."""
+STRUCTURE_Z_LIMIT = 3.0
+"""... and only if its residuals show no serial structure: the Durbin-Watson statistic d
+(pooled over the curves) is not below 2 by more than this many of its standard errors
+under white noise, 2 / sqrt(N) (one-sided, p ~ 0.0013: with a dozen forms and curves a
+correct form is rarely flagged by chance)."""
+WINSOR = 5.0
+"""Residuals beyond this many noise levels count as this many in the residual test."""
+NEAR_BOUND_FACTOR = 1.5
+"""A positive parameter is at its search bound when its fitted value is within this
+factor of it or a tenth of its search range's log, whichever is less (an efficiency's
+0.2..1 gives 1.17); the latch delay within :data:`NEAR_BOUND_DELAY_MS`."""
+NEAR_BOUND_DELAY_MS = 0.1
+
+
+def near_bound(q: float, lower: float, upper: float, log: bool) -> bool:
+    """Whether a fitted coordinate ``q`` is at or near its search bounds (``log``: the log
+    of a positive parameter, near: :data:`NEAR_BOUND_FACTOR`; else the latch delay
+    in ms, within :data:`NEAR_BOUND_DELAY_MS`). A parameter there is not measured by the
+    curves but held by the search: often a form standing in for physics it lacks."""
+    room = (min(np.log(NEAR_BOUND_FACTOR), 0.1 * (upper - lower)) if log
+            else NEAR_BOUND_DELAY_MS)
+    return bool(q - lower <= room or upper - q <= room)
+
+
+@dataclass(frozen=True)
+class ResidualTest:
+    """A form's residuals against the curves' noise (:func:`residual_test`): ``noise``
+    the curves' RMS noise level (m, each curve's estimated from its own samples,
+    :func:`camopt.cases.vcb.curves.noise_level`), ``rms_ratio`` the residuals' RMS in
+    noise levels (winsorised), ``durbin_watson`` d = sum (e_i - e_i-1)^2 / sum e_i^2 of
+    the normalised residuals within each curve, pooled (2 for white residuals, toward 0
+    for a smooth misfit), ``structure_z`` = (2 - d) sqrt(N) / 2 its distance below 2 in
+    standard errors, and the number of samples N."""
+
+    noise: float
+    rms_ratio: float
+    durbin_watson: float
+    structure_z: float
+    samples: int
+
+    def passes(self) -> bool:
+        """Residuals at the noise (:data:`RMS_RATIO_LIMIT`) and without structure
+        (:data:`STRUCTURE_Z_LIMIT`)."""
+        return self.rms_ratio <= RMS_RATIO_LIMIT and self.structure_z <= STRUCTURE_Z_LIMIT
+
+
+def residual_test(residuals: Sequence[NDArray], sigma: Sequence[float]) -> ResidualTest:
+    """The test of a fit's residuals (m, one array per curve) against each curve's noise
+    ``sigma`` (m): :class:`ResidualTest`. Normalised by the noise and winsorised at
+    :data:`WINSOR`; the Durbin-Watson sums run within each curve (no difference across
+    two curves) and are pooled."""
+    e = [np.clip(np.asarray(r) / s, -WINSOR, WINSOR) for r, s in zip(residuals, sigma)]
+    n = sum(len(x) for x in e)
+    squares = sum(float(np.sum(x * x)) for x in e)
+    steps = sum(float(np.sum(np.diff(x) ** 2)) for x in e)
+    counts = np.array([len(x) for x in e])
+    noise = float(np.sqrt(np.sum(counts * np.square(sigma)) / max(n, 1)))
+    d = steps / squares if squares > 0 else 2.0
+    return ResidualTest(noise, float(np.sqrt(squares / max(n, 1))), d,
+                        (2.0 - d) * np.sqrt(n) / 2.0, n)
+
+
+def missing_physics(fit: FormFit, gap: float) -> str:
+    """Where a form's misfit lies along the closing and what typically shows there: the
+    residuals' excess over the noise (sum of squares less N sigma^2) before the motion,
+    in the stroke to the touch and from the touch on. A reading, not a fit: a smooth
+    misfit of the moving part fits several missing effects alike (a distributed mass and
+    a dashpot both leave an S-shaped residual across the touch), so it names them all."""
+    parts = {"before the motion": 0.0, "in the stroke to the touch": 0.0,
+             "from the touch to the latch": 0.0}
+    for c in fit.curves:
+        r = c.fitted - c.measured
+        moving = c.measured > 0.05 * np.max(c.measured)
+        first = int(np.argmax(moving)) if moving.any() else len(r)
+        touched = c.measured >= gap
+        t_touch = int(np.argmax(touched)) if touched.any() else len(r)
+        for name, z in zip(parts, (slice(0, first), slice(first, t_touch),
+                                   slice(t_touch, len(r)))):
+            seg = r[z]
+            parts[name] += max(float(np.sum(seg * seg)) - seg.size * c.noise**2, 0.0)
+    where = max(parts, key=lambda k: parts[k])
+    if where == "before the motion":
+        return ("the misfit is largest before the motion: a latch delay that differs "
+                "between the curves (give each its measured latch_delay_ms), a release "
+                "that is not instantaneous, or a transducer offset")
+    return (f"the misfit is largest {where}: likely missing from the rigid model with "
+            "Coulomb losses: the closing springs' own mass (inertia along the stroke), "
+            "viscous damping (a dashpot or buffer on the rod), the contacts' compliance")
 
 
 @dataclass(frozen=True)
@@ -243,8 +347,11 @@ class FormFit:
     parameters (the form's, then the fitted latch delay in ms, if any), their correlation
     matrix at the optimum (linearised: (J^T J)^-1 s^2), the curves, the predictions,
     ``band``: the form's parameter rows met on the profiles inside the intervals, the fit
-    first, whether the form is ``kept`` (:func:`keep`) and how its ``intervals`` were
-    found (``profile``: profile likelihood; ``linearised``: a form not kept)."""
+    first, whether the form is ``kept`` (:func:`keep`), how its ``intervals`` were
+    found (``profile``: profile likelihood; ``linearised``: a form not kept), the test of
+    its residuals against the curves' noise (:func:`residual_test`) and whether it
+    ``explains`` the curves (kept, and its residuals pass: :meth:`ResidualTest.passes`),
+    and why a form with more physics is not kept (``kept_note``: :func:`nested_keep`)."""
 
     form: str
     description: str
@@ -256,6 +363,9 @@ class FormFit:
     band: NDArray = field(repr=False)
     kept: bool = True
     intervals: str = "profile"
+    residuals: ResidualTest | None = None
+    explains: bool = False
+    kept_note: str = ""
 
 
 @dataclass(frozen=True)
@@ -507,7 +617,9 @@ class Calibration:
             identified = bool(profiled and lo_q is not None and hi_q is not None and (
                 reach <= IDENTIFIED_WITHIN * abs(value) if self.log[j]
                 else reach <= IDENTIFIED_DELAY_MS))
-            ests.append(ParameterEstimate(name, unit, value, low, high, identified))
+            ests.append(ParameterEstimate(name, unit, value, low, high, identified,
+                                          near_bound(q[j], self.lower[j], self.upper[j],
+                                                     bool(self.log[j]))))
         P_band, _ = self.values(np.array(members))
         return FormFit(self.form.name, self.form.summary, o.rms, tuple(ests), corr,
                        self._curve_fits(q), (), P_band,
@@ -577,31 +689,71 @@ class Calibration:
         return float(np.sqrt(np.mean((R * sig) ** 2)))
 
     def _curve_fits(self, q: NDArray) -> tuple[CurveFit, ...]:
+        """Each curve's fit at ``q``: the model at the samples' times, and the analyser's
+        quantities of the measured curve and of the model sampled every
+        :data:`FINE_STEP_S` (the fit's own reading, at any sampling rate of the curve).
+        A measured curve with fewer than :data:`MIN_WINDOW_SAMPLES` samples between the
+        velocity's calculation points reads its contact velocity and closing time from
+        the fit (resampled, said in its notes): linear interpolation between samples
+        5 ms apart reads a 1.73 m/s closing at 1.37."""
         sims = self.simulate(q)
-        _, delays = self.values(q)
+        P, delays = self.values(q)
         gap = self.config.contact_gap_mm * MM
         out = []
         for i, (c, s) in enumerate(zip(self.curves, sims)):
             t, meas = c.curve.time, c.curve.travel
+            fine_t = np.arange(t[0], t[-1] + FINE_STEP_S / 2, FINE_STEP_S)
+            time, rod = travel(self.form, self.model, [self.designs[i]], P, self.steps)
+            fine = sample_travel(time[:, 0], rod[:, 0], (fine_t - delays[0, i])[None, :])[0]
+            fitted = analyse(fine_t, fine, gap, self.points, rebounds=False)
+            measured = analyse(t, meas, gap, self.points)
+            inside = int(np.sum((meas >= self.points.low) & (meas <= self.points.high)))
+            if inside < MIN_WINDOW_SAMPLES:
+                measured = replace(measured, closing_time=fitted.closing_time,
+                                   contact_velocity=fitted.contact_velocity,
+                                   notes=(*measured.notes,
+                                          f"closing time and contact velocity resampled from "
+                                          f"the fit: {inside} sample(s) between the velocity's "
+                                          f"calculation points, fewer than "
+                                          f"{MIN_WINDOW_SAMPLES}"))
             out.append(CurveFit(
                 c.curve.source, c.design.label, float(delays[0, i]), t, meas, s[0],
-                float(np.sqrt(np.mean((s[0] - meas) ** 2))),
-                analyse(t, meas, gap, self.points),
-                analyse(t, s[0], gap, self.points, rebounds=False)))
+                float(np.sqrt(np.mean((s[0] - meas) ** 2))), measured, fitted,
+                float(self.sigma[i])))
         return tuple(out)
 
-    def predict(self, fit: FormFit, designs: Sequence[Design], best: NDArray
-                ) -> tuple[Prediction, ...]:
+    def predict(self, fit: FormFit, designs: Sequence[Design], best: NDArray,
+                opt: Optimum | None = None) -> tuple[Prediction, ...]:
         """Closing velocity and touch time of ``designs`` at the fitted form parameters
-        ``best`` (P,) and their envelope over the fit's band."""
+        ``best`` (P,): low and high the wider of their envelope over the fit's band and,
+        given the optimum ``opt``, the linearised 95 % interval +-1.96 sqrt(g^T C g)
+        (g the prediction's gradient in the fitted coordinates by forward differences, C
+        the optimum's covariance). The envelope alone is the profiles' extremes along
+        each parameter's axis; a prediction that moves with several parameters at once
+        lies off those axes, and the envelope alone covered a third design's true
+        velocity in too few noisy curves (tests/cases/test_vcb_calibrate.py's coverage
+        study)."""
         P = np.vstack([best, fit.band])
         v, t = velocity(self.form, self.model, designs, P, self.steps)
+        sd_v = sd_t = np.zeros(len(designs))
+        if opt is not None:
+            h = 1e-6 * np.maximum(1.0, np.abs(opt.q))
+            Q = np.vstack([opt.q, opt.q + np.diag(h)])
+            vq, tq = velocity(self.form, self.model, designs, self.values(Q)[0], self.steps)
+            with np.errstate(invalid="ignore"):
+                gv, gt = (vq[1:] - vq[:1]) / h[:, None], (tq[1:] - tq[:1]) / h[:, None]
+                sd_v = np.sqrt(np.einsum("in,ij,jn->n", gv, opt.cov, gv))
+                sd_t = np.sqrt(np.einsum("in,ij,jn->n", gt, opt.cov, gt))
+        z = np.sqrt(CHI2_95_1DOF)
         with np.errstate(invalid="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: never touches
-            return tuple(Prediction(d.label, float(v[0, i]), float(np.nanmin(v[:, i])),
-                                    float(np.nanmax(v[:, i])), float(t[0, i]),
-                                    float(np.nanmin(t[:, i])), float(np.nanmax(t[:, i])))
-                         for i, d in enumerate(designs))
+            return tuple(Prediction(
+                d.label, float(v[0, i]),
+                float(np.nanmin(np.r_[v[:, i], v[0, i] - z * sd_v[i]])),
+                float(np.nanmax(np.r_[v[:, i], v[0, i] + z * sd_v[i]])), float(t[0, i]),
+                float(np.nanmin(np.r_[t[:, i], t[0, i] - z * sd_t[i]])),
+                float(np.nanmax(np.r_[t[:, i], t[0, i] + z * sd_t[i]])))
+                for i, d in enumerate(designs))
 
 
 def _robust_cost(R: NDArray) -> NDArray:
@@ -663,26 +815,132 @@ def keep(rms: Sequence[float], noise: float) -> list[bool]:
     return [r <= limit for r in rms]
 
 
+CHI2_99_1DOF = 6.634896601021214
+"""chi-square quantile, 1 degree of freedom, 0.99 (scipy.stats.chi2.ppf(0.99, 1))."""
+
+
+def nested_keep(forms: Sequence[ModelForm], optima: Sequence[Optimum], kept: Sequence[bool]
+                ) -> list[tuple[bool, str]]:
+    """The keep rule for a form that adds one term to a ``base`` form fitted beside it:
+    kept only where the term improves the fit beyond chance, the likelihood ratio
+    2 (cost_base - cost) / s^2 at least chi2(1, 0.99) = 6.63 (s^2 the form's reduced
+    chi-square, at least 1). A term the curves do not need fits them as well as the base
+    (its parameter at its lower bound, the ratio ~0) and is kept out: its extra freedom
+    would only widen the predictions. Returns (kept, why not) per form."""
+    names = [f.name for f in forms]
+    out = []
+    for form, opt, k in zip(forms, optima, kept):
+        if form.base is None or form.base not in names or not k:
+            out.append((k, ""))
+            continue
+        ratio = 2 * (optima[names.index(form.base)].cost - opt.cost) / opt.s2
+        out.append((True, "") if ratio >= CHI2_99_1DOF else (
+            False, f"not kept: its {form.extra.replace('_', ' ')} does not improve on "
+            f"{form.base} (likelihood ratio {ratio:.2f} < {CHI2_99_1DOF:.2f})"))
+    return out
+
+
 def calibrate(config: VcbConfig, curves: Sequence[CurveCase],
-              forms: Sequence[ModelForm] = FORMS, predict: Sequence[Design] = (),
+              forms: Sequence[ModelForm] = CURVE_FORMS, predict: Sequence[Design] = (),
               points: VelocityPoints | None = None) -> tuple[FormFit, ...]:
-    """Fit every form (default every form of :data:`~camopt.cases.vcb.forms.FORMS`) to
-    the curves jointly, mark the forms kept (:func:`keep`), find the intervals (profile
-    likelihood for the kept forms, linearised for the others: :meth:`Calibration.fit`)
-    and predict ``predict``'s designs (the curves' designs if empty)."""
+    """Fit every form (default :data:`~camopt.cases.vcb.forms.CURVE_FORMS`) to the curves
+    jointly, mark the forms kept (:func:`keep`, :func:`nested_keep`; where some form
+    explains the curves, a form whose residuals fail the test is not kept), find the
+    intervals (profile likelihood for the kept forms, linearised for the others:
+    :meth:`Calibration.fit`) and predict ``predict``'s designs (the curves' designs if
+    empty)."""
     cals = [Calibration(config, form, curves, points) for form in forms]
     optima = [c.optimum() for c in cals]
     sigma = np.array([max(c.curve.noise, 1e-3 * MM) for c in curves])
     counts = np.array([len(c.curve.time) for c in curves])
     noise = float(np.sqrt(np.sum(counts * sigma**2) / np.sum(counts)))
-    kept = keep([o.rms for o in optima], noise)
+    decided = nested_keep(forms, optima, keep([o.rms for o in optima], noise))
+    tests = [residual_test([s[0] - c.curve.travel for s, c in zip(cal.simulate(o.q), curves)],
+                           list(cal.sigma)) for cal, o in zip(cals, optima)]
+    explaining = [f.name for f, (k, _), t in zip(forms, decided, tests) if k and t.passes()]
+    if explaining:  # forms that explain the curves outrank forms that merely fit as well
+        decided = [(k, why) if not k or t.passes() else (
+            False, f"not kept: its residuals are not the noise (RMS {t.rms_ratio:.2f} x, "
+            f"Durbin-Watson {t.durbin_watson:.2f}) where {', '.join(explaining)} explain "
+            "the curves") for (k, why), t in zip(decided, tests)]
     out = []
-    for cal, opt, k in zip(cals, optima, kept):
+    for cal, opt, (k, why), test in zip(cals, optima, decided, tests):
         fit = cal.fit(opt, profiled=k)
         best = np.array([p.value for p in fit.parameters[:cal.n_form]])
         designs = list(predict) or _unique(cal.designs)
-        out.append(replace(fit, predictions=cal.predict(fit, designs, best), kept=k))
+        out.append(replace(fit, predictions=cal.predict(fit, designs, best, opt), kept=k,
+                           residuals=test, explains=k and test.passes(), kept_note=why))
     return tuple(out)
+
+
+PREDICTION_SPREAD = 0.02
+"""Forms that explain the curves but predict a design's closing velocity further apart
+than this (relative) are told apart by no curve: a warning says so."""
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Whether any form explains the curves (``explained``, those ``forms``), the
+    one-line ``headline`` a report leads and ends with, and ``warnings``: parameters at a
+    search bound, explaining forms whose predictions disagree."""
+
+    explained: bool
+    forms: tuple[str, ...]
+    headline: str
+    warnings: tuple[str, ...]
+
+
+def verdict(fits: Sequence[FormFit], gap: float) -> Verdict:
+    """The verdict on fitted forms (:func:`calibrate`'s) of curves whose contact gap is
+    ``gap`` (m): explained by the forms that explain them (:attr:`FormFit.explains`),
+    else NOT EXPLAINED with the best form's residual test and where its misfit lies
+    (:func:`missing_physics`)."""
+    good = [f for f in fits if f.explains]
+    warn: list[str] = []
+    for f in fits:
+        if not f.kept:
+            continue
+        for p in f.parameters:
+            if p.at_bound:
+                warn.append(f"form {f.form}: {p.name} = {p.value:.4g} {p.unit} is at its "
+                            "search bound: the curves do not measure it (the form may "
+                            "stand in for physics it lacks)")
+    if good:
+        by_design: dict[str, list[float]] = {}
+        for f in good:
+            for pr in f.predictions:
+                by_design.setdefault(pr.design, []).append(pr.closing_velocity)
+        for design, v in by_design.items():
+            lo, hi = float(np.nanmin(v)), float(np.nanmax(v))
+            if len(v) > 1 and hi - lo > PREDICTION_SPREAD * abs(hi):
+                warn.append(f"design {design}: the forms that explain the curves predict a "
+                            f"closing velocity of {lo:.3f} to {hi:.3f} m/s: the curves do "
+                            "not tell them apart (a curve with other springs does)")
+        coarse: dict[str, list[float]] = {}
+        for f in good:
+            for c in f.curves:
+                q = c.measured_quantities
+                if q.contact_velocity is not None and any("resampled" in n for n in q.notes):
+                    coarse.setdefault(c.source, []).append(q.contact_velocity)
+        for source, v in coarse.items():
+            lo, hi = min(v), max(v)
+            warn.append(f"curve {source} is sampled too coarsely for its contact velocity: "
+                        "read from the fit"
+                        + (f", {lo:.3f} to {hi:.3f} m/s over the forms that explain it"
+                           if hi - lo > PREDICTION_SPREAD * hi else ""))
+        names = ", ".join(f.form for f in good)
+        head = (f"verdict: explained by form{'s' if len(good) > 1 else ''} {names} "
+                "(residuals at the curves' noise, without structure)")
+        return Verdict(True, tuple(f.form for f in good), head, tuple(warn))
+    best = min(fits, key=lambda f: f.rms)
+    t = best.residuals
+    detail = "" if t is None else (
+        f"best form {best.form}: residual RMS {best.rms / t.noise:.2f} x the noise "
+        f"({t.noise / MM:.4f} mm), Durbin-Watson {t.durbin_watson:.2f} "
+        f"({t.structure_z:.1f} standard errors below 2)")
+    head = (f"verdict: NOT EXPLAINED: no model form fits the curves to their noise; {detail}; "
+            f"{missing_physics(best, gap)}")
+    return Verdict(False, (), head, tuple(warn))
 
 
 def _unique(designs: Sequence[Design]) -> list[Design]:

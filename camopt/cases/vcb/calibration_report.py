@@ -22,20 +22,24 @@ import numpy as np
 
 from camopt.cases.vcb.calibrate import (
     KEEP_RATIO,
+    RMS_RATIO_LIMIT,
+    STRUCTURE_Z_LIMIT,
     CurveCase,
     Design,
     FormFit,
+    Verdict,
     calibrate,
+    verdict,
 )
 from camopt.cases.vcb.cam_points import read_cam_points
 from camopt.cases.vcb.config import VcbConfig
-from camopt.cases.vcb.curves import AnalyserQuantities, VelocityPoints, read_curve
-from camopt.cases.vcb.forms import BAND_COLUMNS, FORM_NAMES, FORMS, get_form
+from camopt.cases.vcb.curves import AnalyserQuantities, VelocityPoints, check_scale, read_curve
+from camopt.cases.vcb.forms import BAND_COLUMNS, CURVE_FORM_NAMES, CURVE_FORMS, get_form
 from camopt.cases.vcb.model import VcbModel
 from camopt.config.models import CaseConfig
 from camopt.core.calibration import CalibrationRequest, FittedCurve
 from camopt.errors import ConfigError
-from camopt.units import MM, MS, N_PER_MM
+from camopt.units import DEG, MM, MS, N_PER_MM
 
 DESIGN_KEYS = ("kc1_n_per_mm", "kc2_n_per_mm", "a1", "a2", "a3", "cam_points", "label")
 CURVE_KEYS = (*DESIGN_KEYS, "latch_delay_ms")
@@ -46,6 +50,9 @@ LINEARISED = ("linearised, 95 % (+-1.96 standard deviations of (J^T J)^-1 s^2 in
               "coordinates): a form not kept is not profiled")
 KEEP_RULE = (f"kept: RMS misfit at most {KEEP_RATIO:g} x the best form's or the curves' "
              "noise, whichever is larger")
+EXPLAINS_RULE = (f"explains: kept, residual RMS at most {RMS_RATIO_LIMIT:g} x the noise "
+                 f"and Durbin-Watson not below 2 by more than {STRUCTURE_Z_LIMIT:g} "
+                 "standard errors")
 
 
 def _settings(items: Sequence[str], keys: Sequence[str], where: str
@@ -102,25 +109,11 @@ def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport
     assert isinstance(config, VcbConfig)
     if not request.curves:
         raise ConfigError("--curve", "--curve", "give at least one curve file")
-    unknown = [f for f in request.forms if f not in FORM_NAMES]
+    unknown = [f for f in request.forms if f not in CURVE_FORM_NAMES]
     if unknown:
         raise ConfigError("--form", unknown[0], f"unknown model form; known: "
-                          f"{', '.join(FORM_NAMES)}")
+                          f"{', '.join(CURVE_FORM_NAMES)}")
     model = VcbModel(config)
-    curves = []
-    for c in request.curves:
-        where = str(c.path)
-        settings = _settings(c.settings, CURVE_KEYS, where)
-        delay = settings.pop("latch_delay_ms", None)
-        curves.append(CurveCase(read_curve(c.path), design_of(config, model, settings, where),
-                                None if delay is None
-                                else _number(delay, "latch_delay_ms", where, False) * MS))
-    designs = [design_of(config, model, {}, "case")] + [c.design for c in curves] + [
-        design_of(config, model, _settings(p.split(","), DESIGN_KEYS, "--predict"),
-                  "--predict") for p in request.predict]
-    unique: dict[str, Design] = {}
-    for d in designs:
-        unique.setdefault(d.label, d)
     points = None
     if request.velocity_points_mm is not None:
         low, high = request.velocity_points_mm
@@ -128,10 +121,33 @@ def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport
             raise ConfigError("--velocity-points", f"{low:g},{high:g}",
                               "need 0 < low < high (travel in mm)")
         points = VelocityPoints(low * MM, high * MM)
-    forms = [get_form(f) for f in dict.fromkeys(request.forms)] or list(FORMS)
-    fits = calibrate(config, curves, forms, list(unique.values()), points)
     used = points or VelocityPoints.last_third(config.contact_gap_mm * MM)
+    curves = []
+    for c in request.curves:
+        where = str(c.path)
+        settings = _settings(c.settings, CURVE_KEYS, where)
+        delay = settings.pop("latch_delay_ms", None)
+        curve, design = read_curve(c.path), design_of(config, model, settings, where)
+        check_scale(curve, stroke(model, design), used)
+        curves.append(CurveCase(curve, design, None if delay is None
+                                else _number(delay, "latch_delay_ms", where, False) * MS))
+    designs = [design_of(config, model, {}, "case")] + [c.design for c in curves] + [
+        design_of(config, model, _settings(p.split(","), DESIGN_KEYS, "--predict"),
+                  "--predict") for p in request.predict]
+    unique: dict[str, Design] = {}
+    for d in designs:
+        unique.setdefault(d.label, d)
+    forms = [get_form(f) for f in dict.fromkeys(request.forms)] or list(CURVE_FORMS)
+    fits = calibrate(config, curves, forms, list(unique.values()), points)
     return VcbCalibrationReport(fits, used, config)
+
+
+def stroke(model: VcbModel, design: Design) -> float:
+    """The rod's stroke (m) of a design: its travel at the cam's last angle, the case's
+    linkage."""
+    kin = model.kinematics(design.a[None, :], model.vendor_link[None, :],
+                           model.c.rod_arm_offset_deg * DEG)
+    return float(kin.s1[0, -1])
 
 
 def _quantities(q: AnalyserQuantities) -> dict[str, Any]:
@@ -151,17 +167,32 @@ class VcbCalibrationReport:
     fits: tuple[FormFit, ...]
     points: VelocityPoints
     config: VcbConfig
+    notes: tuple[str, ...] = ()
+
+    @property
+    def verdict(self) -> Verdict:
+        """Whether a form explains the curves (:func:`~camopt.cases.vcb.calibrate.
+        verdict`), with the curves' own warnings (``notes``) among its warnings."""
+        v = verdict(self.fits, self.config.contact_gap_mm * MM)
+        return Verdict(v.explained, v.forms, v.headline, (*self.notes, *v.warnings))
 
     def to_json(self) -> dict[str, Any]:
         forms = []
         for f in self.fits:
             names = [p.name for p in f.parameters]
+            t = f.residuals
+            delay = _delay_ms(f)
             forms.append({
                 "form": f.form, "description": f.description, "rms_mm": f.rms / MM,
-                "kept": f.kept,
+                "kept": f.kept, "kept_note": f.kept_note, "explains": f.explains,
+                "noise_mm": None if t is None else t.noise / MM,
+                "rms_ratio": None if t is None else t.rms_ratio,
+                "durbin_watson": None if t is None else t.durbin_watson,
+                "structure_z": None if t is None else t.structure_z,
                 "intervals": INTERVALS if f.intervals == "profile" else LINEARISED,
                 "parameters": [{"name": p.name, "unit": p.unit, "value": p.value,
-                                "low": p.low, "high": p.high, "identified": p.identified}
+                                "low": p.low, "high": p.high, "identified": p.identified,
+                                "at_bound": p.at_bound}
                                for p in f.parameters],
                 "correlation": {"names": names, "matrix": np.round(f.correlation, 4).tolist()},
                 "curves": [{"file": c.source, "design": c.design,
@@ -176,28 +207,44 @@ class VcbCalibrationReport:
                                                           "high": p.closing_velocity_high},
                                  "touch_time_from_release_ms": {
                                      "value": p.touch_time / MS, "low": p.touch_time_low / MS,
-                                     "high": p.touch_time_high / MS}}
+                                     "high": p.touch_time_high / MS},
+                                 "closing_time_ms": None if delay is None else {
+                                     "value": delay + p.touch_time / MS,
+                                     "low": delay + p.touch_time_low / MS,
+                                     "high": delay + p.touch_time_high / MS}}
                                 for p in f.predictions],
             })
-        return {"velocity_points_mm": [self.points.low / MM, self.points.high / MM],
-                "keep_rule": KEEP_RULE, "kept_forms": [f.form for f in self.fits if f.kept],
-                "forms": forms}
+        v = self.verdict
+        return {"verdict": "explained" if v.explained else "not explained",
+                "verdict_line": v.headline, "explained_by": list(v.forms),
+                "warnings": list(v.warnings),
+                "velocity_points_mm": [self.points.low / MM, self.points.high / MM],
+                "keep_rule": KEEP_RULE, "explains_rule": EXPLAINS_RULE,
+                "kept_forms": [f.form for f in self.fits if f.kept], "forms": forms}
 
     def lines(self) -> list[str]:
-        out = [f"contact velocity between {self.points.low / MM:.3g} and "
-               f"{self.points.high / MM:.3g} mm of travel; intervals: {INTERVALS}", "",
-               f"{'model form':<28}{'RMS mm':>10}  kept ({KEEP_RULE})"]
-        out += [f"{f.form:<28}{f.rms / MM:>10.4f}  {'yes' if f.kept else 'no'}"
-                for f in self.fits]
+        v = self.verdict
+        out = [v.headline] + [f"warning: {w}" for w in v.warnings] + [
+            "", f"contact velocity between {self.points.low / MM:.3g} and "
+            f"{self.points.high / MM:.3g} mm of travel; intervals: {INTERVALS}", "",
+            f"{'model form':<32}{'RMS mm':>10}{'x noise':>9}{'D-W':>7}  kept  explains",
+        ]
+        for f in self.fits:
+            t = f.residuals
+            ratio = "" if t is None else f"{f.rms / t.noise:>9.2f}{t.durbin_watson:>7.2f}"
+            out.append(f"{f.form:<32}{f.rms / MM:>10.4f}{ratio}  {'yes ' if f.kept else 'no  '}"
+                       f"  {'yes' if f.explains else 'no'}")
+        out += [f"({KEEP_RULE}; {EXPLAINS_RULE})"]
         for f in self.fits:
             out += ["", f"form {f.form}: {f.description}",
                     f"  RMS misfit {f.rms / MM:.4f} mm over {len(f.curves)} curve(s); "
-                    f"{'kept' if f.kept else 'NOT kept'}"
+                    f"{'kept' if f.kept else (f.kept_note or 'NOT kept')}"
                     + ("" if f.intervals == "profile" else f"; intervals {LINEARISED}"),
                     f"  {'parameter':<22}{'value':>12}{'low':>12}{'high':>12}  identified"]
             for p in f.parameters:
                 out.append(f"  {p.name:<22}{p.value:>12.5g}{p.low:>12.5g}{p.high:>12.5g}  "
-                           f"{_identified(p.identified, f.kept)}")
+                           f"{_identified(p.identified, f.kept)}"
+                           + ("  AT SEARCH BOUND" if p.at_bound else ""))
             names = [p.name for p in f.parameters]
             k = len(names)
             pairs = sorted(((abs(f.correlation[i, j]), names[i], names[j], f.correlation[i, j])
@@ -209,14 +256,20 @@ class VcbCalibrationReport:
                            f"residual {np.max(np.abs(c.fitted - c.measured)) / MM:.4f} mm, "
                            f"latch delay {c.latch_delay / MS:.3f} ms")
                 out += _side_by_side(c.measured_quantities, c.fitted_quantities)
+            delay = _delay_ms(f)
+            zero = 0.0 if delay is None else delay
+            which = ("touch from the release" if delay is None else
+                     f"closing time: command to touch, latch delay {delay:.3f} ms")
             out.append(f"  {'prediction':<22}{'v_close m/s':>12}{'low':>8}{'high':>8}"
-                       f"{'t_touch ms':>12}{'low':>8}{'high':>8}  (touch: from the release)")
+                       f"{'closing ms' if delay is not None else 't_touch ms':>12}{'low':>8}"
+                       f"{'high':>8}  ({which})")
             for d in f.predictions:
                 out.append(f"  {d.design:<22}{d.closing_velocity:>12.4f}"
                            f"{d.closing_velocity_low:>8.4f}{d.closing_velocity_high:>8.4f}"
-                           f"{d.touch_time / MS:>12.3f}{d.touch_time_low / MS:>8.3f}"
-                           f"{d.touch_time_high / MS:>8.3f}")
-        return out
+                           f"{zero + d.touch_time / MS:>12.3f}"
+                           f"{zero + d.touch_time_low / MS:>8.3f}"
+                           f"{zero + d.touch_time_high / MS:>8.3f}")
+        return out + ["", v.headline]
 
     def curves(self) -> tuple[FittedCurve, ...]:
         return tuple(FittedCurve(f.form, c.source, c.design, c.time, c.measured, c.fitted)
@@ -226,7 +279,12 @@ class VcbCalibrationReport:
         kept = [f for f in self.fits if f.kept] or list(self.fits)
         best = min(kept, key=lambda f: f.rms)
         form = get_form(best.form)
-        lines = [f"# camopt calibrate: form {best.form} ({best.description}),",
+        v = self.verdict
+        first = ([] if v.explained else [
+            "# NOT EXPLAINED: no model form fits these curves to their noise; the values "
+            "below are the best form's all the same (written with --allow-unexplained)",
+            "# " + v.headline.replace("\n", " ")])
+        lines = first + [f"# camopt calibrate: form {best.form} ({best.description}),",
                  f"# RMS misfit {best.rms / MM:.4f} mm on "
                  + ", ".join(c.source for c in best.curves) + ".",
                  f"# intervals: {INTERVALS}.",
@@ -240,6 +298,9 @@ class VcbCalibrationReport:
             else:
                 lines.append(f"# {p.name} = {p.value:.6g} (95 %: {p.low:.4g} .. "
                              f"{p.high:.4g} {p.unit}; not a case field){mark}")
+        delay = _delay_ms(best)
+        if delay is not None and "latch_delay_ms" not in {p.name for p in best.parameters}:
+            lines.append(f"latch_delay_ms = {delay:.6g}    # measured (--set latch_delay_ms)")
         # what the form fixes rather than fits, where it differs from the case's
         if form.efficiency == "none":
             lines.append("efficiency = 1.0    # the form has no efficiency (Coulomb alone)")
@@ -248,6 +309,13 @@ class VcbCalibrationReport:
         if form.friction == "driven":
             lines.append("# the form has no friction in the free rotation from the release: "
                          "only the dynamics_band rows (release_friction_nm = 0) carry that")
+        others = [f.form for f in kept if get_form(f.form).extra != form.extra]
+        if others:
+            lines.append("# not in the band (other physics than the chosen form's; a case "
+                         "has one spring mass and damping): " + ", ".join(others))
+        if form.extra != "none":
+            lines.append(f"# every band row takes the {form.extra.replace('_', ' ')} above "
+                         "(its spread is not in the rows)")
         lines.append("# parameter sets inside the intervals (profiles' extremes), every kept "
                      "form, the chosen form's fit first:")
         lines.append("# (" + ", ".join(BAND_COLUMNS) + ")")
@@ -258,6 +326,13 @@ class VcbCalibrationReport:
         return "\n".join(lines) + "\n"
 
 
+def _delay_ms(fit: FormFit) -> float | None:
+    """The latch delay (ms) of a fit's predictions: the curves' (fitted, shared, or
+    measured), None where measured delays differ between curves."""
+    delays = {round(c.latch_delay / MS, 9) for c in fit.curves}
+    return delays.pop() if len(delays) == 1 else None
+
+
 def _toml_string(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
@@ -265,10 +340,12 @@ def _toml_string(text: str) -> str:
 def _band_rows(best: FormFit, kept: Sequence[FormFit], config: VcbConfig
                ) -> list[list[float]]:
     """``dynamics_band`` rows (:data:`~camopt.cases.vcb.forms.BAND_COLUMNS`) of every kept
-    form: each form's fit and its band's extremes per parameter, the chosen form
-    (``best``) first, at most 64 (the case's limit)."""
+    form with the chosen form's physics (``best``'s ``extra``: one case carries one spring
+    mass and one rod damping for every row): each form's fit and its band's extremes per
+    parameter, the chosen form first, at most 64 (the case's limit)."""
     rows: list[list[float]] = []
-    for fit in [best] + [f for f in kept if f is not best]:
+    extra = get_form(best.form).extra
+    for fit in [best] + [f for f in kept if f is not best and get_form(f.form).extra == extra]:
         band = fit.band
         pick = np.unique(np.r_[0, np.argmin(band, axis=0), np.argmax(band, axis=0)])
         rows += get_form(fit.form).band_rows(band[pick], config).tolist()

@@ -85,7 +85,8 @@ VCB_ROLES: dict[str, FieldRole] = {
         preload_setting_range_mm"""),
     **_roles("identified", """rod_arm_offset_deg opening_arm_ratio free_contact_force_n
         alpha efficiency cam_inertia_kg_m2 follower_inertia_kg_m2 rod_mass_kg
-        contacts_mass_kg release_offset_deg cam_friction_nm dynamics_band"""),
+        contacts_mass_kg release_offset_deg cam_friction_nm latch_delay_ms spring_mass_kg
+        rod_damping_n_s_per_m dynamics_band"""),
     **_roles("requirement", """rod_travel_mm rod_travel_tolerance_mm closing_velocity_m_s
         require_latch pressure_angle_max_deg forbid_lift_off latch_energy_min_j
         latch_energy_max_j release_torque_margin_min lift_off_fraction_min
@@ -216,6 +217,18 @@ class VcbMechanism(CaseConfig):
     cam_friction_nm: float = Field(
         11.53, ge=0, le=1000.0, description="Coulomb friction torque referred to the cam shaft, "
         "against the cam whenever it turns, beyond Eq 26's efficiency (identified)")
+    spring_mass_kg: float = Field(
+        0.0, ge=0, le=100.0, description="the closing springs' own mass moving with their "
+        "free ends, effective (a third of both springs' mass): an inertia (dL/dtheta)^2 on "
+        "the cam (identified by camopt calibrate where curves need it; 0: rigid springs)")
+    rod_damping_n_s_per_m: float = Field(
+        0.0, ge=0, le=1e5, description="viscous damping on the rod (dashpot, buffer), "
+        "force per rod speed (identified by camopt calibrate where curves need it; 0: none)")
+    latch_delay_ms: float | None = Field(
+        None, ge=0, le=1000.0, description="the close command to the closing latch's "
+        "release (coil and latch), ms; with it a run reports closing_time_ms, command to "
+        "the contacts' touch as an analyser reads it (IEC 62271-100's closing time; "
+        "camopt calibrate's --out writes it; identified); none: only times from the release")
     dynamics_band: list[BandRow] = Field(
         default_factory=lambda: list[BandRow](IDENTIFIED_BAND), max_length=64,
         description="parameter sets (BandRow: six values, or eight with the free "
@@ -472,7 +485,7 @@ class VcbDynamicsIdentifyConfig(VcbConfig):
         1.71, description="Sec 3.2: average closing velocity of the vendor design")
     closed_by_ms: Positive = Field(
         45.0, description="Sec 3.2 and Table 4: closed when the simulation ends at 45 ms "
-        "(an upper bound on the closing time, not an event)")
+        "(an upper bound on release_to_latch_ms, not an event)")
     velocity_reading_pct: Positive = Field(
         2.0, description="reading error of the reported velocities (band; assumed)")
     time_reading_ms: Positive = Field(

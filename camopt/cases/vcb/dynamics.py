@@ -80,6 +80,11 @@ class MotionParameters:
     driven closing's ``friction_nm``; 0 for a model form with friction only in the
     driven closing); ``efficiency`` the share of the springs' work that drives (Eq 26's
     eps; None: the case's ``efficiency``; 1 for a form with Coulomb friction alone).
+    ``spring_kg`` the closing springs' own mass moving with their free ends, effective
+    (a uniform coil with one end fixed: a third of its mass), an inertia
+    ``spring_kg`` (dL/dtheta)^2 on the cam from the release on; ``rod_damping_n_s_per_m``
+    a viscous force on the rod (a dashpot or buffer), c ds1/dt against its motion (0:
+    the rigid, Coulomb-only model; either non-zero runs the numpy path, not the kernel).
     The model forms (:mod:`camopt.cases.vcb.forms`) map their fitted vectors to these."""
 
     cam_kg_m2: NDArray | float
@@ -90,6 +95,8 @@ class MotionParameters:
     friction_nm: NDArray | float = 0.0
     release_friction_nm: NDArray | float | None = None
     efficiency: NDArray | float | None = None
+    spring_kg: NDArray | float = 0.0
+    rod_damping_n_s_per_m: NDArray | float = 0.0
 
     def columns(self, n: int, efficiency: float) -> ParameterColumns:
         """The same parameters as (n, 1) columns (what the motions broadcast against);
@@ -105,10 +112,12 @@ class MotionParameters:
 
     def repeat(self, n: int) -> MotionParameters:
         """Each of k parameter sets repeated for n designs in a row: (k n,) arrays ordered
-        set-major (set 0 for every design, then set 1, ...); unset fields stay unset."""
+        set-major (set 0 for every design, then set 1, ...); unset fields stay unset, and
+        a plain number (one value for every set) stays one."""
         return replace(self, **{f.name: np.repeat(np.ravel(np.asarray(getattr(self, f.name),
                                                                       dtype=float)), n)
-                                for f in fields(self) if getattr(self, f.name) is not None})
+                                for f in fields(self) if getattr(self, f.name) is not None
+                                and np.ndim(getattr(self, f.name)) > 0})
 
 
 @dataclass(frozen=True)
@@ -124,6 +133,8 @@ class ParameterColumns:
     friction_nm: NDArray
     release_friction_nm: NDArray
     efficiency: NDArray
+    spring_kg: NDArray
+    rod_damping_n_s_per_m: NDArray
 
 
 @dataclass(frozen=True)
@@ -242,6 +253,10 @@ def _at(a: NDArray, k: NDArray, w: NDArray) -> NDArray:
         return (1 - w) * a[rows, np.maximum(k - 1, 0)] + w * a[rows, k]
 
 
+DAMPING_PASSES = 4
+"""Fixed-point passes for a rod dashpot's work (:func:`closing_state`): each pass's
+speed error is the previous one's times the dashpot's share of the energy lost
+(250 N s/m, a sixth: 4 passes leave ~1e-3 of it; a test compares the ODE)."""
 HERMITE_POINTS = 16
 """Points per interval at which :func:`first_zero` looks for the energy's first sign
 change on its cubic Hermite interpolant between two nodes."""
@@ -387,7 +402,7 @@ def rotation_of(model: VcbModel, kc: NDArray, p: ParameterColumns, steps: int,
     if ratio is None:
         ratio = release_torque_ratio(model, kc, p, pre)
     starts = (p.release_offset_rad[:, 0] > 0) & (start[:, 0] < 0) & (ratio > 1)
-    kernel = compiled()
+    kernel = compiled() if not np.any(p.spring_kg) else None  # the kernel has no spring mass
     if kernel is not None:
         pair = (np.broadcast_to(v, (n, 1))[:, 0] for v in model.precompressions(pre))
         out = np.empty((3, n))
@@ -411,19 +426,20 @@ def _free_rotation(model: VcbModel, kc: NDArray, p: ParameterColumns, start: NDA
     span = -start  # the turn to the roller (n, 1)
     p1, p2 = model.precompressions(pre)
 
-    def net_torque(turn: NDArray) -> tuple[NDArray, NDArray]:
-        """eps T - T_f and the energy eps W - T_f x at ``turn``."""
+    def net_torque(turn: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """eps T - T_f, the energy eps W - T_f x and the springs' extension rate
+        dL/dtheta at ``turn``."""
         ext0, gained, rate = model.closing_spring_travel(start, turn)
         free1, free2 = p1 - ext0, p2 - ext0  # the springs' compressions at the release
         torque = (kc[:, :1] * (free1 - gained) + kc[:, 1:2] * (free2 - gained)) * rate
         # the work given up, 1/2 ((f - 0)^2 - (f - g)^2) = g (f - g / 2) per N/m: no
         # difference of two energies, so it is exact for a turn however small
         work = gained * (kc[:, :1] * (free1 - 0.5 * gained) + kc[:, 1:2] * (free2 - 0.5 * gained))
-        return eps * torque - friction, eps * work - friction * turn
+        return eps * torque - friction, eps * work - friction * turn, rate
 
     # the net torque at the release and its slope set the grid's scale c = 2 a / b
     h = 1e-3 * span
-    ends, _ = net_torque(np.hstack([np.zeros_like(h), h]))
+    ends, _, _ = net_torque(np.hstack([np.zeros_like(h), h]))
     a = ends[:, :1]
     with np.errstate(divide="ignore", invalid="ignore"):
         curve = (ends[:, 1:] - a) / h
@@ -432,12 +448,13 @@ def _free_rotation(model: VcbModel, kc: NDArray, p: ParameterColumns, start: NDA
     s = s_end * u[None, :]
     turn = c * np.sinh(s) ** 2
     turn[:, -1:] = span  # the roller exactly
-    torque, kinetic = net_torque(turn)
+    torque, kinetic, rate = net_torque(turn)
+    moving = inertia + p.spring_kg * rate ** 2  # the springs' own mass moves too
     with np.errstate(invalid="ignore", divide="ignore"):
-        omega = np.sqrt(np.maximum(2 * kinetic / inertia, 0.0))
+        omega = np.sqrt(np.maximum(2 * kinetic / moving, 0.0))
         g = c * np.sinh(2 * s) * s_end / omega  # dt/du
         # at the release x ~ c s^2 and K ~ a x: dt/du -> 2 s_end sqrt(c J / (2 a))
-        g[:, :1] = 2 * s_end * np.sqrt(c * inertia / (2 * a))
+        g[:, :1] = 2 * s_end * np.sqrt(c * moving[:, :1] / (2 * a))
     time = g @ weights / (3 * (len(u) - 1))
     return omega[:, -1], time, np.isfinite(first_zero(turn, kinetic, torque))
 
@@ -530,48 +547,67 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
         loads = loads.tiled(sets)
         pre = None if pre is None else np.tile(pre, (sets, 1))
     eps, friction = p.efficiency, p.friction_nm
-    follower = p.follower_kg_m2 * dphi * dphi  # J_f phi'^2
+    # the closing springs' own mass (spring_kg, at their free ends) turns with the cam
+    rate2 = model.closing_spring_geometry(theta)[1] ** 2 if np.any(p.spring_kg) else 0 * theta
+    follower = p.follower_kg_m2 * dphi * dphi + p.spring_kg * rate2  # J_f phi'^2 (+ springs)
     # 1. free rotation, then the plastic impact of the cam on the roller at rest
     release_ratio = release_torque_ratio(model, kc, p, pre)
     omega_free, t_free = rotation_of(model, kc, p, free_steps(steps), pre, release_ratio)
     moving = p.rod_kg + p.contacts_kg
     j_before = p.cam_kg_m2 + follower + moving * ds1 * ds1
-    omega0 = np.ravel(p.cam_kg_m2 * omega_free[:, None] / j_before[:, :1])
+    j_free = p.cam_kg_m2[:, 0] + p.spring_kg[:, 0] * rate2[0]  # what turned before it
+    omega0 = np.ravel(j_free[:, None] * omega_free[:, None] / j_before[:, :1])
     kinetic0 = 0.5 * j_before[:, 0] * omega0**2
     # Carnot: what the impact takes is the relative motion's energy, 1/2 J* omega_free^2
-    pickup_loss = 0.5 * p.cam_kg_m2[:, 0] * omega_free**2 - kinetic0
+    pickup_loss = 0.5 * j_free * omega_free**2 - kinetic0
     # 2. work-energy equation up to the touch
-    ke_before = kinetic0[:, None] + eps * (spring[:, :1] - spring) - resisting
-    ke_before -= friction * theta
-    with np.errstate(invalid="ignore"):
-        omega_before = np.sqrt(np.maximum(2 * ke_before / j_before, 0.0))
+    ke_before0 = kinetic0[:, None] + eps * (spring[:, :1] - spring) - resisting
+    ke_before0 -= friction * theta
     gap = loads.gap
     k, w = _crossing(s1, gap)
     touched = k > 0
     rows = np.arange(n)
+    index = np.arange(theta.size)[None, :]
+    after = touched[:, None] & (index >= k[:, None])
     # the touch instant from smooth quantities only (Fr steps there, so omega_before at
     # the next node is no smooth continuation to interpolate)
     theta_touch = _at(theta[None, :], k, w)
     ds1_touch = _at(ds1, k, w)
     dphi_touch = _at(dphi, k, w)
-    ke_touch = (kinetic0 + eps[:, 0] * (spring[:, 0] - _at(spring, k, w))
-                - loads.resistant_energy(np.full((n, 1), gap))[:, 0]
-                - friction[:, 0] * theta_touch)
+    ke_touch0 = (kinetic0 + eps[:, 0] * (spring[:, 0] - _at(spring, k, w))
+                 - loads.resistant_energy(np.full((n, 1), gap))[:, 0]
+                 - friction[:, 0] * theta_touch)
     j_touch = (p.cam_kg_m2[:, 0] + p.follower_kg_m2[:, 0] * dphi_touch**2
+               + p.spring_kg[:, 0] * _at(np.broadcast_to(rate2, ds1.shape), k, w)
                + moving[:, 0] * ds1_touch**2)
-    with np.errstate(invalid="ignore"):
-        omega_touch = np.sqrt(np.maximum(2 * ke_touch / j_touch, 0.0))
-    v_touch = np.where(touched, ds1_touch * omega_touch, np.nan)
-    loss = np.where(touched, 0.5 * p.contacts_kg[:, 0] * np.nan_to_num(v_touch) ** 2, 0.0)
-    # 3. after the touch the contacts rest; the rod goes on against the contact springs
     j_after = p.cam_kg_m2 + follower + p.rod_kg * ds1 * ds1
-    ke_after = ke_before - loss[:, None]
-    with np.errstate(invalid="ignore"):
-        omega_after = np.sqrt(np.maximum(2 * ke_after / j_after, 0.0))
-    index = np.arange(theta.size)[None, :]
-    after = touched[:, None] & (index >= k[:, None])
+    # a rod dashpot takes c ds1'^2 omega dtheta: its work depends on the speed it
+    # brakes, found by fixed-point iteration from the undamped speed (each pass one
+    # cumulative trapezoid; DAMPING_PASSES of them)
+    damped = bool(np.any(p.rod_damping_n_s_per_m))
+    lost = np.zeros_like(ke_before0)
+    for _ in range(DAMPING_PASSES if damped else 1):
+        ke_before = ke_before0 - lost
+        ke_touch = ke_touch0 - (_at(lost, k, w) if damped else 0.0)
+        with np.errstate(invalid="ignore"):
+            omega_before = np.sqrt(np.maximum(2 * ke_before / j_before, 0.0))
+            omega_touch = np.sqrt(np.maximum(2 * ke_touch / j_touch, 0.0))
+        v_touch = np.where(touched, ds1_touch * omega_touch, np.nan)
+        loss = np.where(touched, 0.5 * p.contacts_kg[:, 0] * np.nan_to_num(v_touch) ** 2,
+                        0.0)
+        # 3. after the touch the contacts rest; the rod goes on against the contact springs
+        ke_after = ke_before - loss[:, None]
+        with np.errstate(invalid="ignore"):
+            omega_after = np.sqrt(np.maximum(2 * ke_after / j_after, 0.0))
+        if damped:
+            brake = (p.rod_damping_n_s_per_m * ds1 * ds1
+                     * np.where(after, omega_after, omega_before))
+            lost = np.zeros_like(brake)
+            np.cumsum(0.5 * (brake[:, 1:] + brake[:, :-1]) * np.diff(theta), axis=1,
+                      out=lost[:, 1:])
     kinetic = np.where(after, ke_after, ke_before)
     # the first zero of the kinetic energy, between nodes too: its slope is the net torque
+    # (the dashpot's share is 0 where the energy is: omega = 0)
     drive = eps * springs_torque - friction
     stall_theta = first_zero(theta, kinetic, drive - resisting_torque)
     # a cam the springs cannot turn away from its release (friction at least their torque)
@@ -669,7 +705,8 @@ def closing_events(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     is installed and ``CAMOPT_NUMBA`` is not ``0``; else, and as the reference,
     :func:`closing_state` then :func:`events_of`."""
     kernel = compiled()
-    if kernel is not None:
+    extra = np.any(params.spring_kg) or np.any(params.rod_damping_n_s_per_m)
+    if kernel is not None and not extra:  # the kernel has neither term
         return compiled_events(kernel.band_events, model, A, kc, link, rod_offset, loads,
                                params, steps, sets, pre)
     return events_of(closing_state(model, A, kc, link, rod_offset, loads, params, steps,

@@ -85,6 +85,8 @@ CURVE_SEARCH = {p.name: p for p in (
     FitParameter("release_offset_deg", "deg", 0.5, 40.0),
     FitParameter("cam_friction_nm", "N m", 0.01, 100.0),
     FitParameter("efficiency", "1", 0.2, 1.0),
+    FitParameter("spring_mass_kg", "kg", 0.01, 20.0),
+    FitParameter("rod_damping_n_s_per_m", "N s/m", 1.0, 5000.0),
 )}
 """Search bounds of a calibration on travel curves (wider than the identification's: a
 breaker maker's own mechanism, not the paper's); every parameter positive, fitted in its
@@ -96,18 +98,23 @@ class ModelForm:
     """One model form: ``name``, a one-line ``summary``, where the efficiency comes from
     (``case``: the case's ``efficiency``; ``none``: 1; ``fitted``: a parameter) and where
     the Coulomb friction torque acts (``everywhere``: from the release on; ``driven``:
-    only while the cam drives the roller; ``none``)."""
+    only while the cam drives the roller; ``none``), and the physics it adds to its
+    ``base`` form (``extra``: the closing springs' own mass, a rod dashpot; fitted as
+    :data:`EXTRA_PARAMETER`)."""
 
     name: str
     summary: str
     efficiency: Literal["case", "none", "fitted"]
     friction: Literal["everywhere", "driven", "none"]
+    extra: Literal["none", "spring_mass", "dashpot"] = "none"
+    base: str | None = None
 
     @property
     def parameters(self) -> tuple[str, ...]:
         """The fitted parameters' names, units in the names (the order of a vector)."""
         return (INERTIAS + (("cam_friction_nm",) if self.friction != "none" else ())
-                + (("efficiency",) if self.efficiency == "fitted" else ()))
+                + (("efficiency",) if self.efficiency == "fitted" else ())
+                + ((EXTRA_PARAMETER[self.extra],) if self.extra != "none" else ()))
 
     def variables(self, config: VcbDynamicsIdentifyConfig) -> tuple[Variable, ...]:
         """The parameters with the identification config's bounds."""
@@ -121,9 +128,12 @@ class ModelForm:
 
     def start(self, config: VcbConfig) -> NDArray:
         """The case's values of the parameters (their units), (p,): a fit's first start.
-        A friction torque starts at 0.1 N m at least (fitted in its log)."""
+        A friction torque starts at 0.1 N m at least, a spring mass at 0.1 kg, a damping
+        at 20 N s/m (fitted in their logs)."""
         values = {"cam_friction_nm": max(config.cam_friction_nm, 0.1),
-                  "efficiency": config.efficiency}
+                  "efficiency": config.efficiency,
+                  "spring_mass_kg": max(config.spring_mass_kg, 0.1),
+                  "rod_damping_n_s_per_m": max(config.rod_damping_n_s_per_m, 20.0)}
         return np.array([values[n] if n in values else getattr(config, n)
                          for n in self.parameters], dtype=float)
 
@@ -150,7 +160,9 @@ class ModelForm:
             col["cam_inertia_kg_m2"], follower_kg_m2, col["rod_mass_kg"],
             col["contacts_mass_kg"], col["release_offset_deg"] * DEG, friction,
             release_friction_nm=0.0 if self.friction == "driven" else None,
-            efficiency={"case": None, "none": 1.0}.get(self.efficiency, col.get("efficiency")))
+            efficiency={"case": None, "none": 1.0}.get(self.efficiency, col.get("efficiency")),
+            spring_kg=col.get("spring_mass_kg", 0.0),
+            rod_damping_n_s_per_m=col.get("rod_damping_n_s_per_m", 0.0))
 
     def closing(self, model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
                 rod_offset: NDArray | float, loads: Loads, X: NDArray, follower_kg_m2: float,
@@ -191,15 +203,30 @@ FORMS = (
 FORM_NAMES = tuple(f.name for f in FORMS)
 assert len(set(FORM_NAMES)) == len(FORMS), "a model form's name is taken twice"
 assert set(FORM_NAMES) == set(get_args(ModelFormName)), "config.ModelFormName is out of date"
+EXTRA_PARAMETER = {"spring_mass": "spring_mass_kg", "dashpot": "rod_damping_n_s_per_m"}
+"""The parameter a form with more physics fits besides its base form's."""
+CURVE_FORMS = FORMS + (
+    ModelForm("efficiency_coulomb_spring_mass", "efficiency_coulomb with the closing "
+              "springs' own mass (effective, at their free ends)", "case", "everywhere",
+              "spring_mass", "efficiency_coulomb"),
+    ModelForm("efficiency_coulomb_dashpot", "efficiency_coulomb with a viscous damper on "
+              "the rod (dashpot, buffer)", "case", "everywhere", "dashpot",
+              "efficiency_coulomb"),
+)
+"""The forms a calibration on travel curves fits: :data:`FORMS` and forms with physics
+the seven ADAMS data cannot see, each its ``base`` form plus one term (the closing
+springs' own mass, a rod dashpot), kept only where the curves need the term
+(:func:`camopt.cases.vcb.calibrate.nested_keep`)."""
+CURVE_FORM_NAMES = tuple(f.name for f in CURVE_FORMS)
 
 
 def get_form(name: str) -> ModelForm:
-    """The form named ``name``; bad input names the known ones."""
-    for f in FORMS:
+    """The form named ``name`` (of :data:`CURVE_FORMS`); bad input names the known ones."""
+    for f in CURVE_FORMS:
         if f.name == name:
             return f
     raise ConfigError("case", "model_form", f"unknown form {name!r}; known: "
-                      f"{', '.join(FORM_NAMES)}")
+                      f"{', '.join(CURVE_FORM_NAMES)}")
 
 
 def form_of(row: NDArray) -> str:

@@ -106,7 +106,7 @@ DATA = (
     Datum("cam_contact_time_ms", "cam_contact_time", "cam_contact_time_target_ms", "ms"),
     Datum("touch_time_ms", "touch_time", "touch_time_target_ms", "ms"),
     Datum("closing_velocity_avg_m_s", "closing_velocity", "closing_velocity_target_m_s", "m/s"),
-    Datum("closing_time_ms", "closing_time", "closed_by_ms", "ms", upper_bound_only=True),
+    Datum("release_to_latch_ms", "closing_time", "closed_by_ms", "ms", upper_bound_only=True),
 )
 PARAMETERS = FORMS[0].parameters
 """The shipped form's parameters (J_cam kg m^2, m_rod kg, m_c kg, release offset deg,

@@ -169,10 +169,13 @@ class FormSets:
     count: int
 
 
-def _sets(rows: NDArray) -> MotionParameters:
-    """Eight-value band rows (k, 8) as k parameter sets (SI)."""
+def _sets(rows: NDArray, c: VcbConfig | None = None) -> MotionParameters:
+    """Eight-value band rows (k, 8) as k parameter sets (SI), with the case ``c``'s
+    spring mass and rod damping (one value for every set; none without ``c``)."""
     return MotionParameters(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4] * DEG,
-                            rows[:, 5], rows[:, 6], rows[:, 7])
+                            rows[:, 5], rows[:, 6], rows[:, 7],
+                            spring_kg=0.0 if c is None else c.spring_mass_kg,
+                            rod_damping_n_s_per_m=0.0 if c is None else c.rod_damping_n_s_per_m)
 
 
 class VcbProblem(Problem, VariesCase, HasVariants):
@@ -229,12 +232,14 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         self.constraint_names = tuple(con.name for con in self.constraints)
         self.dynamics = MotionParameters(c.cam_inertia_kg_m2, c.follower_inertia_kg_m2,
                                          c.rod_mass_kg, c.contacts_mass_kg,
-                                         c.release_offset_deg * DEG, c.cam_friction_nm)
+                                         c.release_offset_deg * DEG, c.cam_friction_nm,
+                                         spring_kg=c.spring_mass_kg,
+                                         rod_damping_n_s_per_m=c.rod_damping_n_s_per_m)
         # six-value rows are the shipped form: the free rotation's friction the same, the
         # case's efficiency
         band = np.array([tuple(r) + ((r[5], c.efficiency) if len(r) == 6 else ())
                          for r in c.dynamics_band], dtype=float).reshape(-1, 8)
-        self.band = _sets(band) if len(band) else None
+        self.band = _sets(band, c) if len(band) else None
         self.forms = self._forms(band)
         self.search_dynamics = (c.closing_velocity_m_s is not None or c.require_latch
                                 or c.forbid_lift_off or self.setting_column is not None)
@@ -258,14 +263,14 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             if name == names[0]:
                 nominal, members = self.dynamics, rows
             else:
-                nominal = replace(_sets(rows[:1]), **{
+                nominal = replace(_sets(rows[:1], c), **{
                     f: float(np.ravel(getattr(_sets(rows[:1]), f))[0]) for f in
                     ("cam_kg_m2", "follower_kg_m2", "rod_kg", "contacts_kg",
                      "release_offset_rad", "friction_nm")})
                 nominal = replace(nominal, release_friction_nm=float(rows[0, 6]),
                                   efficiency=float(rows[0, 7]))
                 members = rows[1:]
-            out.append(FormSets(name, nominal, _sets(members) if len(members) else None,
+            out.append(FormSets(name, nominal, _sets(members, c) if len(members) else None,
                                 len(members)))
         return tuple(out)
 
@@ -669,6 +674,10 @@ class VcbProblem(Problem, VariesCase, HasVariants):
                 extras[name] = getattr(motion, field) / scale
                 extras[name.replace(unit, "_low" + unit)] = spread.low[field] / scale
                 extras[name.replace(unit, "_high" + unit)] = spread.high[field] / scale
+            if c.latch_delay_ms is not None:  # the analyser's closing time: command to touch
+                for end in ("", "_low", "_high"):
+                    extras[f"closing_time{end}_ms"] = (c.latch_delay_ms
+                                                       + extras[f"touch_time{end}_ms"])
             extras.update({
                 "latch_kinetic_energy_j": motion.final_kinetic,
                 "latch_kinetic_energy_low_j": spread.kinetic_low,
