@@ -446,5 +446,7 @@ def expected_yield(run: RunView, samples: int = EXPECTED_YIELD_SAMPLES) -> dict[
             "requirements": [{"name": r["name"], "yield": r["yield"],
                               "half_spread": r["half_spread"]}
                              for r in t.summary["requirements"]],
-            "adjustments": t.summary.get("adjustments", []),
+            # what the factory set on each draw, where the case models it (else no key)
+            **({"adjustments": t.summary["adjustments"]}
+               if t.summary.get("adjustments") else {}),
             "command": command}

@@ -48,6 +48,8 @@ def test_the_tutorial_runs_as_written(tmp_path):
     # step 3: the calibrated fragment carries the calibrated values and their band
     fragment = (tmp_path / "my_breaker_calibrated.toml").read_text()
     assert "release_offset_deg" in fragment and "dynamics_band" in fragment
+    assert "explained by" in calibrate and "NOT EXPLAINED" not in calibrate  # "the verdict"
+    assert "latch_delay_ms" in fragment
     # step 4: "It ends PASS at nominal", and show says so again
     assert "PASS at nominal" in design
     shown = _json(tmp_path, env, "show", "my_design.h5")
@@ -56,4 +58,5 @@ def test_the_tutorial_runs_as_written(tmp_path):
     assert "yield (feasible share)" in tolerance
     assert shown["expected_yield"]["value"] < 0.1
     # step 6: the drawing of that (passing) design
-    assert (tmp_path / "my_cam" / "my_design.dxf").is_file()
+    drawing = (tmp_path / "my_cam" / "my_design.dxf").read_text()
+    assert "NOT FOR RELEASE" not in drawing  # the design passes: a drawing to release
