@@ -26,11 +26,13 @@ from numpy.typing import NDArray
 
 from camopt.verify.mechanism import Mechanism
 
+exu: Any  # Exudyn's bundled stubs lack settings it has: the module is typed Any here
+ii: Any
 try:
     import exudyn as exu
     from exudyn import itemInterface as ii
 except ImportError:  # the optional extra is not installed
-    exu = None
+    exu = ii = None
 
 CONTACT_STIFFNESS = 1e9
 """Penalty stiffness of every contact (N/m): the cam on the roller, the moving on the fixed
@@ -410,7 +412,11 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
     settings.linearSolverType = exu.LinearSolverType.EXUdense
     settings.displayComputationTime = False
     settings.displayStatistics = False
-    exu.SolveDynamic(mbs, settings, showHints=False)
+    exu.SetWriteToConsole(False)  # its warnings would break a JSON report on stdout
+    try:
+        exu.SolveDynamic(mbs, settings, showHints=False)
+    finally:
+        exu.SetWriteToConsole(True)
     data = np.asarray(rows)
     return Trace(*(data[:, i] for i in range(10)))
 

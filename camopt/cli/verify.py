@@ -1,0 +1,56 @@
+"""``camopt verify``: a VCB run's closing checked against a planar multibody model."""
+
+from __future__ import annotations
+
+import enum
+import json
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from camopt.cli.app import Format, app, errors
+from camopt.cli.console import fmt, out
+from camopt.cli.layout import print_table
+
+
+class Design(str, enum.Enum):
+    """``--design``: the run's best design or the case's reference (the vendor's)."""
+
+    best = "best"
+    reference = "reference"
+
+
+@app.command()
+def verify(
+    run_path: Annotated[Path, typer.Argument(metavar="ARCHIVE", help="VCB run archive")],
+    design: Annotated[Design, typer.Option(
+        "--design", help="the run's best design or the case's reference design")]
+    = Design.best,
+    format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
+) -> None:
+    """Check a VCB run's closing against a planar multibody model (camopt[multibody])."""
+    from camopt import archive
+    from camopt.reporting.views import jsonable
+    from camopt.verify.compare import verify as check
+
+    with errors():
+        run = archive.load_run(run_path)
+        result = check(run, design.value)
+    doc = {"archive": str(run_path), **jsonable(result.as_dict())}
+    if format is Format.json:
+        sys.stdout.write(json.dumps(doc, indent=2) + "\n")
+        return
+    rows = []
+    for q in result.quantities:
+        within = "" if q.within is None else ("yes" if q.within else "NO")
+        limit = "" if q.limit is None else f"±{q.limit:.0%}"
+        rows.append([f"{q.name} ({q.unit})", fmt(q.camopt), fmt(q.multibody),
+                     f"{q.relative_difference:+.2%}", limit, within])
+    engine = result.engine
+    print_table(f"{run_path.name}: {design.value} design, camopt against {engine['name']} "
+                f"{engine['version']} (step {engine['step_s']:g} s, plastic pick-up)",
+                ["quantity", "camopt", "multibody", "difference", "limit", "within"], rows)
+    out.print("agree: the lumped closing is confirmed within the limits" if result.agree
+              else "DISAGREE: a difference is outside its limit", highlight=False)
