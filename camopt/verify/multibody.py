@@ -217,8 +217,8 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
               ) -> tuple[int, int]:
         node = mbs.AddNode(ii.NodeRigidBody2D(referenceCoordinates=[at[0], at[1], 0.0],
                                               initialCoordinates=[0.0, 0.0, angle0]))
-        body = mbs.AddObject(ii.ObjectRigidBody2D(physicsMass=mass,
-                                                  physicsInertia=inertia, nodeNumber=node))
+        body = mbs.AddObject(ii.ObjectRigidBody2D(mass=mass, inertia=inertia,
+                                                  nodeNumber=node))
         return node, body
 
     def pin(body: int, local: NDArray, world: NDArray) -> None:
@@ -265,7 +265,7 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
                                             constrainRotation=False))
     # moving contacts: a vertical slider beside the rod
     con_node = mbs.AddNode(ii.NodePoint2D(referenceCoordinates=[m0[0], m0[1]]))
-    mbs.AddObject(ii.ObjectMassPoint2D(physicsMass=mech.contacts_mass, nodeNumber=con_node))
+    mbs.AddObject(ii.ObjectMassPoint2D(mass=mech.contacts_mass, nodeNumber=con_node))
     mcx = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=con_node, coordinate=0))
     mbs.AddObject(ii.CoordinateConstraint(markerNumbers=[ground_coord, mcx]))
     rod_y = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=rod_node, coordinate=1))
@@ -407,16 +407,15 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
     ti.newton.useModifiedNewton = False
     ti.computeLoadsJacobian = 2
     ti.verboseMode = 0
-    settings.solutionSettings.writeSolutionToFile = False
-    settings.solutionSettings.sensorsWritePeriod = step
-    settings.linearSolverType = exu.LinearSolverType.EXUdense
-    settings.displayComputationTime = False
-    settings.displayStatistics = False
-    exu.SetWriteToConsole(False)  # its warnings would break a JSON report on stdout
+    settings.solution.file.write = False
+    settings.linearSolver.solverType = exu.LinearSolverType.EXUdense
+    settings.show.computationTime = False
+    settings.show.statistics = False
+    exu.config.printToConsole = False  # its warnings would break a JSON report on stdout
     try:
         exu.SolveDynamic(mbs, settings, showHints=False)
     finally:
-        exu.SetWriteToConsole(True)
+        exu.config.printToConsole = True
     data = np.asarray(rows)
     return Trace(*(data[:, i] for i in range(10)))
 
