@@ -29,6 +29,12 @@ def verify(
         "--design", help="the run's best design or the case's reference design")]
     = Design.best,
     format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
+    restitution: Annotated[float, typer.Option(
+        min=0.0, max=0.99, help="the cam-roller pick-up's restitution coefficient in the "
+        "multibody model (camopt's is 0, plastic)")] = 0.0,
+    coupler_kg: Annotated[float, typer.Option(
+        "--coupler-kg", min=0.0, help="the coupler DL's own mass in the multibody model "
+        "(kg, a uniform bar; camopt's is none)")] = 0.0,
 ) -> None:
     """Check a VCB run's closing against a planar multibody model (camopt[multibody])."""
     from camopt import archive
@@ -37,20 +43,24 @@ def verify(
 
     with errors():
         run = archive.load_run(run_path)
-        result = check(run, design.value)
+        result = check(run, design.value, restitution=restitution,
+                       coupler_kg=coupler_kg)
     doc = {"archive": str(run_path), **jsonable(result.as_dict())}
     if format is Format.json:
         sys.stdout.write(json.dumps(doc, indent=2) + "\n")
         return
     rows = []
     for q in result.quantities:
-        within = "" if q.within is None else ("yes" if q.within else "NO")
-        limit = "" if q.limit is None else f"±{q.limit:.0%}"
+        within = "-" if q.within is None else ("yes" if q.within else "NO")
+        limit = "-" if q.limit is None else f"±{q.limit:.0%}"
         rows.append([f"{q.name} ({q.unit})", fmt(q.camopt), fmt(q.multibody),
                      f"{q.relative_difference:+.2%}", limit, within])
     engine = result.engine
+    pickup = ("plastic pick-up" if not restitution
+              else f"pick-up restitution {restitution:g}")
+    coupler = f", coupler {coupler_kg:g} kg" if coupler_kg else ""
     print_table(f"{run_path.name}: {design.value} design, camopt against {engine['name']} "
-                f"{engine['version']} (step {engine['step_s']:g} s, plastic pick-up)",
+                f"{engine['version']} (step {engine['step_s']:g} s, {pickup}{coupler})",
                 ["quantity", "camopt", "multibody", "difference", "limit", "within"], rows)
     out.print("agree: the lumped closing is confirmed within the limits" if result.agree
               else "DISAGREE: a difference is outside its limit", highlight=False)

@@ -12,8 +12,9 @@ the cam on the roller (penalty on the roller centre's penetration of the pitch c
 its normal), the contacts on their fixed counterparts at the gap, the rod's stop at the
 opened position; the contact springs (preloaded) between the rod and the contacts, which
 rest on a shoulder of the rod until they touch; the opening spring on the rod through its
-lever ratio. Each contact's force is max(0, k g + c g'), g the penetration: c from the
-restitution coefficient (0: plastic, critically damped)."""
+lever ratio. Each contact's force is max(0, k g + c g'), g the penetration, c critical
+damping (plastic impacts, as the lumped model's); the cam-roller pick-up's c may instead
+follow from a restitution coefficient (beyond camopt's model, to see what it moves)."""
 
 from __future__ import annotations
 
@@ -195,8 +196,9 @@ def _rot(angle: float) -> NDArray:
 def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
              stiffness: float = CONTACT_STIFFNESS, end_time: float = 0.2) -> Trace:
     """Simulate the closing from the release (the cam at rest at ``release_angle``, the
-    linkage at rest against its stop) until the cam reaches the end of its travel, stops
-    turning forward after the pick-up, or ``end_time`` (s) passes."""
+    linkage at rest against its stop) until the cam reaches the end of its travel, turns
+    back, or ``end_time`` (s) passes; ``restitution`` of the cam-roller pick-up (0:
+    plastic)."""
     if exu is None:
         raise ImportError("exudyn")
     sc = exu.SystemContainer()
@@ -271,12 +273,12 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
     rod_y = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=rod_node, coordinate=1))
     con_y = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=con_node, coordinate=1))
 
-    zeta = damping_ratio(restitution)
+    pickup_zeta = damping_ratio(restitution)  # the cam on the roller; the rest plastic
     k = stiffness
     m_linkage = mech.rod_mass + mech.contacts_mass
 
-    def unilateral(g: float, rate: float, mass: float) -> float:
-        """max(0, k g + c g') for penetration g > 0, else 0."""
+    def unilateral(g: float, rate: float, mass: float, zeta: float = 1.0) -> float:
+        """max(0, k g + c g') for penetration g > 0, else 0; c = 2 zeta sqrt(k mass)."""
         if not g > 0:
             return 0.0
         return max(0.0, k * g + 2 * zeta * math.sqrt(k * mass) * rate)
@@ -325,9 +327,15 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
     # the cam on the roller, and the friction torque at O
     geometry = _CamContact(mech)
     d_local = d0 - b
-    pitch_r0 = float(np.hypot(*d0))
-    m_cam = mech.cam_inertia / pitch_r0**2
-    m_pick = 1 / (1 / m_cam + 1 / max(m_linkage * 0.2, 1e-6))  # ~ reduced mass at pick-up
+    # the masses the pick-up meets along the contact normal: the cam's inertia on the
+    # normal's arm about O, the linkage's (rod, contacts, follower) on the roller's swing
+    # (l2 per rad of the follower: ds1/dphi = (ds1/dtheta) / phi'(0)); their reduced mass
+    # sets the damping of the pick-up
+    arm = abs(float(d0[0] * geometry.normal[0][1] - d0[1] * geometry.normal[0][0]))
+    ds1_dphi = mech.rod_travel(1e-6) / 1e-6 / mech.law[1]
+    m_linkage_roller = (m_linkage * (ds1_dphi / mech.l2) ** 2
+                        + max(mech.follower_inertia, tiny_inertia) / mech.l2**2)
+    m_pick = 1 / (arm**2 / mech.cam_inertia + 1 / m_linkage_roller)
 
     cache: dict[tuple[float, ...], tuple[float, NDArray, float]] = {}
 
@@ -355,7 +363,7 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
         n = _rot(psi) @ n_cam
         v_p = omega * np.array([-d[1], d[0]])  # the cam's point under the roller centre
         rate = float(np.dot(v_p - v_d, n))
-        fn = unilateral(g, rate, m_pick)
+        fn = unilateral(g, rate, m_pick, pickup_zeta)
         force = fn * n
         cache[key] = (fn, force, float(d[0] * force[1] - d[1] * force[0]))
         return cache[key]
