@@ -412,7 +412,7 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
     ti.numberOfSteps = int(round(end_time / step))
     ti.endTime = end_time
     ti.generalizedAlpha.spectralRadius = 1.0
-    ti.newton.useModifiedNewton = False
+    ti.newton.useModifiedNewton = True
     ti.computeLoadsJacobian = 2
     ti.verboseMode = 0
     settings.solution.file.write = False

@@ -45,6 +45,7 @@ def test_another_kind_is_refused(fast_run):
 
 
 @pytest.mark.skipif(not multibody.available(), reason="camopt[multibody] not installed")
+@pytest.mark.slow  # a multibody simulation: ~4 s of CPU, more on a loaded machine
 def test_reference_design_in_json(vcb_run):
     """The vendor's design: both numbers, their ratio and the verdict, stdout pure JSON."""
     r = invoke("verify", vcb_run, "--design", "reference", "--format", "json")
