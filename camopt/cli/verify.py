@@ -36,7 +36,8 @@ def verify(
         "--coupler-kg", min=0.0, help="the coupler DL's own mass in the multibody model "
         "(kg, a uniform bar; camopt's is none)")] = 0.0,
 ) -> None:
-    """Check a VCB run's closing against a planar multibody model (camopt[multibody])."""
+    r"""Check a VCB run's closing against a planar multibody model (needs the extra:
+    pip install 'camopt\[multibody]')."""
     from camopt import archive
     from camopt.reporting.views import jsonable
     from camopt.verify.compare import verify as check
