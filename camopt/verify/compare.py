@@ -74,6 +74,14 @@ class Verification:
                 "quantities": [q.as_dict() for q in self.quantities], "agree": self.agree}
 
 
+def exudyn_error() -> type[Exception]:
+    """The exception Exudyn's solver raises when it fails."""
+    import exudyn
+
+    error: type[Exception] = getattr(exudyn, "SolverError", RuntimeError)
+    return error
+
+
 def design_of(run: Any, problem: Any, design: str) -> NDArray:
     """The design variables (SI) of the run's best design or of the case's reference
     (the vendor's) design."""
@@ -119,7 +127,12 @@ def verify(run: Any, design: str = "best", step: float | None = None,
     ours = camopt_side(problem, x)
     mech = replace(mechanism_of(problem, x), coupler_mass=coupler_kg)
     step = multibody.STEP if step is None else step
-    ev, _ = multibody.run(mech, step, restitution)
+    try:
+        ev, _ = multibody.run(mech, step, restitution)
+    except exudyn_error() as exc:  # Newton failed: a mechanism the model cannot follow
+        raise CamoptError(f"{run.path}: verify: the multibody simulation failed "
+                          f"({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})"
+                          ) from None
     ms = 1e3
     quantities = (
         Quantity("release_to_touch", "ms", ours["touch_time"] * ms, ev.touch_time * ms,

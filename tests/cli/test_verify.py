@@ -57,3 +57,17 @@ def test_reference_design_in_json(vcb_run):
     assert touch["limit"] == 0.02 and touch["within"] is True
     assert rows["touch_velocity"]["within"] is True
     assert doc["agree"] is True and doc["design"] == "reference"
+
+
+@pytest.mark.skipif(not multibody.available(), reason="camopt[multibody] not installed")
+def test_a_failed_simulation_is_one_error_line(vcb_run, monkeypatch):
+    import exudyn
+
+    def fail(*args, **kwargs):
+        raise exudyn.SolverError("SolveDynamic terminated")
+
+    monkeypatch.setattr(multibody, "run", fail)
+    r = invoke("verify", vcb_run, "--design", "reference")
+    assert r.exit_code == 2 and r.stdout == ""
+    assert r.stderr == (f"error: {vcb_run}: verify: the multibody simulation failed "
+                        "(SolveDynamic terminated)\n")
