@@ -38,14 +38,25 @@ def verify(
 ) -> None:
     r"""Check a VCB run's closing against a planar multibody model (needs the extra:
     pip install 'camopt\[multibody]')."""
+    import importlib
+
     from camopt import archive
+    from camopt.engine.tolerance import problem_of
+    from camopt.errors import CamoptError
     from camopt.reporting.views import jsonable
-    from camopt.verify.compare import verify as check
 
     with errors():
         run = archive.load_run(run_path)
-        result = check(run, design.value, restitution=restitution,
-                       coupler_kg=coupler_kg)
+        problem = problem_of(run)
+        # a case with a multibody model has a ``verify`` module beside its problem
+        package = type(problem).__module__.rpartition(".")[0]
+        try:
+            case = importlib.import_module(f"{package}.verify")
+        except ModuleNotFoundError:
+            raise CamoptError(f"{run_path}: verify: a '{run.kind}' run has no multibody "
+                              "model (the VCB closing has)") from None
+        result = case.verify(run, problem, design.value, restitution=restitution,
+                             coupler_kg=coupler_kg)
     doc = {"archive": str(run_path), **jsonable(result.as_dict())}
     if format is Format.json:
         sys.stdout.write(json.dumps(doc, indent=2) + "\n")

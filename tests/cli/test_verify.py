@@ -8,8 +8,8 @@ import json
 import pytest
 from typer.testing import CliRunner
 
+from camopt.cases.vcb import multibody
 from camopt.cli import app
-from camopt.verify import multibody
 from tests.conftest import CONFIGS
 
 runner = CliRunner()

@@ -1,4 +1,4 @@
-"""The multibody model of the VCB closing (camopt.verify.multibody): its geometry against
+"""The multibody model of the VCB closing (camopt.cases.vcb.multibody): its geometry against
 camopt's kinematics, its agreement with camopt's lumped closing on the vendor's design, and
 its convergence in the step size."""
 
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from camopt.cases import build_problem
+from camopt.cases.vcb import multibody
+from camopt.cases.vcb.mechanism import mechanism_of
+from camopt.cases.vcb.verify import TIME_LIMIT, VELOCITY_LIMIT, camopt_side
 from camopt.engine.setup import load
-from camopt.verify import multibody
-from camopt.verify.compare import TIME_LIMIT, VELOCITY_LIMIT, camopt_side
-from camopt.verify.mechanism import mechanism_of
 from tests.conftest import CONFIGS
 
 needs_engine = pytest.mark.skipif(not multibody.available(),

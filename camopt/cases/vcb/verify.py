@@ -1,18 +1,24 @@
-"""camopt's lumped closing of a run's design beside the multibody engine's (docs/verify.md).
+"""``camopt verify`` for the VCB: a design as the data a multibody model is built from
+(points, lengths, the cam's follower law, springs, masses, inertias and friction, SI plain
+floats), and camopt's lumped closing beside the engine's (:mod:`.multibody`,
+docs/verify.md).
 
-The quantities are named for what they are: times from the release of the closing springs
-(the closing latch letting go), not from a close command, which the lumped model does not
-have."""
+The mechanism is read from the run's problem (its stored config and the design's
+variables): the geometry and parameters only, never camopt's closing dynamics, so the
+multibody model is an independent check of them. Times are from the release of the
+closing springs (the closing latch letting go), the lumped model's t = 0, not from a close
+command."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.cases.vcb.mechanism import mechanism_of
 from camopt.errors import CamoptError
 
 TIME_LIMIT = 0.02
@@ -96,7 +102,7 @@ def design_of(run: Any, problem: Any, design: str) -> NDArray:
 def camopt_side(problem: Any, x: NDArray) -> dict[str, float]:
     """camopt's own closing of design ``x`` (its identified parameters; a breaker set at
     the factory as set), the quantities the check compares (SI)."""
-    from camopt.verify.multibody import LEAST_FROM
+    from camopt.cases.vcb.multibody import LEAST_FROM
 
     parts, _ = problem.as_set(x[None, :], None)
     mo = problem.motion(x[None, :], parts=parts)
@@ -107,22 +113,15 @@ def camopt_side(problem: Any, x: NDArray) -> dict[str, float]:
         "least_roller_torque": float(np.min(np.where(window, mo.cam_torque, np.inf)))}
 
 
-def verify(run: Any, design: str = "best", step: float | None = None,
+def verify(run: Any, problem: Any, design: str = "best", step: float | None = None,
            restitution: float = 0.0, coupler_kg: float = 0.0) -> Verification:
-    """Compare camopt's closing of the run's ``design`` with the multibody engine's."""
-    from dataclasses import replace
+    """Compare camopt's closing of the run's ``design`` (its rebuilt ``problem``) with the
+    multibody engine's."""
+    from camopt.cases.vcb import multibody
 
-    from camopt.engine.tolerance import problem_of
-    from camopt.verify import multibody
-    from camopt.verify.mechanism import mechanism_of
-
-    if run.kind != "vcb":
-        raise CamoptError(f"{run.path}: verify: checks VCB closing dynamics; this is a "
-                          f"'{run.kind}' run")
     if not multibody.available():
         raise CamoptError(f"{run.path}: verify: the multibody engine is not installed: "
                           f"{INSTALL}")
-    problem = problem_of(run)
     x = design_of(run, problem, design)
     ours = camopt_side(problem, x)
     mech = replace(mechanism_of(problem, x), coupler_mass=coupler_kg)

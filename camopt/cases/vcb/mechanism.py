@@ -1,4 +1,4 @@
-"""A VCB design as the data a multibody model is built from: points, lengths, the cam's
+"""The VCB design as the data a multibody model is built from: points, lengths, the cam's
 follower law, springs, masses, inertias and friction, all SI and plain floats.
 
 Read from the run's problem (its stored config and the design's variables): the geometry

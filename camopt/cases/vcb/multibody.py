@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.verify.mechanism import Mechanism
+from camopt.cases.vcb.mechanism import Mechanism
 
 exu: Any  # Exudyn's bundled stubs lack settings it has: the module is typed Any here
 ii: Any
