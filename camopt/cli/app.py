@@ -83,7 +83,7 @@ COMMANDS = {"init": "catalog", "validate": "catalog", "solvers": "catalog",
             "calibrate": "calibrate", "run": "run", "show": "show", "tolerance": "tolerance",
             "report": "outputs", "export": "outputs", "plot": "outputs",
             "dashboard": "outputs", "compare": "compare", "sweep": "sweep",
-            "runs": "listing"}
+            "runs": "listing", "verify": "verify"}
 """Each command's module in :mod:`camopt.cli` (tests/cli/test_imports.py checks that every
 command is here and defined where it says)."""
 
