@@ -65,9 +65,12 @@ def print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]
         out.print(f"[italic]{escape(title)}[/]", highlight=False)
     if fits(columns, rows, out.width, numeric):
         table = Table()
-        for c, num in zip(columns, numeric):
+        for i, (c, num) in enumerate(zip(columns, numeric)):
+            # a column of single words (names, kinds) is never folded inside one: rich
+            # would otherwise shrink it with the wrapping ones ("fast_swi|tch")
+            words = all(len(r[i].split()) <= 1 for r in rows)
             table.add_column(escape(c), justify="right" if num else "left",
-                             overflow="fold" if not num else "ellipsis", no_wrap=num)
+                             overflow="fold" if not num else "ellipsis", no_wrap=num or words)
         for i, row in enumerate(rows):
             if i in sections and i:
                 table.add_section()

@@ -145,4 +145,5 @@ def test_a_file_name_is_printed_as_it_is(tmp_path):
     shutil.copy(CONFIGS / "fast_switch.toml", tmp_path / name)
     r = runner.invoke(app, ["validate", str(tmp_path / name)])
     assert r.exit_code == 0, r.output
-    assert f"{name}: case 'fast_switch'" in " ".join(r.stdout.split()), r.stdout
+    # wherever the console wraps the long temporary path (a worker's is longer)
+    assert f"{name}:case'fast_switch'".replace(" ", "") in "".join(r.stdout.split()), r.stdout
