@@ -11,6 +11,7 @@ from camopt.config.models import (
     Bounds,
     CaseConfig,
     FieldRole,
+    AsTuple,
     Pair,
     Plausible,
     Positive,
@@ -58,8 +59,8 @@ IDENTIFIED_BAND = (
 )
 
 
-BandRow = (tuple[float, float, float, float, float, float]
-           | tuple[float, float, float, float, float, float, float, float])
+BandRow = Annotated[tuple[float, float, float, float, float, float]
+                    | tuple[float, float, float, float, float, float, float, float], AsTuple]
 """A parameter set of the band: (cam_inertia_kg_m2, follower_inertia_kg_m2, rod_mass_kg,
 contacts_mass_kg, release_offset_deg, cam_friction_nm[, release_friction_nm,
 efficiency]): six values are the shipped form (the free rotation's friction the
