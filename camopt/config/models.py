@@ -80,8 +80,9 @@ class Strict(BaseModel):
 
     # strict: a number is a number (``population = "10"``, ``repeats = true`` and
     # ``generations = 2.0`` are refused naming the field, not converted); an integer is
-    # still a float. defer_build: a model's validator is built when first used, so a command that reads one
-    # case kind does not build every case's and solver's (~0.1 s CPU at start-up)
+    # still a float. defer_build: a model's validator is built when first used, so a
+    # command that reads one case kind does not build every case's and solver's (~0.1 s
+    # CPU at start-up)
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False, strict=True,
                               defer_build=True)
 

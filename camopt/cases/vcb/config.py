@@ -8,10 +8,10 @@ from typing import Annotated, ClassVar, Literal
 from pydantic import Field, model_validator
 
 from camopt.config.models import (
+    AsTuple,
     Bounds,
     CaseConfig,
     FieldRole,
-    AsTuple,
     Pair,
     Plausible,
     Positive,
