@@ -327,6 +327,24 @@ class CaseConfig(Strict):
         "docs/tolerance.md; unset: the case's default class)")
 
 
+def toml_comment(text: object) -> str:
+    """User text (a file name, a label) for a TOML comment: printable characters as they
+    are, every other one as its Python escape (``\\n``, ``\\x1b``, ``\\u2028``). A
+    comment ends at a line break, so a newline in a name written raw would start a live
+    line (``run = {repeats = 777}``) in the file; TOML forbids other control characters in
+    comments too."""
+    text = str(text)
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
+def toml_string(text: str) -> str:
+    """``text`` as a TOML basic string (quotes, backslashes and control characters
+    escaped: tomli_w), on one line."""
+    import tomli_w
+
+    return tomli_w.dumps({"v": text}).split("=", 1)[1].strip()
+
+
 def _toml_value(value: object) -> str:
     """One TOML value on one line (tables inline, so every field stays a single line)."""
     import tomli_w

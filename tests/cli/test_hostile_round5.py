@@ -1,0 +1,149 @@
+"""Hardening round 5 (issue #49): each test here failed on main before the fix it names.
+
+Calls that could hang or fill memory on a broken camopt run as subprocesses with a time
+limit and an address-space limit, so a regression fails the test instead of the machine."""
+
+from __future__ import annotations
+
+import os
+import resource
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.cases.vcb_ode import CURVES
+from tests.cli.test_faults import CAMOPT, one_error_line
+from tests.conftest import CONFIGS
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+VCB = str(CONFIGS / "vcb.toml")
+VENDOR = str(CURVES / "vendor.csv")
+MEMORY = 3 * 2**30
+"""Address space of a subprocess (bytes): camopt needs well under 1 GiB; a reader of
+/dev/zero without a bound stops here with MemoryError instead of at the OOM killer."""
+
+
+def _bounded() -> None:
+    resource.setrlimit(resource.RLIMIT_AS, (MEMORY, MEMORY))
+
+
+def camopt(*args: object, cwd: Path | None = None, timeout: float = 60
+           ) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*CAMOPT, *map(str, args)], capture_output=True, text=True,
+                          timeout=timeout, cwd=cwd, preexec_fn=_bounded)
+
+
+def _special(tmp_path: Path, kind: str) -> str:
+    """A path that is not a regular file: a FIFO (opening it waits for a writer), a
+    device that never ends, or a directory."""
+    if kind == "fifo":
+        path = tmp_path / "curve.csv"
+        os.mkfifo(path)
+        return str(path)
+    if kind == "dir":
+        path = tmp_path / "folder.csv"
+        path.mkdir()
+        return str(path)
+    return "/dev/zero"
+
+
+# ---- C1: every file input is a regular file of bounded size -----------------------------
+@pytest.mark.parametrize("kind, what", [("fifo", "not a regular file"),
+                                        ("zero", "not a regular file"),
+                                        ("dir", "is a directory")])
+@pytest.mark.parametrize("where", ["--curve", "cam_points", "reference_cam_points"])
+def test_a_curve_or_points_file_that_is_no_regular_file_is_one_line(tmp_path, kind, what,
+                                                                      where):
+    """main: a FIFO as --curve hung for ever and /dev/zero read until the OOM killer ended
+    camopt (23 GiB, exit 137). Now the shared reader (config.loader.read_regular_file,
+    the case files' check) refuses it before reading: one line, exit 2."""
+    special = _special(tmp_path, kind)
+    if where == "--curve":
+        args = ["calibrate", VCB, "--curve", special]
+    elif where == "cam_points":
+        args = ["calibrate", VCB, "--curve", VENDOR, "--set", f"cam_points={special}"]
+    else:
+        case = tmp_path / "case.toml"
+        case.write_text(f'extends = "{VCB}"\n[case]\nreference_cam_points = "{special}"\n')
+        args = ["validate", case]
+    proc = camopt(*args, cwd=tmp_path)
+    assert proc.returncode == 2 and one_error_line(proc.stderr), proc.stderr
+    assert what in proc.stderr and special in proc.stderr
+
+
+def test_a_curve_file_over_the_size_cap_is_refused_unread(tmp_path, monkeypatch):
+    from camopt.cases.vcb import curves
+    from camopt.errors import ConfigError
+
+    big = tmp_path / "big.csv"
+    big.write_text("time_ms,travel_mm\n" + "0,0\n" * 100)
+    monkeypatch.setattr(curves, "MAX_TABLE_BYTES", 100)
+    with pytest.raises(ConfigError, match="bytes; a CSV file is at most 100 bytes"):
+        curves.read_curve(big)
+
+
+# ---- C3: per-curve and predicted designs get the case's checks ---------------------------
+@pytest.mark.parametrize("option", ["--set", "--predict"])
+@pytest.mark.parametrize("value, what", [
+    ("kc1_n_per_mm=1e300", "kc1_n_per_mm: 1e+300 is beyond 1e+12 in size"),
+    ("kc2_n_per_mm=1e5", "kc2_n_per_mm: 100000 is outside the physical range [0.01, 10000] "
+                         "N/mm"),
+    ("kc1_n_per_mm=nan", "kc1_n_per_mm: Input should be a finite number"),
+    ("a1=1e300", "a1: 1e+300 is beyond 1e+12 in size"),
+    ("a3=-inf", "a3: not a finite number"),
+])
+def test_design_values_of_calibrate_get_the_case_checks(option, value, what):
+    """main: kc1_n_per_mm=1e300 after a --curve ended 'internal error: ValueError' after 14
+    RuntimeWarning lines; as a prediction it exited 0 with a 150-digit velocity. Now one
+    line naming the curve file (or --predict) and the key, before any fit."""
+    proc = camopt("calibrate", VCB, "--curve", VENDOR, option, value)
+    assert proc.returncode == 2 and one_error_line(proc.stderr), proc.stderr
+    where = VENDOR if option == "--set" else "--predict"
+    assert proc.stderr.startswith(f"error: {where}: {what}"), proc.stderr
+    assert "Warning" not in proc.stderr
+
+
+@pytest.mark.parametrize("delay, what", [("1e300", "1e+300 is beyond 1e+12 in size"),
+                                         ("-5", "-5: outside [0, 1000] ms"),
+                                         ("2000", "2000: outside [0, 1000] ms")])
+def test_a_measured_latch_delay_is_within_the_curve(delay, what):
+    proc = camopt("calibrate", VCB, "--curve", VENDOR, "--set", f"latch_delay_ms={delay}")
+    assert proc.returncode == 2 and one_error_line(proc.stderr), proc.stderr
+    assert f"latch_delay_ms: {what}" in proc.stderr
+
+
+def test_the_case_plausibility_switch_also_governs_design_values():
+    from camopt.cli.calibrate import check_design_values
+    from tests.helpers import load
+
+    config = load(VCB, "run.check_plausibility=false")
+    check_design_values(config, [("c.csv", ["kc1_n_per_mm=1e5"])], [])  # accepted
+
+
+# ---- K1: user text in the TOML fragment stays text ----------------------------------------
+@pytest.mark.slow
+def test_a_curve_name_cannot_add_settings_to_the_fragment(tmp_path):
+    """main: calibrate --out wrote the curve file's name into a TOML comment unescaped, so
+    a name with a newline added live settings that every case extending the fragment
+    inherited. The name is now in the comment with its newline as '\\n'."""
+    name = "x\nrun = {repeats = 777, seed = 666}\n#.csv"
+    curve = tmp_path / name
+    curve.write_bytes(Path(VENDOR).read_bytes())
+    out = tmp_path / "fragment.toml"
+    proc = camopt("calibrate", VCB, "--curve", curve, "--form", "coulomb", "--out", out,
+                  timeout=180)
+    assert proc.returncode == 0, proc.stderr
+    data = tomllib.loads(out.read_text())
+    assert "run" not in data and set(data) == {"extends", "case"}
+    assert "x\\nrun = {repeats = 777, seed = 666}\\n#.csv" in out.read_text()
+    assert camopt("validate", out).returncode == 0
+
+
+if sys.platform != "linux":  # pragma: no cover
+    pytest.skip("FIFOs, /dev/zero and RLIMIT_AS", allow_module_level=True)
