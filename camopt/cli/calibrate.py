@@ -8,6 +8,7 @@ command keeps the raw arguments (:class:`OrderedCommand`) to pair them."""
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 from typing import Annotated, Any
@@ -20,6 +21,9 @@ from camopt.cli.console import visible
 from camopt.errors import ConfigError
 
 RAW = "camopt.raw_args"
+MAX_TRAVEL_MM = 500.0
+"""Largest travel of a velocity calculation point (mm): the physical range of a case's
+strokes (``Stroke``, 0.1 to 500 mm)."""
 
 
 class OrderedCommand(TyperCommand):
@@ -67,6 +71,9 @@ def velocity_points(text: str | None) -> tuple[float, float] | None:
     except ValueError:
         raise ConfigError("--velocity-points", text, "expected LOW,HIGH travel in mm "
                           "(e.g. 7.333,11)") from None
+    if not (math.isfinite(low) and math.isfinite(high) and 0 < low < high <= MAX_TRAVEL_MM):
+        raise ConfigError("--velocity-points", text, f"need 0 < LOW < HIGH <= "
+                          f"{MAX_TRAVEL_MM:g} (travel in mm)")
     return low, high
 
 
@@ -127,7 +134,7 @@ def calibrate(
         "keys of a design); repeatable")] = None,
     points: Annotated[str | None, typer.Option(
         "--velocity-points", metavar="LOW,HIGH",
-        help="contact velocity between these travels, LOW,HIGH mm "
+        help="contact velocity between these travels, LOW,HIGH mm, 0 < LOW < HIGH <= 500 "
         "(default the case's: 2/3 of the contact gap to the touch)")] = None,
     form: Annotated[list[str] | None, typer.Option(
         "--form", metavar="NAME",

@@ -89,7 +89,8 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
            force: Annotated[bool, typer.Option(help="replace existing files of these names")]
            = False,
            step_deg: Annotated[float, typer.Option(
-               "--step-deg", help="angle step of the dxf's CNC points table (deg)")] = 1.0
+               "--step-deg", help="angle step of the dxf's CNC points table (deg, 0.01 to "
+               "30)")] = 1.0
            ) -> None:
     """Export the summary and analysis curves (csv or json) or, for the workshop, the cam
     as a DXF drawing in mm (dxf: the closed full-turn outline where the case has one, base

@@ -147,3 +147,55 @@ def test_a_curve_name_cannot_add_settings_to_the_fragment(tmp_path):
 
 if sys.platform != "linux":  # pragma: no cover
     pytest.skip("FIFOs, /dev/zero and RLIMIT_AS", allow_module_level=True)
+
+
+# ---- X1: every numeric option has a stated range ------------------------------------------
+@pytest.mark.parametrize("step", ["1e-5", "0.001", "31", "nan"])
+def test_export_step_is_bounded_below(fast_run, tmp_path, step):
+    """main: --step-deg 1e-5 ran 78 s at 7.7 GB before 'error: out of memory'. The CNC
+    points table's step is in [0.01, 30] deg, refused before any work."""
+    proc = camopt("export", fast_run, "--format", "dxf", "--step-deg", step,
+                  "--out", tmp_path / "e", timeout=30)
+    assert proc.returncode == 2 and one_error_line(proc.stderr), proc.stderr
+    assert f"--step-deg: {float(step):g}: must be in [0.01, 30] deg" in proc.stderr
+    assert not (tmp_path / "e").exists()
+
+
+@pytest.mark.parametrize("args, what", [
+    (["compare", "{run}", "{run}", "--equivalence", "inf"],
+     "--equivalence: inf: a finite threshold"),
+    (["calibrate", VCB, "--curve", VENDOR, "--velocity-points", "1,inf"],
+     "--velocity-points: 1,inf: need 0 < LOW < HIGH <= 500"),
+    (["calibrate", VCB, "--curve", VENDOR, "--velocity-points", "1,1e300"],
+     "--velocity-points: 1,1e300: need 0 < LOW < HIGH <= 500"),
+])
+def test_unbounded_numbers_are_refused_with_their_range(fast_run, args, what):
+    proc = camopt(*(a.format(run=fast_run) for a in args))
+    assert proc.returncode == 2 and one_error_line(proc.stderr), proc.stderr
+    assert what in proc.stderr
+
+
+def test_every_numeric_option_states_its_range():
+    """Each int or float option of every command is a click range with a lower bound and
+    an upper bound, or its help states its range in words ('0.01 to 30', '>= 0', 'at
+    most'), or it is checked by the case's models (run --seed/--repeats set run.seed and
+    run.repeats) or has its cap documented (sweep --jobs: docs/reliability.md)."""
+    import typer
+
+    from camopt.cli.app import app, load_commands
+
+    load_commands([])
+    group = typer.main.get_command(app)
+    checked_by_models = {("run", "seed"), ("run", "repeats"), ("sweep", "jobs")}
+    missing, numeric = [], 0
+    for name, command in group.commands.items():  # type: ignore[attr-defined]
+        for param in command.params:
+            if param.type_descriptor.annotation not in (int, float):
+                continue
+            numeric += 1
+            bounded = param.min is not None and param.max is not None
+            stated = any(w in (getattr(param, "help", "") or "")
+                         for w in (" to ", ">=", "at most", "<="))
+            if not (bounded or stated or (name, param.name) in checked_by_models):
+                missing.append(f"{name} --{param.name}")
+    assert numeric >= 8 and not missing, missing
