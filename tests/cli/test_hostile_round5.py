@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import os
 import resource
+import shlex
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -199,3 +201,70 @@ def test_every_numeric_option_states_its_range():
             if not (bounded or stated or (name, param.name) in checked_by_models):
                 missing.append(f"{name} --{param.name}")
     assert numeric >= 8 and not missing, missing
+
+
+# ---- stdout: a failed or short write is one line and a non-zero exit ---------------------
+def _commands(run: Path) -> dict[str, list[object]]:
+    return {"show json": ["show", run, "--format", "json"], "show": ["show", run],
+            "compare json": ["compare", run, run, "--format", "json"],
+            "tolerance json": ["tolerance", run, "--samples", "50", "--format", "json"],
+            "init": ["init", "fast_switch"],
+            "validate": ["validate", CONFIGS / "fast_switch.toml"], "help": ["--help"]}
+
+
+@pytest.mark.parametrize("name", ["show json", "show", "compare json", "tolerance json",
+                                  "init", "validate", "help"])
+def test_stdout_on_a_full_disk_is_one_line(fast_run, name):
+    """main: 'error: internal error: OSError: [Errno 28] No space left on device (please
+    report this)'."""
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([*CAMOPT, *map(str, _commands(fast_run)[name])], stdout=full,
+                              stderr=subprocess.PIPE, text=True, timeout=60)
+    assert proc.returncode == 2 and one_error_line(proc.stderr), proc.stderr
+    assert proc.stderr.startswith("error: <stdout>: write: No space left on device; the "
+                                  "output is incomplete"), proc.stderr
+
+
+def _file_limit(limit: int) -> Callable[[], None]:
+    def apply() -> None:  # the kernel's EFBIG past ``limit`` bytes (as `ulimit -f`)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+    return apply
+
+
+@pytest.mark.parametrize("name", ["show json", "show", "compare json", "tolerance json",
+                                  "init"])
+def test_stdout_over_a_file_size_limit_is_not_success(fast_run, tmp_path, name):
+    """main: under `ulimit -f 1` `show --format json` exited 0 with its output cut at
+    1,024 bytes (Python's buffered stdout let the short write pass). Each output here is
+    over 1,024 bytes: the command exits 2 with one line saying the output is incomplete.
+    (Python ignores SIGXFSZ, so the limit is an EFBIG error, as in a shell.)"""
+    out = tmp_path / "out.txt"
+    with out.open("w") as f:
+        proc = subprocess.run([*CAMOPT, *map(str, _commands(fast_run)[name])], stdout=f,
+                              stderr=subprocess.PIPE, text=True, timeout=60,
+                              preexec_fn=_file_limit(1024))
+    assert proc.returncode == 2 and one_error_line(proc.stderr), proc.stderr
+    assert "<stdout>: write: File too large; the output is incomplete" in proc.stderr
+    assert out.stat().st_size == 1024
+
+
+def test_a_shell_ulimit_cuts_json_with_an_error(fast_run, tmp_path):
+    """The issue's reproduction as a user types it: `ulimit -f 1` (1,024-byte blocks) in a
+    shell, then show --format json into a file."""
+    command = " ".join(map(shlex.quote, [*CAMOPT, "show", str(fast_run), "--format", "json"]))
+    proc = subprocess.run(["bash", "-c", f"ulimit -f 1; {command} > out.json"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2 and one_error_line(proc.stderr), proc.stderr
+
+
+def test_output_that_fits_is_unchanged(fast_run, tmp_path):
+    """The checked stdout writes what Python's did: the same bytes as the in-process
+    command, nothing on stderr."""
+    from typer.testing import CliRunner
+
+    from camopt.cli import app
+
+    proc = camopt("show", fast_run, "--format", "json")
+    assert proc.returncode == 0 and proc.stderr == ""
+    inline = CliRunner().invoke(app, ["show", str(fast_run), "--format", "json"])
+    assert proc.stdout == inline.stdout
