@@ -544,3 +544,32 @@ def test_one_at_a_time_ends_are_each_computed_at_its_own_end(fast_run):
         assert np.array_equal([by_input[v.name]["low"], by_input[v.name]["high"]], [low, high],
                               equal_nan=True)
     assert uneven >= 2  # the test can tell the ends apart
+
+
+def test_the_expected_yield_counts_draws_meeting_every_requirement_inside_range(
+        fast_run, monkeypatch):
+    """The expected yield is the share of draws that meet every requirement of the run
+    and whose inputs lie inside their physical ranges (docs/tolerance.md). With stand-ins
+    (every other draw meets the requirements; the first 10 of 60 draws outside their
+    range) it is exactly 25 / 60, and its interval Clopper-Pearson's on 25 of 60."""
+    from camopt.core import requirements
+    from camopt.core.stats import success_rate
+    from camopt.engine import tolerance
+
+    run = archive.load_run(fast_run)
+    real, seen = tolerance.analyse, []
+
+    def outside_first(*args, **kwargs):
+        t = real(*args, **kwargs)
+        t.outside = np.arange(len(t.inputs)) < 10
+        seen.append(t)
+        return t
+
+    monkeypatch.setattr(tolerance, "analyse", outside_first)
+    monkeypatch.setattr(requirements, "all_pass",
+                        lambda reqs, columns: np.arange(60) % 2 == 0)
+    y = tolerance.expected_yield(run, samples=60)
+    assert len(seen) == 1 and y["samples"] == 60
+    assert y["value"] == 25 / 60  # 30 meet them, 5 of those outside their range
+    rate = success_rate(25, 60)
+    assert (y["low"], y["high"]) == (rate["ci_low"], rate["ci_high"])
