@@ -218,4 +218,5 @@ def test_the_drawn_outline_closes_on_its_first_point_without_repeating_it():
     assert poly.closed and drawn.shape == points.shape
     np.testing.assert_array_equal(drawn, points)  # doubles through DXF text: exact
     edges = np.hypot(*np.diff(np.vstack([drawn, drawn[:1]]), axis=0).T)
-    assert edges.min() > 0 and edges[-1] <= edges[:-1].max()
+    # no vanishing edge (a repeated point a turn later differs by round-off only)
+    assert edges.min() > 0.01 * np.median(edges) and edges[-1] <= edges[:-1].max()
