@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import stat
@@ -129,21 +130,28 @@ def apply_override(data: dict[str, Any], key: str, value: Any) -> None:
     node[parts[-1]] = value
 
 
-def read_regular_file(path: str | Path, key: str, limit: int, what: str) -> bytes:
+def read_regular_file(path: str | Path, key: str, limit: int, what: str,
+                      follow: bool = True) -> bytes:
     """The bytes of ``path``, refused as a ConfigError ``<path>: <key>: <why>`` unless it
     is a regular file of at most ``limit`` bytes (``what`` names it: 'a case file'). Every
-    file camopt reads as input goes through here: opened ``O_NONBLOCK`` (a FIFO must not
-    wait for a writer) and checked with ``fstat`` on the opened descriptor before a byte
-    is read (a device such as /dev/zero never ends; a directory is no file), then read
-    at most ``limit + 1`` bytes (a file that grew since ``fstat`` is still refused)."""
+    file camopt reads as input goes through here (case files, curves and cam points,
+    a sweep's journal and lock): opened ``O_NONBLOCK`` (a FIFO must not wait for a
+    writer) and checked with ``fstat`` on the opened descriptor before a byte is read (a
+    device such as /dev/zero never ends; a directory is no file), then read at most
+    ``limit + 1`` bytes (a file that grew since ``fstat`` is still refused). ``follow``
+    False: a symbolic link is refused too (``O_NOFOLLOW``: files camopt itself keeps
+    beside an archive, where a planted link would redirect the read)."""
     source = str(path)
+    flags = os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC | (0 if follow else os.O_NOFOLLOW)
     try:
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+        fd = os.open(path, flags)
     except FileNotFoundError:
         raise ConfigError(source, key, "no such file") from None
     except IsADirectoryError:
         raise ConfigError(source, key, f"is a directory, not {what}") from None
     except (OSError, ValueError) as exc:
+        if isinstance(exc, OSError) and exc.errno == errno.ELOOP and not follow:
+            raise ConfigError(source, key, "cannot read (a symbolic link)") from None
         why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
         raise ConfigError(source, key, f"cannot open: {why}") from None
     try:
