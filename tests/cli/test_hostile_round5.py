@@ -26,8 +26,8 @@ else:  # pragma: no cover
 
 VCB = str(CONFIGS / "vcb.toml")
 VENDOR = str(CURVES / "vendor.csv")
-MEMORY = 3 * 2**30
-"""Address space of a subprocess (bytes): camopt needs well under 1 GiB; a reader of
+MEMORY = 3 * 2**29
+"""Address space of a subprocess (1.5 GiB): camopt needs well under 1 GiB; a reader of
 /dev/zero without a bound stops here with MemoryError instead of at the OOM killer."""
 
 
