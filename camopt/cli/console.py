@@ -168,4 +168,4 @@ def checked_stdout() -> None:
     old.flush()
     sys.stdout = io.TextIOWrapper(
         io.BufferedWriter(CheckedOutput(fd, "<stdout>")), encoding=old.encoding,
-        errors=old.errors, line_buffering=old.line_buffering)
+        errors=old.errors, line_buffering=bool(getattr(old, "line_buffering", False)))
