@@ -529,31 +529,29 @@ def _reaches_outside(f: h5py.File) -> str | None:
     return found[0] if found else None
 
 
+MAX_SIDE_FILE_BYTES = 2**30
+"""Largest journal or lock file read (bytes): a journal line is a cell's result, at most
+a few kB, and a sweep at most 100,000 cells (``sweep/spec.py``); a device or a runaway
+file is refused before it fills memory."""
+
+
 def read_regular(path: Path, what: str) -> bytes | None:
-    """The bytes of the regular file ``path`` (None if there is none). Opened without
-    following a symlink and without blocking, and checked with ``fstat`` before reading:
-    a FIFO, device or link put there is an ArchiveError naming ``what``, never a hang."""
+    """The bytes of the regular file ``path`` (None if there is none): the shared check of
+    every input (:func:`camopt.config.loader.read_regular_file`), without following a
+    symbolic link. A FIFO, device, directory or link put there is an ArchiveError naming
+    ``what``, never a hang."""
+    from camopt.config.loader import read_regular_file
+    from camopt.errors import ConfigError
+
     try:
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_NOFOLLOW | os.O_CLOEXEC)
-    except FileNotFoundError:
-        return None
-    except OSError as exc:
-        reason = "a symbolic link" if exc.errno == errno.ELOOP else exc.strerror
-        raise ArchiveError(f"{path}: {what}: cannot read ({reason})") from None
-    try:
-        if not stat.S_ISREG(os.fstat(fd).st_mode):
-            raise ArchiveError(f"{path}: {what}: not a regular file (a FIFO or device); "
-                               "remove it")
-        chunks = []
-        while chunk := os.read(fd, 1 << 20):
-            chunks.append(chunk)
-        return b"".join(chunks)
-    except ArchiveError:
-        raise
-    except OSError as exc:
-        raise ArchiveError(f"{path}: {what}: cannot read ({exc.strerror})") from None
-    finally:
-        os.close(fd)
+        return read_regular_file(path, what, MAX_SIDE_FILE_BYTES, f"a {what} file",
+                                 follow=False)
+    except ConfigError as exc:
+        if exc.what == "no such file":
+            return None
+        remedy = "; remove it" if "regular file" in exc.what or "directory" in exc.what \
+            else ""
+        raise ArchiveError(f"{path}: {what}: {exc.what}{remedy}") from None
 
 
 def same_file(a: Path, b: Path) -> bool:

@@ -51,7 +51,7 @@ class _Loader:
 
     def locate(self, key: str, ref: str) -> Path:
         path = self._find(ref)
-        if not path.is_file():
+        if not path.exists():  # a FIFO or device: its reader says what it is
             raise ConfigError(self.case_path, key, f"{ref}: no such file (looked in the "
                               "working folder and beside the case file)")
         return path

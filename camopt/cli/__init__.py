@@ -9,6 +9,7 @@ import os
 import sys
 
 from camopt.cli.app import app, internal_error, load_commands
+from camopt.cli.console import OutputError, checked_stdout, visible
 from camopt.core import perf
 from camopt.engine import interrupts
 
@@ -22,6 +23,7 @@ def main() -> None:
 
     perf.one_blas_thread_on_load()
     interrupts.install()
+    checked_stdout()
     # a design that does not assemble is data (NaN), judged by the verdict: numpy's
     # 'invalid value' warnings, with source paths, are no message to a user
     warnings.simplefilter("ignore", RuntimeWarning)
@@ -31,9 +33,17 @@ def main() -> None:
         sys.exit(2)
     load_commands(sys.argv[1:])
     try:
-        app(standalone_mode=True)
+        try:
+            app(standalone_mode=True)
+        finally:
+            # the buffered rest goes out now, where a failure is one line (at exit,
+            # Python would print it as an ignored exception, or not at all)
+            sys.stdout.flush()
     except SystemExit:
         raise
+    except OutputError as exc:  # printed outside a command's errors(): stdout failed
+        print(f"error: {visible(exc)}", file=sys.stderr)
+        sys.exit(2)
     except KeyboardInterrupt:
         interrupts.handled()
         print("error: interrupted", file=sys.stderr)

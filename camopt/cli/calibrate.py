@@ -8,6 +8,7 @@ command keeps the raw arguments (:class:`OrderedCommand`) to pair them."""
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 from typing import Annotated, Any
@@ -20,6 +21,9 @@ from camopt.cli.console import visible
 from camopt.errors import ConfigError
 
 RAW = "camopt.raw_args"
+MAX_TRAVEL_MM = 500.0
+"""Largest travel of a velocity calculation point (mm): the physical range of a case's
+strokes (``Stroke``, 0.1 to 500 mm)."""
 
 
 class OrderedCommand(TyperCommand):
@@ -67,7 +71,47 @@ def velocity_points(text: str | None) -> tuple[float, float] | None:
     except ValueError:
         raise ConfigError("--velocity-points", text, "expected LOW,HIGH travel in mm "
                           "(e.g. 7.333,11)") from None
+    if not (math.isfinite(low) and math.isfinite(high) and 0 < low < high <= MAX_TRAVEL_MM):
+        raise ConfigError("--velocity-points", text, f"need 0 < LOW < HIGH <= "
+                          f"{MAX_TRAVEL_MM:g} (travel in mm)")
     return low, high
+
+
+def check_design_values(config: Any, pairs: list[tuple[str, list[str]]],
+                        predict: list[str]) -> None:
+    """Every number of a per-curve ``--set`` and of a ``--predict`` through the checks a
+    case file's numbers get: a key that is a field of the case (the closing springs'
+    ``kc1_n_per_mm``) through the case's model (its physical range, unless
+    ``run.check_plausibility = false``, and the 1e12 cap), any other number (the law's
+    ``a1``..``a3``, a latch delay) finite and within the cap. A bad value is one line
+    naming the curve file (or ``--predict``) and the key, before any fit."""
+    from pydantic import ValidationError
+
+    from camopt.config.models import MAX_MAGNITUDE, PLAUSIBILITY_KEY
+
+    case = config.case
+    model = type(case)
+    context = {PLAUSIBILITY_KEY: config.run.check_plausibility}
+    given = [(p, items) for p, items in pairs] + [("--predict", p.split(","))
+                                                  for p in predict]
+    for where, items in given:
+        for item in items:
+            key, _, text = (part.strip() for part in item.partition("="))
+            try:
+                value = float(text)
+            except ValueError:
+                continue  # not a number: a label, a cam file, or refused by the case
+            if key in model.model_fields:
+                try:
+                    model.model_validate({**case.model_dump(), key: value}, context=context)
+                except ValidationError as exc:
+                    error = exc.errors()[0]
+                    raise ConfigError(where, key, error["msg"].removeprefix(
+                        "Value error, ") + f" (got {text})") from None
+            elif not abs(value) <= MAX_MAGNITUDE:
+                what = "not a finite number" if value != value or abs(value) == float(
+                    "inf") else f"{value:g} is beyond {MAX_MAGNITUDE:g} in size"
+                raise ConfigError(where, key, what)
 
 
 @app.command(cls=OrderedCommand)
@@ -90,7 +134,7 @@ def calibrate(
         "keys of a design); repeatable")] = None,
     points: Annotated[str | None, typer.Option(
         "--velocity-points", metavar="LOW,HIGH",
-        help="contact velocity between these travels, LOW,HIGH mm "
+        help="contact velocity between these travels, LOW,HIGH mm, 0 < LOW < HIGH <= 500 "
         "(default the case's: 2/3 of the contact gap to the touch)")] = None,
     form: Annotated[list[str] | None, typer.Option(
         "--form", metavar="NAME",
@@ -123,6 +167,7 @@ def calibrate(
     del set_  # read in order from the raw arguments
     with errors():
         config = load_case(case, overrides)
+        check_design_values(config, pairs, list(predict or ()))
         request = CalibrationRequest(
             curves=tuple(CurveRequest(Path(p), tuple(s)) for p, s in pairs),
             predict=tuple(predict or ()), velocity_points_mm=velocity_points(points),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -19,7 +20,7 @@ from camopt.cli.layout import (
     print_verdicts,
     success_rate_text,
 )
-from camopt.errors import CamoptError
+from camopt.errors import CamoptError, ConfigError
 
 
 @app.command()
@@ -27,8 +28,9 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
                                                        help="run archives, or one sweep")],
             format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
             equivalence: Annotated[float | None, typer.Option(
-                min=0, help="practical-equivalence threshold in the objective's unit "
-                "(default: the case's, else 0.1% of the larger median)")] = None,
+                min=0, help="practical-equivalence threshold in the objective's unit, a "
+                "finite number >= 0 (default: the case's, else 0.1% of the larger "
+                "median)")] = None,
             ) -> None:
     """Compare runs (config differences, designs, statistics, a significance test for two)
     or rank the grid points of a sweep."""
@@ -37,6 +39,9 @@ def compare(runs: Annotated[list[Path], typer.Argument(metavar="RUN...",
     from camopt.reporting import report
 
     with errors():
+        if equivalence is not None and not math.isfinite(equivalence):
+            raise ConfigError("--equivalence", str(equivalence), "a finite threshold >= 0 "
+                              "in the objective's unit")
         if len(runs) == 1 and archive.archive_kind(runs[0]) == "sweep":
             from camopt.archive.sweeps import load_sweep
 

@@ -5,12 +5,17 @@ plain tables."""
 from __future__ import annotations
 
 import contextlib
+import io
+import os
+import sys
 from collections.abc import Callable, Iterator
 from typing import Any
 
 from rich.console import Console
 from rich.markup import escape as markup_escape
 from rich.text import Text
+
+from camopt.errors import CamoptError
 
 
 def visible(text: object) -> str:
@@ -97,3 +102,70 @@ def plain(value: Any) -> str:
         return ",".join(plain(v) for v in value)
     return "-" if value is None else str(value)
 
+
+
+class OutputError(CamoptError):
+    """Standard output could not take what a command printed (a full disk, a file-size
+    limit, an I/O error): the output is incomplete."""
+
+
+class CheckedOutput(io.RawIOBase):
+    """File descriptor ``fd`` as a raw stream whose every write is whole or an
+    :class:`OutputError`. Python's own stdout let a short write pass silently: under
+    ``ulimit -f`` ``show --format json`` exited 0 with its output cut at 1,024 bytes.
+    On a failure the descriptor is pointed at /dev/null first, so the rest of the
+    output (flushed again at exit) goes nowhere instead of adding a second error; a
+    closed pipe stays a BrokenPipeError (``camopt show | head`` is no error)."""
+
+    def __init__(self, fd: int, name: str) -> None:
+        super().__init__()
+        self.fd, self.name = fd, name
+
+    def writable(self) -> bool:
+        return True
+
+    def fileno(self) -> int:
+        return self.fd
+
+    def isatty(self) -> bool:
+        return os.isatty(self.fd)
+
+    def write(self, data: Any) -> int:
+        view = memoryview(data).cast("B")
+        done = 0
+        while done < len(view):
+            try:
+                n = os.write(self.fd, view[done:])
+            except BrokenPipeError:
+                raise
+            except OSError as exc:
+                self._discard()
+                raise OutputError(f"{self.name}: write: {exc.strerror or exc}; the output "
+                                  f"is incomplete ({done} of {len(view)} bytes of the last "
+                                  "write went out)") from None
+            if n <= 0:  # a write that makes no progress would loop for ever
+                self._discard()
+                raise OutputError(f"{self.name}: write: no bytes written; the output is "
+                                  "incomplete")
+            done += n
+        return done
+
+    def _discard(self) -> None:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, self.fd)
+        os.close(devnull)
+
+
+def checked_stdout() -> None:
+    """Replace ``sys.stdout`` by a text stream over :class:`CheckedOutput` with the same
+    encoding and buffering (line-buffered on a terminal): every print is then either
+    written whole or an :class:`OutputError`."""
+    old = sys.stdout
+    try:
+        fd = old.fileno()
+    except (AttributeError, OSError, ValueError):  # not a real file (a test's capture)
+        return
+    old.flush()
+    sys.stdout = io.TextIOWrapper(
+        io.BufferedWriter(CheckedOutput(fd, "<stdout>")), encoding=old.encoding,
+        errors=old.errors, line_buffering=bool(getattr(old, "line_buffering", False)))

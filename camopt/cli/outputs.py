@@ -90,7 +90,8 @@ def export(run_path: Annotated[Path, typer.Argument(metavar="RUN", help="run arc
            force: Annotated[bool, typer.Option(help="replace existing files of these names")]
            = False,
            step_deg: Annotated[float, typer.Option(
-               "--step-deg", help="angle step of the dxf's CNC points table (deg)")] = 1.0,
+               "--step-deg", help="angle step of the dxf's CNC points table (deg, 0.01 to "
+               "30)")] = 1.0,
            chord_error_mm: Annotated[float | None, typer.Option(
                "--chord-error-mm", help="largest distance of the dxf's outline from the "
                "exact profile (mm, 0.0005 to 0.05 and below the case's profile tolerance; "

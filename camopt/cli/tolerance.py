@@ -38,7 +38,8 @@ def tolerance(
     samples: Annotated[int, typer.Option(
         min=1, max=1_000_000, help="samples, evaluated in row chunks (at most 10^6)")]
     = 2000,
-    seed: Annotated[int, typer.Option(min=0, help="root seed of the draws")] = 0,
+    seed: Annotated[int, typer.Option(min=0, max=2**128 - 1, help="root seed of the draws "
+                                      "(0 to 2^128 - 1, as run.seed)")] = 0,
     dist: Annotated[Dist, typer.Option(
         "--dist", help="uniform on ±X, or normal with sigma = X/3")] = Dist.uniform,
     format: Annotated[Format, typer.Option("--format", help="output")] = Format.table,
@@ -58,8 +59,8 @@ def tolerance(
         "--allocate", help="the yield in every tolerance class of the case, the cheapest "
         "that reaches --target, and what tightening each input buys")] = False,
     target: Annotated[float | None, typer.Option(
-        help="yield target of --allocate (default the run's robust.yield_target, else "
-        "0.95)")] = None,
+        help="yield target of --allocate, a share > 0 and <= 1 (default the run's "
+        "robust.yield_target, else 0.95)")] = None,
     quiet: Annotated[bool, typer.Option(
         help="no progress bar (there is none when stderr is not a terminal)")] = False,
 ) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import stat
@@ -129,37 +130,55 @@ def apply_override(data: dict[str, Any], key: str, value: Any) -> None:
     node[parts[-1]] = value
 
 
-def _read(path: Path) -> tuple[str, dict[str, Any]]:
-    """A case file's text and parsed TOML: a regular file (a FIFO would block, a device
-    never end) of at most MAX_FILE_BYTES, checked on the opened descriptor."""
+def read_regular_file(path: str | Path, key: str, limit: int, what: str,
+                      follow: bool = True) -> bytes:
+    """The bytes of ``path``, refused as a ConfigError ``<path>: <key>: <why>`` unless it
+    is a regular file of at most ``limit`` bytes (``what`` names it: 'a case file'). Every
+    file camopt reads as input goes through here (case files, curves and cam points,
+    a sweep's journal and lock): opened ``O_NONBLOCK`` (a FIFO must not wait for a
+    writer) and checked with ``fstat`` on the opened descriptor before a byte is read (a
+    device such as /dev/zero never ends; a directory is no file), then read at most
+    ``limit + 1`` bytes (a file that grew since ``fstat`` is still refused). ``follow``
+    False: a symbolic link is refused too (``O_NOFOLLOW``: files camopt itself keeps
+    beside an archive, where a planted link would redirect the read)."""
     source = str(path)
+    flags = os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC | (0 if follow else os.O_NOFOLLOW)
     try:
-        # O_NONBLOCK: opening a FIFO must not wait for a writer; fstat then refuses it
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+        fd = os.open(path, flags)
     except FileNotFoundError:
-        raise ConfigError(source, "file", "no such file") from None
+        raise ConfigError(source, key, "no such file") from None
     except IsADirectoryError:
-        raise ConfigError(source, "file", "is a directory, not a case file") from None
+        raise ConfigError(source, key, f"is a directory, not {what}") from None
     except (OSError, ValueError) as exc:
-        what = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-        raise ConfigError(source, "file", f"cannot open: {what}") from None
+        if isinstance(exc, OSError) and exc.errno == errno.ELOOP and not follow:
+            raise ConfigError(source, key, "cannot read (a symbolic link)") from None
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise ConfigError(source, key, f"cannot open: {why}") from None
     try:
         info = os.fstat(fd)
         if stat.S_ISDIR(info.st_mode):
-            raise ConfigError(source, "file", "is a directory, not a case file")
+            raise ConfigError(source, key, f"is a directory, not {what}")
         if not stat.S_ISREG(info.st_mode):
-            raise ConfigError(source, "file", "not a regular file (a device, FIFO or socket)")
-        if info.st_size > MAX_FILE_BYTES:
-            raise ConfigError(source, "file", f"{info.st_size} bytes; a case file is at most "
-                              f"{MAX_FILE_BYTES} bytes")
+            raise ConfigError(source, key, "not a regular file (a device, FIFO or socket)")
+        if info.st_size > limit:
+            raise ConfigError(source, key, f"{info.st_size} bytes; {what} is at most "
+                              f"{limit} bytes")
         with os.fdopen(fd, "rb", closefd=False) as fh:
-            raw = fh.read(MAX_FILE_BYTES + 1)
+            raw = fh.read(limit + 1)
     except OSError as exc:
-        raise ConfigError(source, "file", f"cannot read: {exc.strerror or exc}") from None
+        raise ConfigError(source, key, f"cannot read: {exc.strerror or exc}") from None
     finally:
         os.close(fd)
-    if len(raw) > MAX_FILE_BYTES:
-        raise ConfigError(source, "file", f"a case file is at most {MAX_FILE_BYTES} bytes")
+    if len(raw) > limit:
+        raise ConfigError(source, key, f"{what} is at most {limit} bytes")
+    return raw
+
+
+def _read(path: Path) -> tuple[str, dict[str, Any]]:
+    """A case file's text and parsed TOML (:func:`read_regular_file`, at most
+    MAX_FILE_BYTES)."""
+    source = str(path)
+    raw = read_regular_file(path, "file", MAX_FILE_BYTES, "a case file")
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -14,7 +14,15 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Annotated, Any, ClassVar, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
 # Every float of a case file is finite (``allow_inf_nan=False`` on :class:`Strict`) and at
 # most MAX_MAGNITUDE in size: no length, mass, rate or modulus of a mechanism in the units
@@ -23,7 +31,17 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validat
 MAX_MAGNITUDE = 1e12
 
 Positive = Annotated[float, Field(gt=0)]
-Pair = tuple[float, float]
+
+
+def _as_tuple(value: Any) -> Any:
+    """A TOML array (a list) as the tuple a fixed-length field holds; strict mode refuses
+    a list for a tuple, and the numbers inside are still checked strictly."""
+    return tuple(value) if isinstance(value, list) else value
+
+
+AsTuple = BeforeValidator(_as_tuple)
+"""Metadata of every tuple field: ``Annotated[tuple[float, float], AsTuple]``."""
+Pair = Annotated[tuple[float, float], AsTuple]
 
 PLAUSIBILITY_KEY = "check_plausibility"
 
@@ -60,9 +78,12 @@ class Strict(BaseModel):
     """Base of every config model: unknown keys are errors; every float is finite and at
     most MAX_MAGNITUDE in size; fields with :class:`Plausible` metadata are in range."""
 
-    # defer_build: a model's validator is built when first used, so a command that reads one
-    # case kind does not build every case's and solver's (~0.1 s CPU at start-up)
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False,
+    # strict: a number is a number (``population = "10"``, ``repeats = true`` and
+    # ``generations = 2.0`` are refused naming the field, not converted); an integer is
+    # still a float. defer_build: a model's validator is built when first used, so a
+    # command that reads one case kind does not build every case's and solver's (~0.1 s
+    # CPU at start-up)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False, strict=True,
                               defer_build=True)
 
     @field_validator("*", mode="after")
@@ -308,6 +329,24 @@ class CaseConfig(Strict):
         None, description="manufacturing tolerance class the parts are made to, used by "
         "camopt tolerance and robust design (the case's classes and their sources: "
         "docs/tolerance.md; unset: the case's default class)")
+
+
+def toml_comment(text: object) -> str:
+    """User text (a file name, a label) for a TOML comment: printable characters as they
+    are, every other one as its Python escape (``\\n``, ``\\x1b``, ``\\u2028``). A
+    comment ends at a line break, so a newline in a name written raw would start a live
+    line (``run = {repeats = 777}``) in the file; TOML forbids other control characters in
+    comments too."""
+    text = str(text)
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
+def toml_string(text: str) -> str:
+    """``text`` as a TOML basic string (quotes, backslashes and control characters
+    escaped: tomli_w), on one line."""
+    import tomli_w
+
+    return tomli_w.dumps({"v": text}).split("=", 1)[1].strip()
 
 
 def _toml_value(value: object) -> str:

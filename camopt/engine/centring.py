@@ -102,6 +102,19 @@ def ranking(F: NDArray, violation: NDArray) -> NDArray:
     return np.argsort(np.where(np.isfinite(violation), F + violation, np.inf), kind="stable")
 
 
+def keep(feasible_start: bool, feasible_centred: bool, share_start: float,
+         share_centred: float) -> bool:
+    """Whether the centred design replaces the design it started from, judged on the
+    robust selection's draws: the case's nominal verdict first (a centred design the
+    case accepts replaces a start it refuses, never the other way round), then, when
+    both are judged alike, a strictly larger pass share ``share_centred`` than
+    ``share_start`` (a tie keeps the start: centring that does not help changes
+    nothing)."""
+    if feasible_centred != feasible_start:
+        return feasible_centred
+    return share_centred > share_start
+
+
 def centre(problem: Problem, draws: Draws, x0: NDArray, generations: int, step: float,
            rng: np.random.Generator) -> Centred:
     """Minimise F from ``x0`` (n_var,), SI, for ``generations`` CMA-ES generations of

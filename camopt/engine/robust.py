@@ -444,7 +444,7 @@ class RobustProblem(Problem, Stochastic):
         selection's), kept if the case accepts it at nominal and not ``x``, or if both
         are judged alike there and more of the selection's draws ``unit`` pass it than
         ``x`` (a tie keeps ``x``); both shares go to the repeat's notes."""
-        from camopt.engine.centring import centre
+        from camopt.engine.centring import centre, keep
 
         spec, base, plan = self.plan.spec, self.base, self.plan
         rng = np.random.default_rng(np.random.SeedSequence(seed.entropy,
@@ -458,8 +458,7 @@ class RobustProblem(Problem, Stochastic):
         c = centre(base, draws, x, spec.centre_generations, spec.centre_step, rng)
         both = sample(base, plan, np.vstack([x, c.x]), unit).feasible.mean(axis=1)
         ok = base.evaluate(np.vstack([x, c.x])).feasible
-        # the case's nominal verdict first, then more of the selection's draws passing
-        kept = bool((ok[1] and not ok[0]) or (ok[1] == ok[0] and both[1] > both[0]))
+        kept = keep(bool(ok[0]), bool(ok[1]), float(both[0]), float(both[1]))
         self.notes = (f"yield centring ({c.generations} generations, {len(fixed)} fixed "
                       f"draws): pass share {c.passed_start:.4f} -> {c.passed:.4f} on its "
                       f"draws, {both[0]:.4f} -> {both[1]:.4f} on the selection's "

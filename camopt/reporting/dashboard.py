@@ -130,7 +130,18 @@ def _report(path: Path) -> str | None:
     """The report beside the archive (``camopt report``'s default name), as a link
     relative to the folder, or None."""
     page = path.with_suffix(".html")
-    return page.name if page.is_file() else None
+    return relative_href(page.name) if page.is_file() else None
+
+
+def relative_href(name: str) -> str:
+    """A file name as an ``href`` that can only mean that file beside the page: ``./``
+    then the name percent-encoded (RFC 3986; ``/`` too). A name is user text: without
+    the ``./``, ``javascript:alert(1);({}).html`` is a URL of the ``javascript:`` scheme
+    (a script runs when the link is clicked), ``//host/x.html`` another host, and ``#``,
+    ``?`` or ``%`` change what a browser fetches."""
+    from urllib.parse import quote
+
+    return "./" + quote(name, safe="")
 
 
 def rows(folder: Path) -> list[DashboardRow]:

@@ -33,6 +33,10 @@ from camopt.units import DEG, MM, TO_DEG
 FORMATS = ("csv", "json", "dxf")
 STEP_DEG = 1.0
 """Default angle step of the CNC points table (deg)."""
+STEP_RANGE_DEG = (0.01, 30.0)
+"""Steps of the CNC points table (deg): from 0.01 (36,000 rows, finer than the dense
+outline of :data:`DENSE_DEG` it is interpolated from is of no use; 1e-5 deg was 36 million
+rows, 78 s and 7.7 GB before running out of memory) to 30 (12 rows)."""
 DENSE_DEG = 0.02
 """Sampling of the outline the points table is interpolated from (deg): linear
 interpolation in polar angle then errs by well under 0.1 um (tested against 0.01 deg)."""
@@ -63,15 +67,17 @@ def export_run(run: RunView, out_dir: Path, stem: str, fmt: str, force: bool = F
     curves' point files and the CNC points table at ``step_deg``, its outline within
     ``chord_error_mm``, None: :data:`CHORD_ERROR_MM`); returns their paths. A DXF of a
     case without profiles is bad input (ConfigError against ``--format``), and so is a
-    step outside (0, 30] deg or a chord error :func:`check_chord_error` refuses. The files
-    are built in memory and written all or nothing
+    step outside :data:`STEP_RANGE_DEG` or a chord error :func:`check_chord_error`
+    refuses. The files are built in memory and written all or nothing
     (:func:`camopt.archive.files.write_files`): never over an existing file without
     ``force``, never through a link, never over one of ``inputs``."""
     from camopt.archive.files import output_folder, write_files
 
     spec = get_case(run.kind)
-    if not (np.isfinite(step_deg) and 0 < step_deg <= 30):
-        raise ConfigError(run.path, "--step-deg", f"{step_deg:g}: must be in (0, 30]")
+    low, high = STEP_RANGE_DEG
+    if not (np.isfinite(step_deg) and low <= step_deg <= high):
+        raise ConfigError(run.path, "--step-deg", f"{step_deg:g}: must be in [{low:g}, "
+                          f"{high:g}] deg")
     if fmt == "dxf":
         files = dxf_files(run, out_dir, stem, spec, step_deg, chord_error_mm)
     elif chord_error_mm is not None:

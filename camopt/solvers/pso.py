@@ -10,13 +10,13 @@ input), ``false`` gives plain PSO. Written here because scipy has no PSO.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
-from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
+from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, AsTuple, SolverOptions
 from camopt.core.capabilities import Repairable
 from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
@@ -47,7 +47,7 @@ class PSOOptions(PolishableOptions):
     repair: bool | None = Field(
         None, description="the case's corrections (improved PSO): unset uses them when the "
         "case has them, true requires them, false is plain PSO")
-    repair_probability: dict[str, tuple[float, float]] | None = Field(
+    repair_probability: dict[str, Annotated[tuple[float, float], AsTuple]] | None = Field(
         None, description="per correction: trigger probability at the first and last "
         "iteration; corrections not named keep the case's schedule")
 

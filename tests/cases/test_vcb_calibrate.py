@@ -375,3 +375,40 @@ def test_95_percent_intervals_cover_the_truth_in_noisy_model_curves(problem):
         held, total = held + ok, total + 1
         misses += [] if ok else ["velocity"]
     assert held / total >= 0.9, (held, total, misses)
+
+
+def test_a_parameter_the_curves_do_not_see_is_open_without_warnings(problem):
+    """The profile-likelihood walk divided column j of the covariance by its variance:
+    for a coordinate the curves do not see (a zero Jacobian column, so zero variance in
+    the pseudo-inverse) that was 0 / 0, a RuntimeWarning and NaN starts. Residuals here
+    are a stand-in, linear in every coordinate but the first (the fit's machinery, not
+    the dynamics, is under test): that coordinate's profile is open to both search
+    bounds and not identified; the others' intervals are closed and finite."""
+    import warnings
+
+    from camopt.cases.vcb.calibrate import Optimum
+
+    cal = Calibration(problem.config, FORM, [_curve(problem, "vendor")])
+    centre, width = 0.5 * (cal.lower + cal.upper), cal.upper - cal.lower
+
+    def residuals(Q):
+        d = (np.atleast_2d(Q) - centre) / width * 40.0
+        d[:, 0] = 0.0  # the first coordinate changes nothing
+        return np.repeat(d, 5, axis=1) + 1.0
+
+    cal.residuals = residuals  # type: ignore[method-assign]
+    cal._curve_fits = lambda q: ()  # type: ignore[method-assign]
+    J = cal._jacobian(centre)
+    cov = np.linalg.pinv(J.T @ J)
+    assert cov[0, 0] == 0.0
+    optimum = Optimum(centre, float(cal._costs(centre)[0]), cov, 1.0, 1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fit = cal.fit(optimum, profiled=True)
+        linear = cal.fit(optimum, profiled=False)
+    unseen = fit.parameters[0]
+    assert unseen.low == pytest.approx(np.exp(cal.lower[0]), rel=1e-12)
+    assert unseen.high == pytest.approx(np.exp(cal.upper[0]), rel=1e-12)
+    assert not unseen.identified
+    for p in (*fit.parameters[1:], *linear.parameters):
+        assert np.isfinite([p.low, p.value, p.high]).all() and p.low < p.value < p.high, p

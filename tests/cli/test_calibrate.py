@@ -144,7 +144,7 @@ def test_a_design_run_on_the_fragment_reports_the_analysers_closing_time(two):
 @pytest.mark.parametrize("args, message", [
     (["--curve", "missing.csv"], "missing.csv: --curve: no such file"),
     (["--curve", VENDOR, "--set", "spring=3"], "spring: unknown; expected one of"),
-    (["--curve", VENDOR, "--set", "kc1_n_per_mm=-3"], "must be a finite positive"),
+    (["--curve", VENDOR, "--set", "kc1_n_per_mm=-3"], "kc1_n_per_mm: Input should be greater"),
     (["--curve", VENDOR, "--form", "viscousness"], "unknown model form; known:"),
     (["--curve", VENDOR, "--velocity-points", "8"], "expected LOW,HIGH"),
     (["--set", "case.nonsense=1", "--curve", VENDOR], "nonsense"),

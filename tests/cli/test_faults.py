@@ -353,18 +353,35 @@ def test_a_sweep_gives_the_same_cells_with_one_or_the_default_blas_threads(tmp_p
 
 
 # ---- lost work ----------------------------------------------------------------------------
+def _wait_for_line(path: Path, timeout: float = 120) -> None:
+    """Until ``path`` holds a complete line (an event another process records)."""
+    deadline = time.monotonic() + timeout
+    while not (path.exists() and b"\n" in path.read_bytes()):
+        assert time.monotonic() < deadline, f"nothing recorded in {path}"
+        time.sleep(0.02)
+
+
 def test_a_dying_worker_of_run_jobs_keeps_the_finished_repeats(tmp_path, monkeypatch):
-    original = driver.run_repeat
+    """The worker of repeat 3 dies once the parent has collected a finished repeat (an
+    observed event, recorded by the parent in ``collected``; a fixed sleep before the
+    kill failed on a loaded machine when no repeat had finished yet)."""
+    original, collected = driver.run_repeat, tmp_path / "collected"
+    real_as_completed = driver.as_completed
+
+    def recording(futures):  # the parent: a line once the loop body took the record
+        for fut in real_as_completed(futures):
+            yield fut
+            with collected.open("a") as f:
+                f.write("repeat\n")
 
     def dying(problem, solver_cls, config, child, index, *args, **kwargs):
-        if index == 3:  # the OOM killer takes this worker (after the first repeats finish)
-            import time
-
-            time.sleep(1.0)
+        if index == 3:  # the OOM killer takes this worker (after a repeat is collected)
+            _wait_for_line(collected)
             os.kill(os.getpid(), signal.SIGKILL)
         return original(problem, solver_cls, config, child, index, *args, **kwargs)
 
     monkeypatch.setattr(driver, "run_repeat", dying)  # forked workers inherit it
+    monkeypatch.setattr(driver, "as_completed", recording)
     out = tmp_path / "a.h5"
     r = invoke("run", DE, "--out", out, "--quiet", "--repeats", "6", "--jobs", "2", *TINY)
     assert r.exit_code == 2 and one_error_line(r.stderr), r.output
@@ -376,20 +393,19 @@ def test_a_dying_worker_of_run_jobs_keeps_the_finished_repeats(tmp_path, monkeyp
 
 
 def test_a_dying_sweep_worker_keeps_the_finished_cells(tmp_path, monkeypatch):
+    from camopt.archive.sweeps import journal_path
     from camopt.engine import sweep as sweep_run
 
     original = sweep_run.run_cell
+    out = tmp_path / "s.h5"
 
     def dying(cell, *args):
-        if cell.seed == 3:
-            import time
-
-            time.sleep(1.0)
+        if cell.seed == 3:  # dies once a finished cell is in the sweep's journal
+            _wait_for_line(journal_path(out))
             os.kill(os.getpid(), signal.SIGKILL)
         return original(cell, *args)
 
     monkeypatch.setattr(sweep_run, "run_cell", dying)
-    out = tmp_path / "s.h5"
     r = invoke("sweep", DE, "--out", out, "--seeds", "0:6", "--jobs", "2", "--quiet", *TINY)
     assert r.exit_code == 2 and one_error_line(r.stderr), r.output
     assert "worker process died" in r.stderr

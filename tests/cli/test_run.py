@@ -74,15 +74,39 @@ def test_best_x_is_stored_in_the_units_of_its_names(tmp_path):
     assert 10.0 < stored["k_n_per_mm"] < 60.0
 
 
+# camopt run with every finished repeat recorded as a line in FINISHED (a journal of the
+# run's repeats, which a run keeps only in memory)
+RECORDING_RUN = """\
+import os, sys
+from camopt.engine import driver
+_run_repeat = driver.run_repeat
+def run_repeat(*args, **kwargs):
+    record = _run_repeat(*args, **kwargs)
+    with open(os.environ["FINISHED"], "a") as journal:
+        journal.write(f"{record.index}\\n")
+    return record
+driver.run_repeat = run_repeat
+from camopt.cli import main
+sys.argv[0] = "camopt"
+main()
+"""
+
+
 def test_ctrl_c_keeps_the_finished_repeats(tmp_path):
-    out = tmp_path / "a.h5"
-    proc = subprocess.Popen([*CAMOPT, "run", PP3, "--out", str(out), "--quiet",
-                             "--set", "solver.starts=2", "--repeats", "5000"],
+    """Ctrl-C sent on an observed event, not after a sleep: once the journal holds two
+    finished repeats (the first is then surely among the run's records; a repeat's line
+    is written just before the run takes its record). A fixed 2 s sleep failed at a load
+    of 9-13 when no repeat had finished yet."""
+    out, finished = tmp_path / "a.h5", tmp_path / "finished"
+    proc = subprocess.Popen([sys.executable, "-c", RECORDING_RUN, "run", PP3, "--out",
+                             str(out), "--quiet", "--set", "solver.starts=2",
+                             "--repeats", "5000"],
+                            env={**os.environ, "FINISHED": str(finished)},
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    deadline = time.time() + 60
-    while not (tmp_path / ".a.h5.lock").exists() and time.time() < deadline:
-        time.sleep(0.05)
-    time.sleep(2.0)  # some repeats finish
+    deadline = time.monotonic() + 120
+    while not (finished.exists() and finished.read_text().count("\n") >= 2):
+        assert time.monotonic() < deadline and proc.poll() is None, "no repeat finished"
+        time.sleep(0.02)
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 130, stderr

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import json
 import os
 import sys
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from camopt.config.loader import parse_overrides, parse_value
 from camopt.errors import ConfigError
@@ -200,3 +203,71 @@ def test_the_vcb_refuses_centimetres_and_millimetres_per_second(override, where,
         load(VCB, override)
     assert info.value.where == where and what in info.value.what
     assert load(VCB, override, "run.check_plausibility=false").case.kind == "vcb"
+
+
+# ---- types are strict (issue #49): a number is a number, a switch is true or false
+
+
+def _typed_keys() -> list[tuple[str, str, str, object]]:
+    """(config file, section, key, value) of every number and switch the shipped
+    configs set at the top of a section, after loading."""
+    out = []
+    for path in sorted(CONFIGS.glob("*.toml")):
+        for section, table in load(path).effective().items():
+            out += [(path.name, section, k, v) for k, v in table.items()
+                    if isinstance(v, (bool, int, float))]
+    return out
+
+
+TYPED = _typed_keys()
+
+
+def _wrong(value: object) -> st.SearchStrategy[str]:
+    """TOML text of a value of the wrong type for a field holding ``value``: a string
+    holding a number (or a switch), a switch for a number, a float for an integer, a
+    number for a switch."""
+    as_string = st.one_of(st.integers(-10**6, 10**6), st.floats(allow_nan=False),
+                          st.booleans()).map(lambda v: json.dumps(str(v).lower()
+                                                                  if isinstance(v, bool)
+                                                                  else str(v)))
+    if isinstance(value, bool):
+        return st.one_of(as_string, st.integers(-2, 2).map(str))
+    switch = st.sampled_from(["true", "false"])
+    if isinstance(value, int):
+        return st.one_of(as_string, switch, st.integers(1, 10**4).map(lambda v: f"{v}.0"))
+    return st.one_of(as_string, switch)
+
+
+@settings(max_examples=120, derandomize=True, deadline=None)
+@given(data=st.data())
+def test_wrong_types_are_refused_naming_the_field(data, tmp_path_factory):
+    """``repeats = true``, ``population = "10"``, ``generations = 2.0``: pydantic's lax
+    mode converted each to a number silently; strict mode refuses it, in a case file and
+    in --set (whose value is TOML: ``--set solver.population=10`` is a number,
+    ``--set 'solver.population="10"'`` a string), naming the field."""
+    name, section, key, value = data.draw(st.sampled_from(TYPED))
+    wrong = data.draw(_wrong(value))
+    with pytest.raises(ConfigError) as info:
+        load(CONFIGS / name, f"{section}.{key}={wrong}")
+    assert info.value.source == "--set" and info.value.where == f"{section}.{key}"
+    case = tmp_path_factory.mktemp("strict") / "case.toml"
+    case.write_text(f"extends = {json.dumps(str(CONFIGS / name))}\n[{section}]\n"
+                    f"{key} = {wrong}\n")
+    with pytest.raises(ConfigError) as info:
+        load(case)
+    assert info.value.source == str(case) and info.value.where == f"{section}.{key}"
+
+
+@pytest.mark.parametrize("override", ["run.repeats=true", "solver.generations=true",
+                                      'solver.population="10"', "solver.population=10.0"])
+def test_the_reported_conversions_are_refused(override):
+    key = override.partition("=")[0]
+    with pytest.raises(ConfigError, match=f"^--set: {key}: Input should be a valid"):
+        load(DE, override)
+
+
+def test_numbers_from_the_command_line_are_still_numbers():
+    cfg = load(DE, "solver.population=12", "run.repeats=2", "case.m3_kg=3",
+               "run.check_plausibility=false")
+    assert (cfg.solver.population, cfg.run.repeats, cfg.case.m3_kg) == (12, 2, 3.0)
+    assert cfg.run.check_plausibility is False

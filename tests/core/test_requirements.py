@@ -125,3 +125,67 @@ def test_values_and_margins_print_at_the_judging_resolution():
     for value in (1.1 - 4e-6, 1.1 + 4e-6, 1.1 + 6e-6, 0.9, 2.0):
         shown = float(value_text(v, value))
         assert (shown <= 1.1) is bool(v.passes(value)), value
+
+
+# ---- issue #49: the decision rules at their exact boundaries ----------------------------
+PASS_WORD = verdict(check([STRESS], {"tau_max_mpa": 100.0}))
+FAIL_WORD = verdict(check([STRESS], {"tau_max_mpa": 2000.0}))
+
+
+@pytest.mark.parametrize("values, word", [
+    ({"rod_travel_mm": 18.0, "tau_max_mpa": 100.0}, PASS_WORD),
+    ({"rod_travel_mm": 18.0, "tau_max_mpa": 1200.0}, FAIL_WORD),   # one fails
+    ({"rod_travel_mm": 18.0}, PASS_WORD),                         # one not reported
+    ({"rod_travel_mm": math.nan, "tau_max_mpa": 100.0}, FAIL_WORD),  # n/a fails
+    ({}, FAIL_WORD),                                              # nothing evaluated
+])
+def test_the_verdict_rule(values, word):
+    """Every evaluated requirement passes, and at least one was evaluated."""
+    assert PASS_WORD != FAIL_WORD
+    assert verdict(check([TRAVEL, STRESS], values)) == word
+
+
+def test_a_value_passes_up_to_the_round_off_allowance_and_no_further():
+    """A limit at 0 (scale 1): a value PASS_TOL beyond passes, the next float fails; at a
+    larger limit the allowance scales with it (STRESS: 1194 MPa)."""
+    from camopt.core.requirements import PASS_TOL
+
+    at_zero = Requirement("r", "q", upper=0.0)
+    assert at_zero.tol_scale == 1.0
+    assert at_zero.passes(PASS_TOL) and not at_zero.passes(np.nextafter(PASS_TOL, 1.0))
+    allowance = PASS_TOL * 1194.0
+    assert STRESS.passes(1194.0 + 0.99 * allowance)
+    assert not STRESS.passes(1194.0 + 1.01 * allowance)
+
+
+def test_at_limit_at_its_exact_boundaries():
+    """Strictly below: a margin equal to the spread, to 1 % of the band or scale, or a
+    flag's sampled yield equal to 95 %, is not at the limit; the next float below is."""
+    from camopt.core.requirements import AT_LIMIT_SHARE, AT_LIMIT_YIELD
+
+    below = lambda v: np.nextafter(v, -np.inf)  # noqa: E731
+    assert not TRAVEL.at_limit(0.05, spread=0.05) and TRAVEL.at_limit(below(0.05), 0.05)
+    band = AT_LIMIT_SHARE * (18.2 - 17.8)
+    for spread in (None, 0.0, math.nan, math.inf):  # no usable spread: the band's share
+        assert not TRAVEL.at_limit(band, spread) and TRAVEL.at_limit(below(band), spread)
+    scale = AT_LIMIT_SHARE * 1194.0  # one-sided: the share of its scale
+    assert not STRESS.at_limit(scale) and STRESS.at_limit(below(scale))
+    assert not LATCH.at_limit(1.0, sampled_yield=AT_LIMIT_YIELD)
+    assert LATCH.at_limit(1.0, sampled_yield=below(AT_LIMIT_YIELD))
+    assert not LATCH.at_limit(1.0, sampled_yield=None)
+    (failing,) = check([TRAVEL], {"rod_travel_mm": 18.3}, {"rod travel": Spread(1.0, 0.0)})
+    assert failing.passed is False and failing.at_limit is False
+
+
+def test_yields_shares_and_spreads_exactly():
+    """A requirement's yield is the share of samples passing; half_spread half the 5-95 %
+    spread of its quantity; margins at their 5th and 50th percentiles (101 evenly spaced
+    samples, whose percentiles are exact)."""
+    v = np.linspace(1144.0, 1244.0, 101)  # 1 MPa apart; 1194 passes, 1195 does not
+    (s,) = yields([STRESS], {"tau_max_mpa": v})
+    assert s["yield"] == 51 / 101
+    assert s["half_spread"] == pytest.approx(45.0, abs=1e-9)
+    assert s["margin_p5"] == pytest.approx(-45.0, abs=1e-9)
+    assert s["margin_p50"] == pytest.approx(0.0, abs=1e-9)
+    ok = all_pass([TRAVEL, STRESS], {"tau_max_mpa": v, "rod_travel_mm": np.full(101, 18.0)})
+    assert ok.sum() == 51 and ok[:51].all()

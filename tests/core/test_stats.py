@@ -143,3 +143,37 @@ def test_a_significant_but_tiny_difference_is_equivalent_in_practice():
     far["threshold"] = equivalence_threshold(far["median_a"], far["median_b"])
     assert verdict("A", "B", far, unit="ms").startswith("A is better than B at p = ")
     assert "by 1.35 ms (medians)" in verdict("A", "B", far, unit="ms")
+
+
+def _fisher_by_hand(k_a: int, n_a: int, k_b: int, n_b: int) -> float:
+    """Two-sided Fisher p from the hypergeometric law with the margins fixed: the sum of
+    the probabilities of every table at most as likely as the observed one."""
+    from math import comb
+
+    k, n = k_a + k_b, n_a + n_b
+    prob = [comb(n_a, x) * comb(n_b, k - x) / comb(n, k)
+            for x in range(max(0, k - n_b), min(k, n_a) + 1)]
+    observed = comb(n_a, k_a) * comb(n_b, k_b) / comb(n, k)
+    return min(1.0, sum(p for p in prob if p <= observed * (1 + 1e-7)))
+
+
+@pytest.mark.parametrize("k_a, n_a, k_b, n_b", [
+    (4, 6, 1, 5), (1, 6, 4, 5), (6, 6, 0, 5), (0, 10, 3, 4), (5, 9, 5, 9), (2, 3, 0, 8)])
+def test_fishers_test_on_success_counts_is_the_hypergeometric_sum(k_a, n_a, k_b, n_b):
+    """compare's success test: rows (successes, failures) of A and B; the p-value by hand
+    (rtol 1e-12: the same sum in another order). Unequal sizes, so mixing up a count and
+    its complement, or A's with B's, changes the p-value."""
+    assert compare_success(k_a, n_a, k_b, n_b) == pytest.approx(
+        _fisher_by_hand(k_a, n_a, k_b, n_b), rel=1e-12)
+    assert compare_success(k_a, n_a, k_b, 0) == 1.0
+
+
+def test_compare_reports_each_runs_own_counts():
+    """report.significance: each run's success rate from its own count, Fisher's p on
+    (4 of 6, 1 of 5) exactly as by hand (0.2424...: 8/33)."""
+    from camopt.reporting.report import significance
+
+    s = significance("A", np.arange(6.0), 4, "B", np.arange(5.0) + 10, 1)
+    assert (s.success_a["rate"], s.success_b["rate"]) == (4 / 6, 1 / 5)
+    assert s.success_p_value == pytest.approx(_fisher_by_hand(4, 6, 1, 5), rel=1e-12)
+    assert _fisher_by_hand(4, 6, 1, 5) == pytest.approx(8 / 33, rel=1e-12)

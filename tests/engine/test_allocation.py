@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -73,3 +74,46 @@ def test_allocate_json_names_classes_costs_and_the_choice(switch_run):
     assert doc["target"] == 0.95 and set(doc["classes"][0]) >= {"yield", "low", "high"}
     r = invoke("tolerance", switch_run.path, "--allocate", "--class", "graded")
     assert r.exit_code == 2 and r.output.startswith("error: ")
+
+
+@pytest.mark.parametrize("lows, target, chosen", [
+    ((0.97, 0.99), 0.95, 0),    # both reach: the cheaper, not the higher yield
+    ((0.50, 0.95), 0.95, 1),    # a lower bound equal to the target reaches it
+    ((0.50, 0.9499), 0.95, None),  # none reaches: no class chosen
+    ((0.96, 0.50), 0.95, 0),
+])
+def test_the_chosen_class_is_the_cheapest_that_reaches_the_target(fast_run, monkeypatch,
+                                                                   lows, target, chosen):
+    """The allocation's decision pinned with stand-ins: every draw passes (a trivial
+    evaluation) and the classes' interval lower bounds are given, in the case's order
+    (cheapest first, by documented cost). Chosen: the first whose lower bound is at or
+    above the target; the tightenings then aim at that class (the tightest without
+    one)."""
+    from camopt.core.problem import Evaluation
+    from camopt.engine import allocation
+
+    run = archive.load_run(fast_run)
+    spec = get_case(run.kind)
+    names = spec.class_names()
+    assert len(names) == len(lows)
+    assert [spec.class_cost(n) for n in names] == sorted(spec.class_cost(n) for n in names)
+    given = iter(lows)
+
+    def evaluate(run, problem, varies, values, describe, variant=None):
+        n = len(values)
+        return Evaluation(np.zeros(n), np.zeros((n, 1)), {}), np.zeros(n, dtype=bool)
+
+    monkeypatch.setattr(allocation, "evaluate_inputs", evaluate)
+    monkeypatch.setattr(allocation, "success_rate",
+                        lambda ok, n, confidence: {"ci_low": next(given), "ci_high": 1.0})
+    result = allocate(run, target, 20, 0)
+    assert [c.reaches_target for c in result.classes] == [low >= target for low in lows]
+    assert result.chosen == (None if chosen is None else names[chosen])
+    aim = names[-1] if chosen is None else names[chosen]
+    tight = {v.name: allocation._text(v)
+             for v in allocation.class_varies(run, allocation.problem_of(run), aim)}
+    loose = {v.name: allocation._text(v)
+             for v in allocation.class_varies(run, allocation.problem_of(run), names[0])}
+    assert {t.input for t in result.tightenings} == {k for k in tight if tight[k] != loose[k]}
+    assert all(t.tolerance_to == tight[t.input] for t in result.tightenings)
+    assert result.tightenings or aim == names[0]

@@ -234,3 +234,18 @@ def test_the_walk_ranking_is_stable_on_many_ties_and_ties_every_non_finite_viola
     assert centring.ranking(F, np.zeros(60)).tolist() == np.argsort(F, kind="stable").tolist()
     order = centring.ranking(np.array([0.0, 0.0, 1.0]), np.array([np.nan, np.inf, 0.0]))
     assert order.tolist() == [2, 0, 1]
+
+
+@pytest.mark.parametrize("start, centred, share_start, share_centred, kept", [
+    (True, True, 0.90, 0.95, True),     # alike at nominal: more draws pass
+    (True, True, 0.95, 0.90, False),    # alike: fewer pass
+    (True, True, 0.95, 0.95, False),    # a tie keeps the start
+    (False, False, 0.10, 0.20, True),   # both refused: the pass share still decides
+    (False, False, 0.20, 0.20, False),
+    (False, True, 0.99, 0.01, True),    # the case accepts only the centred design
+    (True, False, 0.01, 0.99, False),   # the case refuses the centred design
+])
+def test_the_centring_keep_rule(start, centred, share_start, share_centred, kept):
+    """centring.keep's truth table, exact: the case's nominal verdict first, then a
+    strictly larger share of the selection's draws passing."""
+    assert centring.keep(start, centred, share_start, share_centred) is kept

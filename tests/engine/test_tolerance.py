@@ -506,3 +506,71 @@ def test_the_expected_yield_command_pastes_as_one_path(vcb_run, tmp_path):
     shutil.copy(vcb_run, path)
     command = expected_yield(archive.load_run(path), samples=20)["command"]
     assert shlex.split(command)[:3] == ["camopt", "tolerance", str(path)]
+
+
+def test_one_at_a_time_ends_are_each_computed_at_its_own_end(fast_run):
+    """The tornado's rows pinned at the engine: input j's 'low' swing is every metric of
+    the run's design with input j at nominal - X (the others nominal), its 'high' at
+    nominal + X, each against one row evaluated on its own (rtol 1e-12: the same model
+    on a row alone vs in a batch). A '+X' computed at -X (issue #49's surviving mutant)
+    swaps them, and the inputs here move the objective unevenly enough that it shows."""
+    from camopt.engine.tolerance import (
+        default_varies,
+        evaluate_inputs,
+        nominal_inputs,
+        problem_of,
+    )
+
+    run = archive.load_run(fast_run)
+    problem = problem_of(run)
+    varies = default_varies(run)
+    t = analyse(run, varies, 2, 0)
+    nominal = nominal_inputs(run, problem, varies)
+    half = np.array([v.half_width(x) for v, x in zip(varies, nominal)])
+    swings = t.metric_columns(t.swings)
+    uneven = 0
+    for j, v in enumerate(varies):
+        for row, sign in ((2 * j, -1.0), (2 * j + 1, 1.0)):
+            inputs = nominal.copy()
+            inputs[j] += sign * half[j]
+            ev, _ = evaluate_inputs(run, problem, varies, inputs[None, :], describe=True,
+                                    variant=np.array([-1]))
+            alone = t.metric_columns(ev)
+            for name, column in swings.items():
+                np.testing.assert_allclose(column[row], alone[name][0], rtol=1e-12,
+                                           atol=1e-300, err_msg=f"{v.name} {sign:+} {name}")
+        low, high = swings[t.objective_name][2 * j], swings[t.objective_name][2 * j + 1]
+        uneven += bool(abs(high - low) > 1e-6 * abs(high))
+        by_input = {r["input"]: r for r in t.summary["one_at_a_time"][t.objective_name]}
+        assert np.array_equal([by_input[v.name]["low"], by_input[v.name]["high"]], [low, high],
+                              equal_nan=True)
+    assert uneven >= 2  # the test can tell the ends apart
+
+
+def test_the_expected_yield_counts_draws_meeting_every_requirement_inside_range(
+        fast_run, monkeypatch):
+    """The expected yield is the share of draws that meet every requirement of the run
+    and whose inputs lie inside their physical ranges (docs/tolerance.md). With stand-ins
+    (every other draw meets the requirements; the first 10 of 60 draws outside their
+    range) it is exactly 25 / 60, and its interval Clopper-Pearson's on 25 of 60."""
+    from camopt.core import requirements
+    from camopt.core.stats import success_rate
+    from camopt.engine import tolerance
+
+    run = archive.load_run(fast_run)
+    real, seen = tolerance.analyse, []
+
+    def outside_first(*args, **kwargs):
+        t = real(*args, **kwargs)
+        t.outside = np.arange(len(t.inputs)) < 10
+        seen.append(t)
+        return t
+
+    monkeypatch.setattr(tolerance, "analyse", outside_first)
+    monkeypatch.setattr(requirements, "all_pass",
+                        lambda reqs, columns: np.arange(60) % 2 == 0)
+    y = tolerance.expected_yield(run, samples=60)
+    assert len(seen) == 1 and y["samples"] == 60
+    assert y["value"] == 25 / 60  # 30 meet them, 5 of those outside their range
+    rate = success_rate(25, 60)
+    assert (y["low"], y["high"]) == (rate["ci_low"], rate["ci_high"])

@@ -121,3 +121,31 @@ def test_angles_do_not_depend_on_the_sampling(outline):
         assert (a.name, a.start, a.end) == (b.name, b.start, b.end)
         assert np.array_equal(a.ends, b.ends)
     assert outline.phi.max() == pytest.approx(fine.phi.max(), rel=1e-12)  # the top dwell
+
+
+def test_the_closure_splits_the_rest_of_the_turn_exactly(outline):
+    """The closure's decision pinned: what the approach, the rise and the run-out leave of
+    the turn goes a quarter to the top dwell, half to the 3-4-5 return and a quarter to
+    the base dwell (rtol 1e-12 of a turn: sums of the same floats in another order); the
+    run-out overtravels by the rise's end slope times half its span (phi' and phi''
+    zero at the top), and every segment
+    starts where the one before ends, the last a turn after the first."""
+    s = {seg.name: seg for seg in outline.segments}
+    left = 2 * np.pi - (s["approach"].end - s["approach"].start) - END - (
+        s["run-out"].end - s["run-out"].start)
+    span = {name: seg.end - seg.start for name, seg in s.items()}
+    assert span["top dwell"] == pytest.approx(left / 4, rel=1e-12)
+    assert span["return"] == pytest.approx(left / 2, rel=1e-12)
+    assert span["base dwell"] == pytest.approx(left / 4, rel=1e-12)
+    for before, after in zip(outline.segments, outline.segments[1:]):
+        assert after.start == before.end, after.name
+    assert outline.segments[-1].end == pytest.approx(outline.segments[0].start + 2 * np.pi,
+                                                     rel=0, abs=1e-12)
+    k = np.arange(LAW.size)
+    slope = float(LAW[1:] @ (k[1:] * END ** (k[1:] - 1)))
+    top = float(LAW @ END ** k) + slope * span["run-out"] / 2
+    # the ends as each segment's quintic evaluates them: round-off of O(1) terms
+    np.testing.assert_allclose(s["run-out"].ends[1], [top, 0.0, 0.0], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(s["top dwell"].ends, [[top, 0, 0], [top, 0, 0]], rtol=1e-12,
+                               atol=1e-12)
+    np.testing.assert_allclose(s["base dwell"].ends, 0.0, atol=1e-12)

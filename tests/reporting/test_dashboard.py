@@ -5,11 +5,15 @@ filters, and two ticked runs show only the values that differ."""
 from __future__ import annotations
 
 import shutil
+from urllib.parse import unquote, urlsplit
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from camopt.cli import app
+from camopt.reporting.dashboard import relative_href, render
 from tests.conftest import CONFIGS
 from tests.reporting.test_html_report import (
     EXTERNAL,
@@ -73,7 +77,7 @@ def folder(tmp_path_factory):
 def test_page_is_self_contained_and_links_reports(folder):
     page = (folder / "index.html").read_text()
     assert not EXTERNAL.search(page)
-    assert '<a href="fast_switch.html">fast_switch.h5</a>' in page
+    assert '<a href="./fast_switch.html">fast_switch.h5</a>' in page
     assert "<script src" not in page and "<link" not in page
     r = runner.invoke(app, ["dashboard", str(folder)])  # never over a page without --force
     assert r.exit_code == 2 and r.stderr.startswith("error: ")
@@ -161,3 +165,31 @@ def test_scatter_places_points_on_its_axes():
     assert cy[0] < cy[2] < cy[1]  # SVG y grows downwards: objective 3 highest
     lines = parallel("c", _rows([0.2, 0.9], [1.0, 2.0]))
     assert lines.svg.count('class="line"') == 2 and "x_mm" in lines.svg
+
+
+@settings(max_examples=300, derandomize=True, deadline=None)
+@given(st.text(min_size=1, max_size=40).filter(lambda n: "/" not in n and "\0" not in n)
+       | st.sampled_from(["javascript:alert(1);({}).html", "JaVaScRiPt:x.html",
+                          "data:text/html,<script>x</script>.html", "//evil.example/x.html",
+                          "#top.html", "?q=1.html", "%2e%2e.html", " javascript:x.html",
+                          "\tjavascript:x.html", "vbscript:x.html"]))
+def test_a_report_link_is_always_the_file_beside_the_page(name):
+    """Whatever the archive's name, its href parses (RFC 3986, as a browser does) as a
+    path relative to the page with no scheme, host, query or fragment, and decodes back
+    to the name: a name such as 'javascript:...' cannot become a script link."""
+    href = relative_href(name)
+    parts = urlsplit(href)
+    assert (parts.scheme, parts.netloc, parts.query, parts.fragment) == ("", "", "", "")
+    assert parts.path.startswith("./") and unquote(parts.path[2:]) == name
+    assert href.isascii() and not any(c in href for c in "\"<>' \t\n")
+
+
+def test_an_archive_named_like_a_script_url_links_as_a_file(folder, tmp_path):
+    """The hostile run of issue #49: an archive named 'javascript:...;({}).h5' with its
+    report beside it gave href="javascript:...": a script link."""
+    name = "javascript:document.title='pwned';({})"
+    shutil.copy(folder / "fast_switch.h5", tmp_path / f"{name}.h5")
+    (tmp_path / f"{name}.html").write_text("<p>report</p>")
+    page = render(tmp_path)
+    assert 'href="./javascript%3Adocument.title%3D%27pwned%27%3B%28%7B%7D%29.html"' in page
+    assert 'href="javascript' not in page.lower()

@@ -327,3 +327,27 @@ def test_failing_design_warns_once_on_stderr(exported, tmp_path):
         assert "NOT FOR RELEASE" in lines[0] and all(f in lines[0] for f in failed)
     else:
         assert not lines
+
+
+def test_the_drawn_outline_closes_on_its_first_point_without_repeating_it():
+    """The DXF's closure pinned without a run: the outline (a VCB-like cam,
+    tests/mechanics/test_cam_outline.py) drawn as one LWPOLYLINE flagged closed whose
+    vertices are the outline's points in mm, in order, the first not repeated at the end
+    (a repeated vertex is a zero-length edge a CAM program may stop on); the closing
+    edge, last vertex back to the first, is no longer than the outline's other steps."""
+    import io
+
+    from camopt.mechanics.cam_outline import closed_outline
+    from camopt.reporting.export import dxf_bytes
+    from tests.mechanics.test_cam_outline import END, L2, L6, LAW, RF, XI
+
+    outline = closed_outline(LAW, END, 140, XI, L2, L6, RF, RF)
+    points = outline.profile * 1000.0
+    doc = ezdxf.read(io.StringIO(dxf_bytes({"cam-profile": points}, {}, outline).decode()))
+    (poly,) = doc.modelspace().query('LWPOLYLINE[layer=="cam-profile"]')
+    drawn = np.array([(x, y) for x, y, *_ in poly.get_points("xy")])
+    assert poly.closed and drawn.shape == points.shape
+    np.testing.assert_array_equal(drawn, points)  # doubles through DXF text: exact
+    edges = np.hypot(*np.diff(np.vstack([drawn, drawn[:1]]), axis=0).T)
+    # no vanishing edge (a repeated point a turn later differs by round-off only)
+    assert edges.min() > 0.01 * np.median(edges) and edges[-1] <= edges[:-1].max()

@@ -100,3 +100,22 @@ def test_the_budget_hint_names_the_option_that_binds():
                         ({"name": "simplex", "starts": 8}, "solver.starts"),
                         ({"name": "evaluate"}, "solver.generations")]:
         assert budget_key(SimpleNamespace(solver=solver)) == key  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("low, target, meets", [
+    (0.95, 0.95, True), (0.9499, 0.95, False), (0.99, 0.95, True), (0.5, None, None),
+    (None, 0.95, None)])
+def test_a_robust_yield_meets_its_target_when_its_lower_bound_reaches_it(low, target, meets):
+    """The robust run's answer: the final check's interval's low end at or above the
+    target (equality meets it); no target or no interval: not judged."""
+    from types import SimpleNamespace
+
+    from camopt.reporting.report import robust_yield
+
+    run = SimpleNamespace(
+        robust_check={"robust": {"yield": 0.97, "yield_low": low, "yield_high": 0.99,
+                                 "samples": 2000}},
+        robust={} if target is None else {"yield_target": target})
+    y = robust_yield(run)  # type: ignore[arg-type]
+    assert y is not None and y.meets_target is meets
+    assert robust_yield(SimpleNamespace(robust_check=None, robust={})) is None  # type: ignore[arg-type]

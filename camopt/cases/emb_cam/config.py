@@ -6,7 +6,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field
 
-from camopt.config.models import Bounds, CaseConfig, Plausible, Positive
+from camopt.config.models import AsTuple, Bounds, CaseConfig, Plausible, Positive
 
 # Physical ranges of a brake cam (a bicycle brake to a truck's): a value outside is a unit
 # slip (metres into mm) or a typo; run.check_plausibility = false accepts it.
@@ -50,7 +50,7 @@ class EmbCamConfig(CaseConfig):
     torque_ramp_rms_max_pct: Positive | None = Field(
         None, description="optional cap on the torque's RMS deviation from a straight line "
         "over the clamping section, % of the peak (beyond the paper: configs/emb_linear.toml)")
-    knot_density: tuple[float, float, float] | None = Field(
+    knot_density: Annotated[tuple[float, float, float], AsTuple] | None = Field(
         None, description="None: key points evenly spaced in profile angle (Eq 25); "
         "[centre, peak, width]: their density peaks 'peak' times higher around the fraction "
         "'centre' of the profile (Gaussian of that width)")

@@ -602,7 +602,7 @@ class Calibration:
                     inside = bool(self.lower[j] <= x <= self.upper[j])
                     ends[(j, sign)] = x if inside else None
                     # the linearised conditional optimum there: the band's member
-                    m = np.clip(q + cov[:, j] / cov[j, j] * (x - q[j]), self.lower, self.upper)
+                    m = np.clip(q + _valley(cov, j) * (x - q[j]), self.lower, self.upper)
                     members.append(m)
         ests = []
         for j, (name, unit) in enumerate(self.names()):
@@ -654,8 +654,9 @@ class Calibration:
             for sign in (-1.0, 1.0):
                 bound = self.upper[j] if sign > 0 else self.lower[j]
                 room = abs(bound - q[j])
-                out[(j, sign)] = _Profile(j, sign, float(q[j]), room,
-                                          min(1.5 * float(np.sqrt(cov[j, j])), room), q)
+                # a coordinate the curves do not see (no variance) starts at its bound
+                first = 1.5 * float(np.sqrt(cov[j, j])) if cov[j, j] > 0 else room
+                out[(j, sign)] = _Profile(j, sign, float(q[j]), room, min(first, room), q)
         for _ in range(self.MAX_PROFILE_STEPS):
             live = [p for p in out.values() if not p.done]
             if not live:
@@ -665,7 +666,7 @@ class Calibration:
             starts = []
             for p in live:
                 x = q[p.j] + p.sign * p.d
-                two = np.vstack([p.last, q + cov[:, p.j] / cov[p.j, p.j] * (x - q[p.j])])
+                two = np.vstack([p.last, q + _valley(cov, p.j) * (x - q[p.j])])
                 two = np.clip(two, self.lower + 1e-9, self.upper - 1e-9)
                 two[:, p.j] = x
                 starts.append(two)
@@ -754,6 +755,17 @@ class Calibration:
                 float(np.nanmin(np.r_[t[:, i], t[0, i] - z * sd_t[i]])),
                 float(np.nanmax(np.r_[t[:, i], t[0, i] + z * sd_t[i]])))
                 for i, d in enumerate(designs))
+
+
+def _valley(cov: NDArray, j: int) -> NDArray:
+    """How the linearised conditional optimum moves per unit of coordinate j (n,):
+    column j of the covariance over its variance. A coordinate the curves do not see
+    (a zero column of the Jacobian: zero variance in the pseudo-inverse) moves alone:
+    the others have nothing to trade against it (0 / 0 there was NaN, and a
+    RuntimeWarning)."""
+    if cov[j, j] > 0:
+        return cov[:, j] / cov[j, j]
+    return np.eye(len(cov))[j]
 
 
 def _robust_cost(R: NDArray) -> NDArray:

@@ -33,10 +33,16 @@ from camopt.cases.vcb.calibrate import (
 )
 from camopt.cases.vcb.cam_points import read_cam_points
 from camopt.cases.vcb.config import VcbConfig
-from camopt.cases.vcb.curves import AnalyserQuantities, VelocityPoints, check_scale, read_curve
+from camopt.cases.vcb.curves import (
+    MAX_DURATION_S,
+    AnalyserQuantities,
+    VelocityPoints,
+    check_scale,
+    read_curve,
+)
 from camopt.cases.vcb.forms import BAND_COLUMNS, CURVE_FORM_NAMES, CURVE_FORMS, get_form
 from camopt.cases.vcb.model import VcbModel
-from camopt.config.models import CaseConfig
+from camopt.config.models import CaseConfig, toml_comment, toml_string
 from camopt.core.calibration import CalibrationRequest, FittedCurve
 from camopt.errors import ConfigError
 from camopt.units import DEG, MM, MS, N_PER_MM
@@ -77,6 +83,18 @@ def _number(value: str, key: str, where: str, positive: bool = True) -> float:
     if not np.isfinite(v) or (positive and v <= 0):
         raise ConfigError(where, key, f"{value}: must be a finite positive number")
     return v
+
+
+def _delay(value: str, where: str) -> float:
+    """A measured latch delay (s) from ``latch_delay_ms``: 0 up to the longest curve
+    (MAX_DURATION_S), since the release lies between the close command and the curve's
+    end."""
+    v = _number(value, "latch_delay_ms", where, positive=False)
+    if not 0 <= v <= MAX_DURATION_S / MS:
+        raise ConfigError(where, "latch_delay_ms", f"{value}: outside [0, "
+                          f"{MAX_DURATION_S / MS:g}] ms (from the close command, within "
+                          "the curve)")
+    return v * MS
 
 
 def design_of(config: VcbConfig, model: VcbModel, settings: dict[str, str], where: str
@@ -130,7 +148,7 @@ def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport
         curve, design = read_curve(c.path), design_of(config, model, settings, where)
         check_scale(curve, stroke(model, design), used)
         curves.append(CurveCase(curve, design, None if delay is None
-                                else _number(delay, "latch_delay_ms", where, False) * MS))
+                                else _delay(delay, where)))
     designs = [design_of(config, model, {}, "case")] + [c.design for c in curves] + [
         design_of(config, model, _settings(p.split(","), DESIGN_KEYS, "--predict"),
                   "--predict") for p in request.predict]
@@ -283,13 +301,13 @@ class VcbCalibrationReport:
         first = ([] if v.explained else [
             "# NOT EXPLAINED: no model form fits these curves to their noise; the values "
             "below are the best form's all the same (written with --allow-unexplained)",
-            "# " + v.headline.replace("\n", " ")])
+            "# " + toml_comment(v.headline.replace("\n", " "))])
         lines = first + [f"# camopt calibrate: form {best.form} ({best.description}),",
                  f"# RMS misfit {best.rms / MM:.4f} mm on "
-                 + ", ".join(c.source for c in best.curves) + ".",
+                 + ", ".join(toml_comment(c.source) for c in best.curves) + ".",
                  f"# intervals: {INTERVALS}.",
                  f"# kept forms ({KEEP_RULE}): " + ", ".join(f.form for f in kept) + ".",
-                 f"extends = {_toml_string(extends)}", "", "[case]"]
+                 f"extends = {toml_string(extends)}", "", "[case]"]
         for p in best.parameters:
             mark = "" if p.identified else "  NOT identified by the curves"
             if p.name in VcbConfig.model_fields:
@@ -331,10 +349,6 @@ def _delay_ms(fit: FormFit) -> float | None:
     measured), None where measured delays differ between curves."""
     delays = {round(c.latch_delay / MS, 9) for c in fit.curves}
     return delays.pop() if len(delays) == 1 else None
-
-
-def _toml_string(text: str) -> str:
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
 def _band_rows(best: FormFit, kept: Sequence[FormFit], config: VcbConfig

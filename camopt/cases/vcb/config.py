@@ -9,6 +9,7 @@ from pydantic import Field, ValidationInfo, model_validator
 
 from camopt.config.models import (
     PLAUSIBILITY_KEY,
+    AsTuple,
     Bounds,
     CaseConfig,
     FieldRole,
@@ -62,8 +63,8 @@ IDENTIFIED_BAND = (
 )
 
 
-BandRow = (tuple[float, float, float, float, float, float]
-           | tuple[float, float, float, float, float, float, float, float])
+BandRow = Annotated[tuple[float, float, float, float, float, float]
+                    | tuple[float, float, float, float, float, float, float, float], AsTuple]
 """A parameter set of the band: (cam_inertia_kg_m2, follower_inertia_kg_m2, rod_mass_kg,
 contacts_mass_kg, release_offset_deg, cam_friction_nm[, release_friction_nm,
 efficiency]): six values are the shipped form (the free rotation's friction the

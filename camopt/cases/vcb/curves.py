@@ -27,11 +27,15 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.config.loader import read_regular_file
 from camopt.errors import ConfigError
 from camopt.units import MM, MS, TO_MS
 
 MAX_SAMPLES = 200_000
 """Samples a curve may have (an analyser records a closing at 10-20 kHz for ~0.1 s)."""
+MAX_TABLE_BYTES = 64 * 2**20
+"""Largest CSV file read (bytes): 200,000 rows of an analyser's export with a dozen
+channels are about 30 MB; a device or a runaway log is refused before it fills memory."""
 MAX_DURATION_S = 1.0
 """Longest curve (s): a VCB closes in ~50 ms; seconds typed into ``time_ms`` exceed it."""
 MIN_STROKE_MM = 1.0
@@ -104,13 +108,12 @@ def read_table(path: str | Path, columns: Sequence[Mapping[str, float]], key: st
     wrong number of fields, a non-number or a non-finite value."""
     path = Path(path)
     name = str(path)
+    raw = read_regular_file(path, key, MAX_TABLE_BYTES, "a CSV file")
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise ConfigError(name, key, "no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        why = getattr(exc, "strerror", None) or exc
-        raise ConfigError(name, key, f"cannot read ({why})") from None
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(name, key, f"cannot read (not UTF-8 text: byte {exc.start})"
+                          ) from None
     wanted = "a header naming " + " and ".join(" or ".join(c) for c in columns)
     lines = text.splitlines()
     delimiter = dialect(next((ln for ln in lines if ln.strip()), ""))
