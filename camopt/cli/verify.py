@@ -33,7 +33,7 @@ def verify(
         min=0.0, max=0.99, help="the cam-roller pick-up's restitution coefficient in the "
         "multibody model (camopt's is 0, plastic)")] = 0.0,
     coupler_kg: Annotated[float, typer.Option(
-        "--coupler-kg", min=0.0, help="the coupler DL's own mass in the multibody model "
+        "--coupler-kg", min=0.0, max=50.0, help="the coupler DL's own mass in the multibody model "
         "(kg, a uniform bar; camopt's is none)")] = 0.0,
 ) -> None:
     r"""Check a VCB run's closing against a planar multibody model (needs the extra:

@@ -145,15 +145,16 @@ def test_the_verdict_rule(values, word):
     assert verdict(check([TRAVEL, STRESS], values)) == word
 
 
-def test_a_value_passes_up_to_the_round_off_allowance_and_no_further():
-    """A limit at 0 (scale 1): a value PASS_TOL beyond passes, the next float fails; at a
-    larger limit the allowance scales with it (STRESS: 1194 MPa)."""
-    from camopt.core.requirements import PASS_TOL
-
+def test_a_value_passes_up_to_half_its_resolution_and_no_further():
+    """A limit at 0 (scale 1, resolution 1e-5): a value half a resolution beyond passes,
+    the next float fails; at a larger limit the allowance scales with it (STRESS:
+    1194 MPa, resolution 0.01 MPa)."""
     at_zero = Requirement("r", "q", upper=0.0)
-    assert at_zero.tol_scale == 1.0
-    assert at_zero.passes(PASS_TOL) and not at_zero.passes(np.nextafter(PASS_TOL, 1.0))
-    allowance = PASS_TOL * 1194.0
+    assert at_zero.tol_scale == 1.0 and at_zero.resolution == pytest.approx(1e-5, rel=1e-12)
+    edge = 0.5 * at_zero.resolution
+    assert at_zero.passes(edge) and not at_zero.passes(np.nextafter(edge, 1.0))
+    allowance = 0.5 * STRESS.resolution
+    assert STRESS.resolution == pytest.approx(0.01, rel=1e-12)
     assert STRESS.passes(1194.0 + 0.99 * allowance)
     assert not STRESS.passes(1194.0 + 1.01 * allowance)
 
