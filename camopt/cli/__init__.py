@@ -22,6 +22,13 @@ def main() -> None:
     interrupts.install()
     load_commands(sys.argv[1:])
     try:
+        if sys.argv[1:] == ["solvers"]:
+            # nothing to parse: the stored listing, without typer's parameter conversion
+            # (it imports pydantic: 1.4x `import numpy, scipy` for any typer command)
+            from camopt.cli.catalog import list_solvers
+
+            list_solvers()
+            sys.exit(0)  # as typer ends every command
         app(standalone_mode=True)
     except SystemExit:
         raise

@@ -54,14 +54,15 @@ def loaded_after(*args: str) -> tuple[int, set[str]]:
     return result["code"], set(result["modules"])
 
 
-@pytest.mark.parametrize("args", [("--version",), ("--help",), ("run", "--help")])
+@pytest.mark.parametrize("args", [("--version",), ("--help",), ("run", "--help"),
+                                  ("solvers",)])
 def test_startup_imports_no_heavy_library(args: tuple[str, ...]) -> None:
     code, modules = loaded_after(*args)
     assert code in (0, None)
     assert not modules & set(HEAVY), sorted(modules & set(HEAVY))
 
 
-@pytest.mark.parametrize("args", [("--version",), ("--help",)])
+@pytest.mark.parametrize("args", [("--version",), ("--help",), ("solvers",)])
 def test_version_and_help_load_no_pydantic_nor_config(args: tuple[str, ...]) -> None:
     code, modules = loaded_after(*args)
     assert code in (0, None)
