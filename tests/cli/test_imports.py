@@ -143,6 +143,10 @@ def test_show_and_runs_load_no_solver_library(command: str, current_archive: str
     assert not modules & set(NEVER_FOR_CHECKS), sorted(modules & set(NEVER_FOR_CHECKS))
     assert "h5py" in modules  # the probe sees the archive being read
     assert "camopt.engine.driver" not in modules  # the registries validate, not the engine
+    # nor build the case's Problem to check the archive's variable names (issue #48)
+    models = {m for m in modules if m.startswith("camopt.cases.")
+              and m.rsplit(".", 1)[-1] in ("problem", "model", "dynamics", "kernel")}
+    assert not models and not modules & {"scipy", "numba"}, sorted(models)
     if command == "show":  # the archive's case and solver only
         assert _loaded(modules, "cases") & CASES == {"fast_switch"}
         assert _loaded(modules, "solvers") & SOLVERS == {"enumeration"}
