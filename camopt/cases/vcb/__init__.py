@@ -158,7 +158,7 @@ def variable_names(config: VcbConfig) -> tuple[str, ...]:
     velocity setting; step 2 the four-bar's lengths and angle."""
     if config.step != "cam":
         return ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
-    names = ("a1", "a2", "a3", "kc1_n_per_mm", "kc2_n_per_mm")
+    names: tuple[str, ...] = ("a1", "a2", "a3", "kc1_n_per_mm", "kc2_n_per_mm")
     names += tuple(n for n, b in (("a4", config.a4_bounds), ("a5", config.a5_bounds))
                    if b is not None)
     if config.release_offset_bounds_deg is not None:
