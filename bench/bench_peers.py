@@ -1,13 +1,17 @@
 """camopt's shipped config against other optimisers on the same Problem objects (issue #36).
 
 Peers (optional, ``pip install 'camopt[peers]'``; a missing one is reported and skipped):
-scipy's ``differential_evolution``, pycma (``cma``, IPOP restarts), pymoo's DE and GA,
-nevergrad's NGOpt. Each solver minimises camopt's own Problem (``evaluate`` over a whole
-population per call) for each objective, seeds interleaved in one process.
+scipy's ``differential_evolution``, pycma (``cma``, BIPOP restarts), pymoo's DE and GA,
+nevergrad's NGOpt, each at its documented settings and from camopt's start (:class:`Start`;
+issue #48). Each solver minimises camopt's own Problem (``evaluate`` over a whole
+population per call) for each objective, seeds interleaved in one process. A robust row
+judges each solver's chosen design on fresh draws (:func:`score_fresh`); ``--peers
+'scipy DE,pymoo DE'`` runs those peers alone.
 
 Constraints: pymoo takes the case's ``g`` as inequality constraints; scipy and pycma get a
 scalar that ranks feasible designs by the objective and infeasible ones after every
-feasible one, by their violation (``1e9 + 1e6 * violation``: Deb's rules as a scalar).
+feasible one, by their violation (``1e9 + 1e6 * violation``, each constraint's capped:
+Deb's rules as a scalar).
 Integer variables (fast switch coils) are rounded before every peer evaluation, as camopt's
 solvers snap them.
 
