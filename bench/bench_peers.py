@@ -1,13 +1,17 @@
 """camopt's shipped config against other optimisers on the same Problem objects (issue #36).
 
 Peers (optional, ``pip install 'camopt[peers]'``; a missing one is reported and skipped):
-scipy's ``differential_evolution``, pycma (``cma``, IPOP restarts), pymoo's DE and GA,
-nevergrad's NGOpt. Each solver minimises camopt's own Problem (``evaluate`` over a whole
-population per call) for each objective, seeds interleaved in one process.
+scipy's ``differential_evolution``, pycma (``cma``, BIPOP restarts), pymoo's DE and GA,
+nevergrad's NGOpt, each at its documented settings and from camopt's start (:class:`Start`;
+issue #48). Each solver minimises camopt's own Problem (``evaluate`` over a whole
+population per call) for each objective, seeds interleaved in one process. A robust row
+judges each solver's chosen design on fresh draws (:func:`score_fresh`); ``--peers
+'scipy DE,pymoo DE'`` runs those peers alone.
 
 Constraints: pymoo takes the case's ``g`` as inequality constraints; scipy and pycma get a
 scalar that ranks feasible designs by the objective and infeasible ones after every
-feasible one, by their violation (``1e9 + 1e6 * violation``: Deb's rules as a scalar).
+feasible one, by their violation (``1e9 + 1e6 * violation``, each constraint's capped:
+Deb's rules as a scalar).
 Integer variables (fast switch coils) are rounded before every peer evaluation, as camopt's
 solvers snap them.
 
@@ -58,6 +62,10 @@ OBJECTIVES: dict[str, tuple[str, list[str]]] = {
     "vcb_velocity_robust": ("vcb_velocity_robust.toml", [
         "solver.population=20", "solver.generations=120", "robust.samples=8",
         "robust.check_samples=200", "robust.centre_generations=0"]),
+    # the shipped budgets: each repeat takes 0.1-5 s
+    "vcb_identify": ("vcb_identify.toml", []),
+    "vcb_identify_dynamics": ("vcb_identify_dynamics.toml", []),
+    "fast_switch_robust": ("fast_switch_robust.toml", []),
 }
 SEEDS = 9  # the reduced robust VCB reaches its peers' level in ~0.2 s: 5 seeds were noise
 INFEASIBLE = 1e9  # a scalar peer's floor for infeasible designs (every feasible one is below)
@@ -90,56 +98,89 @@ def show(q: Quality) -> str:
     return f"{q[1]:.6f}" if q[0] == 0 else f"viol {q[0]:.9g}"
 
 
+class Spent(Exception):
+    """A peer asked for a batch when its budget was already spent (a polish or restart
+    after the last generation): it stops there, with what it reached."""
+
+
 @dataclass
 class Trace:
     """Best design so far by Deb's rules against CPU seconds since the solver started."""
 
+    budget: int | None = None
     start: float = field(default_factory=time.process_time)
     nfev: int = 0
     best: Quality = (np.inf, np.inf)
+    best_x: NDArray | None = None
     cpu: list[float] = field(default_factory=list)
     value: list[Quality] = field(default_factory=list)
+    total: float = np.inf
+    """CPU seconds of the whole solve (set when it ends)."""
+    fresh: Quality | None = None
+    """A robust row: the chosen design's quality on fresh draws (:func:`score_fresh`)."""
 
-    def record(self, f: NDArray, violation: NDArray) -> None:
+    def record(self, X: NDArray, f: NDArray, violation: NDArray) -> None:
         self.nfev += len(f)
         v = np.where(np.isfinite(violation), violation, np.inf)
         f = np.where(np.isnan(f), np.inf, f)
         i = int(np.lexsort((f, v))[0])
         q = (float(v[i]), float(f[i]))
         if q < self.best:
-            self.best = q
+            self.best, self.best_x = q, np.array(X[i], dtype=float)
             self.cpu.append(time.process_time() - self.start)
             self.value.append(q)
 
     def cpu_to(self, quality: Quality) -> float:
-        """CPU seconds until the best-so-far was as good as ``quality`` (inf: never)."""
+        """CPU seconds until the best-so-far was as good as ``quality`` (inf: never); a
+        robust row: the whole solve's, if its fresh-draw quality is as good."""
+        if self.fresh is not None:
+            return self.total if at_least(self.fresh, quality) else np.inf
         for t, q in zip(self.cpu, self.value):
             if at_least(q, quality):
                 return t
         return np.inf
 
+    @property
+    def quality(self) -> Quality:
+        """What the solver's result is judged by: its best design's (violation,
+        objective), a robust row's on fresh draws."""
+        return self.best if self.fresh is None else self.fresh
+
 
 def traced(problem: Problem, trace: Trace, snap_integers: bool) -> Callable[[NDArray], tuple]:
     """``X (n, n_var) -> (f, g, feasible, violation)`` through ``problem.evaluate``,
-    recorded in ``trace``; integer variables rounded first when ``snap_integers``."""
+    recorded in ``trace``; integer variables rounded first when ``snap_integers``;
+    :class:`Spent` once the trace's budget is spent."""
     lower, upper, integer = problem.lower, problem.upper, problem.integer
 
     def evaluate(X: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        if trace.budget is not None and trace.nfev >= trace.budget:
+            raise Spent
         X = np.clip(np.atleast_2d(np.asarray(X, dtype=float)), lower, upper)
         if snap_integers and integer.any():
             X[:, integer] = np.rint(X[:, integer])
         ev = problem.evaluate(X)
         f = np.asarray(ev.f, dtype=float)
-        trace.record(f, np.asarray(ev.violation, dtype=float))
+        trace.record(X, f, np.asarray(ev.violation, dtype=float))
         return f, np.asarray(ev.g, dtype=float), ev.feasible, ev.violation
     return evaluate
 
 
+CAP = 1e3
+"""A constraint's violation counted at most this in a scalar peer's penalty: a design
+that does not assemble has infinite constraints (a robust candidate's order statistics
+too), and with the sum capped instead of each term every such design had one penalty,
+so scipy's DE saw a population of equal values and stopped (366 evaluations)."""
+
+
 def scalar(evaluate: Callable[[NDArray], tuple], X: NDArray) -> NDArray:
-    """Deb's rules as one number per design (for peers without constraints)."""
-    f, _, feasible, violation = evaluate(X)
-    bad = INFEASIBLE + 1e6 * np.where(np.isfinite(violation), violation, 1e6)
-    return np.where(feasible & np.isfinite(f), f, bad)
+    """Deb's rules as one number per design (for peers without constraints): the
+    objective of a feasible design, else ``INFEASIBLE`` plus 10^6 x its violation, each
+    constraint's capped at :data:`CAP`."""
+    f, g, feasible, _ = evaluate(X)
+    g = np.atleast_2d(np.where(np.isnan(g), np.inf, g)).reshape(len(f), -1)
+    violation = np.minimum(np.maximum(g, 0.0), CAP).sum(axis=1)
+    return np.where(feasible & np.isfinite(f), f, INFEASIBLE + 1e6 * violation)
 
 
 def warm_up(problem: Problem) -> None:
@@ -151,14 +192,56 @@ def warm_up(problem: Problem) -> None:
     base.evaluate(base.sample(np.random.default_rng(0), 4))
 
 
-# ---- the solvers: each (problem, budget, seed, trace) -> None --------------------------
-def run_camopt(cfg, problem: Problem, solver_cls, seed: int, trace: Trace) -> int:
-    """camopt's shipped config, one repeat (seed child ``seed``); its nfev."""
+@dataclass(frozen=True)
+class Start:
+    """Where camopt starts with a seed, handed to every peer: ``x0`` the single start
+    of camopt's ``cmaes`` (the case's design, else the centre of the bounds; unit box),
+    ``population(n)`` a first population drawn as camopt's population solvers draw
+    theirs (uniform within the bounds from the repeat's generator; SI): its first rows
+    are camopt's first generation when the sizes agree."""
+
+    x0: NDArray
+    child: np.random.SeedSequence
+    problem: Problem
+
+    def population(self, n: int) -> NDArray:
+        return self.problem.sample(np.random.default_rng(self.child), n)
+
+
+def start_of(problem: Problem, cfg, seed: int) -> Start:
+    initial = problem.initial_x()
+    x0 = (problem.lower + problem.upper) / 2 if initial is None else np.asarray(initial)
+    child = np.random.SeedSequence(cfg.run.seed).spawn(seed + 1)[seed]
+    return Start(np.clip(problem.to_unit(x0), 0, 1), child, problem)
+
+
+SCORE_SEED = 20261128
+"""The fresh draws a robust row's chosen designs are judged on: ``robust.check``'s draws
+from this seed, none of any search's or camopt's selection's (those come from
+``run.seed``)."""
+
+
+def score_fresh(problem: Problem, x: NDArray | None) -> Quality:
+    """A robust design on ``check_samples`` fresh draws: (shortfall of its yield's lower
+    bound below the target, 0 when met; its nominal objective)."""
+    from camopt.engine import robust
+
+    if x is None:
+        return (np.inf, np.inf)
+    r = robust.check(problem, [x], SCORE_SEED)[0]  # type: ignore[arg-type]
+    target = problem.plan.spec.yield_target  # type: ignore[attr-defined]
+    return (max(0.0, target - r["yield_low"]), r["objective_nominal"])
+
+
+# ---- the solvers: each (problem, budget, seed, trace, start) -> None --------------------
+def run_camopt(cfg, problem: Problem, solver_cls, seed: int, trace: Trace) -> tuple[int, NDArray]:
+    """camopt's shipped config, one repeat (seed child ``seed``); its nfev and result."""
     original = problem.evaluate
 
     def recording(X: NDArray):
         ev = original(X)
-        trace.record(np.asarray(ev.f, dtype=float), np.asarray(ev.violation, dtype=float))
+        trace.record(np.atleast_2d(X), np.asarray(ev.f, dtype=float),
+                     np.asarray(ev.violation, dtype=float))
         return ev
     problem.evaluate = recording  # type: ignore[method-assign]
     try:
@@ -166,40 +249,42 @@ def run_camopt(cfg, problem: Problem, solver_cls, seed: int, trace: Trace) -> in
         rec = run_repeat(problem, solver_cls, cfg, child, seed, 1)
     finally:
         del problem.evaluate
-    return rec.nfev
+    return rec.nfev, rec.x
 
 
-def run_scipy_de(problem: Problem, budget: int, seed: int, trace: Trace) -> None:
+def run_scipy_de(problem: Problem, budget: int, start: Start, seed: int, trace: Trace) -> None:
+    """scipy's defaults (best1bin, popsize 15, dithered mutation (0.5, 1), recombination
+    0.7, the L-BFGS-B polish), integer variables declared (``integrality``), the first
+    population camopt's draws; ``tol=0``: its default (0.01) compares the population's
+    spread with its mean, which the infeasible designs' 1e9 floor makes tiny (it stopped
+    the robust fast switch after 186 evaluations), so it runs to the budget and its
+    polish, after the last generation, is cut by the budget."""
     from scipy.optimize import differential_evolution
 
     evaluate = traced(problem, trace, snap_integers=True)
-    popsize = 10  # scipy's default: 10 x n_var individuals
-    pop = popsize * problem.n_var
-    differential_evolution(lambda x: scalar(evaluate, np.asarray(x).T),
-                           list(zip(problem.lower, problem.upper)), popsize=popsize,
-                           maxiter=max(budget // pop - 1, 1), tol=0, polish=False,
+    pop = 15 * problem.n_var
+
+    def func(x: NDArray) -> NDArray | float:
+        x = np.asarray(x)
+        values = scalar(evaluate, x.T)
+        return values if x.ndim == 2 else float(values[0])
+    differential_evolution(func, list(zip(problem.lower, problem.upper)),
+                           maxiter=max(budget // pop - 1, 1), init=start.population(pop), tol=0,
+                           integrality=problem.integer if problem.integer.any() else None,
                            vectorized=True, updating="deferred", rng=seed)
 
 
-def run_pycma(problem: Problem, budget: int, seed: int, trace: Trace) -> None:
-    """pycma with IPOP restarts (population doubled per restart) until the budget."""
+def run_pycma(problem: Problem, budget: int, start: Start, seed: int, trace: Trace) -> None:
+    """pycma's BIPOP-CMA-ES (``cma.fmin2(..., restarts=9, bipop=True)``, its documented
+    setting for multimodal functions) from camopt's start, sigma0 0.3 of each range (as
+    camopt's ``cmaes``), bounds by its own BoundTransform, a generation per call."""
     import cma
 
     evaluate = traced(problem, trace, snap_integers=True)
     lo, span = problem.lower, problem.upper - problem.lower
-    rng = np.random.default_rng(seed)
-    popsize, restart = None, 0
-    while trace.nfev < budget:
-        opts = {"bounds": [0, 1], "seed": int(rng.integers(1, 2**31)), "verbose": -9,
-                "maxfevals": budget - trace.nfev}
-        if popsize:
-            opts["popsize"] = popsize
-        es = cma.CMAEvolutionStrategy(rng.random(problem.n_var), 0.3, opts)
-        while not es.stop() and trace.nfev < budget:
-            U = np.array(es.ask())
-            es.tell(list(U), list(scalar(evaluate, lo + U * span)))
-        popsize = 2 * es.popsize
-        restart += 1
+    opts = {"bounds": [0, 1], "seed": seed + 1, "verbose": -9, "maxfevals": budget}
+    cma.fmin2(None, start.x0, 0.3, opts, restarts=9, bipop=True,
+              parallel_objective=lambda U: list(scalar(evaluate, lo + np.array(U) * span)))
 
 
 def _pymoo(problem: Problem, budget: int, seed: int, trace: Trace, algorithm) -> None:
@@ -221,23 +306,31 @@ def _pymoo(problem: Problem, budget: int, seed: int, trace: Trace, algorithm) ->
     minimize(Wrapped(), algorithm, ("n_eval", budget), seed=seed, verbose=False)
 
 
-def run_pymoo_de(problem: Problem, budget: int, seed: int, trace: Trace) -> None:
+def run_pymoo_de(problem: Problem, budget: int, start: Start, seed: int, trace: Trace) -> None:
+    """pymoo's DE as its documentation's example sets it (100, DE/rand/1/bin, CR 0.3,
+    dithered F), the first population camopt's draws."""
     from pymoo.algorithms.soo.nonconvex.de import DE
 
-    _pymoo(problem, budget, seed, trace, DE(pop_size=100))
+    _pymoo(problem, budget, seed, trace, DE(pop_size=100, sampling=start.population(100),
+                                            variant="DE/rand/1/bin", CR=0.3,
+                                            dither="vector", jitter=False))
 
 
-def run_pymoo_ga(problem: Problem, budget: int, seed: int, trace: Trace) -> None:
+def run_pymoo_ga(problem: Problem, budget: int, start: Start, seed: int, trace: Trace) -> None:
+    """pymoo's GA, its defaults (100, SBX, polynomial mutation, duplicates eliminated),
+    the first population camopt's draws."""
     from pymoo.algorithms.soo.nonconvex.ga import GA
 
-    _pymoo(problem, budget, seed, trace, GA(pop_size=100))
+    _pymoo(problem, budget, seed, trace, GA(pop_size=100, sampling=start.population(100)))
 
 
-def run_nevergrad(problem: Problem, budget: int, seed: int, trace: Trace) -> None:
+def run_nevergrad(problem: Problem, budget: int, start: Start, seed: int, trace: Trace) -> None:
+    """nevergrad's NGOpt (its recommended optimiser) from camopt's start, 50 designs per
+    batch."""
     import nevergrad as ng
 
     evaluate = traced(problem, trace, snap_integers=True)
-    param = ng.p.Array(shape=(problem.n_var,), lower=0.0, upper=1.0)
+    param = ng.p.Array(init=start.x0).set_bounds(0.0, 1.0)
     param.random_state = np.random.RandomState(seed)
     opt = ng.optimizers.NGOpt(parametrization=param, budget=budget, num_workers=50)
     lo, span = problem.lower, problem.upper - problem.lower
@@ -250,52 +343,79 @@ def run_nevergrad(problem: Problem, budget: int, seed: int, trace: Trace) -> Non
 
 PEERS: dict[str, tuple[str, Callable[..., None]]] = {
     "scipy DE": ("scipy", run_scipy_de),
-    "pycma IPOP": ("cma", run_pycma),
+    "pycma BIPOP": ("cma", run_pycma),
     "pymoo DE": ("pymoo", run_pymoo_de),
     "pymoo GA": ("pymoo", run_pymoo_ga),
     "nevergrad NGOpt": ("nevergrad", run_nevergrad),
 }
 
+PEER_KEY = 0x50454552  # "PEER": the spawn-key word of a peer's robust draws
 
-def compare(objective: str, seeds: int, full: bool = False) -> None:
-    """One objective: camopt and every installed peer, seeds interleaved; print the table."""
+
+def compare(objective: str, seeds: int, full: bool = False,
+            only: list[str] | None = None) -> None:
+    """One objective: camopt and every installed peer (``only``: those named), seeds
+    interleaved; print the table."""
+    from camopt.core.capabilities import Stochastic
+
     path, reduced = OBJECTIVES[objective]
     cfg = load(CONFIGS / path, ["run.repeats=1", *([] if full else reduced)])
     problem, solver_cls = prepare(cfg)
     warm_up(problem)
-    available = {name: fn for name, (module, fn) in PEERS.items()
+    robust = isinstance(problem, Stochastic)
+    chosen = {name: v for name, v in PEERS.items() if only is None or name in only}
+    available = {name: fn for name, (module, fn) in chosen.items()
                  if importlib.util.find_spec(module) is not None}
-    missing = [name for name in PEERS if name not in available]
+    missing = [name for name in chosen if name not in available]
     traces: dict[str, list[Trace]] = {"camopt": [], **{name: [] for name in available}}
     crashed: list[str] = []
     for seed in range(seeds):
         trace = Trace()
-        budget = run_camopt(cfg, problem, solver_cls, seed, trace)
+        budget, x = run_camopt(cfg, problem, solver_cls, seed, trace)
+        trace.total = time.process_time() - trace.start
+        if robust:
+            trace.fresh = score_fresh(problem, x)
         traces["camopt"].append(trace)
+        start = start_of(problem, cfg, seed)
         for name, fn in available.items():
-            trace = Trace()
+            if robust:  # one set of draws for the whole solve (a peer knows no generations)
+                problem.reseed(np.random.SeedSequence(cfg.run.seed,  # type: ignore[attr-defined]
+                                                      spawn_key=(seed, PEER_KEY)))
+                problem.new_generation()  # type: ignore[attr-defined]
+            trace = Trace(budget=budget)
             try:
-                fn(problem, budget, seed, trace)
+                fn(problem, budget, start, seed, trace)
+            except Spent:
+                pass
             except Exception as exc:  # a peer's own bug: keep what it reached, say so
                 crashed.append(f"{name} (seed {seed}: {type(exc).__name__}: {exc}; "
                                f"stopped at {trace.nfev} evaluations)")
+            trace.total = time.process_time() - trace.start
+            if robust:
+                trace.fresh = score_fresh(problem, trace.best_x)
             traces[name].append(trace)
-    best = {name: median_quality([t.best for t in ts]) for name, ts in traces.items()}
+    best = {name: median_quality([t.quality for t in ts]) for name, ts in traces.items()}
     peers = {k: v for k, v in best.items() if k != "camopt"}
     best_peer = min(peers, key=lambda k: peers[k]) if peers else None
     quality = peers[best_peer] if best_peer else (np.inf, np.inf)
     polish = " + polish" if getattr(cfg.solver, "polish", None) else ""
+    judged = "chosen design on fresh draws, " if robust else ""
     print(f"{objective} ({cfg.solver.name}{polish}; {' '.join(reduced) if not full else 'full'}"
           f"; {seeds} seeds, budget = camopt's evaluations, median "
-          f"{statistics.median(t.nfev for t in traces['camopt']):.0f}):")
+          f"{statistics.median(t.nfev for t in traces['camopt']):.0f}; {judged}"
+          f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}):")
     print(f"| solver | median best | feasible seeds | median nfev | "
-          f"median CPU s to {show(quality)} |")
-    print("|---|---|---|---|---|")
+          f"median CPU s to {show(quality)} | median CPU s |")
+    print("|---|---|---|---|---|---|")
     for name, ts in traces.items():
         cpu = statistics.median(t.cpu_to(quality) for t in ts)
-        print(f"| {name} | {show(best[name])} | {sum(t.best[0] == 0 for t in ts)}/{len(ts)} | "
+        print(f"| {name} | {show(best[name])} | {sum(t.quality[0] == 0 for t in ts)}/{len(ts)} | "
               f"{statistics.median(t.nfev for t in ts):.0f} | "
-              f"{'-' if not np.isfinite(cpu) else format(cpu, '.2f')} |")
+              f"{'-' if not np.isfinite(cpu) else format(cpu, '.2f')} | "
+              f"{statistics.median(t.total for t in ts):.2f} |")
+    for name, ts in traces.items():
+        print(f"{name} per seed: " + ", ".join(
+            f"{show(t.quality)} ({t.cpu_to(quality):.2f} s)" for t in ts))
     if missing:
         print(f"not installed: {', '.join(missing)}")
     for line in crashed:
@@ -304,22 +424,30 @@ def compare(objective: str, seeds: int, full: bool = False) -> None:
         ahead = at_least(best["camopt"], quality)
         ours = statistics.median(t.cpu_to(quality) for t in traces["camopt"])
         theirs = statistics.median(t.cpu_to(quality) for t in traces[best_peer])
+        reached = sum(at_least(t.quality, quality) for t in traces["camopt"])
+        peer_reached = sum(at_least(t.quality, quality) for t in traces[best_peer])
         print(f"camopt {'at least as good as' if ahead else 'BEHIND'} the best peer "
-              f"({best_peer}); CPU to its quality: camopt {ours:.2f} s, {best_peer} "
-              f"{theirs:.2f} s\n", flush=True)
+              f"({best_peer}); its median quality reached in {reached}/{seeds} seeds by "
+              f"camopt, {peer_reached}/{seeds} by {best_peer}; CPU to it: camopt "
+              f"{ours:.2f} s, {best_peer} {theirs:.2f} s\n", flush=True)
 
 
 def main(argv: list[str] | None = None) -> None:
     import warnings
 
     # pycma's notes on injected and rescaled solutions are its own business, not a result
-    warnings.filterwarnings("ignore", module=r"cma\..*")
+    warnings.filterwarnings("ignore", module=r"cma(\..*)?")
     args = list(sys.argv[1:] if argv is None else argv)
     full = "--full" in args
     args = [a for a in args if a != "--full"]
+    only = None
+    if "--peers" in args:  # --peers 'scipy DE,pycma BIPOP': those peers alone
+        i = args.index("--peers")
+        only = args[i + 1].split(",")
+        del args[i:i + 2]
     seeds = int(args.pop(0)) if args and args[0].isdigit() else SEEDS
     for objective in args or list(OBJECTIVES):
-        compare(objective, seeds, full)
+        compare(objective, seeds, full, only)
 
 
 if __name__ == "__main__":

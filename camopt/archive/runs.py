@@ -169,7 +169,7 @@ def check_variables(view: RunView) -> None:
     config's own error (docs/reliability.md)."""
     from pydantic import ValidationError
 
-    from camopt.cases import build_problem, case_configs
+    from camopt.cases import case_configs, get_case
     from camopt.config import validate_data
     from camopt.errors import CamoptError
     from camopt.solvers.registry import solver_options
@@ -178,7 +178,7 @@ def check_variables(view: RunView) -> None:
         config = validate_data({"case": view.case, "solver": view.solver, "run": view.run},
                                solver_options(), case_configs(), view.path)
         with np.errstate(all="ignore"):  # a non-assembling design is the run's business
-            names = tuple(build_problem(config.case).names)
+            names = get_case(config.case.kind).names_of(config.case)
     except (CamoptError, ValidationError):
         return
     if names != tuple(view.variables):

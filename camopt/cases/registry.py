@@ -188,6 +188,18 @@ class CaseSpec:
     calibration: str | None = None
     """``"module:function"`` that calibrates the case on measured curves (``camopt
     calibrate``, :mod:`camopt.core.calibration`); None: the case has none."""
+    variable_names: Callable[[Any], tuple[str, ...]] | None = None
+    """The design variables' names for a validated config of this kind, without building
+    its Problem: ``show`` and ``runs`` check an archive's names with it and import no case
+    model (tests/cases/test_registry.py compares it with the Problem's); None: the
+    Problem is built to ask."""
+
+    def names_of(self, config: CaseConfig) -> tuple[str, ...]:
+        """The design variables' names for ``config`` (:attr:`variable_names`, else the
+        Problem's)."""
+        if self.variable_names is not None:
+            return tuple(self.variable_names(config))
+        return tuple(self.build(config).names)
 
     def class_names(self) -> tuple[str, ...]:
         """Every tolerance class of the case, cheapest (loosest) first; the default class

@@ -34,6 +34,13 @@ def main() -> None:
     load_commands(sys.argv[1:])
     try:
         try:
+            if sys.argv[1:] == ["solvers"]:
+                # nothing to parse: the stored listing, without typer's parameter
+                # conversion (it imports pydantic: 1.4x `import numpy, scipy`)
+                from camopt.cli.catalog import list_solvers
+
+                list_solvers()
+                sys.exit(0)  # as typer ends every command
             app(standalone_mode=True)
         finally:
             # the buffered rest goes out now, where a failure is one line (at exit,

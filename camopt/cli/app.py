@@ -69,6 +69,9 @@ class WorkflowGroup(TyperGroup):
         command = super().get_command(ctx, cmd_name)
         if command is not None and command.help:
             command.help = unwrap(command.help)
+            # the command list shows the first paragraph whole, wrapped (click would
+            # cut it at 45 characters)
+            command.short_help = command.short_help or command.help.split("\n\n")[0]
         return command
 
 
@@ -125,7 +128,9 @@ def load_commands(args: Sequence[str] | None = None) -> None:
 
 
 # -h as --help on every command; typer's --install-completion / --show-completion
-app = CommandsOnDemand(cls=WorkflowGroup, rich_markup_mode="rich", no_args_is_help=True,
+# help as click formats it (rich_markup_mode=None): typer's rich help imports rich's
+# Markdown and markdown-it, ~50 % of `camopt --help`'s start-up (bench/bench_startup.py)
+app = CommandsOnDemand(cls=WorkflowGroup, rich_markup_mode=None, no_args_is_help=True,
                   add_completion=True,
                   context_settings={"help_option_names": ["-h", "--help"]},
                   help="Batch optimiser for spring-actuated mechanisms.",

@@ -59,24 +59,70 @@ def write_text(path: Path, text: str, force: bool) -> None:
     archive.write_files({path: text.encode()}, force)
 
 
+LISTING = Path(__file__).with_name("solvers.json")
+"""What ``camopt solvers`` prints for camopt's own solvers and cases, stored so that
+listing them imports none of them (every case's model, pydantic, numpy): ``text``, and
+the entry points it was rendered with (``entry_points``: group -> name -> module). Written
+by :func:`write_listing` (``python -m camopt.cli.catalog``); tests/cli/test_catalog.py
+checks it against the registries."""
+
+
 @app.command(name="solvers")
 def list_solvers() -> None:
     """List solvers with their options (TOML lines for a solver table, each with its
     meaning) and the case kinds each runs on."""
+    with errors():
+        text = solver_listing()
+    sys.stdout.write(text)
+
+
+def solver_listing() -> str:
+    """The stored listing (:data:`LISTING`), or, when an installed distribution declares a
+    case or solver entry point it was not rendered with (a plugin), the listing rendered
+    from the registries (:func:`render_listing`: every case and solver imported)."""
+    import json
+
+    from camopt.core.plugins import entry_points
+
+    stored = json.loads(LISTING.read_text(encoding="utf-8"))
+    for group, known in stored["entry_points"].items():
+        if any(known.get(ep.name) != ep.value for ep in entry_points(group)):
+            return render_listing()
+    return str(stored["text"])
+
+
+def render_listing() -> str:
+    """Every registered solver as a commented ``[solver]`` table: its summary, the case
+    kinds it runs on (their Problem classes declare what it requires), its options."""
     from camopt.cases import cases
     from camopt.core.capabilities import capability_name
     from camopt.solvers import solvers
 
+    blocks = []
     for name, cls in solvers().items():
         options = [line for k, v in cls.Options.model_fields.items() if k != "name"
                    for line in (f"# {v.description}" if v.description else "",
                                 toml_line(k, v.get_default(call_default_factory=True))) if line]
         runs_on = ", ".join(k for k, spec in cases().items() if cls.supports(spec.problem))
         needs = ", ".join(capability_name(c) for c in cls.requires)
-        # plain print, never wrapped: each block is a valid [solver] table to copy
-        print(f"# {name}: {cls.summary}")
-        print(f"# cases: {runs_on or '-'}" + (f"; needs: {needs}" if needs else ""))
-        print("[solver]", f'name = "{name}"', *options, sep="\n", end="\n\n")
+        # plain lines, never wrapped: each block is a valid [solver] table to copy
+        blocks.append("\n".join([
+            f"# {name}: {cls.summary}",
+            f"# cases: {runs_on or '-'}" + (f"; needs: {needs}" if needs else ""),
+            "[solver]", f'name = "{name}"', *options]) + "\n\n")
+    return "".join(blocks)
+
+
+def write_listing() -> None:
+    """Render the listing and store it with the installed entry points (:data:`LISTING`)."""
+    import json
+
+    from camopt.core.plugins import entry_points
+
+    groups = {group: {ep.name: ep.value for ep in entry_points(group)}
+              for group in ("camopt.cases", "camopt.solvers")}
+    LISTING.write_text(json.dumps({"entry_points": groups, "text": render_listing()},
+                                  indent=1) + "\n", encoding="utf-8")
 
 
 def toml_line(key: str, value: object) -> str:
@@ -89,3 +135,7 @@ def toml_line(key: str, value: object) -> str:
     if hasattr(value, "model_dump"):
         value = value.model_dump(mode="json", exclude_none=True)
     return tomli_w.dumps({key: value}).strip()
+
+
+if __name__ == "__main__":
+    write_listing()

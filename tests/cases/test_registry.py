@@ -123,3 +123,28 @@ def test_a_look_up_imports_its_entry_point_s_package_else_every_case(metadata: s
               "camopt.solvers.pso"}
     loaded = others & set(result["modules"])
     assert loaded == (set() if metadata == "installed" else others), sorted(loaded)
+
+
+SHIPPED = sorted(p.name for p in (Path(__file__).resolve().parents[2] / "configs").glob("*.toml"))
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_variable_names_without_the_model_are_the_problem_s(name: str) -> None:
+    """``CaseSpec.variable_names`` (what ``show`` checks an archive's names with, building
+    no model) gives the names the Problem has, for every shipped config, and for the
+    VCB's optional variables switched on and off."""
+    from camopt import archive
+    from camopt.cases import build_problem, get_case
+    from camopt.engine.setup import load
+
+    configs = Path(__file__).resolve().parents[2] / "configs"
+    config = archive.resolve_references(load(configs / name, []))
+    spec = get_case(config.case.kind)
+    assert spec.variable_names is not None, spec.kind
+    assert spec.names_of(config.case) == tuple(build_problem(config.case).names)
+    if config.case.kind == "vcb" and config.case.step == "cam":
+        bare = config.case.model_copy(update={"release_offset_bounds_deg": None,
+                                              "velocity_setting_bounds_m_s": None})
+        assert spec.names_of(bare) == tuple(build_problem(bare).names)
+        assert len(spec.names_of(bare)) < len(spec.names_of(config.case)) or \
+            config.case.release_offset_bounds_deg is None

@@ -207,7 +207,7 @@ def test_identification_reproduces_rod_travel(seed):
     """configs/vcb_identify.toml fits the rod arm so the vendor rod travel is 18 mm (Sec
     3.2); the physically bounded fit cannot make Table 6's surpluses vanish (documented).
     The misfit has two minima along the rod offset, 11.65 deg apart (two rod arm angles
-    give 18 mm of travel; misfits 0.4343 and 0.4350): whatever the seed, one repeat of DE
+    give 18 mm of travel; misfits 0.4343 and 0.4350): whatever the seed, one repeat
     ends on one of them, and configs/vcb.toml holds the lower."""
     rec = execute(load(CONFIGS / "vcb_identify.toml", "run.repeats=1",
                        "solver.generations=80", f"run.seed={seed}"))

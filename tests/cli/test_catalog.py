@@ -38,6 +38,48 @@ def test_solvers_prints_one_valid_solver_table_per_solver():
     assert de["population"] == 100 and "polish" not in de  # unset: a comment, not None
 
 
+def test_stored_solver_listing_is_the_registries_listing():
+    """``camopt solvers`` prints camopt/cli/solvers.json (it imports no case nor solver);
+    it must be what the registries render now. After changing a solver's options or a
+    case's capabilities: ``python -m camopt.cli.catalog`` writes it again."""
+    import subprocess
+    import sys
+
+    from camopt.cli.catalog import LISTING
+
+    stored = json.loads(LISTING.read_text(encoding="utf-8"))
+    # a fresh interpreter: this one has the tests' own cases and solvers registered
+    fresh = subprocess.run(
+        [sys.executable, "-c", "import json; from camopt.cli.catalog import render_listing; "
+         "from camopt.cases import cases; from camopt.solvers import solvers; "
+         "print(json.dumps([render_listing(), sorted(solvers()), sorted(cases())]))"],
+        capture_output=True, text=True, check=True, cwd=CONFIGS.parent)
+    text, solver_names, kinds = json.loads(fresh.stdout)
+    assert stored["text"] == text, "stale: run python -m camopt.cli.catalog"
+    assert sorted(stored["entry_points"]["camopt.solvers"]) == solver_names
+    assert sorted(stored["entry_points"]["camopt.cases"]) == kinds
+    r = runner.invoke(app, ["solvers"])
+    assert r.exit_code == 0 and r.stdout == stored["text"]
+
+
+def test_a_plugin_solver_is_listed_from_the_registries(monkeypatch):
+    """An entry point the stored listing was not rendered with (a plugin): the listing is
+    rendered from the registries, which import it."""
+    from importlib.metadata import EntryPoint
+
+    from camopt.cli import catalog
+    from camopt.core import plugins
+
+    real = plugins.entry_points
+    extra = EntryPoint("sphere_walk", "camopt.solvers.cmaes:CMAES", "camopt.solvers")
+
+    def with_plugin(group):
+        return [*real(group), *([extra] if group == "camopt.solvers" else [])]
+    monkeypatch.setattr(plugins, "entry_points", with_plugin)
+    monkeypatch.setattr(catalog, "render_listing", lambda: "rendered\n")
+    assert catalog.solver_listing() == "rendered\n"
+
+
 def test_version():
     r = runner.invoke(app, ["--version"])
     assert r.exit_code == 0 and r.stdout == f"camopt {__version__}\n"
@@ -84,8 +126,7 @@ def test_help_lists_commands_in_workflow_order_as_paragraphs():
     from camopt.cli.app import WORKFLOW
 
     r = runner.invoke(app, ["--help"], env={"COLUMNS": "200"})
-    rows = [line.strip("│ ").split() for line in r.stdout.splitlines()
-            if line.startswith("│ ") and "─" not in line]
+    rows = [line.split() for line in r.stdout.split("Commands:")[1].splitlines()]
     listed = [row[0] for row in rows if row and row[0] in WORKFLOW]
     assert listed == list(WORKFLOW)
     import click

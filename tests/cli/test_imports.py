@@ -54,14 +54,15 @@ def loaded_after(*args: str) -> tuple[int, set[str]]:
     return result["code"], set(result["modules"])
 
 
-@pytest.mark.parametrize("args", [("--version",), ("--help",), ("run", "--help")])
+@pytest.mark.parametrize("args", [("--version",), ("--help",), ("run", "--help"),
+                                  ("solvers",)])
 def test_startup_imports_no_heavy_library(args: tuple[str, ...]) -> None:
     code, modules = loaded_after(*args)
     assert code in (0, None)
     assert not modules & set(HEAVY), sorted(modules & set(HEAVY))
 
 
-@pytest.mark.parametrize("args", [("--version",), ("--help",)])
+@pytest.mark.parametrize("args", [("--version",), ("--help",), ("solvers",)])
 def test_version_and_help_load_no_pydantic_nor_config(args: tuple[str, ...]) -> None:
     code, modules = loaded_after(*args)
     assert code in (0, None)
@@ -142,6 +143,10 @@ def test_show_and_runs_load_no_solver_library(command: str, current_archive: str
     assert not modules & set(NEVER_FOR_CHECKS), sorted(modules & set(NEVER_FOR_CHECKS))
     assert "h5py" in modules  # the probe sees the archive being read
     assert "camopt.engine.driver" not in modules  # the registries validate, not the engine
+    # nor build the case's Problem to check the archive's variable names (issue #48)
+    models = {m for m in modules if m.startswith("camopt.cases.")
+              and m.rsplit(".", 1)[-1] in ("problem", "model", "dynamics", "kernel")}
+    assert not models and not modules & {"scipy", "numba"}, sorted(models)
     if command == "show":  # the archive's case and solver only
         assert _loaded(modules, "cases") & CASES == {"fast_switch"}
         assert _loaded(modules, "solvers") & SOLVERS == {"enumeration"}

@@ -43,6 +43,8 @@ SPEC = register_case(CaseSpec(
     tolerances=TOLERANCES, tolerance_classes=TOLERANCE_CLASSES, requirements=requirements,
     reference="paper, Sec 4.4",
     reference_values={k: PAPER[k] for k in ("peak_torque_nm", "clearance_angle_rad")},
+    variable_names=lambda config: (*(f"r{j}_mm" for j in range(1, config.key_points)),
+                                   "kappa_rad", "e_mm"),
 ))
 
 

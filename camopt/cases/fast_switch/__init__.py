@@ -38,6 +38,7 @@ SPEC = register_case(CaseSpec(
     figures="camopt.cases.fast_switch.figures:figures", paper=PAPER, tolerances=TOLERANCES,
     tolerance_classes=TOLERANCE_CLASSES,
     requirements=requirements, reference="paper's optimum, Eq 92", reference_values=OPTIMUM,
+    variable_names=lambda config: ("coils", "sf_mm", "sud_mm", "s0_mm", "r3_mm", "r2_mm"),
 ))
 
 

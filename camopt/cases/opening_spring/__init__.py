@@ -32,6 +32,7 @@ SPEC = register_case(CaseSpec(
     figures="camopt.cases.opening_spring.figures:figures", paper=PAPER,
     tolerances=TOLERANCES, tolerance_classes=TOLERANCE_CLASSES, requirements=requirements,
     reference="original design, Table 1",
+    variable_names=lambda config: tuple(config.free),
 ))
 
 

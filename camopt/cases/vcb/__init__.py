@@ -153,6 +153,30 @@ def resolve_cam_archive(config: CaseConfig, load: ArchiveLoader) -> CaseConfig:
     return config.model_copy(update={"cam_design": design})
 
 
+def variable_names(config: VcbConfig) -> tuple[str, ...]:
+    """The VCB Problem's variables for ``config`` (``VcbProblem.__init__``), by name only:
+    step 1 the law's coefficients and spring rates, with the optional release offset and
+    velocity setting; step 2 the four-bar's lengths and angle."""
+    if config.step != "cam":
+        return ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
+    names: tuple[str, ...] = ("a1", "a2", "a3", "kc1_n_per_mm", "kc2_n_per_mm")
+    names += tuple(n for n, b in (("a4", config.a4_bounds), ("a5", config.a5_bounds))
+                   if b is not None)
+    if config.release_offset_bounds_deg is not None:
+        names += ("release_offset_deg",)
+    if config.velocity_setting_bounds_m_s is not None:
+        names += ("velocity_setting_m_s",)
+    return names
+
+
+def form_parameters(config: VcbDynamicsIdentifyConfig) -> tuple[str, ...]:
+    """The dynamics identification's variables: its model form's parameters (the forms'
+    table imports the closing dynamics, not the numba kernel; no model is built)."""
+    from camopt.cases.vcb.forms import get_form
+
+    return get_form(config.model_form).parameters
+
+
 VCB = register_case(CaseSpec(
     kind="vcb", config=VcbConfig, problem=problem_at("camopt.cases.vcb.problem:VcbProblem"),
     default_solver="de_gr",
@@ -179,6 +203,7 @@ VCB = register_case(CaseSpec(
         "closing springs' preload nut", "preload_setting_mm", "preload_setting_range_mm",
         "mm", "the analyser's contact velocity to velocity_setting_m_s"),),
     calibration="camopt.cases.vcb.calibration_report:run",
+    variable_names=lambda config: variable_names(config),
 ))
 VCB_IDENTIFY = register_case(CaseSpec(
     kind="vcb_identify", config=VcbIdentifyConfig,
@@ -186,6 +211,8 @@ VCB_IDENTIFY = register_case(CaseSpec(
     default_solver="de_gr",
     summary="fits the VCB parameters the paper omits to the numbers it reports",
     paper_source=SOURCE,
+    variable_names=lambda config: ("rod_arm_offset_deg", "opening_arm_ratio",
+                                   "free_contact_force_n"),
 ))
 VCB_IDENTIFY_DYNAMICS = register_case(CaseSpec(
     kind="vcb_identify_dynamics", config=VcbDynamicsIdentifyConfig,
@@ -193,6 +220,7 @@ VCB_IDENTIFY_DYNAMICS = register_case(CaseSpec(
     default_solver="de_gr",
     summary="fits the VCB dynamics' parameters to the vendor design's seven ADAMS data",
     paper_source=SOURCE,
+    variable_names=lambda config: form_parameters(config),
 ))
 
 _PROBLEMS = {"VcbProblem": VCB, "VcbIdentification": VCB_IDENTIFY,
