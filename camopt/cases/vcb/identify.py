@@ -212,7 +212,9 @@ def fit(problem: VcbDynamicsIdentification, start: NDArray, drop: int | None = N
     def jacobian(q: NDArray) -> NDArray:
         return log_jacobian(problem, np.exp(q))[keep]
 
-    x0 = np.clip(np.log(start), lower + 1e-9, upper - 1e-9)
+    # a start on a zero lower bound (a mass the search drove to 0) starts at the log
+    # bound's 1e-9 instead: log(0) is no start
+    x0 = np.clip(np.log(np.maximum(start, np.exp(lower))), lower + 1e-9, upper - 1e-9)
     return np.exp(least_squares(residuals, x0, jac=jacobian, bounds=(lower, upper),
                                 x_scale=1.0).x)
 
@@ -221,7 +223,9 @@ def log_jacobian(problem: VcbDynamicsIdentification, x: NDArray, step: float = 1
                  ) -> NDArray:
     """d residual / d log parameter at ``x`` (p,), (7, p), by central differences of
     ``step`` in every log parameter, all 2 p simulations in one vectorised call."""
-    q = np.log(x)[None, :] + step * np.vstack([np.eye(len(x)), -np.eye(len(x))])
+    # a parameter at zero (a lower bound of 0) is taken at 1e-9, the log bounds' floor
+    q = np.log(np.maximum(x, 1e-9))[None, :] + step * np.vstack([np.eye(len(x)),
+                                                                  -np.eye(len(x))])
     r = problem.residuals(problem.predict(np.exp(q)))
     return ((r[:len(x)] - r[len(x):]) / (2 * step)).T
 
