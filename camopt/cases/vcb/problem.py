@@ -592,6 +592,9 @@ class VcbProblem(Problem, VariesCase, HasVariants):
 
         reach = c.preload_setting_range_mm * MM
         needed = nut_travel(squared_speed, target, SETTING_TRIAL_MM * MM, reach)
+        step = c.preload_setting_resolution_mm * MM
+        if step > 0:  # the fitter turns the nut by whole steps: the nearest one
+            needed = np.where(np.isfinite(needed), np.round(needed / step) * step, needed)
         pre = base_rows + np.clip(needed, -reach, reach)[:, None]
         return replace(parts, pre=pre[:n]), Setting(pre[n:] if k > 1 else None,
                                                     needed.reshape(k, n))
