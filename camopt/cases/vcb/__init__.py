@@ -23,12 +23,8 @@ from camopt.cases.registry import (
     problem_at,
     register_case,
 )
-from camopt.cases.vcb.config import (
-    CamDesign,
-    VcbConfig,
-    VcbDynamicsIdentifyConfig,
-    VcbIdentifyConfig,
-)
+from camopt.cases.vcb.config import CamDesign, VcbConfig
+from camopt.cases.vcb.identify_config import VcbDynamicsIdentifyConfig, VcbIdentifyConfig
 from camopt.cases.vcb.paper import PAPER
 from camopt.cases.vcb.requirements import requirements
 from camopt.config.models import CaseConfig
