@@ -70,14 +70,14 @@ def share_interval(successes: ArrayLike, trials: int, confidence: float = 0.95
     from ``successes`` of ``trials``, vectorised over ``successes``: the beta quantiles
     ``B((1 - c)/2; k, n - k + 1)`` and ``B((1 + c)/2; k + 1, n - k)``.
 
-    Why not Wilson's (camopt's interval before issue #33): its coverage dips below the
+    Why not Wilson's (camopt's interval before): its coverage dips below the
     stated level for yields near 1 at a few hundred draws (0.933 at n = 200, p = 0.98;
     0.920 at p = 0.995; computed exactly in tests/core/test_stats.py), which is where
     quick yield estimates and robust designs live; Clopper-Pearson covers at least the
     stated level for every n and p, at the price of a slightly wider interval."""
     # the beta quantile as the inverse regularised incomplete beta function: what
     # scipy.stats.beta.ppf computes (equal to the bit on k = 0..n for n up to 10^5), from
-    # scipy.special (~0.35 s to import) rather than scipy.stats (~1.2 s: issue #36,
+    # scipy.special (~0.35 s to import) rather than scipy.stats (~1.2 s:
     # `camopt show` prints a yield's interval)
     from scipy.special import betaincinv
 

@@ -1,5 +1,5 @@
 """Typed views of archives, as :mod:`camopt.reporting.report` builds them and the printers,
-the HTML report and the JSON outputs read them (issue #37).
+the HTML report and the JSON outputs read them.
 
 Each view is a frozen dataclass read by attribute; its ``to_json()`` is the JSON document
 ``show --format json``, ``compare --format json`` and ``export --format json`` write (the
