@@ -166,14 +166,3 @@ def test_fishers_test_on_success_counts_is_the_hypergeometric_sum(k_a, n_a, k_b,
     assert compare_success(k_a, n_a, k_b, n_b) == pytest.approx(
         _fisher_by_hand(k_a, n_a, k_b, n_b), rel=1e-12)
     assert compare_success(k_a, n_a, k_b, 0) == 1.0
-
-
-def test_compare_reports_each_runs_own_counts():
-    """report.significance: each run's success rate from its own count, Fisher's p on
-    (4 of 6, 1 of 5) exactly as by hand (0.2424...: 8/33)."""
-    from camopt.reporting.report import significance
-
-    s = significance("A", np.arange(6.0), 4, "B", np.arange(5.0) + 10, 1)
-    assert (s.success_a["rate"], s.success_b["rate"]) == (4 / 6, 1 / 5)
-    assert s.success_p_value == pytest.approx(_fisher_by_hand(4, 6, 1, 5), rel=1e-12)
-    assert _fisher_by_hand(4, 6, 1, 5) == pytest.approx(8 / 33, rel=1e-12)
