@@ -164,8 +164,8 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
     "stats_mw_direction": ("camopt/core/stats.py", "p_a_better = 1.0 - float(res.statistic)",
                            "p_a_better = float(res.statistic)"),
     "stats_mw_one_sided": ("camopt/core/stats.py", 'alternative="two-sided"', 'alternative="less"'),
-    "stats_verdict": ("camopt/core/stats.py", 'if test["p_a_better"] > 0.5',
-                      'if test["p_a_better"] < 0.5'),
+    "stats_verdict": ("camopt/core/stats.py", "if test.p_a_better > 0.5",
+                      "if test.p_a_better < 0.5"),
     # decision rules: a class "reaching" or a run "meeting" its yield target by the
     # interval's lower end, not the point estimate; "latched" under every band set and
     # every form, not some; the next-step rule's branches; compare's Fisher counts
