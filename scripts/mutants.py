@@ -21,7 +21,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 TESTS = ["tests/mechanics", "tests/cases", "tests/engine/test_sweep.py", "tests/solvers",
          "tests/core/test_stats.py", "tests/engine/test_driver.py", "tests/core/test_record.py",
-         "tests/engine/test_robust.py", "tests/reporting/test_tolerance_figures.py"]
+         "tests/engine/test_robust.py", "tests/reporting/test_tolerance_figures.py",
+         "tests/engine/test_allocation.py", "tests/reporting/test_report.py",
+         "tests/reporting/test_views.py", "tests/core/test_requirements.py"]
 
 # name: (file, original text, mutated text); each original must occur exactly once
 MUTANTS: dict[str, tuple[str, str, str]] = {
@@ -51,7 +53,7 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
                                   "- 4 / 27 * h * (np.abs(d0) + np.abs(d1)) <= 0)",
                                   "<= 0)"),
     # the design's closing latch moves every band set (set-major order, issue #21)
-    "vcb_band_latch_order": ("camopt/cases/vcb/problem.py", "+ np.tile(moved, k))",
+    "vcb_band_latch_order": ("camopt/cases/vcb/parts.py", "+ np.tile(moved, k))",
                              "+ np.repeat(moved, k))"),
     "vcb_band_latch_sign": ("camopt/cases/vcb/problem.py",
                             "self.release_offset(X) - self.config.release_offset_deg * DEG",
@@ -162,8 +164,38 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
     "stats_mw_direction": ("camopt/core/stats.py", "p_a_better = 1.0 - float(res.statistic)",
                            "p_a_better = float(res.statistic)"),
     "stats_mw_one_sided": ("camopt/core/stats.py", 'alternative="two-sided"', 'alternative="less"'),
-    "stats_verdict": ("camopt/core/stats.py", 'if test["p_a_better"] > 0.5',
-                      'if test["p_a_better"] < 0.5'),
+    "stats_verdict": ("camopt/core/stats.py", "if test.p_a_better > 0.5",
+                      "if test.p_a_better < 0.5"),
+    # decision rules: a class "reaching" or a run "meeting" its yield target by the
+    # interval's lower end, not the point estimate; "latched" under every band set and
+    # every form, not some; the next-step rule's branches; compare's Fisher counts
+    "alloc_reach_point": ("camopt/engine/allocation.py", 'rate["ci_low"] >= target)',
+                          "passed / samples >= target)"),
+    "robust_meets_point": ("camopt/reporting/report.py", "else low >= target)",
+                           'else checked.get("yield") >= target)'),
+    "verdict_low_point": ("camopt/reporting/views.py", 'low = y.get("low", y.get("value"))',
+                          'low = y.get("value")'),
+    "grade_boundary": ("camopt/core/requirements.py", "or expected < target:",
+                       "or expected <= target:"),
+    "band_latched_some": ("camopt/cases/vcb/band.py", 'stack("latched").all(axis=0)',
+                          'stack("latched").any(axis=0)'),
+    "verdict_latched_some": ("camopt/cases/vcb/verdict.py", '"latched": Reduction.LEAST,',
+                             '"latched": Reduction.GREATEST,'),
+    "next_robust_met": ("camopt/reporting/report.py", "if robust_yield_doc.meets_target is False:",
+                        "if robust_yield_doc.meets_target is True:"),
+    "next_repeats": ("camopt/reporting/report.py", "if len(run.repeats) > 1:",
+                     "if len(run.repeats) >= 1:"),
+    "next_nominal_fail": ("camopt/reporting/report.py", 'if judged.verdict != "pass":',
+                          'if judged.verdict == "pass":'),
+    "next_amber": ("camopt/reporting/report.py", 'if judged.grade != "pass":',
+                   'if judged.grade == "pass":'),
+    "next_config_own": ("camopt/reporting/report.py", "target.resolve() == own.resolve()",
+                        "target.resolve() != own.resolve()"),
+    "fisher_counts": ("camopt/core/stats.py", "[[k_a, n_a - k_a], [k_b, n_b - k_b]]",
+                      "[[k_a, n_a], [k_b, n_b]]"),
+    "fisher_runs_own": ("camopt/reporting/report.py",
+                        "stats.compare_success(k_a, len(a), k_b, len(b))",
+                        "stats.compare_success(k_b, len(a), k_a, len(b))"),
 }
 
 # the tests that mirror each mutated module (a subset of the fast tests above): a mutant
@@ -176,6 +208,13 @@ MIRROR = {
     "camopt/cases/emb_cam/problem.py": ["tests/cases/test_emb_cam.py"],
     "camopt/cases/fast_switch/problem.py": ["tests/cases/test_fast_switch.py"],
     "camopt/cases/vcb/problem.py": ["tests/cases/test_vcb_release.py"],
+    "camopt/cases/vcb/parts.py": ["tests/cases/test_vcb_release.py"],
+    "camopt/cases/vcb/band.py": ["tests/cases/test_vcb_band.py"],
+    "camopt/cases/vcb/verdict.py": ["tests/cases/test_vcb_verdict.py"],
+    "camopt/engine/allocation.py": ["tests/engine/test_allocation.py"],
+    "camopt/reporting/report.py": ["tests/reporting/test_report.py"],
+    "camopt/reporting/views.py": ["tests/reporting/test_views.py"],
+    "camopt/core/requirements.py": ["tests/core/test_requirements.py"],
     "camopt/cases/vcb/identify.py": ["tests/cases/test_vcb_identify.py"],
     "camopt/cases/vcb/constraints.py": ["tests/cases/test_vcb_constraints.py"],
     "camopt/cases/vcb/dynamics.py": ["tests/cases/test_vcb_dynamics.py"],

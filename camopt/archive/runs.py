@@ -174,7 +174,7 @@ def check_variables(view: RunView) -> None:
     from camopt.errors import CamoptError
     from camopt.solvers.registry import solver_options
 
-    try:  # engine.driver.validate's check, without importing the engine (issue #36)
+    try:  # engine.driver.validate's check, without importing the engine (start-up time)
         config = validate_data({"case": view.case, "solver": view.solver, "run": view.run},
                                solver_options(), case_configs(), view.path)
         with np.errstate(all="ignore"):  # a non-assembling design is the run's business
@@ -256,7 +256,7 @@ class _Layout:
 def _migrate(schema: int, variable_scale: NDArray) -> tuple[NDArray, NDArray]:
     """The one place archives of older schemas are told apart: the factors from the stored
     ``x`` to display units and to SI. Schema 2 stores display units (SI * scale); schema 1
-    stored SI. (Repeats of archives before issue #25 also lack ``success``:
+    stored SI. (Repeats of the oldest archives also lack ``success``:
     :func:`_success` derives it.)"""
     ones = np.ones_like(variable_scale)
     if schema >= 2:
@@ -265,7 +265,7 @@ def _migrate(schema: int, variable_scale: NDArray) -> tuple[NDArray, NDArray]:
 
 
 def _success(attrs: Any, fun: float, feasible: bool, target: float | None) -> bool:
-    """A repeat's ``success``: stored since issue #25; before, the same definition
+    """A repeat's ``success``: stored where the archive has it; else the same definition
     (:func:`camopt.core.stats.succeeded`) from what the archive holds."""
     if "success" in attrs:
         return bool(attrs["success"])
@@ -273,7 +273,7 @@ def _success(attrs: Any, fun: float, feasible: bool, target: float | None) -> bo
 
 
 def _json_dict(text: object) -> dict[str, Any]:
-    """An optional JSON object attribute ({} when absent: archives before issue #34)."""
+    """An optional JSON object attribute ({} when absent: older archives)."""
     if text is None:
         return {}
     value = json.loads(str(text))

@@ -10,7 +10,7 @@ and export ask the registry.
 A look-up by kind (:func:`get_case`, :func:`case_configs`) imports only the package the
 kind's entry point names (pyproject.toml declares every built-in case there), not every
 case: a command that reads one case file or archive starts without the others' models
-(issue #36, :mod:`camopt.core.plugins`). Listing (:func:`cases`) imports them all.
+(:mod:`camopt.core.plugins`). Listing (:func:`cases`) imports them all.
 """
 
 from __future__ import annotations
@@ -130,7 +130,7 @@ class CaseSpec:
     ``problem`` is the Problem class, or ``"module:Class"`` (:func:`problem_at`) imported
     when ``spec.problem`` is first read (building a problem, listing solvers): a command
     that reads a case file or archive without building its problem (``init``, ``show``)
-    does not import the case's model (issue #36). ``figures`` is ``"module:function"``,
+    does not import the case's model (start-up time). ``figures`` is ``"module:function"``,
     imported only when figures are drawn (matplotlib is slow to import); the function
     takes a :class:`~camopt.core.runview.RunView` and returns ``{name: Figure}``.
     ``paper`` holds the paper's reported values, used to mark figures only, never by a

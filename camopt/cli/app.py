@@ -96,7 +96,7 @@ class CommandsOnDemand(typer.Typer):
     first asked for: all of them (``--help``, tests' ``CliRunner``), or only the module of
     the command a command line names (:func:`load_commands`, from ``camopt.cli.main``),
     so ``camopt validate`` builds and imports one module's commands, not all 14
-    (issue #36)."""
+    (start-up time)."""
 
     _chosen = False  # the command modules are imported, or being imported
 

@@ -1,4 +1,4 @@
-"""What ``camopt calibrate`` hands a case and gets back: typed, kind-free (issue #32).
+"""What ``camopt calibrate`` hands a case and gets back: typed, kind-free.
 
 A case that can be calibrated on measured curves names its function in
 ``CaseSpec.calibration`` (``"module:function"``, imported only when asked); the function

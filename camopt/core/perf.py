@@ -68,7 +68,7 @@ def pin_blas_threads() -> None:
     When :func:`one_blas_thread_on_load` ran before numpy loaded (the command line) and
     nothing has imported threadpoolctl since (the one way a caller raises a loaded BLAS's
     threads), every BLAS in the process read one thread when it loaded: threadpoolctl is
-    not imported (~5 ms, ``camopt validate`` evaluates nothing; issue #36)."""
+    not imported (~5 ms, ``camopt validate`` evaluates nothing)."""
     import numpy  # noqa: F401  (loads numpy's BLAS, so threadpoolctl finds it)
 
     one_blas_thread_on_load()  # for a BLAS loaded later (read when it loads)
@@ -91,7 +91,7 @@ def one_blas_thread_on_load() -> None:
     camopt computes on one BLAS thread anyway (:func:`pin_blas_threads`), and an OpenBLAS
     that loads with its default starts a thread per core whose start-up cost ~0.06 s of
     CPU on every command, numpy's import being most of what a command that evaluates
-    nothing pays for (issue #36, bench/bench_startup.py)."""
+    nothing pays for (bench/bench_startup.py)."""
     import os
 
     global _one_on_load

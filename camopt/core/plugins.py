@@ -1,5 +1,5 @@
 """What the case and solver registries share: finding one entry by name without importing
-every other (issue #36).
+every other (start-up time).
 
 A registry's entries register themselves when their module is imported, and the
 registries used to import every module before the first look-up: ``camopt validate`` of a
@@ -11,7 +11,7 @@ exactly one entry point (an unknown name, a source checkout without installed me
 two other distributions claiming one name) falls back to importing everything, as before,
 so what is found and every error are unchanged. Listing a registry imports everything.
 
-Where a name is looked up (issue #36, fifth pass): first in camopt's own distribution
+Where a name is looked up: first in camopt's own distribution
 (:data:`DISTRIBUTION`, its one ``entry_points.txt``), then, for a name camopt does not
 declare, in every installed distribution's entry points (reading them opens each
 distribution's metadata, 84 in camopt's development environment: a look-up of a built-in

@@ -57,7 +57,7 @@ class Evaluation:
         """(n_pop,) bool: no constraint violated and a finite objective: ``violation == 0``
         (every ``g <= FEASIBILITY_TOL``, NaN failing), read off a bool comparison rather
         than the violation's (n_pop, n_constr) float temporary (112 MB at 10^6 VCB
-        samples, each time a tolerance analysis asks; issue #36)."""
+        samples, each time a tolerance analysis asks)."""
         return np.all(np.asarray(self.g) <= FEASIBILITY_TOL, axis=1) & np.isfinite(self.f)
 
     def take(self, index: NDArray | int | slice) -> Evaluation:

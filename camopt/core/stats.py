@@ -70,14 +70,14 @@ def share_interval(successes: ArrayLike, trials: int, confidence: float = 0.95
     from ``successes`` of ``trials``, vectorised over ``successes``: the beta quantiles
     ``B((1 - c)/2; k, n - k + 1)`` and ``B((1 + c)/2; k + 1, n - k)``.
 
-    Why not Wilson's (camopt's interval before issue #33): its coverage dips below the
+    Why not Wilson's (camopt's interval before): its coverage dips below the
     stated level for yields near 1 at a few hundred draws (0.933 at n = 200, p = 0.98;
     0.920 at p = 0.995; computed exactly in tests/core/test_stats.py), which is where
     quick yield estimates and robust designs live; Clopper-Pearson covers at least the
     stated level for every n and p, at the price of a slightly wider interval."""
     # the beta quantile as the inverse regularised incomplete beta function: what
     # scipy.stats.beta.ppf computes (equal to the bit on k = 0..n for n up to 10^5), from
-    # scipy.special (~0.35 s to import) rather than scipy.stats (~1.2 s: issue #36,
+    # scipy.special (~0.35 s to import) rather than scipy.stats (~1.2 s:
     # `camopt show` prints a yield's interval)
     from scipy.special import betaincinv
 
@@ -97,30 +97,48 @@ def success_rate(successes: int, runs: int, confidence: float = 0.95) -> dict[st
     return {"rate": successes / runs, "ci_low": float(low), "ci_high": float(high)}
 
 
-def compare_objectives(a: ArrayLike, b: ArrayLike) -> dict[str, Any]:
-    """Two-sided Mann-Whitney U on final objectives (lower is better) and effect sizes.
+@dataclass(frozen=True)
+class ObjectivesTest:
+    """Two sets of final objectives compared (lower is better): the two-sided Mann-Whitney
+    ``p_value``; ``p_a_better`` = P(A < B) + P(A = B)/2 (the common-language effect size)
+    and the rank-biserial correlation 2 p_a_better - 1 (positive when A tends to be
+    lower); the medians, the counts and ``effect`` = median B - median A in the
+    objective's unit (None unless both are finite); ``threshold``, the practical-
+    equivalence threshold in that unit, where the caller set one
+    (:func:`equivalence_threshold`)."""
 
-    ``p_a_better`` is P(A < B) + P(A = B)/2 (the common-language effect size); the
-    rank-biserial correlation 2 p_a_better - 1 is positive when A tends to be lower;
-    ``effect`` is median B - median A in the objective's unit (None unless both are
-    finite); ``n_a``, ``n_b`` the counts. Infeasible or failed runs should be passed as
-    +inf (they rank last).
-    """
+    p_value: float
+    p_a_better: float
+    rank_biserial: float
+    median_a: float
+    median_b: float
+    n_a: int
+    n_b: int
+    effect: float | None
+    threshold: float | None = None
+
+    def as_dict(self) -> dict[str, float | int | None]:
+        """The JSON document, in the fields' order."""
+        return asdict(self)
+
+
+def compare_objectives(a: ArrayLike, b: ArrayLike) -> ObjectivesTest:
+    """Two-sided Mann-Whitney U on final objectives (lower is better) and effect sizes
+    (:class:`ObjectivesTest`). Infeasible or failed runs should be passed as +inf (they
+    rank last); all values equal, or fewer than 2 a side: p = 1, no side better."""
     a = np.where(np.isnan(a), np.inf, np.asarray(a, dtype=float))
     b = np.where(np.isnan(b), np.inf, np.asarray(b, dtype=float))
     ma, mb = float(np.median(a)), float(np.median(b))
     with np.errstate(invalid="ignore"):
         effect = mb - ma if np.isfinite(ma) and np.isfinite(mb) else None
-    sizes = {"n_a": int(a.size), "n_b": int(b.size), "effect": effect}
     if a.size < 2 or b.size < 2 or np.all(np.concatenate([a, b]) == a[0]):
-        return {"p_value": 1.0, "p_a_better": 0.5, "rank_biserial": 0.0,
-                "median_a": ma, "median_b": mb, **sizes}
+        return ObjectivesTest(1.0, 0.5, 0.0, ma, mb, int(a.size), int(b.size), effect)
     from scipy import stats
 
     res = stats.mannwhitneyu(a, b, alternative="two-sided")
     p_a_better = 1.0 - float(res.statistic) / (a.size * b.size)
-    return {"p_value": float(res.pvalue), "p_a_better": p_a_better,
-            "rank_biserial": 2 * p_a_better - 1, "median_a": ma, "median_b": mb, **sizes}
+    return ObjectivesTest(float(res.pvalue), p_a_better, 2 * p_a_better - 1, ma, mb,
+                          int(a.size), int(b.size), effect)
 
 
 def min_p_value(n_a: int, n_b: int) -> float:
@@ -167,28 +185,27 @@ def _num(x: float) -> str:
     return f"{x:.3g}"
 
 
-def verdict(name_a: str, name_b: str, test: dict[str, Any], alpha: float = ALPHA,
+def verdict(name_a: str, name_b: str, test: ObjectivesTest, alpha: float = ALPHA,
             unit: str = "") -> str:
     """A plain-language line for a comparison: too few runs to decide (when no p-value
     below ``alpha`` is possible: :func:`min_p_value`), no significant difference, or which
     is better and by how much (the medians' difference in ``unit``), saying when that
-    difference is below the practical-equivalence threshold (``test["threshold"]``)."""
-    p = test["p_value"]
-    n_a, n_b = test.get("n_a"), test.get("n_b")
-    if n_a is not None and n_b is not None and min_p_value(n_a, n_b) >= alpha:
+    difference is below the practical-equivalence threshold (``test.threshold``)."""
+    p, n_a, n_b = test.p_value, test.n_a, test.n_b
+    if min_p_value(n_a, n_b) >= alpha:
         return (f"too few repeats to decide: {n_a} against {n_b} can give no p-value below "
                 f"{min_p_value(n_a, n_b):.3g} (alpha {alpha:g}); run at least "
                 f"{min_repeats(alpha)} each")
-    effect = test.get("effect")
+    effect = test.effect
     size = abs(float(effect)) if effect is not None and np.isfinite(effect) else None
-    threshold = test.get("threshold")
+    threshold = test.threshold
     u = f" {unit}" if unit else ""
     equivalent = size is not None and threshold is not None and size < threshold
     if p >= alpha:
         tail = (f"; equivalent in practice (medians {_num(size or 0.0)}{u} apart, below the "
                 f"threshold {_num(threshold or 0.0)}{u})" if equivalent else "")
         return f"no significant difference between {name_a} and {name_b} (p = {p:.3g}){tail}"
-    better, worse = (name_a, name_b) if test["p_a_better"] > 0.5 else (name_b, name_a)
+    better, worse = (name_a, name_b) if test.p_a_better > 0.5 else (name_b, name_a)
     if equivalent:
         return (f"{better} ranks lower than {worse} at p = {p:.3g}, but the medians differ by "
                 f"{_num(size or 0.0)}{u}, below the practical-equivalence threshold "

@@ -156,7 +156,7 @@ def mark(ev: Evaluation, bad: NDArray) -> Evaluation:
 
     Written into ``ev``'s own arrays where they are float arrays that own their data
     (what :mod:`camopt.core.batch` allocates for more than one chunk): a marked copy of
-    a 10^6-sample VCB evaluation was another 520 bytes a sample (issue #36); a Problem
+    a 10^6-sample VCB evaluation was another 520 bytes a sample; a Problem
     returns new arrays from every call and keeps none. Any other array (a view, which
     may share memory with another output, a read-only or a non-float array) is replaced
     by a marked copy and left as it was."""

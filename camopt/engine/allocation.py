@@ -86,6 +86,17 @@ class Allocation:
                 "tightenings": [row(t) for t in self.tightenings]}
 
 
+def class_yield(name: str, cost: float, passed: int, samples: int, target: float,
+                confidence: float) -> ClassYield:
+    """A class's yield ``passed`` / ``samples`` with its Clopper-Pearson interval; the
+    class reaches ``target`` when the interval's lower end does (low >= target): the
+    point estimate alone would pick a class that misses the target by sampling luck
+    as often as not when its true yield sits at the target."""
+    rate = success_rate(passed, samples, confidence)
+    return ClassYield(name, cost, passed / samples, rate["ci_low"], rate["ci_high"],
+                      rate["ci_low"] >= target)
+
+
 def _text(v: Vary) -> str:
     return f"±{v.tolerance:g}{'%' if v.relative else ''}"
 
@@ -120,12 +131,8 @@ def allocate(run: RunView, target: float, samples: int, seed: int,
                                 variant=variant)
         return int(np.count_nonzero((ev.g <= FEASIBILITY_TOL).all(axis=1)))
 
-    classes = []
-    for name in names:
-        ok = passes(plans[name])
-        rate = success_rate(ok, samples, confidence)
-        classes.append(ClassYield(name, spec.class_cost(name), ok / samples,
-                                  rate["ci_low"], rate["ci_high"], rate["ci_low"] >= target))
+    classes = [class_yield(name, spec.class_cost(name), passes(plans[name]), samples, target,
+                           confidence) for name in names]
     chosen = next((c.name for c in classes if c.reaches_target), None)
     cheapest = plans[names[0]]
     goal = plans[chosen if chosen is not None else names[-1]]

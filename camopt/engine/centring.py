@@ -1,5 +1,5 @@
 """Yield centring: a robust repeat's result moved to where the most of one fixed set of
-draws pass (issue #33; docs/tolerance.md, "Yield centring").
+draws pass (docs/tolerance.md, "Yield centring").
 
 The robust search (:mod:`camopt.engine.robust`) ranks a candidate by its worst draw's
 worst constraint on each generation's few draws. Where discrete requirements fail (the

@@ -2,7 +2,7 @@
 registries, the case's problem built and checked with the solver (:mod:`camopt.engine.driver`
 re-exports it). A module apart from the driver, so ``camopt validate`` checks a case file
 without importing the loop's process pools, records, statistics and robust evaluation
-(issue #36); ``[robust]`` imports :mod:`camopt.engine.robust` when a case file has one."""
+(start-up time); ``[robust]`` imports :mod:`camopt.engine.robust` when a case file has one."""
 
 from __future__ import annotations
 

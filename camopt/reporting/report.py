@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -535,8 +536,8 @@ def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarra
     (``success_p_value``), ``decidable`` (whether these counts can give a p-value below
     alpha at all) and the verdict line."""
     test = stats.compare_objectives(a, b)
-    test["threshold"] = stats.equivalence_threshold(test["median_a"], test["median_b"],
-                                                    equivalence)
+    test = replace(test, threshold=stats.equivalence_threshold(test.median_a, test.median_b,
+                                                               equivalence))
     return Significance(
         name_a, name_b, test, decidable=stats.min_p_value(len(a), len(b)) < stats.ALPHA,
         success_a=stats.success_rate(k_a, len(a)), success_b=stats.success_rate(k_b, len(b)),

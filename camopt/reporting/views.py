@@ -1,5 +1,5 @@
 """Typed views of archives, as :mod:`camopt.reporting.report` builds them and the printers,
-the HTML report and the JSON outputs read them (issue #37).
+the HTML report and the JSON outputs read them.
 
 Each view is a frozen dataclass read by attribute; its ``to_json()`` is the JSON document
 ``show --format json``, ``compare --format json`` and ``export --format json`` write (the
@@ -28,7 +28,7 @@ from camopt.core.requirements import (
     short_sentence,
 )
 from camopt.core.runview import BestView
-from camopt.core.stats import RunStatistics
+from camopt.core.stats import ObjectivesTest, RunStatistics
 
 Json = dict[str, Any]
 
@@ -337,13 +337,13 @@ class ShowView:
 @dataclass(frozen=True)
 class Significance:
     """Two sets of final objectives compared: ``test`` is
-    :func:`camopt.core.stats.compare_objectives`'s document with the practical-equivalence
-    ``threshold`` added; success rates with their intervals, Fisher's p on them, whether
+    :func:`camopt.core.stats.compare_objectives`'s test with the practical-equivalence
+    ``threshold`` set; success rates with their intervals, Fisher's p on them, whether
     these counts can decide at all, and the verdict line."""
 
     a: str
     b: str
-    test: Mapping[str, Any]
+    test: ObjectivesTest
     decidable: bool
     success_a: Mapping[str, float]
     success_b: Mapping[str, float]
@@ -352,24 +352,25 @@ class Significance:
 
     @property
     def p_value(self) -> float:
-        return float(self.test["p_value"])
+        return self.test.p_value
 
     @property
     def p_a_better(self) -> float:
-        return float(self.test["p_a_better"])
+        return self.test.p_a_better
 
     @property
     def effect(self) -> float | None:
         """The medians' difference B - A in the objective's unit (None when undefined)."""
-        return self.test.get("effect")
+        return self.test.effect
 
     @property
     def threshold(self) -> float | None:
-        return self.test.get("threshold")
+        return self.test.threshold
 
     def to_json(self) -> Json:
-        return jsonable({"a": self.a, "b": self.b, **self.test, "decidable": self.decidable,
-                         "success_a": self.success_a, "success_b": self.success_b,
+        return jsonable({"a": self.a, "b": self.b, **self.test.as_dict(),
+                         "decidable": self.decidable, "success_a": self.success_a,
+                         "success_b": self.success_b,
                          "success_p_value": self.success_p_value, "verdict": self.verdict})
 
 

@@ -15,7 +15,7 @@ success test and every variable within its bounds). Any other end point is a las
 iterate, not a design: it is never the best, and when no start converged the repeat's
 best is reported infeasible (objective +inf) with a note saying so.
 
-A local solve runs under the run's budget (issue #37): every call scipy makes of the
+A local solve runs under the run's budget: every call scipy makes of the
 start's function goes through a :class:`Meter` that counts it against
 ``run.max_evaluations`` (one evaluation kept for the driver's evaluation of the end
 point) and ``run.max_seconds``; once either is spent the meter raises out of scipy, the

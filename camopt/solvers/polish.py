@@ -289,8 +289,8 @@ def _slsqp(problem: Problem, x0: NDArray, options: PolishOptions
 
     def evaluate(u: NDArray) -> Evaluation:
         # SLSQP asks for f and then g at each point, and differences both at the same
-        # n_free + 1 points (the same absolute step): one evaluation serves both (issue
-        # #24: the constraints' Jacobian re-evaluated every point, half the polish)
+        # n_free + 1 points (the same absolute step): one evaluation serves both (the
+        # constraints' Jacobian evaluated again at every point was half the polish's time)
         key = u.tobytes()
         hit = cache.get(key)
         if hit is None:

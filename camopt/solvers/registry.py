@@ -8,7 +8,7 @@ installed metadata.
 
 A look-up by name (:func:`get_solver`, :func:`solver_options`) imports only the module the
 name's entry point names, not every solver; listing (:func:`solvers`) imports them all
-(issue #36, :mod:`camopt.core.plugins`).
+(:mod:`camopt.core.plugins`).
 """
 
 from __future__ import annotations

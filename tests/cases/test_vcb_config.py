@@ -7,13 +7,8 @@ from __future__ import annotations
 import pydantic
 import pytest
 
-from camopt.cases.vcb.config import (
-    VcbCamStep,
-    VcbConfig,
-    VcbDynamicsIdentifyConfig,
-    VcbIdentifyConfig,
-    VcbMechanism,
-)
+from camopt.cases.vcb.config import VcbCamStep, VcbConfig, VcbMechanism
+from camopt.cases.vcb.identify_config import VcbDynamicsIdentifyConfig, VcbIdentifyConfig
 
 
 def test_the_steps_are_layers_of_one_flat_table():

@@ -1,5 +1,5 @@
 """The VCB judged at the end of its life (``life_friction_rise``, ``life_spring_relaxation``;
-:meth:`camopt.cases.vcb.problem.VcbProblem._aged`): every friction torque higher, the
+:func:`camopt.cases.vcb.life.aged`): every friction torque higher, the
 closing springs relaxed, the factory setting's nut where it was left, and each requirement
 at its worse of the start and the end."""
 
@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from camopt.cases import build_problem
-from camopt.cases.vcb.problem import LIFE_END_METRICS, _worst_of
+from camopt.cases.vcb.life import LIFE_END_METRICS
+from camopt.cases.vcb.verdict import worst_of
 from camopt.core.problem import Evaluation
 from tests.conftest import CONFIGS
 from tests.helpers import load
@@ -82,7 +83,7 @@ def test_a_stall_at_either_end_is_no_velocity():
                           extras={"closing_velocity_low_m_s": np.array(v),
                                   "closing_velocity_avg_m_s": np.array(v),
                                   "latch_kinetic_energy_low_j": np.array(k)})
-    out = _worst_of([ev([0.9, 0.8], [3.0, np.nan]), ev([np.nan, 0.7], [2.0, 1.0])], 1e6)
+    out = worst_of([ev([0.9, 0.8], [3.0, np.nan]), ev([np.nan, 0.7], [2.0, 1.0])], 1e6)
     np.testing.assert_array_equal(out.extras["closing_velocity_low_m_s"], [np.nan, 0.7])
     np.testing.assert_array_equal(out.extras["latch_kinetic_energy_low_j"], [2.0, 1.0])
     # the identified set's own value is the first judgement's, not a band end

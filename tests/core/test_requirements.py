@@ -14,6 +14,7 @@ from camopt.core.requirements import (
     all_pass,
     check,
     engineering,
+    grade,
     sentence,
     verdict,
     yields,
@@ -190,3 +191,18 @@ def test_yields_shares_and_spreads_exactly():
     assert s["margin_p50"] == pytest.approx(0.0, abs=1e-9)
     ok = all_pass([TRAVEL, STRESS], {"tau_max_mpa": v, "rod_travel_mm": np.full(101, 18.0)})
     assert ok.sum() == 51 and ok[:51].all()
+
+
+@pytest.mark.parametrize("verdict_, at_limit, expected, target, graded", [
+    ("pass", False, 0.95, 0.95, "pass"),             # the yield's lower end at the target
+    ("pass", False, 0.9499, 0.95, "pass at nominal"),
+    ("pass", True, 0.99, 0.95, "pass at nominal"),   # a requirement at its limit
+    ("pass", False, None, 0.95, "pass at nominal"),  # no estimate
+    ("pass", False, 0.99, None, "pass at nominal"),  # no target
+    ("fail", False, 0.99, 0.95, "fail"),
+    (None, False, 0.99, 0.95, None),
+])
+def test_the_grade_rule(verdict_, at_limit, expected, target, graded):
+    """Green only for a nominal pass with no requirement at its limit and the yield (the
+    caller's interval lower end) at or above the target."""
+    assert grade(verdict_, at_limit, expected, target) == graded

@@ -117,3 +117,28 @@ def test_the_chosen_class_is_the_cheapest_that_reaches_the_target(fast_run, monk
     assert {t.input for t in result.tightenings} == {k for k in tight if tight[k] != loose[k]}
     assert all(t.tolerance_to == tight[t.input] for t in result.tightenings)
     assert result.tightenings or aim == names[0]
+
+
+@pytest.mark.parametrize("passed, samples, target, reaches", [
+    (96, 100, 0.95, False),    # 96 % point estimate, interval [0.9007, 0.9890]
+    (100, 100, 0.95, True),    # [0.9638, 1]
+    (100, 100, 0.97, False),   # 100 % point estimate, lower end 0.9638
+    (1979, 2000, 0.985, False),  # 98.95 % point estimate, lower end 0.98399
+    (1979, 2000, 0.98, True),
+])
+def test_a_class_reaches_the_target_by_its_intervals_lower_end(passed, samples, target,
+                                                               reaches):
+    """class_yield: the yield is passed / samples exactly, its interval the Clopper-Pearson
+    one (scipy.stats.binomtest's exact interval, an independent implementation: rtol
+    1e-9, the two beta inversions' agreement), and "reaches" compares the interval's
+    lower end with the target, never the point estimate."""
+    from scipy.stats import binomtest
+
+    from camopt.engine.allocation import class_yield
+
+    c = class_yield("graded", 2.0, passed, samples, target, 0.95)
+    ci = binomtest(passed, samples).proportion_ci(0.95, method="exact")
+    assert c.yield_ == passed / samples and c.name == "graded" and c.relative_cost == 2.0
+    assert c.low == pytest.approx(ci.low, rel=1e-9)
+    assert c.high == pytest.approx(ci.high, rel=1e-9)
+    assert c.reaches_target is reaches is (ci.low >= target)

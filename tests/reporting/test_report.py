@@ -13,7 +13,9 @@ from __future__ import annotations
 import dataclasses
 import json
 from pathlib import Path
+from types import SimpleNamespace
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -119,3 +121,75 @@ def test_a_robust_yield_meets_its_target_when_its_lower_bound_reaches_it(low, ta
     y = robust_yield(run)  # type: ignore[arg-type]
     assert y is not None and y.meets_target is meets
     assert robust_yield(SimpleNamespace(robust_check=None, robust={})) is None  # type: ignore[arg-type]
+
+
+def _run(tmp_path, *, robust=None, feasible=True, violated=(), repeats=1, next_config=None):
+    """A stand-in run in ``tmp_path`` (its case file ``case.toml`` beside ``other.toml`` and
+    ``case_robust.toml``) with what :func:`report.next_step` reads."""
+    for name in ("case.toml", "other.toml", "case_robust.toml"):
+        (tmp_path / name).write_text('[case]\nkind = "vcb"\n')
+    return SimpleNamespace(
+        path="r.h5", kind="vcb", config_path=str(tmp_path / "case.toml"),
+        robust_check={"robust": robust} if robust else None,
+        robust={"yield_target": 0.95} if robust else {},
+        best=SimpleNamespace(feasible=feasible, violated=list(violated), repeat=0),
+        repeats=[SimpleNamespace(index=i, notes=()) for i in range(repeats)],
+        run={} if next_config is None else {"next_config": next_config},
+        solver={"name": "de_gr", "generations": 300})
+
+
+def _judged(verdict, grade):
+    return SimpleNamespace(verdict=verdict, grade=grade)
+
+
+REPORT_LINE = "next: camopt report r.h5 (or camopt export r.h5 --format dxf)"
+
+
+def test_the_next_step_rule(tmp_path):
+    """Each branch of the next-step rule, exact lines: a robust run by its yield's lower
+    end; an infeasible best by its repeats; a nominal fail by ``run.next_config`` (a file
+    other than the run's own); an amber pass to tolerance analysis; a green pass to the
+    report."""
+    below = {"yield": 0.97, "yield_low": 0.94, "yield_high": 0.99, "samples": 2000}
+    meets = {**below, "yield_low": 0.951}
+    robust = str(tmp_path / "case_robust.toml")
+    assert report.next_step(_run(tmp_path, robust=below), _judged("pass", "pass")) == (
+        "next: the robust yield is below its target: another tolerance_class (camopt "
+        "tolerance r.h5 --allocate), a lower robust.yield_target or more budget (--set "
+        "solver.generations=...)")
+    assert report.next_step(_run(tmp_path, robust=meets), _judged("pass", "pass")) \
+        == REPORT_LINE
+    assert report.next_step(_run(tmp_path, feasible=False, violated=["a", "b", "c"],
+                                 repeats=3), _judged("fail", "fail")) == (
+        "next: every repeat ended infeasible (violates a, b): more budget rarely helps; "
+        f"for parts made to tolerance: camopt run {robust}, else a wider bound on the "
+        "variables the constraints push against")
+    assert report.next_step(_run(tmp_path, feasible=False, violated=["a"]),
+                            _judged("fail", "fail")) == (
+        "next: no feasible design (violates a): more budget (--set solver.generations=... "
+        "or --repeats) or a wider bound on the variables the constraints push against")
+    other = str(tmp_path / "other.toml")
+    assert report.next_step(_run(tmp_path, next_config="other.toml"),
+                            _judged("fail", "fail")) == (
+        f"next: camopt run {other} (requires what this run's search leaves out)")
+    generic = ("next: the run's search leaves out the requirements it fails: run a case "
+               "file that requires them (a config of this kind with them as constraints)")
+    for named in ("case.toml", "missing.toml", None):  # its own file, none, not named
+        assert report.next_step(_run(tmp_path, next_config=named),
+                                _judged("fail", "fail")) == generic
+    assert report.next_step(_run(tmp_path), _judged("pass", "pass at nominal")) == (
+        "next: camopt tolerance r.h5 --samples 2000; for parts made to tolerance: "
+        f"camopt run {robust}")
+    assert report.next_step(_run(tmp_path), _judged("pass", "pass")) == REPORT_LINE
+
+
+def test_compare_reports_each_runs_own_counts():
+    """report.significance: each run's success rate from its own count, Fisher's p on
+    (4 of 6, 1 of 5) as the 2x2 table [[4, 2], [1, 4]] gives it by hand: the tables at
+    most as likely, with the margins fixed (5 successes of 11), sum to 8/33."""
+    s = report.significance("A", np.arange(6.0), 4, "B", np.arange(5.0) + 10, 1)
+    assert (s.success_a["rate"], s.success_b["rate"]) == (4 / 6, 1 / 5)
+    assert s.success_p_value == pytest.approx(8 / 33, rel=1e-12)
+    # (1 of 6, 4 of 5): the tables with 0, 1 or 5 of A's successes, (1 + 30 + 6) / 462
+    s = report.significance("A", np.arange(6.0), 1, "B", np.arange(5.0) + 10, 4)
+    assert s.success_p_value == pytest.approx(37 / 462, rel=1e-12)

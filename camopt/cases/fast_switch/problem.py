@@ -255,7 +255,8 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         reduced problem's constraints, and what a search may name as an objective: the
         closure time and the spring's stress margin (% below its strength at the worse of
         the two loads, R14 and R15). :meth:`describe` adds x1..x13 and the full model's
-        largest equality residual (not computed for a search: issue #24)."""
+        largest equality residual (not computed for a search: it solves the full model
+        per design, which a search does not need)."""
         return self._evaluate(X)[0]
 
     def describe(self, X: NDArray) -> Evaluation:
@@ -370,7 +371,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         The exact motion is integrated only for a design the reduced problem finds
         feasible with a finite Eq 39 time, and within :data:`EXACT_MAX_CALLS`: for any
         other the ODE could oscillate short of 90 deg for its whole second (minutes of
-        Python calls, issue #24). ``exact_dynamics`` says which: ``computed``,
+        Python calls). ``exact_dynamics`` says which: ``computed``,
         ``skipped: infeasible design`` (times NaN) or ``capped: ...`` (times NaN)."""
         ev = self.describe(np.atleast_2d(x))
         out: dict[str, object] = {k: float(v[0]) for k, v in ev.extras.items()}

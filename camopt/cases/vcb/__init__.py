@@ -6,7 +6,7 @@ The specs name their problems as ``"module:Class"`` (imported when a problem is 
 :func:`camopt.cases.registry.problem_at`), and ``VcbProblem``, ``VcbIdentification`` and
 ``VcbDynamicsIdentification`` are imported from here on first use (PEP 562): ``camopt init
 vcb`` or ``show`` of a VCB archive do not import the model and its dynamics, nor a
-``vcb`` case the identifications (issue #36)."""
+``vcb`` case the identifications (start-up time)."""
 
 from __future__ import annotations
 
@@ -23,12 +23,8 @@ from camopt.cases.registry import (
     problem_at,
     register_case,
 )
-from camopt.cases.vcb.config import (
-    CamDesign,
-    VcbConfig,
-    VcbDynamicsIdentifyConfig,
-    VcbIdentifyConfig,
-)
+from camopt.cases.vcb.config import CamDesign, VcbConfig
+from camopt.cases.vcb.identify_config import VcbDynamicsIdentifyConfig, VcbIdentifyConfig
 from camopt.cases.vcb.paper import PAPER
 from camopt.cases.vcb.requirements import requirements
 from camopt.config.models import CaseConfig
@@ -55,14 +51,14 @@ TOLERANCES = {  # class "standard", docs/tolerance.md, "Tolerance classes"
     "velocity_setting_m_s": "±2%",
     "case.l1_mm": "±0.05", "case.l3_mm": "±0.05", "case.l4_mm": "±0.05",  # step 1
     "case.l5_mm": "±0.05", "case.theta1_deg": "±0.05",
-    # the parts beyond the closing springs' rates (issue #33; docs/tolerance.md, "VCB's
+    # the parts beyond the closing springs' rates (docs/tolerance.md, "VCB's
     # parts"; docs/assumptions.md, "VCB: tolerances of the parts"):
     # closing springs' free lengths (EN 15800 grade 2 tolerances the free length; the
     # springs' L0 is not given: +-1.5 mm assumed), as their compressions when opened
     "case.kc1_precompression_mm": "±1.5", "case.kc2_precompression_mm": "±1.5",
     # opening spring and contact springs: ungraded, as the closing springs (±10 % on rate)
     "case.opening_k_n_per_mm": "±10%", "case.wipe_k_n_per_mm": "±10%",
-    # friction with lubrication, temperature and wear (issue #33: ±20-30 %): every set's
+    # friction varies with lubrication, temperature and wear (±20-30 %): every set's
     # friction torque ±25 %, and the efficiency forms' loss 1 - eps = 0.15 by ±0.03 (±20 %)
     "case.cam_friction_nm": "±25%", "case.efficiency": "±0.03",
     # the cam profile's radial error, a CNC-milled profile (the EMB's class "milled")

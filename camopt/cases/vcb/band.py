@@ -73,3 +73,11 @@ Times run from the release of the closing springs: ``touch_time_ms`` to the cont
 touch, ``release_to_latch_ms`` to the latch (the motion's field ``closing_time``); the
 analyser's closing time, command to touch (``closing_time_ms``), adds the case's
 ``latch_delay_ms`` (:meth:`camopt.cases.vcb.problem.VcbProblem`'s extras)."""
+
+
+def band_ends(name: str) -> tuple[str, str]:
+    """The names of the band's lower and higher ends of a :data:`BANDED` extra: low/high
+    before its unit (``touch_time_ms`` -> ``touch_time_low_ms``, ``touch_time_high_ms``)."""
+    unit = BANDED[name][1]
+    return name.replace(unit, "_low" + unit), name.replace(unit, "_high" + unit)
+

@@ -1,4 +1,4 @@
-"""A current cam entered as points: cam angle against follower angle (issue #32).
+"""A current cam entered as points: cam angle against follower angle.
 
 A CSV with a header naming ``cam_angle_deg`` (or ``cam_angle_rad``) and
 ``follower_angle_deg`` (or ``follower_angle_rad``): the cam angle theta_c from the cam

@@ -1,4 +1,5 @@
-"""``[case]`` of the VCB closing mechanism (Kang, Huang & Yang 2023) and of its identification."""
+"""``[case]`` of the VCB closing mechanism (Kang, Huang & Yang 2023); the identifications'
+are in :mod:`camopt.cases.vcb.identify_config`."""
 
 from __future__ import annotations
 
@@ -71,12 +72,13 @@ efficiency]): six values are the shipped form (the free rotation's friction the
 same, the case's efficiency), eight any model form's (camopt/cases/vcb/forms.py)."""
 
 
-def _roles(role: FieldRole, names: str) -> dict[str, FieldRole]:
+def roles_of(role: FieldRole, names: str) -> dict[str, FieldRole]:
+    """``role`` for each of the whitespace-separated field ``names``."""
     return dict.fromkeys(names.split(), role)
 
 
 VCB_ROLES: dict[str, FieldRole] = {
-    **_roles("hardware", """reference_label reference_cam_points reference_law l1_mm l2_mm
+    **roles_of("hardware", """reference_label reference_cam_points reference_law l1_mm l2_mm
         l3_mm l4_mm l5_mm theta1_deg pivot_b_mm pivot_g_mm crank_l8_mm preset_qox_deg rb_mm rf_mm
         beta_mm gamma_mm node_clearance_mm theta0_deg s1_bar_mm node_cam_deg node_fractions
         kc1_n_per_mm kc2_n_per_mm kc1_precompression_mm kc2_precompression_mm
@@ -84,15 +86,15 @@ VCB_ROLES: dict[str, FieldRole] = {
         wipe_compression_closed_mm contact_gap_mm cam_modulus_gpa poisson
         contact_length_mm shear_yield_mpa cam_design tolerance_class cam_profile_error_mm
         preload_setting_range_mm preload_setting_resolution_mm"""),
-    **_roles("identified", """rod_arm_offset_deg opening_arm_ratio free_contact_force_n
+    **roles_of("identified", """rod_arm_offset_deg opening_arm_ratio free_contact_force_n
         alpha efficiency cam_inertia_kg_m2 follower_inertia_kg_m2 rod_mass_kg
         contacts_mass_kg release_offset_deg cam_friction_nm latch_delay_ms spring_mass_kg
         rod_damping_n_s_per_m dynamics_band"""),
-    **_roles("requirement", """rod_travel_mm rod_travel_tolerance_mm closing_velocity_m_s
+    **roles_of("requirement", """rod_travel_mm rod_travel_tolerance_mm closing_velocity_m_s
         require_latch pressure_angle_max_deg forbid_lift_off latch_energy_min_j
         latch_energy_max_j release_torque_margin_min lift_off_fraction_min
         stress_constraint phi_max_deg life_friction_rise life_spring_relaxation"""),
-    **_roles("solver setting", """step cam_archive dynamics_steps objective_form positions penalty
+    **roles_of("solver setting", """step cam_archive dynamics_steps objective_form positions penalty
         a1_bounds a2_bounds a3_bounds a4_bounds a5_bounds release_offset_bounds_deg
         velocity_setting_bounds_m_s kc1_bounds_n_per_mm kc2_bounds_n_per_mm l1_bounds_mm
         l3_bounds_mm l4_bounds_mm l5_bounds_mm theta1_bounds_deg"""),
@@ -435,86 +437,3 @@ class VcbConfig(VcbCamStep):
             raise ValueError("step 'fourbar' needs the step-1 design: set cam_design or "
                              "cam_archive")
         return self
-
-
-class VcbIdentifyConfig(VcbConfig):
-    """Fit the VCB parameters the paper leaves out to the results it reports."""
-
-    field_roles: ClassVar[Mapping[str, FieldRole]] = {
-        **VCB_ROLES, **_roles("measured data", """vendor_surplus_target_j
-            optimum_surplus_target_j paper_optimum"""),
-        **_roles("solver setting", """rod_offset_bounds_deg opening_arm_bounds
-            free_contact_bounds_n""")}
-    kind: Literal["vcb_identify"] = "vcb_identify"  # type: ignore[assignment]
-    vendor_surplus_target_j: float = Field(
-        1.75, description="Table 6 vendor objective 1.75e3, read as N mm")
-    optimum_surplus_target_j: float = Field(0.0, description="Table 6 optimum: 1.74e-7")
-    paper_optimum: CamDesign = Field(
-        CamDesign(a1=0.238432, a2=0.000226, a3=-0.011492, kc1_n_per_mm=9.315336,
-                  kc2_n_per_mm=7.788183), description="Table 6 DE-gr design")
-    rod_offset_bounds_deg: Bounds = Field(Bounds(lower=-15, upper=15),
-                                          description="unknown (search range)")
-    opening_arm_bounds: Bounds = Field(
-        Bounds(lower=0.1, upper=1.85), description="r7/r6; above 1.86 the opening spring "
-        "would be compressed in the opened state (search range)")
-    free_contact_bounds_n: Bounds = Field(
-        Bounds(lower=0, upper=1000), description="self-closing force of three interrupters; "
-        "it helps closing, so not negative (search range)")
-
-
-class VcbDynamicsIdentifyConfig(VcbConfig):
-    """Fit the dynamics' parameters the paper leaves out to the vendor design's seven ADAMS data
-    (Sec 3.2, Table 4)."""
-
-    field_roles: ClassVar[Mapping[str, FieldRole]] = {
-        **VCB_ROLES, **_roles("measured data", """departure_time_target_ms
-            open_time_target_ms opening_velocity_target_m_s cam_contact_time_target_ms
-            touch_time_target_ms closing_velocity_target_m_s closed_by_ms
-            velocity_reading_pct time_reading_ms"""),
-        **_roles("solver setting", """cam_inertia_bounds_kg_m2 rod_mass_bounds_kg
-            contacts_mass_bounds_kg release_offset_bounds_deg cam_friction_bounds_nm
-            efficiency_bounds model_form form_keep_ratio form_keep_pct band_samples
-            band_seed""")}
-    kind: Literal["vcb_identify_dynamics"] = "vcb_identify_dynamics"  # type: ignore[assignment]
-    # the ADAMS data of the vendor design (Sec 3.2 and Table 4), times from the release
-    departure_time_target_ms: Positive = Field(
-        3.2, description="Sec 3.2: the contacts separate 3.2 ms after the hook lets go")
-    open_time_target_ms: Positive = Field(
-        7.0, description="Sec 3.2: the opening is complete at 7 ms")
-    opening_velocity_target_m_s: Positive = Field(
-        2.5, description="Sec 3.2: average opening velocity of the vendor design")
-    cam_contact_time_target_ms: Positive = Field(
-        13.1, description="Sec 3.2: the freely turning cam meets the roller at 13.1 ms")
-    touch_time_target_ms: Positive = Field(
-        27.8, description="Sec 3.2 and Table 4: the contacts collide at 27.8 ms")
-    closing_velocity_target_m_s: Positive = Field(
-        1.71, description="Sec 3.2: average closing velocity of the vendor design")
-    closed_by_ms: Positive = Field(
-        45.0, description="Sec 3.2 and Table 4: closed when the simulation ends at 45 ms "
-        "(an upper bound on release_to_latch_ms, not an event)")
-    velocity_reading_pct: Positive = Field(
-        2.0, description="reading error of the reported velocities (band; assumed)")
-    time_reading_ms: Positive = Field(
-        0.5, description="reading error of the reported times (band; assumed)")
-    cam_inertia_bounds_kg_m2: Bounds = Field(Bounds(lower=5e-4, upper=0.05),
-                                             description="search range (physical)")
-    rod_mass_bounds_kg: Bounds = Field(Bounds(lower=0.1, upper=30.0), description="search range")
-    contacts_mass_bounds_kg: Bounds = Field(Bounds(lower=0.1, upper=15.0),
-                                            description="search range")
-    release_offset_bounds_deg: Bounds = Field(Bounds(lower=0.5, upper=23.0),
-                                              description="search range (physical)")
-    cam_friction_bounds_nm: Bounds = Field(Bounds(lower=0.0, upper=50.0),
-                                           description="search range")
-    efficiency_bounds: Bounds = Field(Bounds(lower=0.3, upper=1.0),
-                                      description="search range of a fitted efficiency")
-    model_form: ModelFormName = Field(
-        "efficiency_coulomb", description="the losses the search fits (camopt/cases/vcb/"
-        "forms.py); every form is fitted and reported after the run (camopt option)")
-    form_keep_ratio: float = Field(
-        1.5, ge=1.0, description="a form is kept (in every band) when its largest residual "
-        "is at most this many times the best form's ... (assumed; docs/assumptions.md)")
-    form_keep_pct: Positive = Field(
-        10.0, description="... or at most this (%), whichever is larger (assumed)")
-    band_samples: int = Field(2000, ge=10, le=100_000, description="draws per kept form "
-                              "for the band of parameter sets (camopt option)")
-    band_seed: int = Field(0, ge=0, description="seed of the band's draws (camopt option)")

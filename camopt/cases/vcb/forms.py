@@ -39,7 +39,7 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.cases.vcb.config import ModelFormName, VcbConfig, VcbDynamicsIdentifyConfig
+from camopt.cases.vcb.config import ModelFormName, VcbConfig
 from camopt.cases.vcb.dynamics import (
     ClosingEvents,
     ClosingMotion,
@@ -47,6 +47,7 @@ from camopt.cases.vcb.dynamics import (
     closing_events,
     closing_motion,
 )
+from camopt.cases.vcb.identify_config import VcbDynamicsIdentifyConfig
 from camopt.cases.vcb.model import Loads, VcbModel
 from camopt.core.problem import Variable
 from camopt.errors import ConfigError

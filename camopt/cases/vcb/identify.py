@@ -20,9 +20,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from camopt.cases.vcb.config import VcbDynamicsIdentifyConfig, VcbIdentifyConfig
 from camopt.cases.vcb.dynamics import MotionParameters, opening_motion
 from camopt.cases.vcb.forms import BAND_COLUMNS, FORMS, INERTIAS, ModelForm, get_form
+from camopt.cases.vcb.identify_config import VcbDynamicsIdentifyConfig, VcbIdentifyConfig
 from camopt.cases.vcb.model import VcbModel
 from camopt.core.problem import Evaluation, Problem, Variable
 from camopt.units import DEG, MM, MS, N_PER_MM

@@ -134,7 +134,7 @@ def mechanism_of(problem: object, x: NDArray) -> Mechanism:
     c, m = problem.config, problem.model
     x = np.atleast_2d(np.asarray(x, dtype=float))
     A, kc, link = problem.designs(x)
-    A = problem._profiled(A, None)
+    A = problem.profiled(A, None)
     parts, _ = problem.as_set(x, None)
     pre = (c.kc1_precompression_mm * MM, c.kc2_precompression_mm * MM)
     if parts is not None and parts.pre is not None:
