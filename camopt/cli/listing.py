@@ -36,9 +36,10 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
             try:  # the requirements' verdict (show's first line); feasibility when unreadable
                 view = archive.load_run(row["path"])
                 judged = verdict(view)
-                y = judged_yield(view) or {}
+                y = judged_yield(view)
                 row.update(verdict=judged.verdict or "-", verdict_grade=judged.grade,
-                           expected_yield=y.get("value"), yield_target=judged.yield_target)
+                           expected_yield=None if y is None else y.value,
+                           yield_target=judged.yield_target)
             except CamoptError:
                 pass
     if format is Format.json:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -32,6 +32,39 @@ def succeeded(objectives: ArrayLike, feasible: ArrayLike, target: float | None) 
     when the case file sets ``run.target``."""
     f = ranked(objectives, feasible)
     return np.isfinite(f) & (f <= target if target is not None else True)
+
+
+@dataclass(frozen=True)
+class YieldInterval:
+    """A yield (the share of draws meeting every requirement) with its Clopper-Pearson
+    interval [``low``, ``high``] over ``samples`` draws (None where a document lacks
+    them). A verdict is graded on ``low`` (:attr:`camopt.reporting.views.Verdict.grade`):
+    on the point estimate alone a design whose true yield sits at the target would pass
+    half the time by sampling luck."""
+
+    value: float
+    low: float | None = None
+    high: float | None = None
+    samples: int | None = None
+
+    @classmethod
+    def of(cls, doc: Mapping[str, object]) -> YieldInterval | None:
+        """From a yield document (``value`` or ``yield``, ``low``/``yield_low``,
+        ``high``/``yield_high``, ``samples``); None without a value."""
+        value = doc.get("value", doc.get("yield"))
+        if value is None:
+            return None
+
+        def num(*keys: str) -> float | None:
+            v = next((doc[k] for k in keys if doc.get(k) is not None), None)
+            return None if v is None else float(v)  # type: ignore[arg-type]
+        samples = doc.get("samples")
+        return cls(float(value), num("low", "yield_low"),  # type: ignore[arg-type]
+                   num("high", "yield_high"),
+                   None if samples is None else int(samples))  # type: ignore[call-overload]
+
+    def as_dict(self) -> dict[str, float | int | None]:
+        return asdict(self)
 
 
 @dataclass(frozen=True)

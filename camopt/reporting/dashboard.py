@@ -94,8 +94,8 @@ def expected_yield(view: Any) -> float | None:
     on)."""
     from camopt.reporting.report import judged_yield
 
-    judged = judged_yield(view) or {}
-    return _finite(judged.get("value"))
+    judged = judged_yield(view)
+    return _finite(None if judged is None else judged.value)
 
 
 def run_row(path: Path, listed: dict[str, Any]) -> DashboardRow:

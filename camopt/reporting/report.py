@@ -359,19 +359,14 @@ def yield_target(run: RunView) -> float:
     return float(target) if isinstance(target, (int, float)) else DEFAULT_YIELD_TARGET
 
 
-def judged_yield(run: RunView) -> dict[str, Any] | None:
-    """The yield a run's verdict is graded on (``value``, ``low``, ``high``,
-    ``samples``): a robust run's final check on fresh draws, else the stored expected
-    yield (or the one :func:`expected` made at show time; never a new one, as
-    :func:`spreads`); None when there is none."""
+def judged_yield(run: RunView) -> stats.YieldInterval | None:
+    """The yield a run's verdict is graded on: a robust run's final check on fresh draws,
+    else the stored expected yield (or the one :func:`expected` made at show time; never
+    a new one, as :func:`spreads`); None when there is none."""
     checked = (run.robust_check or {}).get("robust") or {}
     if checked.get("yield") is not None:
-        return {"value": checked["yield"], "low": checked.get("yield_low"),
-                "high": checked.get("yield_high"), "samples": checked.get("samples")}
-    estimate = run.expected_yield or _ESTIMATED.get(run.path) or {}
-    if estimate.get("value") is None:
-        return None
-    return {k: estimate.get(k) for k in ("value", "low", "high", "samples")}
+        return stats.YieldInterval.of(checked)
+    return stats.YieldInterval.of(run.expected_yield or _ESTIMATED.get(run.path) or {})
 
 
 def verdict(run: RunView, values: dict[str, Any] | None = None) -> Verdict:

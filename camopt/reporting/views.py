@@ -28,7 +28,7 @@ from camopt.core.requirements import (
     short_sentence,
 )
 from camopt.core.runview import BestView
-from camopt.core.stats import ObjectivesTest, RunStatistics
+from camopt.core.stats import ObjectivesTest, RunStatistics, YieldInterval
 
 Json = dict[str, Any]
 
@@ -61,7 +61,7 @@ class Verdict:
     checks: tuple[Check, ...]
     verdict: str | None
     sentence: str
-    expected_yield: Mapping[str, Any] | None = None
+    expected_yield: YieldInterval | None = None
     yield_target: float | None = None
     nominal: bool = True
 
@@ -69,9 +69,7 @@ class Verdict:
     def yield_low(self) -> float | None:
         """The low end of the expected yield's 95 % interval (what the grade compares with
         the target), or None."""
-        y = self.expected_yield or {}
-        low = y.get("low", y.get("value"))
-        return None if low is None else float(low)
+        return None if self.expected_yield is None else self.expected_yield.low
 
     @property
     def grade(self) -> str | None:
@@ -93,12 +91,12 @@ class Verdict:
         design's verdict."""
         if not self.nominal:
             return ""
-        y = self.expected_yield or {}
-        if y.get("value") is None:
+        y = self.expected_yield
+        if y is None:
             return "expected yield not estimated"
-        text = f"expected yield {100 * float(y['value']):.1f} %"
-        if y.get("low") is not None and y.get("high") is not None:
-            text += f" [{100 * float(y['low']):.1f}, {100 * float(y['high']):.1f}]"
+        text = f"expected yield {100 * y.value:.1f} %"
+        if y.low is not None and y.high is not None:
+            text += f" [{100 * y.low:.1f}, {100 * y.high:.1f}]"
         if self.yield_target is not None:
             below = self.yield_low is not None and self.yield_low < self.yield_target
             text += (f" (target {positional(100 * self.yield_target, 1)} %"
