@@ -21,7 +21,6 @@ from typing import Any
 
 import h5py
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.archive.files import atomic_write, claim, open_archive, versions
 from camopt.archive.tables import read_table, write_table
@@ -30,6 +29,7 @@ from camopt.core.record import Repeat, RunRecord, nfev_to_target
 from camopt.core.runview import BestView, RunView
 from camopt.core.stats import succeeded
 from camopt.errors import ArchiveError
+from camopt.mechanics import Floats
 
 SCHEMA_VERSION = 2
 READABLE_SCHEMAS = (1, 2)
@@ -245,15 +245,15 @@ class _Layout:
     names: tuple[str, ...]
     constraints: tuple[str, ...]
     config: dict[str, Any]
-    to_display: NDArray
-    to_si: NDArray
+    to_display: Floats
+    to_si: Floats
 
     @property
     def target(self) -> float | None:
         return self.config["run"].get("target")
 
 
-def _migrate(schema: int, variable_scale: NDArray) -> tuple[NDArray, NDArray]:
+def _migrate(schema: int, variable_scale: Floats) -> tuple[Floats, Floats]:
     """The one place archives of older schemas are told apart: the factors from the stored
     ``x`` to display units and to SI. Schema 2 stores display units (SI * scale); schema 1
     stored SI. (Repeats of the oldest archives also lack ``success``:

@@ -19,6 +19,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.mechanics import Floats
+
 if TYPE_CHECKING:  # annotations only: the record stays pure data (numpy only)
     from camopt.config import LoadedConfig
     from camopt.core.problem import Problem
@@ -70,7 +72,7 @@ class Repeat:
     """Evaluations until the best design was feasible and at or below ``run.target``
     (feasible without a target); -1: never."""
     wall_s: float
-    history: dict[str, NDArray] = field(default_factory=dict)
+    history: dict[str, Floats] = field(default_factory=dict)
     """Per iteration (n_iter,): ``nfev``, ``best_objective``, ``best_violation``,
     ``mean_objective``."""
     g: NDArray[np.float64] = field(default_factory=_empty)
@@ -105,7 +107,7 @@ class RunRecord:
     repeats: list[Repeat]
     best: Repeat
     metrics: dict[str, object]
-    analysis: dict[str, NDArray]
+    analysis: dict[str, Floats]
     names: tuple[str, ...]
     scale: NDArray[np.float64]
     constraint_names: tuple[str, ...]
@@ -132,7 +134,7 @@ def seed_id(seq: np.random.SeedSequence) -> int:
     return int(seq.generate_state(1, np.uint64)[0] >> np.uint64(1))
 
 
-def nfev_to_target(history: dict[str, NDArray], target: float | None) -> int:
+def nfev_to_target(history: dict[str, Floats], target: float | None) -> int:
     """Evaluations after the first iteration whose best design was feasible and, with a
     ``target``, at or below it, from a repeat's ``history``; -1: none was (or the history
     lacks ``nfev``, ``best_objective`` or ``best_violation``)."""

@@ -8,7 +8,9 @@ from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+
+from camopt.mechanics import Bools, Floats, Ints
 
 if TYPE_CHECKING:
     from camopt.config.sweep_spec import SweepSpec
@@ -21,13 +23,13 @@ larger one's magnitude are the same objective in practice (a case may set an abs
 ``CaseSpec.equivalence``; ``compare --equivalence`` overrides both)."""
 
 
-def ranked(objectives: ArrayLike, feasible: ArrayLike) -> NDArray:
+def ranked(objectives: ArrayLike, feasible: ArrayLike) -> Floats:
     """Final objectives as they rank across runs: an infeasible (or NaN) run counts +inf."""
     f = np.asarray(objectives, dtype=float)
     return np.where(np.asarray(feasible, dtype=bool) & ~np.isnan(f), f, np.inf)
 
 
-def succeeded(objectives: ArrayLike, feasible: ArrayLike, target: float | None) -> NDArray:
+def succeeded(objectives: ArrayLike, feasible: ArrayLike, target: float | None) -> Bools:
     """camopt's one definition of a successful run: feasible, and at or below ``target``
     when the case file sets ``run.target``."""
     f = ranked(objectives, feasible)
@@ -98,7 +100,7 @@ def run_statistics(objectives: Sequence[float], feasible: Sequence[bool],
 
 
 def share_interval(successes: ArrayLike, trials: int, confidence: float = 0.95
-                   ) -> tuple[NDArray, NDArray]:
+                   ) -> tuple[Floats, Floats]:
     """Two-sided Clopper-Pearson ("exact") interval of a share (a yield, a success rate)
     from ``successes`` of ``trials``, vectorised over ``successes``: the beta quantiles
     ``B((1 - c)/2; k, n - k + 1)`` and ``B((1 + c)/2; k + 1, n - k)``.
@@ -271,7 +273,7 @@ def sweep_summary(spec: SweepSpec, results: Iterable[Repeat]) -> list[dict[str, 
     return rows
 
 
-def per_variant(passed: NDArray, variant: NDArray, names: Sequence[str],
+def per_variant(passed: Bools, variant: Ints, names: Sequence[str],
                 confidence: float) -> list[dict[str, Any]]:
     """The yield of the draws of each model variant, with its Clopper-Pearson interval:
     ``passed`` (S,) bool, ``variant`` (S,) each draw's index into ``names``."""

@@ -6,13 +6,13 @@ from __future__ import annotations
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import MAX_STARTS
 from camopt.core.capabilities import HasResiduals
 from camopt.core.problem import Problem
 from camopt.errors import SolverError
+from camopt.mechanics import Floats
 from camopt.solvers.multistart import MultiStart, MultiStartOptions
 from camopt.solvers.registry import register_solver
 
@@ -51,10 +51,10 @@ class NewtonPP(MultiStart):
             raise SolverError(f"newton_pp needs as many equations as unknowns: the case has "
                               f"{n_eq} equations for {problem.n_var} unknowns")
 
-    def _residual(self, u: NDArray) -> NDArray:
+    def _residual(self, u: Floats) -> Floats:
         return self.equations.residuals(self.problem.from_unit(u)[None, :])[0]
 
-    def jacobian_condition(self, x: NDArray) -> float:
+    def jacobian_condition(self, x: Floats) -> float:
         """Condition number of the residuals' Jacobian (central differences, in the
         bounds-normalised variables), evaluated in one vectorised call."""
         u = self.problem.to_unit(x)
@@ -65,7 +65,7 @@ class NewtonPP(MultiStart):
         J = (R[: len(u)] - R[len(u):]).T / (2 * h)
         return float(np.linalg.cond(J))
 
-    def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:
+    def local_solve(self, x0: Floats) -> tuple[Floats, dict[str, Any]]:
         from scipy.optimize import root  # scipy.optimize: 0.5 s, only for a run
 
         equations = self.metered(self._residual, lambda r: float(np.max(np.abs(r))))
@@ -80,7 +80,7 @@ class NewtonPP(MultiStart):
                    "in_bounds": bool(np.all((x >= self.lo) & (x <= self.hi))),
                    "message": str(sol.message), "nfev": int(sol.nfev)}
 
-    def stopped_record(self, x: NDArray) -> dict[str, Any]:
+    def stopped_record(self, x: Floats) -> dict[str, Any]:
         """A start the run's budget stopped: its best point's largest residual (no
         condition number: it is not a root)."""
         residual = float(np.max(np.abs(self.equations.residuals(x[None, :])[0])))

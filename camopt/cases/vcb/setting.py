@@ -14,8 +14,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from camopt.mechanics import Floats
 from camopt.units import MM
 
 SETTING_TRIAL_MM = 2.0
@@ -30,24 +30,24 @@ class Setting:
     (None without other sets), and the nut travel each set needs, ``needed`` (k + 1, n) m
     (the fit's first; +inf: none reaches the velocity)."""
 
-    member_pre: NDArray | None
-    needed: NDArray
+    member_pre: Floats | None
+    needed: Floats
 
     @property
-    def longest(self) -> NDArray:
+    def longest(self) -> Floats:
         """(n,) the needed travel of the set that needs the most, with its sign."""
         return longest(self.needed)
 
 
-def longest(travels: NDArray) -> NDArray:
+def longest(travels: Floats) -> Floats:
     """(n,) each column's entry of largest magnitude, with its sign, of ``travels``
     (k, n): the nut must reach the set that needs the most, whichever way it turns."""
     index = np.argmax(np.abs(travels), axis=0)
     return np.take_along_axis(travels, index[None], axis=0)[0]
 
 
-def nut_setting(velocity: Callable[[NDArray], NDArray], base: NDArray, target: NDArray,
-                sets: int, reach_mm: float) -> tuple[NDArray, Setting]:
+def nut_setting(velocity: Callable[[Floats], Floats], base: Floats, target: Floats,
+                sets: int, reach_mm: float) -> tuple[Floats, Setting]:
     """The nut travel that sets n breakers under ``sets`` parameter sets each (k n rows,
     set-major, the fit first): ``velocity(pre)`` the average closing velocity of each row
     with closing-spring compressions ``pre`` (k n, 2) m (NaN: the contacts never meet),
@@ -58,7 +58,7 @@ def nut_setting(velocity: Callable[[NDArray], NDArray], base: NDArray, target: N
     rows = len(base)
     n = rows // sets
 
-    def squared_speed(d: NDArray) -> NDArray:
+    def squared_speed(d: Floats) -> Floats:
         return np.asarray(np.nan_to_num(velocity(base + d[:, None]), nan=0.0) ** 2)
 
     d_a, d_b = np.zeros(rows), np.full(rows, SETTING_TRIAL_MM * MM)
