@@ -6,6 +6,9 @@ Layout (schema 2, documented dataset by dataset in ``docs/archive.md``): root at
 ``/table/<column>``; ``/summary/<column>``. Design vectors (``x``) are stored in the units
 their variable names say (``kc1_n_per_mm`` in N/mm); schema 1 stored them in SI with the
 factor in ``variable_scale`` and is still read.
+
+tomli_w, pydantic, the case and solver registries are imported where used: ``camopt show``
+reads an archive without the config models.
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
 from camopt.core.record import Repeat, RunRecord, nfev_to_target
 from camopt.core.runview import BestView, RunView
 from camopt.core.stats import succeeded
-from camopt.errors import ArchiveError
+from camopt.errors import ArchiveError, CamoptError
 from camopt.mechanics import Floats
 
 SCHEMA_VERSION = 2
@@ -171,7 +174,6 @@ def check_variables(view: RunView) -> None:
 
     from camopt.cases import case_configs, get_case
     from camopt.config import validate_data
-    from camopt.errors import CamoptError
     from camopt.solvers.registry import solver_options
 
     try:  # engine.driver.validate's check, without importing the engine (start-up time)

@@ -2,7 +2,9 @@
 prints and the hypervolume ``compare`` reports (pymoo's indicator).
 
 A run is multi-objective when its solver's options name ``objectives`` (``nsga2``); its
-archive's table holds the Pareto set, one row per design with every metric."""
+archive's table holds the Pareto set, one row per design with every metric.
+
+pymoo is imported where used (the hypervolume; pymoo is slow to import)."""
 
 from __future__ import annotations
 

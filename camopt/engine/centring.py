@@ -28,7 +28,10 @@ Whether it is kept in the end is judged on other draws (the robust selection's:
 :meth:`camopt.engine.robust.RobustProblem.select`).
 
 Written here: no library offers a smoothed sample-average yield; the optimiser is the
-project's own CMA-ES core."""
+project's own CMA-ES core.
+
+The solvers' CMA-ES core and rounding are imported where used (only a robust run with
+``centre_generations`` centres)."""
 
 from __future__ import annotations
 

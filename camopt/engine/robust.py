@@ -56,6 +56,9 @@ spawn_key=(i, ROBUST_KEY, 0))``, its selection's from ``(i, ROBUST_KEY, 1)``, th
 check's from ``SeedSequence(run.seed, spawn_key=(ROBUST_KEY, CHECK_KEY))``; never the
 solver's generator, so the search itself is unchanged by the draws and results do not
 depend on the worker count.
+
+:mod:`camopt.engine.centring` is imported where used (only a run with ``centre_generations``
+centres).
 """
 
 from __future__ import annotations

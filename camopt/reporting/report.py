@@ -1,12 +1,18 @@
 """Views of archives for ``show``, ``compare``, ``report`` and ``export`` (no printing
 here): each function builds one of the typed views of :mod:`camopt.reporting.views`,
-whose ``to_json()`` is the JSON output."""
+whose ``to_json()`` is the JSON output.
+
+The case registry, config models, scipy-backed statistics and the tolerance engine are
+imported where used: ``camopt show`` builds its view without them."""
 
 from __future__ import annotations
 
 import math
+import shlex
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -261,8 +267,6 @@ def next_step(run: RunView, judged: Verdict) -> str:
     run's (``*_robust.toml``); for a pass below the yield target or at a limit, tolerance
     analysis and the robust config; for a green pass, the report and the DXF. Paths are
     quoted for a shell where they need it (a space, ';')."""
-    import shlex
-
     path = shlex.quote(run.path)
     robust_cfg = robust_sibling(run)
     robust_run = (f"camopt run {shlex.quote(robust_cfg)}" if robust_cfg
@@ -300,8 +304,6 @@ def next_step(run: RunView, judged: Verdict) -> str:
 def next_config(run: RunView) -> str:
     """The case file the run's ``run.next_config`` names (relative to the run's own case
     file) when it exists and is not the run's own, else ''."""
-    from pathlib import Path
-
     name = run.run.get("next_config")
     if not name or not run.config_path:
         return ""
@@ -327,9 +329,6 @@ def robust_sibling(run: RunView) -> str:
     """The robust config beside the run's case file (``configs/vcb_velocity.toml`` ->
     ``configs/vcb_velocity_robust.toml``; else that of the file it ``extends``, else
     ``<kind>_robust.toml``) when it exists, else ''."""
-    import sys
-    from pathlib import Path
-
     if sys.version_info >= (3, 11):
         import tomllib
     else:  # pragma: no cover

@@ -1,5 +1,7 @@
 """``newton_pp``: precision-point equations solved by scipy's root finder from several
-starts (Ahn et al., Sec 3: n + 1 precision points give n equations)."""
+starts (Ahn et al., Sec 3: n + 1 precision points give n equations).
+
+scipy.optimize is imported where a start is solved (scipy is slow to import)."""
 
 from __future__ import annotations
 

@@ -23,6 +23,9 @@ by rank and crowding; then the least violation), and runs its ``generations``.
 pymoo draws from ``algorithm.random_state``; the plugin hands it the repeat's own
 generator (after ``setup``, which would otherwise seed a fresh one), so the same seed
 gives the same front. The CMA-ES start draws from the same generator.
+
+pymoo is imported where the search runs (it is slow to import; ``camopt solvers`` lists this
+one without it).
 """
 
 from __future__ import annotations

@@ -12,6 +12,9 @@ which the driver hands the solver: every evaluation of every stage goes through 
 that counts them and stops the scipy solve (an exception out of its objective) before a
 batch would pass the budget or once the time is spent; the polish then ends on the best
 design it evaluated. Without a limit reached the meter changes nothing.
+
+scipy.optimize and the CMA-ES core are imported where a polish runs (scipy is slow to
+import).
 """
 
 from __future__ import annotations

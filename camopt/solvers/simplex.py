@@ -1,5 +1,7 @@
 """``simplex``: the modified simplex method, i.e. scipy's Nelder-Mead with bounds
-(adaptive parameters), as a generic local optimiser from one or several starts."""
+(adaptive parameters), as a generic local optimiser from one or several starts.
+
+scipy.optimize is imported where a start is solved (scipy is slow to import)."""
 
 from __future__ import annotations
 

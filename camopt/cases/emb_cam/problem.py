@@ -6,6 +6,9 @@ working profile is the cubic spline through (theta0 + j dtheta, r_j), clamped to
 the non-working arc at the start (Eqs 19-20) and natural at the end; theta0 and
 theta_a follow from the boundary geometry (Eqs 22-24). The whole swarm is
 analysed at once on a common normalised grid (``mechanics.spline``).
+
+scipy.special is imported where used (only the fitness with the clamping ramp needs it;
+scipy is slow to import).
 """
 
 from __future__ import annotations

@@ -12,6 +12,9 @@ motion here is Lagrange's equation for exactly the energies of Eq 5:
     J(th) th'' + J'(th) th'^2 / 2 = -dV/dth + Q,   J = I_o + n_c m_c (d cos th)^2,
     V = (n_s/2) k (L - l0)^2 + m_f g C_f sin(psi + th) - n_c m_c g d sin th,
     Q = -n_c F_r d cos th  (the self-closing force resists opening).
+
+scipy.integrate is imported where used (only the exact motion of one design needs it; scipy
+is slow to import).
 """
 
 from __future__ import annotations

@@ -13,6 +13,9 @@ from any sampled curve, measured or simulated, the same way: closing time (comma
 touch), the average contact velocity between two calculation points on the travel, total
 travel, contact wipe, over-travel and rebound. Without a contact channel the touch is
 where the travel reaches the case's contact gap (``contact_gap_mm``), as the model has it.
+
+scipy.signal is imported where used (the smoothing of a measured curve; scipy is slow to
+import).
 """
 
 from __future__ import annotations

@@ -1,5 +1,8 @@
 """Figures of a VCB run: cam profile, pressure angle, curvature, contact stresses and the
-forces along the stroke, each for the optimum beside the vendor's design."""
+forces along the stroke, each for the optimum beside the vendor's design.
+
+The cam's outline is imported where a figure draws it (matplotlib figures are drawn on
+request only)."""
 
 from __future__ import annotations
 

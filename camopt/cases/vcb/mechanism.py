@@ -3,7 +3,10 @@ follower law, springs, masses, inertias and friction, all SI and plain floats.
 
 Read from the run's problem (its stored config and the design's variables): the geometry
 and parameters only, never camopt's closing dynamics, so the multibody model is an
-independent check of them."""
+independent check of them.
+
+:class:`~camopt.cases.vcb.problem.VcbProblem` is imported where used: a mechanism read from
+an archive needs no problem."""
 
 from __future__ import annotations
 
