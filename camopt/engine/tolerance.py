@@ -171,7 +171,7 @@ def shared_constants(ev: Evaluation) -> Evaluation:
     coefficient no varied input moves, a flag, a quantity the design does not have: NaN),
     held as that value broadcast to the rows: a read-only view of 8 bytes instead of
     8 bytes a row (the VCB describes 50 metrics, several of them constant: 8 MB each at
-    10^6 samples; issue #36). Every value read is the same."""
+    10^6 samples). Every value read is the same."""
     extras = {}
     for name, values in ev.extras.items():
         a = np.asarray(values)
@@ -318,7 +318,7 @@ def requirement_yields(t: Tolerance, columns: dict[str, NDArray]) -> list[dict[s
 def average_ranks(values: NDArray) -> NDArray:
     """Ranks 1..n of a 1-D array, ties given the average of their ranks: what
     ``scipy.stats.rankdata`` (method "average") returns, the same floats (each rank is a
-    whole or half number), without importing scipy.stats (~1.2 s; issue #36: ``camopt
+    whole or half number), without importing scipy.stats (~1.2 s: ``camopt
     show`` estimates an older archive's yield)."""
     a = np.asarray(values)
     order = np.argsort(a, kind="mergesort")
@@ -346,7 +346,7 @@ def spearman_columns(inputs: NDArray, columns: dict[str, NDArray]
     Metrics are grouped by their dropped rows first, so one group's input ranks (n x k)
     are held at a time.
 
-    The sums are exact (issue #36): twice the centred ranks are integers
+    The sums are exact: twice the centred ranks are integers
     (:func:`doubled_ranks`), the inputs' held as int32 (4 bytes an input and sample:
     10^6 samples under 1 GiB) and their products summed in int64 (:data:`EXACT_RANK_ROWS`),
     so rho is the exact ratio rounded once, whatever the summation order or the BLAS
