@@ -28,7 +28,7 @@ before it left). Without a limit reached the meter changes nothing.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 
@@ -41,7 +41,23 @@ from camopt.solvers.base import Budget, Solver, StopReason, best_index
 _SOLVING: MultiStart | None = None  # the solver whose starts forked workers solve
 
 
-def _solve_start(i: int) -> tuple[Floats, dict[str, Any]]:
+class StartRecord(TypedDict, total=False):
+    """A local solve's record, one per start (the table's columns beside the design):
+    whether it converged (``success``) inside the bounds (``in_bounds``), the local
+    solver's ``message`` and evaluations (``nfev``), where the run's budget stopped it
+    (``stopped``), and what a solver adds (``residual_max``, ``jacobian_cond``: a root
+    finder's largest residual and its Jacobian's condition number)."""
+
+    success: bool
+    message: str
+    nfev: int
+    in_bounds: bool
+    stopped: StopReason
+    residual_max: float
+    jacobian_cond: float
+
+
+def _solve_start(i: int) -> tuple[Floats, StartRecord]:
     assert _SOLVING is not None
     return _SOLVING.solve_within_budget(_SOLVING.starts[i])
 
@@ -103,10 +119,10 @@ class MultiStart(Solver):
         super().__init__(problem, options, rng)
         self.lo, self.hi = problem.lower, problem.upper
         self.starts = self._starts()
-        self.results: list[dict[str, Any]] = []
+        self.results: list[StartRecord] = []
         self.X: list[Floats] = []
         self.ev: Evaluation | None = None
-        self._solved: list[tuple[Floats, dict[str, Any]]] | None = None
+        self._solved: list[tuple[Floats, StartRecord]] | None = None
         self.meter: Meter | None = None
         """The running start's meter (None: no run limit set)."""
         self.stopped: StopReason | None = None
@@ -126,7 +142,7 @@ class MultiStart(Solver):
     def max_iterations(self) -> int:
         return len(self.starts)
 
-    def local_solve(self, x0: Floats) -> tuple[Floats, dict[str, Any]]:  # pragma: no cover
+    def local_solve(self, x0: Floats) -> tuple[Floats, StartRecord]:  # pragma: no cover
         """One scipy local solve from ``x0``: its end point and a record (success, nfev,
         ...). The function handed to scipy goes through :meth:`metered`."""
         raise NotImplementedError
@@ -137,12 +153,12 @@ class MultiStart(Solver):
         :class:`Meter` (unchanged when the run sets no limit)."""
         return fun if self.meter is None else self.meter.wrap(fun, score)
 
-    def stopped_record(self, x: Floats) -> dict[str, Any]:
+    def stopped_record(self, x: Floats) -> StartRecord:
         """A stopped start's record beyond success, message and nfev (subclasses add
         what their table shows of every start)."""
         return {}
 
-    def solve_within_budget(self, x0: Floats) -> tuple[Floats, dict[str, Any]]:
+    def solve_within_budget(self, x0: Floats) -> tuple[Floats, StartRecord]:
         """:meth:`local_solve` under the run's budget (:attr:`Solver.budget`): unchanged
         while it holds; once spent, the best point the solve evaluated (unconverged,
         never a design) with a record saying where it stopped (``stopped``: the limit)."""
@@ -164,7 +180,7 @@ class MultiStart(Solver):
         finally:
             self.meter = None
 
-    def _solve_all(self) -> list[tuple[Floats, dict[str, Any]]]:
+    def _solve_all(self) -> list[tuple[Floats, StartRecord]]:
         """Every start's local solve in ``jobs`` forked workers, in start order."""
         global _SOLVING
         _SOLVING = self

@@ -5,7 +5,7 @@ scipy.optimize is imported where a start is solved (scipy is slow to import)."""
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 from pydantic import Field
@@ -15,7 +15,7 @@ from camopt.core.capabilities import HasResiduals
 from camopt.core.problem import Problem
 from camopt.errors import SolverError
 from camopt.mechanics import Floats
-from camopt.solvers.multistart import MultiStart, MultiStartOptions
+from camopt.solvers.multistart import MultiStart, MultiStartOptions, StartRecord
 from camopt.solvers.registry import register_solver
 
 
@@ -67,7 +67,7 @@ class NewtonPP(MultiStart):
         J = (R[: len(u)] - R[len(u):]).T / (2 * h)
         return float(np.linalg.cond(J))
 
-    def local_solve(self, x0: Floats) -> tuple[Floats, dict[str, Any]]:
+    def local_solve(self, x0: Floats) -> tuple[Floats, StartRecord]:
         from scipy.optimize import root  # scipy.optimize: 0.5 s, only for a run
 
         equations = self.metered(self._residual, lambda r: float(np.max(np.abs(r))))
@@ -82,7 +82,7 @@ class NewtonPP(MultiStart):
                    "in_bounds": bool(np.all((x >= self.lo) & (x <= self.hi))),
                    "message": str(sol.message), "nfev": int(sol.nfev)}
 
-    def stopped_record(self, x: Floats) -> dict[str, Any]:
+    def stopped_record(self, x: Floats) -> StartRecord:
         """A start the run's budget stopped: its best point's largest residual (no
         condition number: it is not a root)."""
         residual = float(np.max(np.abs(self.equations.residuals(x[None, :])[0])))

@@ -6,7 +6,7 @@ scipy.optimize is imported where a start is solved (scipy is slow to import)."""
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 from pydantic import Field
@@ -14,7 +14,7 @@ from pydantic import Field
 from camopt.config.models import MAX_LOCAL_ITERATIONS, MAX_STARTS
 from camopt.core.problem import FEASIBILITY_TOL
 from camopt.mechanics import Bools, Floats
-from camopt.solvers.multistart import MultiStart, MultiStartOptions
+from camopt.solvers.multistart import MultiStart, MultiStartOptions, StartRecord
 from camopt.solvers.registry import register_solver
 
 
@@ -62,7 +62,7 @@ class Simplex(MultiStart):
                 violation = math.inf
         return float(ev.f[0]) + self.options.penalty * violation
 
-    def local_solve(self, x0: Floats) -> tuple[Floats, dict[str, Any]]:
+    def local_solve(self, x0: Floats) -> tuple[Floats, StartRecord]:
         from scipy.optimize import minimize  # scipy.optimize: 0.5 s, only for a run
 
         o = self.options
