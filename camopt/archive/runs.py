@@ -20,7 +20,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import h5py
 import numpy as np
@@ -28,7 +28,7 @@ import numpy as np
 from camopt.archive.files import atomic_write, claim, open_archive, versions
 from camopt.archive.tables import read_table, write_table
 from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
-from camopt.core.record import Repeat, RunRecord, nfev_to_target
+from camopt.core.record import ExpectedYield, Repeat, RunRecord, nfev_to_target
 from camopt.core.runview import BestView, RunView
 from camopt.core.stats import succeeded
 from camopt.errors import ArchiveError, CamoptError
@@ -387,7 +387,7 @@ def _load(f: h5py.File, path: str | Path) -> RunView:
         robust=config.get("robust") or {},
         robust_check=json.loads(attrs["robust_check"]) if "robust_check" in attrs else {},
         findings=json.loads(attrs["findings"]) if "findings" in attrs else {},
-        expected_yield=_json_dict(attrs.get("expected_yield")),
+        expected_yield=cast(ExpectedYield, _json_dict(attrs.get("expected_yield"))),
         config_path=str(attrs.get("config_path", "")),
         versions={k: str(v) for k, v in attrs.items()
                   if k.endswith("_version") and k != "schema_version"},

@@ -14,7 +14,7 @@ plain data and never a driver or a live Problem.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 from numpy.typing import NDArray
@@ -24,6 +24,32 @@ from camopt.mechanics import Floats
 if TYPE_CHECKING:  # annotations only: the record stays pure data (numpy only)
     from camopt.config import LoadedConfig
     from camopt.core.problem import Problem
+
+
+RequirementYield = TypedDict("RequirementYield", {
+    "name": str, "yield": float, "half_spread": "float | None"})
+"""One requirement's share of the draws that meet it, and its quantity's half spread
+(5 to 95 %; None for a flag)."""
+
+class ExpectedYield(TypedDict, total=False):
+    value: float | None
+    low: float | None
+    high: float | None
+    samples: int
+    seed: int
+    vary: list[str]
+    requirements: list[RequirementYield]
+    adjustments: list[dict[str, Any]]
+    command: str
+    reason: str
+    estimated: str
+"""The best design's quick expected yield under the case's default tolerances
+(:func:`camopt.engine.tolerance.expected_yield`): the share of ``samples`` draws meeting
+every requirement with its Clopper-Pearson interval (``low``, ``high``), the draws'
+``seed`` and tolerances (``vary``), each requirement's share, the factory's adjustments
+where the case models them, and the ``command`` that repeats it; without tolerances,
+``value`` None and the ``reason``; ``estimated`` where ``show`` made it for an older
+archive."""
 
 
 def _empty() -> NDArray[np.float64]:
@@ -124,7 +150,7 @@ class RunRecord:
     findings: dict[str, Any] = field(default_factory=dict)
     """:meth:`Problem.findings` of the best design (JSON-able): what the archive stores as
     ``findings`` and ``show`` reports under its own names."""
-    expected_yield: dict[str, Any] | None = None
+    expected_yield: ExpectedYield | None = None
     """The quick default-tolerance yield estimate of the best design
     (:func:`camopt.engine.tolerance.expected_yield`), set by ``camopt run`` before writing."""
 

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
-from camopt.core.record import Repeat, RunRecord
+from camopt.core.record import ExpectedYield, Repeat, RunRecord
 from camopt.mechanics import Floats
 
 
@@ -70,7 +70,7 @@ class RunView:
     identification's ``model_forms`` and ``identifiability``)."""
     config_path: str = ""
     """The case file the run read (as given on the command line)."""
-    expected_yield: dict[str, Any] = field(default_factory=dict)
+    expected_yield: ExpectedYield = field(default_factory=lambda: ExpectedYield())
     """The quick default-tolerance yield estimate ``run`` stored
     (:func:`camopt.engine.tolerance.expected_yield`); {} in archives made before it."""
 

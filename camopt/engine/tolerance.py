@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from camopt.cases import build_problem, get_case, run_requirements
 from camopt.core.batch import RowsDone
 from camopt.core.problem import FEASIBILITY_TOL, Evaluation, Problem
+from camopt.core.record import ExpectedYield
 from camopt.core.runview import RunView
 from camopt.core.stats import per_variant, share_interval
 from camopt.core.variation import (  # noqa: F401 - Distribution, parse_vary: the CLI's names
@@ -410,7 +411,7 @@ and a 95 % interval about +-5 points wide at a yield near one half (``camopt tol
 a sharper one)."""
 
 
-def expected_yield(run: RunView, samples: int = EXPECTED_YIELD_SAMPLES) -> dict[str, Any]:
+def expected_yield(run: RunView, samples: int = EXPECTED_YIELD_SAMPLES) -> ExpectedYield:
     """The quick expected yield of a run's best design: the share of ``samples`` draws of
     the case's default tolerances (:func:`default_varies`, uniform) whose design meets every
     requirement of the run (the run's constraints included), with its Clopper-Pearson 95 % interval,

@@ -330,9 +330,9 @@ def title_sheet(run: RunView, spec: CaseSpec, tolerance_mm: float | None,
         verdict = f"FAIL at nominal: {len(failed)} requirement{'s' if len(failed) > 1 else ''}"
     else:
         verdict = "PASS at nominal"
-        stored = run.expected_yield or {}
-        if stored.get("value") is not None:
-            verdict += f", expected yield {100 * stored['value']:.1f} %"
+        value = run.expected_yield.get("value")
+        if value is not None:
+            verdict += f", expected yield {100 * value:.1f} %"
     release = not failed
     tclass = run.case.get("tolerance_class") or spec.default_tolerance_class
     rows = [("PART", f"cam of run '{run.run.get('name', Path(run.path).stem)}' "

@@ -19,6 +19,7 @@ import numpy as np
 
 from camopt.cases import run_requirements
 from camopt.core import pareto, stats
+from camopt.core.record import ExpectedYield
 from camopt.core.requirements import (
     DEFAULT_YIELD_TARGET,
     Check,
@@ -176,12 +177,12 @@ def reference(run: RunView) -> Reference:
     return Reference(f"reference: {spec.reference or 'paper'}", values)
 
 
-_ESTIMATED: dict[str, dict[str, Any]] = {}
+_ESTIMATED: dict[str, ExpectedYield] = {}
 """Expected yields estimated at show time for archives that lack one, by path (a process
 shows an old archive's estimate once)."""
 
 
-def expected(run: RunView) -> dict[str, Any]:
+def expected(run: RunView) -> ExpectedYield:
     """The best design's quick expected yield (``value``, ``low``, ``high``, ``samples``,
     per-requirement spreads): as ``camopt run`` stored it, else (an archive older than the
     estimate) estimated now, the same way (:func:`camopt.engine.tolerance.expected_yield`,

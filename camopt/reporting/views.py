@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from camopt.core.record import ExpectedYield
 from camopt.core.requirements import (
     GRADE_STYLES,
     Check,
@@ -291,7 +292,7 @@ class ShowView:
     check and yield; a case's findings (under their own names)."""
 
     verdict: Verdict
-    expected_yield: Mapping[str, Any]
+    expected_yield: ExpectedYield
     next: str
     case: Mapping[str, Any]
     solver: Mapping[str, Any]
