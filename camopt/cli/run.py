@@ -43,7 +43,8 @@ def run(
     from camopt.cli.layout import print_show
     from camopt.core.perf import tune_allocator
     from camopt.core.runview import record_view
-    from camopt.engine.driver import execute, prepare
+    from camopt.engine.driver import execute
+    from camopt.engine.setup import prepare
     from camopt.engine.tolerance import expected_yield
 
     overrides = list(set_ or [])

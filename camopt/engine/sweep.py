@@ -32,8 +32,9 @@ from camopt.core.perf import fork_pool, kill_pool, pin_blas_threads, tune_alloca
 from camopt.core.problem import Problem
 from camopt.core.record import Repeat
 from camopt.engine import interrupts
-from camopt.engine.driver import prepare, run_repeat, validate
+from camopt.engine.driver import run_repeat
 from camopt.engine.interrupts import deferred
+from camopt.engine.setup import prepare, validate
 from camopt.errors import CamoptError, ConfigError, SolverError
 from camopt.solvers import Solver
 

@@ -291,7 +291,7 @@ def _objective_name(spec: Any) -> str:
     plain 'objective' when the case cannot be built here (e.g. it names another archive)."""
     from pydantic import ValidationError
 
-    from camopt.engine.driver import prepare, validate
+    from camopt.engine.setup import prepare, validate
 
     try:
         return str(prepare(validate(spec.data, spec.source))[0].objective_name)

@@ -51,8 +51,8 @@ from camopt.reporting.views import (
     SummaryRow,
     SweepRanking,
     Verdict,
-    jsonable,
 )
+from camopt.reporting.views import jsonable as jsonable  # re-exported for the printers
 
 SHOW_KEYS = ("case", "solver", "best", "repeats", "table")
 
