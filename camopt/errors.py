@@ -1,4 +1,6 @@
-"""Error types. Only the CLI catches them; everything else builds a message and raises."""
+"""Error types. Only the CLI catches them; everything else builds a message and raises.
+
+difflib is imported where a suggestion is made (every command imports this module)."""
 
 from __future__ import annotations
 

@@ -19,6 +19,9 @@ Writing an archive (``claim`` then ``atomic_write``):
   until it is moved into place or removed; the sweeper removes only a file with such a
   name whose lock it can take (its writer is dead). A user's ``.notes.abcd1234.tmp`` (an
   editor's autosave) is never touched, nor a live writer's temporary file of any command.
+
+scipy (its version, written once per archive) and the config loader are imported where used:
+reading an archive starts without them.
 """
 
 from __future__ import annotations
@@ -45,7 +48,7 @@ import h5py
 import numpy as np
 
 import camopt
-from camopt.errors import ArchiveError
+from camopt.errors import ArchiveError, ConfigError
 
 # the temporary file's name adds 21 bytes and a leading dot to the archive's name, and a
 # file name has at most 255 bytes
@@ -541,7 +544,6 @@ def read_regular(path: Path, what: str) -> bytes | None:
     symbolic link. A FIFO, device, directory or link put there is an ArchiveError naming
     ``what``, never a hang."""
     from camopt.config.loader import read_regular_file
-    from camopt.errors import ConfigError
 
     try:
         return read_regular_file(path, what, MAX_SIDE_FILE_BYTES, f"a {what} file",

@@ -2,7 +2,9 @@
 
 Generic: the case's spec says which values and how (``CaseSpec.resolve``); this module
 finds and reads the archives, relative to the working folder or else to the case file's
-folder, and turns a missing or foreign archive into bad input against the key."""
+folder, and turns a missing or foreign archive into bad input against the key.
+
+:func:`camopt.archive.runs.load_run` is imported where used (that module imports this one)."""
 
 from __future__ import annotations
 

@@ -6,6 +6,9 @@ Layout (schema 2, documented dataset by dataset in ``docs/archive.md``): root at
 ``/table/<column>``; ``/summary/<column>``. Design vectors (``x``) are stored in the units
 their variable names say (``kc1_n_per_mm`` in N/mm); schema 1 stored them in SI with the
 factor in ``variable_scale`` and is still read.
+
+tomli_w, pydantic, the case and solver registries are imported where used: ``camopt show``
+reads an archive without the config models.
 """
 
 from __future__ import annotations
@@ -17,19 +20,19 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import h5py
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.archive.files import atomic_write, claim, open_archive, versions
 from camopt.archive.tables import read_table, write_table
 from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
-from camopt.core.record import Repeat, RunRecord, nfev_to_target
+from camopt.core.record import ExpectedYield, Repeat, RunRecord, nfev_to_target
 from camopt.core.runview import BestView, RunView
 from camopt.core.stats import succeeded
-from camopt.errors import ArchiveError
+from camopt.errors import ArchiveError, CamoptError
+from camopt.mechanics import Floats
 
 SCHEMA_VERSION = 2
 READABLE_SCHEMAS = (1, 2)
@@ -171,7 +174,6 @@ def check_variables(view: RunView) -> None:
 
     from camopt.cases import case_configs, get_case
     from camopt.config import validate_data
-    from camopt.errors import CamoptError
     from camopt.solvers.registry import solver_options
 
     try:  # engine.driver.validate's check, without importing the engine (start-up time)
@@ -245,15 +247,15 @@ class _Layout:
     names: tuple[str, ...]
     constraints: tuple[str, ...]
     config: dict[str, Any]
-    to_display: NDArray
-    to_si: NDArray
+    to_display: Floats
+    to_si: Floats
 
     @property
     def target(self) -> float | None:
         return self.config["run"].get("target")
 
 
-def _migrate(schema: int, variable_scale: NDArray) -> tuple[NDArray, NDArray]:
+def _migrate(schema: int, variable_scale: Floats) -> tuple[Floats, Floats]:
     """The one place archives of older schemas are told apart: the factors from the stored
     ``x`` to display units and to SI. Schema 2 stores display units (SI * scale); schema 1
     stored SI. (Repeats of the oldest archives also lack ``success``:
@@ -385,7 +387,7 @@ def _load(f: h5py.File, path: str | Path) -> RunView:
         robust=config.get("robust") or {},
         robust_check=json.loads(attrs["robust_check"]) if "robust_check" in attrs else {},
         findings=json.loads(attrs["findings"]) if "findings" in attrs else {},
-        expected_yield=_json_dict(attrs.get("expected_yield")),
+        expected_yield=cast(ExpectedYield, _json_dict(attrs.get("expected_yield"))),
         config_path=str(attrs.get("config_path", "")),
         versions={k: str(v) for k, v in attrs.items()
                   if k.endswith("_version") and k != "schema_version"},

@@ -16,17 +16,17 @@ from typing import Any
 
 import h5py
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.archive.files import atomic_write, claim, open_archive, versions
 from camopt.errors import ArchiveError
+from camopt.mechanics import Bools, Floats
 
 SCHEMA_VERSION = 1
 
 
-def write_samples(path: str | Path, summary: Mapping[str, Any], inputs: Mapping[str, NDArray],
-                  metrics: Mapping[str, NDArray], g: NDArray, constraints: Sequence[str],
-                  feasible: NDArray, force: bool = False) -> Path:
+def write_samples(path: str | Path, summary: Mapping[str, Any], inputs: Mapping[str, Floats],
+                  metrics: Mapping[str, Floats], g: Floats, constraints: Sequence[str],
+                  feasible: Bools, force: bool = False) -> Path:
     """Write a sample archive beside ``path`` and rename it into place when complete."""
     path = Path(path)
 
@@ -55,10 +55,10 @@ class ToleranceSamples:
     and ``feasible`` (n,)."""
 
     summary: dict[str, Any]
-    columns: dict[str, NDArray]
-    g: NDArray
+    columns: dict[str, Floats]
+    g: Floats
     constraint_names: tuple[str, ...]
-    feasible: NDArray
+    feasible: Bools
     path: str = ""
     created: str = ""
 

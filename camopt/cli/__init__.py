@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import sys
+import warnings
 
 from camopt.cli.app import app, internal_error, load_commands
 from camopt.cli.console import OutputError, checked_stdout, visible
@@ -19,8 +20,6 @@ def main() -> None:
     (:func:`camopt.core.perf.one_blas_thread_on_load`); SIGTERM handled like Ctrl-C;
     whatever escapes a command (a closed pipe, a bug) is still one line, never a
     traceback."""
-    import warnings
-
     perf.one_blas_thread_on_load()
     interrupts.install()
     checked_stdout()

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import contextlib
 import enum
+import importlib
+import os
 import sys
 from collections.abc import Iterator, Sequence
 from pathlib import Path
@@ -115,9 +117,6 @@ def load_commands(args: Sequence[str] | None = None) -> None:
     """Import the command modules: the one of the command ``args`` start with (a command
     line), else every one (no command first: ``--help``, ``--version``, an unknown name
     that typer lists the commands for, shell completion)."""
-    import importlib
-    import os
-
     app._chosen = True
     completing = any(k.startswith("_") and k.endswith("_COMPLETE") for k in os.environ)
     names = set(COMMANDS.values())

@@ -3,7 +3,10 @@
 ``--set KEY=VALUE`` belongs to the ``--curve`` before it (that curve's design or latch
 delay); a ``--set`` before the first ``--curve`` overrides the case file as in ``camopt
 run`` (``case.FIELD=VALUE``). click gives each option's values without their order, so the
-command keeps the raw arguments (:class:`OrderedCommand`) to pair them."""
+command keeps the raw arguments (:class:`OrderedCommand`) to pair them.
+
+Each command imports the engine, archives and reports it needs inside its function: a
+command line loads only its own command's modules (tests/cli/test_imports.py)."""
 
 from __future__ import annotations
 

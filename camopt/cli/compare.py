@@ -1,4 +1,7 @@
-"""``camopt compare``: runs side by side with a significance test, or a sweep's ranking."""
+"""``camopt compare``: runs side by side with a significance test, or a sweep's ranking.
+
+Each command imports the engine, archives and reports it needs inside its function: a
+command line loads only its own command's modules (tests/cli/test_imports.py)."""
 
 from __future__ import annotations
 

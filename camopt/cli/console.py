@@ -1,6 +1,8 @@
 """The consoles every command prints to (results on stdout, progress and errors on
 stderr), how names print (:func:`visible`, :func:`escape`) and the one cell format of
-plain tables."""
+plain tables.
+
+rich.progress is imported where a progress bar is shown (not every command has one)."""
 
 from __future__ import annotations
 

@@ -4,10 +4,14 @@ never split across lines.
 
 Cells are plain text (markup escaped here); rich wraps a column only at spaces, so a table
 is drawn as columns when the longest word of each column, padded, fits the console's width.
+
+Each command imports the engine, archives and reports it needs inside its function: a
+command line loads only its own command's modules (tests/cli/test_imports.py).
 """
 
 from __future__ import annotations
 
+import shlex
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -158,8 +162,6 @@ def print_brief(view: RunView, doc: ShowView) -> None:
     """``run``'s short summary: the requirements the best design fails or meets only at
     their limit (all of them: ``camopt show``), a Pareto run's front size, the run's
     constraints and the repeats in a line each, then the closing lines."""
-    import shlex
-
     from camopt.reporting import report
 
     judged = doc.verdict

@@ -1,4 +1,7 @@
-"""``camopt runs``: the archives of a folder with their case, verdict and date."""
+"""``camopt runs``: the archives of a folder with their case, verdict and date.
+
+Each command imports the engine, archives and reports it needs inside its function: a
+command line loads only its own command's modules (tests/cli/test_imports.py)."""
 
 from __future__ import annotations
 
@@ -12,6 +15,7 @@ import typer
 from camopt.cli.app import Format, app, errors
 from camopt.cli.console import escape, out
 from camopt.cli.layout import print_table
+from camopt.errors import CamoptError
 
 
 @app.command(name="runs")
@@ -25,7 +29,6 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
     from camopt import archive
     from camopt.archive.listing import list_archives
     from camopt.core.requirements import GRADE_STYLES
-    from camopt.errors import CamoptError
     from camopt.reporting.report import format_value, judged_yield, verdict
 
     with errors():
@@ -36,9 +39,10 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
             try:  # the requirements' verdict (show's first line); feasibility when unreadable
                 view = archive.load_run(row["path"])
                 judged = verdict(view)
-                y = judged_yield(view) or {}
+                y = judged_yield(view)
                 row.update(verdict=judged.verdict or "-", verdict_grade=judged.grade,
-                           expected_yield=y.get("value"), yield_target=judged.yield_target)
+                           expected_yield=None if y is None else y.value,
+                           yield_target=judged.yield_target)
             except CamoptError:
                 pass
     if format is Format.json:

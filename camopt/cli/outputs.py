@@ -1,4 +1,7 @@
-"""``camopt plot`` and ``camopt export``: figures and files from an archive."""
+"""``camopt plot`` and ``camopt export``: figures and files from an archive.
+
+Each command imports the engine, archives and reports it needs inside its function: a
+command line loads only its own command's modules (tests/cli/test_imports.py)."""
 
 from __future__ import annotations
 

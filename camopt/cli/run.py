@@ -1,9 +1,13 @@
-"""``camopt run``: run a case file and write a run archive."""
+"""``camopt run``: run a case file and write a run archive.
+
+Each command imports the engine, archives and reports it needs inside its function: a
+command line loads only its own command's modules (tests/cli/test_imports.py)."""
 
 from __future__ import annotations
 
 import contextlib
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Annotated, Any
@@ -39,7 +43,8 @@ def run(
     from camopt.cli.layout import print_show
     from camopt.core.perf import tune_allocator
     from camopt.core.runview import record_view
-    from camopt.engine.driver import execute, prepare
+    from camopt.engine.driver import execute
+    from camopt.engine.setup import prepare
     from camopt.engine.tolerance import expected_yield
 
     overrides = list(set_ or [])
@@ -142,8 +147,6 @@ def progress(quiet: bool) -> Iterator[Any]:
     feasible value so far or ``infeasible, worst: <constraint>``: a rich bar when stderr is
     a terminal, else one plain line a minute (:data:`PLAIN_EVERY_S`). Yields the search's
     callback and a robust run's final-check callback (None, None with ``--quiet``)."""
-    import time
-
     if quiet:
         yield None, None
         return

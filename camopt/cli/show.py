@@ -1,5 +1,8 @@
 """``camopt show``: a run archive's summary (the best design beside the reference design,
-repeats, the solver's table), or a sweep archive's ranking."""
+repeats, the solver's table), or a sweep archive's ranking.
+
+Each command imports the engine, archives and reports it needs inside its function: a
+command line loads only its own command's modules (tests/cli/test_imports.py)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,7 @@
-"""``camopt sweep``: grid points x seeds in one resumable sweep archive."""
+"""``camopt sweep``: grid points x seeds in one resumable sweep archive.
+
+Each command imports the engine, archives and reports it needs inside its function: a
+command line loads only its own command's modules (tests/cli/test_imports.py)."""
 
 from __future__ import annotations
 

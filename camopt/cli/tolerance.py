@@ -1,4 +1,7 @@
-"""``camopt tolerance``: how a run's optimum fares when its parts are made to tolerance."""
+"""``camopt tolerance``: how a run's optimum fares when its parts are made to tolerance.
+
+Each command imports the engine, archives and reports it needs inside its function: a
+command line loads only its own command's modules (tests/cli/test_imports.py)."""
 
 from __future__ import annotations
 

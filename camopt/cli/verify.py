@@ -1,8 +1,12 @@
-"""``camopt verify``: a VCB run's closing checked against a planar multibody model."""
+"""``camopt verify``: a VCB run's closing checked against a planar multibody model.
+
+Each command imports the engine, archives and reports it needs inside its function: a
+command line loads only its own command's modules (tests/cli/test_imports.py)."""
 
 from __future__ import annotations
 
 import enum
+import importlib
 import json
 import sys
 from pathlib import Path
@@ -13,6 +17,7 @@ import typer
 from camopt.cli.app import Format, app, errors
 from camopt.cli.console import fmt, out
 from camopt.cli.layout import print_table
+from camopt.errors import CamoptError
 
 
 class Design(str, enum.Enum):
@@ -38,11 +43,8 @@ def verify(
 ) -> None:
     r"""Check a VCB run's closing against a planar multibody model (needs the extra:
     pip install 'camopt\[multibody]')."""
-    import importlib
-
     from camopt import archive
     from camopt.engine.tolerance import problem_of
-    from camopt.errors import CamoptError
     from camopt.reporting.views import jsonable
 
     with errors():

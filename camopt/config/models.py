@@ -4,6 +4,8 @@ Units: a field whose name ends in ``_mm``, ``_deg``, ``_kg``, ``_gpa`` ... is in
 that unit; everything else is SI or unitless. Cases convert to SI when they
 build their Problem. Each case's own config model lives beside the case
 (``camopt/cases/<kind>/config.py``) and subclasses :class:`CaseConfig`.
+
+tomli_w is imported where a case file is written (``camopt init``), not when one is read.
 """
 
 from __future__ import annotations

@@ -20,9 +20,9 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.core.problem import Evaluation, Problem
+from camopt.mechanics import Floats, Ints
 
 RowsDone = Callable[[int, int], None]
 """A progress callback: ``(rows evaluated so far, rows in all)``, called after each chunk
@@ -48,7 +48,7 @@ def chunks(n: int, size: int) -> Iterator[slice]:
         yield slice(start, min(start + size, n))
 
 
-def evaluate(problem: Problem, X: NDArray, size: int | None = None,
+def evaluate(problem: Problem, X: Floats, size: int | None = None,
              progress: RowsDone | None = None) -> Evaluation:
     """``problem.evaluate`` of designs ``X`` (n, n_var), SI, in chunks of ``size`` rows;
     the same Evaluation as one call. ``progress`` is told after each chunk."""
@@ -56,7 +56,7 @@ def evaluate(problem: Problem, X: NDArray, size: int | None = None,
                     progress)
 
 
-def describe(problem: Problem, X: NDArray, fields: Mapping[str, NDArray] | None = None,
+def describe(problem: Problem, X: Floats, fields: Mapping[str, Floats] | None = None,
              size: int | None = None, progress: RowsDone | None = None) -> Evaluation:
     """``problem.describe`` of designs ``X`` (n, n_var), SI, in chunks; with ``fields``
     (case field name -> (n,) values, capability :class:`~camopt.core.capabilities.VariesCase`)
@@ -73,22 +73,22 @@ VARIANT = "\0variant"
 """Key of the variant column among the chunked fields (no case field can be named so)."""
 
 
-def describe_variants(problem: Problem, X: NDArray, fields: Mapping[str, NDArray],
-                      variant: NDArray, size: int | None = None,
+def describe_variants(problem: Problem, X: Floats, fields: Mapping[str, Floats],
+                      variant: Ints, size: int | None = None,
                       progress: RowsDone | None = None, detail: bool = True) -> Evaluation:
     """``problem.describe_variants`` (capability
     :class:`~camopt.core.capabilities.HasVariants`) of designs ``X`` (n, n_var) with
     ``fields`` and each row's ``variant`` (n,), in chunks: the same Evaluation as one call
     (``detail``: as the capability's)."""
-    def call(Xc: NDArray, f: Mapping[str, NDArray]) -> Evaluation:
+    def call(Xc: Floats, f: Mapping[str, Floats]) -> Evaluation:
         return problem.describe_variants(  # type: ignore[attr-defined]
             Xc, {k: v for k, v in f.items() if k != VARIANT}, f[VARIANT], detail=detail)
     return _chunked(call, X, {**fields, VARIANT: np.asarray(variant)},
                     size or chunk_rows(problem), progress)
 
 
-def _chunked(fn: Callable[[NDArray, Mapping[str, NDArray]], Evaluation], X: NDArray,
-             fields: Mapping[str, NDArray], size: int,
+def _chunked(fn: Callable[[Floats, Mapping[str, Floats]], Evaluation], X: Floats,
+             fields: Mapping[str, Floats], size: int,
              progress: RowsDone | None = None) -> Evaluation:
     """Call ``fn`` on each row chunk of ``X`` and of every ``fields`` column, writing the
     results into arrays allocated after the first chunk (dtypes and column counts from

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
-from numpy.typing import NDArray
+from camopt.mechanics import Floats
 
 
 @dataclass(frozen=True)
@@ -45,9 +45,9 @@ class FittedCurve:
     form: str
     source: str
     design: str
-    time_s: NDArray
-    measured_m: NDArray
-    fitted_m: NDArray
+    time_s: Floats
+    measured_m: Floats
+    fitted_m: Floats
 
 
 class CalibrationReport(Protocol):

@@ -13,9 +13,9 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.core.problem import Evaluation
+from camopt.mechanics import Bools, Floats, Ints
 
 
 @runtime_checkable
@@ -23,7 +23,7 @@ class HasFamily(Protocol):
     """A discrete one-degree-of-freedom family of designs left by monotonicity analysis
     (Clauss 1982, Eq 86); the ``enumeration`` solver walks it."""
 
-    def family(self) -> NDArray:
+    def family(self) -> Floats:
         """Every member of the family, (n_members, n_var), SI."""
         ...
 
@@ -32,8 +32,8 @@ class HasFamily(Protocol):
 class Repairable(Protocol):
     """Case-specific corrections of a swarm (Yan 2023's "improved PSO", Sec 3.3.4)."""
 
-    def repair(self, X: NDArray, rng: np.random.Generator,
-               probability: Mapping[str, float]) -> NDArray:
+    def repair(self, X: Floats, rng: np.random.Generator,
+               probability: Mapping[str, float]) -> Floats:
         """Corrected copies of designs ``X`` (n, n_var); correction ``k`` is applied to a
         design with ``probability[k]``."""
         ...
@@ -47,7 +47,7 @@ class Repairable(Protocol):
 class HasResiduals(Protocol):
     """Equations whose roots are the designs (precision points, Ahn et al. Sec 3)."""
 
-    def residuals(self, X: NDArray) -> NDArray:
+    def residuals(self, X: Floats) -> Floats:
         """Residuals of designs ``X`` (n, n_var), shape (n, n_equations), dimensionless."""
         ...
 
@@ -62,7 +62,7 @@ class VariesCase(Protocol):
         """The ``[case]`` fields that may vary per design (names as in the case file)."""
         ...
 
-    def describe_with(self, X: NDArray, fields: Mapping[str, NDArray]) -> Evaluation:
+    def describe_with(self, X: Floats, fields: Mapping[str, Floats]) -> Evaluation:
         """As ``describe(X)``, with each named case field taking its own value per row:
         ``fields[name]`` (n,) in the field's unit (``l1_mm`` in mm)."""
         ...
@@ -80,8 +80,8 @@ class HasVariants(Protocol):
         """The variants' names, in a fixed order (none: the case has one model)."""
         ...
 
-    def describe_variants(self, X: NDArray, fields: Mapping[str, NDArray],
-                          variant: NDArray, detail: bool = True) -> Evaluation:
+    def describe_variants(self, X: Floats, fields: Mapping[str, Floats],
+                          variant: Ints, detail: bool = True) -> Evaluation:
         """As ``describe_with(X, fields)`` (``fields`` may be empty), row ``i`` judged
         under variant ``variant[i]`` ((n,) int, an index into :meth:`variants`; -1: every
         variant at once, the case's own evaluation). ``detail=False``: the constraints,
@@ -114,23 +114,23 @@ class Stochastic(Protocol):
         """Draw the next generation's perturbations, shared by every candidate."""
         ...
 
-    def select(self, x: NDArray, seed: np.random.SeedSequence
-               ) -> tuple[NDArray, Evaluation]:
+    def select(self, x: Floats, seed: np.random.SeedSequence
+               ) -> tuple[Floats, Evaluation]:
         """The repeat's result from the solver's best ``x`` (n_var,), SI: a design and its
         evaluation (one row) judged on fresh draws from ``seed``."""
         ...
 
-    def nominal_design(self) -> NDArray | None:
+    def nominal_design(self) -> Floats | None:
         """The best design this repeat saw whose nominal evaluation is feasible, or None."""
         ...
 
-    def draw_dependent(self, ev: Evaluation) -> NDArray:
+    def draw_dependent(self, ev: Evaluation) -> Bools:
         """(n,) bool: the rows of an evaluation of this problem that depend on the draws.
         A screened candidate's do not (its columns are its nominal design's), so a solver
         that evaluates its parents again on new draws need not evaluate those."""
         ...
 
-    def final_check(self, best: NDArray, seen: Sequence[NDArray], seed: int,
+    def final_check(self, best: Floats, seen: Sequence[Floats], seed: int,
                     progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
         """The run's check of its best design and of the best of the repeats' ``seen``
         nominal designs, for the archive's ``robust_check`` (plain JSON data); ``progress``

@@ -2,22 +2,24 @@
 prints and the hypervolume ``compare`` reports (pymoo's indicator).
 
 A run is multi-objective when its solver's options name ``objectives`` (``nsga2``); its
-archive's table holds the Pareto set, one row per design with every metric."""
+archive's table holds the Pareto set, one row per design with every metric.
+
+pymoo is imported where used (the hypervolume; pymoo is slow to import)."""
 
 from __future__ import annotations
 
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.core.runview import RunView
+from camopt.mechanics import Floats
 
 REFERENCE_MARGIN = 0.1
 """The common reference point lies this share of the union's range beyond its nadir."""
 
 
-def objectives(run: RunView) -> tuple[tuple[str, ...], NDArray]:
+def objectives(run: RunView) -> tuple[tuple[str, ...], Floats]:
     """A run's objective names and their signs (+1 minimised, -1 maximised); no names for a
     single-objective run."""
     names = tuple(run.solver.get("objectives") or ())
@@ -78,7 +80,7 @@ def summary(run: RunView) -> dict[str, Any] | None:
     return doc
 
 
-def front(run: RunView) -> NDArray:
+def front(run: RunView) -> Floats:
     """The feasible Pareto designs' objectives, (n, n_obj), in their own units."""
     names, _ = objectives(run)
     values = [[float(r[n]) for n in names] for r in rows(run) or [] if r["feasible"]]

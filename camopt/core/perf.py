@@ -6,10 +6,15 @@ to the system once it exceeds M_TRIM_THRESHOLD (128 KB), so the next temporary
 page-faults on first touch: that doubled the VCB evaluation time. Raising the trim
 and mmap thresholds keeps those pages mapped. No library does this for us; it is a
 no-op off glibc.
+
+Its imports are where they are used: the command line calls it before numpy loads.
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
+import signal
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # imported where used: the CLI starts without them
@@ -92,8 +97,6 @@ def one_blas_thread_on_load() -> None:
     that loads with its default starts a thread per core whose start-up cost ~0.06 s of
     CPU on every command, numpy's import being most of what a command that evaluates
     nothing pays for (bench/bench_startup.py)."""
-    import os
-
     global _one_on_load
     for name in BLAS_THREADS:
         os.environ[name] = "1"
@@ -109,7 +112,6 @@ def die_with_parent() -> bool:
     whose parent was killed would otherwise wait for work forever); True if applied."""
     if not sys.platform.startswith("linux"):
         return False
-    import signal
 
     try:
         return _libc().prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
@@ -121,8 +123,6 @@ def worker_start() -> None:
     """Set-up of every camopt pool worker: die with the parent (a killed camopt leaves no
     worker blocked forever), leave Ctrl-C to the parent (which stops the pool), restore
     SIGTERM's default, tune the allocator."""
-    import signal
-
     die_with_parent()
     pin_blas_threads()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -139,7 +139,6 @@ def fork_pool(jobs: int) -> ProcessPoolExecutor:
     time on them nor writes their headers, which would copy every page they sit on
     (copy-on-write). Measured: a worker's first tiny cell (~3 ms later on) took 14-24 ms
     of CPU without it, 3-20 ms with it."""
-    import contextlib
     import gc
     from concurrent.futures import ProcessPoolExecutor
     from multiprocessing import get_context

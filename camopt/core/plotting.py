@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from typing import Any
 
 import matplotlib
@@ -32,8 +33,6 @@ TITLE_CHARS = 64
 def wrapped(title: str, width: int = TITLE_CHARS) -> str:
     """A title broken into lines of at most ``width`` characters (its own line breaks
     kept), so none is cut at the figure's edge."""
-    import textwrap
-
     return "\n".join(part for line in title.splitlines()
                      for part in textwrap.wrap(line, width) or [""])
 

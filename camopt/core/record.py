@@ -14,14 +14,42 @@ plain data and never a driver or a live Problem.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.mechanics import Floats
+
 if TYPE_CHECKING:  # annotations only: the record stays pure data (numpy only)
     from camopt.config import LoadedConfig
     from camopt.core.problem import Problem
+
+
+RequirementYield = TypedDict("RequirementYield", {
+    "name": str, "yield": float, "half_spread": "float | None"})
+"""One requirement's share of the draws that meet it, and its quantity's half spread
+(5 to 95 %; None for a flag)."""
+
+class ExpectedYield(TypedDict, total=False):
+    value: float | None
+    low: float | None
+    high: float | None
+    samples: int
+    seed: int
+    vary: list[str]
+    requirements: list[RequirementYield]
+    adjustments: list[dict[str, Any]]
+    command: str
+    reason: str
+    estimated: str
+"""The best design's quick expected yield under the case's default tolerances
+(:func:`camopt.engine.tolerance.expected_yield`): the share of ``samples`` draws meeting
+every requirement with its Clopper-Pearson interval (``low``, ``high``), the draws'
+``seed`` and tolerances (``vary``), each requirement's share, the factory's adjustments
+where the case models them, and the ``command`` that repeats it; without tolerances,
+``value`` None and the ``reason``; ``estimated`` where ``show`` made it for an older
+archive."""
 
 
 def _empty() -> NDArray[np.float64]:
@@ -70,7 +98,7 @@ class Repeat:
     """Evaluations until the best design was feasible and at or below ``run.target``
     (feasible without a target); -1: never."""
     wall_s: float
-    history: dict[str, NDArray] = field(default_factory=dict)
+    history: dict[str, Floats] = field(default_factory=dict)
     """Per iteration (n_iter,): ``nfev``, ``best_objective``, ``best_violation``,
     ``mean_objective``."""
     g: NDArray[np.float64] = field(default_factory=_empty)
@@ -105,7 +133,7 @@ class RunRecord:
     repeats: list[Repeat]
     best: Repeat
     metrics: dict[str, object]
-    analysis: dict[str, NDArray]
+    analysis: dict[str, Floats]
     names: tuple[str, ...]
     scale: NDArray[np.float64]
     constraint_names: tuple[str, ...]
@@ -122,7 +150,7 @@ class RunRecord:
     findings: dict[str, Any] = field(default_factory=dict)
     """:meth:`Problem.findings` of the best design (JSON-able): what the archive stores as
     ``findings`` and ``show`` reports under its own names."""
-    expected_yield: dict[str, Any] | None = None
+    expected_yield: ExpectedYield | None = None
     """The quick default-tolerance yield estimate of the best design
     (:func:`camopt.engine.tolerance.expected_yield`), set by ``camopt run`` before writing."""
 
@@ -132,7 +160,7 @@ def seed_id(seq: np.random.SeedSequence) -> int:
     return int(seq.generate_state(1, np.uint64)[0] >> np.uint64(1))
 
 
-def nfev_to_target(history: dict[str, NDArray], target: float | None) -> int:
+def nfev_to_target(history: dict[str, Floats], target: float | None) -> int:
     """Evaluations after the first iteration whose best design was feasible and, with a
     ``target``, at or below it, from a repeat's ``history``; -1: none was (or the history
     lacks ``nfev``, ``best_objective`` or ``best_violation``)."""

@@ -48,7 +48,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+
+from camopt.mechanics import Bools, Floats
 
 RESOLUTION_DIGITS = 6
 """Significant digits of a requirement's scale it is judged and printed at (module
@@ -149,7 +150,7 @@ class Requirement:
             return f"<= {_fmt(hi)}{unit}"
         return f">= {_fmt(lo)}{unit}"
 
-    def margin(self, value: NDArray | float) -> NDArray:
+    def margin(self, value: Floats | float) -> Floats:
         """Distance inside the limit in ``unit`` (negative: outside; NaN: not evaluated),
         same shape as ``value``. A flag's margin is 1 for yes, -1 for no."""
         v = np.asarray(value, dtype=float)
@@ -160,7 +161,7 @@ class Requirement:
         # an infinite value (a stress at a cusp, a stroke never finished) fails its bound
         return np.where(np.isinf(v) & ~np.isnan(m), -np.inf, m)
 
-    def passes(self, value: NDArray | float) -> NDArray:
+    def passes(self, value: Floats | float) -> Bools:
         """Bool array: the value meets the requirement (NaN fails)."""
         m = self.margin(value)
         with np.errstate(invalid="ignore"):
@@ -352,7 +353,7 @@ def grade(verdict: str | None, at_limit: bool, expected: float | None,
     return "pass"
 
 
-def yields(requirements: Sequence[Requirement], samples: Mapping[str, NDArray],
+def yields(requirements: Sequence[Requirement], samples: Mapping[str, Floats],
            ) -> list[dict[str, Any]]:
     """Per requirement, its finite limits (``lower``/``upper``, None when unbounded), the
     share of ``samples`` (``{quantity: (n,)}``) that passes and the margin's percentiles;
@@ -376,7 +377,7 @@ def yields(requirements: Sequence[Requirement], samples: Mapping[str, NDArray],
     return out
 
 
-def all_pass(requirements: Sequence[Requirement], samples: Mapping[str, NDArray]) -> NDArray:
+def all_pass(requirements: Sequence[Requirement], samples: Mapping[str, Floats]) -> Bools:
     """(n,) bool: each sample meets every requirement whose quantity ``samples`` holds (an
     all-true column when none is sampled)."""
     n = len(next(iter(samples.values()))) if samples else 0

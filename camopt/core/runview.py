@@ -7,10 +7,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
-from camopt.core.record import Repeat, RunRecord
+from camopt.core.record import ExpectedYield, Repeat, RunRecord
+from camopt.mechanics import Floats
 
 
 @dataclass(frozen=True)
@@ -47,7 +47,7 @@ class RunView:
     repeats: list[Repeat]
     """Every repeat stored, in index order (``x`` in SI, as the run had it)."""
     table: list[dict[str, Any]]
-    analysis: dict[str, NDArray] = field(repr=False, default_factory=dict)
+    analysis: dict[str, Floats] = field(repr=False, default_factory=dict)
     config_toml: str = ""
     created: str = ""
     camopt_version: str = ""
@@ -70,7 +70,7 @@ class RunView:
     identification's ``model_forms`` and ``identifiability``)."""
     config_path: str = ""
     """The case file the run read (as given on the command line)."""
-    expected_yield: dict[str, Any] = field(default_factory=dict)
+    expected_yield: ExpectedYield = field(default_factory=lambda: ExpectedYield())
     """The quick default-tolerance yield estimate ``run`` stored
     (:func:`camopt.engine.tolerance.expected_yield`); {} in archives made before it."""
 
@@ -78,7 +78,7 @@ class RunView:
     def solver_name(self) -> str:
         return str(self.solver.get("name", ""))
 
-    def histories(self, key: str = "best_objective") -> list[NDArray]:
+    def histories(self, key: str = "best_objective") -> list[Floats]:
         """One history array per repeat (``best_objective``, ``nfev``, ...)."""
         return [np.asarray(r.history[key]) for r in self.repeats if key in r.history]
 

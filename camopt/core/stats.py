@@ -1,14 +1,20 @@
-"""Statistics for comparing runs and sweep points (scipy.stats)."""
+"""Statistics for comparing runs and sweep points (scipy.stats).
+
+scipy is imported where used (``camopt show`` prints an interval without scipy.stats, ~1.2 s
+to import)."""
 
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass
+from math import comb
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+
+from camopt.mechanics import Bools, Floats, Ints
 
 if TYPE_CHECKING:
     from camopt.config.sweep_spec import SweepSpec
@@ -21,17 +27,50 @@ larger one's magnitude are the same objective in practice (a case may set an abs
 ``CaseSpec.equivalence``; ``compare --equivalence`` overrides both)."""
 
 
-def ranked(objectives: ArrayLike, feasible: ArrayLike) -> NDArray:
+def ranked(objectives: ArrayLike, feasible: ArrayLike) -> Floats:
     """Final objectives as they rank across runs: an infeasible (or NaN) run counts +inf."""
     f = np.asarray(objectives, dtype=float)
     return np.where(np.asarray(feasible, dtype=bool) & ~np.isnan(f), f, np.inf)
 
 
-def succeeded(objectives: ArrayLike, feasible: ArrayLike, target: float | None) -> NDArray:
+def succeeded(objectives: ArrayLike, feasible: ArrayLike, target: float | None) -> Bools:
     """camopt's one definition of a successful run: feasible, and at or below ``target``
     when the case file sets ``run.target``."""
     f = ranked(objectives, feasible)
     return np.isfinite(f) & (f <= target if target is not None else True)
+
+
+@dataclass(frozen=True)
+class YieldInterval:
+    """A yield (the share of draws meeting every requirement) with its Clopper-Pearson
+    interval [``low``, ``high``] over ``samples`` draws (None where a document lacks
+    them). A verdict is graded on ``low`` (:attr:`camopt.reporting.views.Verdict.grade`):
+    on the point estimate alone a design whose true yield sits at the target would pass
+    half the time by sampling luck."""
+
+    value: float
+    low: float | None = None
+    high: float | None = None
+    samples: int | None = None
+
+    @classmethod
+    def of(cls, doc: Mapping[str, object]) -> YieldInterval | None:
+        """From a yield document (``value`` or ``yield``, ``low``/``yield_low``,
+        ``high``/``yield_high``, ``samples``); None without a value."""
+        value = doc.get("value", doc.get("yield"))
+        if value is None:
+            return None
+
+        def num(*keys: str) -> float | None:
+            v = next((doc[k] for k in keys if doc.get(k) is not None), None)
+            return None if v is None else float(v)  # type: ignore[arg-type]
+        samples = doc.get("samples")
+        return cls(float(value), num("low", "yield_low"),  # type: ignore[arg-type]
+                   num("high", "yield_high"),
+                   None if samples is None else int(samples))  # type: ignore[call-overload]
+
+    def as_dict(self) -> dict[str, float | int | None]:
+        return asdict(self)
 
 
 @dataclass(frozen=True)
@@ -65,7 +104,7 @@ def run_statistics(objectives: Sequence[float], feasible: Sequence[bool],
 
 
 def share_interval(successes: ArrayLike, trials: int, confidence: float = 0.95
-                   ) -> tuple[NDArray, NDArray]:
+                   ) -> tuple[Floats, Floats]:
     """Two-sided Clopper-Pearson ("exact") interval of a share (a yield, a success rate)
     from ``successes`` of ``trials``, vectorised over ``successes``: the beta quantiles
     ``B((1 - c)/2; k, n - k + 1)`` and ``B((1 + c)/2; k + 1, n - k)``.
@@ -145,8 +184,6 @@ def min_p_value(n_a: int, n_b: int) -> float:
     """The smallest two-sided p-value an exact Mann-Whitney test of ``n_a`` against ``n_b``
     runs can give (complete separation): 2 / C(n_a + n_b, n_a), at most 1. Below
     :data:`ALPHA` only from 4 against 4 (2/70); 3 against 3 gives 0.1 at best."""
-    from math import comb
-
     if n_a < 1 or n_b < 1:
         return 1.0
     return min(1.0, 2.0 / comb(n_a + n_b, n_a))
@@ -238,7 +275,7 @@ def sweep_summary(spec: SweepSpec, results: Iterable[Repeat]) -> list[dict[str, 
     return rows
 
 
-def per_variant(passed: NDArray, variant: NDArray, names: Sequence[str],
+def per_variant(passed: Bools, variant: Ints, names: Sequence[str],
                 confidence: float) -> list[dict[str, Any]]:
     """The yield of the draws of each model variant, with its Clopper-Pearson interval:
     ``passed`` (S,) bool, ``variant`` (S,) each draw's index into ``names``."""

@@ -20,13 +20,13 @@ from dataclasses import dataclass
 
 import annotated_types
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.config.models import CaseConfig, Plausible
 from camopt.core import batch
 from camopt.core.capabilities import HasVariants, VariesCase
 from camopt.core.problem import Evaluation, Problem
 from camopt.errors import CamoptError
+from camopt.mechanics import Bools, Floats, Ints
 
 CASE_PREFIX = "case."
 _SPEC = re.compile(r"^(?P<name>[A-Za-z_][\w.]*)=(?:±|\+-|\+/-)(?P<value>[0-9.eE+-]+)"
@@ -140,7 +140,7 @@ def physical_range(problem: Problem, case_model: type[CaseConfig], vary: Vary
     return lower, strict, upper
 
 
-def outside(values: NDArray, ranges: Sequence[tuple[float, bool, float]]) -> NDArray:
+def outside(values: Floats, ranges: Sequence[tuple[float, bool, float]]) -> Bools:
     """(rows,) bool: a row of input values (rows, k) with any input outside its range."""
     values = np.asarray(values, dtype=float)
     low = np.array([r[0] for r in ranges])
@@ -150,7 +150,7 @@ def outside(values: NDArray, ranges: Sequence[tuple[float, bool, float]]) -> NDA
     return np.asarray((below | (values > high)).any(axis=1))
 
 
-def mark(ev: Evaluation, bad: NDArray) -> Evaluation:
+def mark(ev: Evaluation, bad: Bools) -> Evaluation:
     """``ev`` with the rows ``bad`` (rows,) counted as failed: every constraint +inf,
     objective and metrics NaN (no physical part was made; its numbers mean nothing).
 
@@ -166,7 +166,7 @@ def mark(ev: Evaluation, bad: NDArray) -> Evaluation:
                       {k: _marked(v, bad, np.nan) for k, v in ev.extras.items()})
 
 
-def _marked(a: NDArray, rows: NDArray, value: float) -> NDArray:
+def _marked(a: Floats, rows: Bools, value: float) -> Floats:
     """``a`` with ``value`` where ``rows`` (broadcast to ``a``), in place when ``a`` is a
     writeable float array owning its data, else in a float copy."""
     a = np.asarray(a)
@@ -177,7 +177,7 @@ def _marked(a: NDArray, rows: NDArray, value: float) -> NDArray:
 
 
 def unit_draws(rng: np.random.Generator, n: int, k: int, distribution: Distribution
-               ) -> NDArray:
+               ) -> Floats:
     """(n, k) draws in units of the half-width: uniform on [-1, 1], or normal with
     sigma = 1/3 (so ±X is the 3-sigma range)."""
     if distribution is Distribution.uniform:
@@ -185,8 +185,8 @@ def unit_draws(rng: np.random.Generator, n: int, k: int, distribution: Distribut
     return rng.standard_normal((n, k)) / 3
 
 
-def draw(rng: np.random.Generator, n: int, nominal: NDArray, half: NDArray,
-         distribution: Distribution) -> NDArray:
+def draw(rng: np.random.Generator, n: int, nominal: Floats, half: Floats,
+         distribution: Distribution) -> Floats:
     """``n`` samples of the inputs, (n, k): uniform on nominal +- half, or normal with
     sigma = half / 3."""
     return nominal + unit_draws(rng, n, len(nominal), distribution) * half
@@ -198,17 +198,17 @@ def variants_of(problem: Problem) -> tuple[str, ...]:
     return problem.variants() if isinstance(problem, HasVariants) else ()
 
 
-def assign_variants(n: int, m: int) -> NDArray:
+def assign_variants(n: int, m: int) -> Ints:
     """The variant of each of ``n`` draws among ``m`` (n,) int: draw ``j`` takes variant
     ``j mod m`` (stratified: each variant the same share, the draws being independent and
     identically distributed whatever their index; -1 for every draw when m = 0)."""
     return np.arange(n) % m if m else np.full(n, -1)
 
 
-def apply(problem: Problem, X: NDArray, varies: Sequence[Vary], values: NDArray,
+def apply(problem: Problem, X: Floats, varies: Sequence[Vary], values: Floats,
           describe: bool = False, size: int | None = None,
           progress: batch.RowsDone | None = None,
-          variant: NDArray | None = None) -> Evaluation:
+          variant: Ints | None = None) -> Evaluation:
     """Designs ``X`` (rows, n_var), SI, with the varied inputs set to ``values`` (rows, k)
     in the inputs' own units (display units for variables), evaluated in row chunks of
     ``size`` (:mod:`camopt.core.batch`; unset: its default): the case's ``describe_with`` when a

@@ -28,7 +28,10 @@ Whether it is kept in the end is judged on other draws (the robust selection's:
 :meth:`camopt.engine.robust.RobustProblem.select`).
 
 Written here: no library offers a smoothed sample-average yield; the optimiser is the
-project's own CMA-ES core."""
+project's own CMA-ES core.
+
+The solvers' CMA-ES core and rounding are imported where used (only a robust run with
+``centre_generations`` centres)."""
 
 from __future__ import annotations
 
@@ -36,9 +39,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.core.problem import FEASIBILITY_TOL, Problem
+from camopt.mechanics import Floats, Ints
 
 SHARPNESS = 3.0
 """kappa: a draw at one standard deviation inside every limit counts as passing with
@@ -46,7 +49,7 @@ sigmoid(3) = 0.95 per constraint, one on the limit with 0.5."""
 TAU_FLOOR = 1e-3
 """tau of a constraint whose spread over the draws is below it (normalised units)."""
 
-Draws = Callable[[NDArray], tuple[NDArray, NDArray, NDArray]]
+Draws = Callable[[Floats], tuple[Floats, Floats, Floats]]
 """Designs (n, n_var), SI, to their constraints (n, S, n_constr) and objectives (n, S) on
 the stage's fixed draws, and their nominal designs' violations (n,; 0: feasible, +inf for
 a non-finite nominal objective)."""
@@ -57,13 +60,13 @@ class Centred:
     """The stage's result: the design (n_var,), SI, and on the stage's draws its pass
     share and that of the design it started from, and the generations run."""
 
-    x: NDArray
+    x: Floats
     passed: float
     passed_start: float
     generations: int
 
 
-def spread(g: NDArray) -> NDArray:
+def spread(g: Floats) -> Floats:
     """tau (n_constr,): each constraint's standard deviation over the draws ``g`` (S,
     n_constr) of one design, finite values only, at least :data:`TAU_FLOOR`."""
     finite = np.where(np.isfinite(g), g, np.nan)
@@ -73,7 +76,7 @@ def spread(g: NDArray) -> NDArray:
     return np.maximum(tau, TAU_FLOOR)
 
 
-def smoothed_failure(g: NDArray, f: NDArray, tau: NDArray) -> NDArray:
+def smoothed_failure(g: Floats, f: Floats, tau: Floats) -> Floats:
     """F (n,) of designs whose draws gave constraints ``g`` (n, S, n_constr) and
     objectives ``f`` (n, S) (module docstring): 0 when every draw passes with a wide
     margin, 1 when none does."""
@@ -85,7 +88,7 @@ def smoothed_failure(g: NDArray, f: NDArray, tau: NDArray) -> NDArray:
     return 1.0 - passes.mean(axis=1)
 
 
-def passed(g: NDArray, f: NDArray) -> NDArray:
+def passed(g: Floats, f: Floats) -> Floats:
     """(n,) the share of each design's draws that meet every constraint with a finite
     objective, from ``g`` (n, S, n_constr) and ``f`` (n, S)."""
     worst = g.max(axis=2) if g.shape[2] else np.full(f.shape, -np.inf)
@@ -93,7 +96,7 @@ def passed(g: NDArray, f: NDArray) -> NDArray:
             ).mean(axis=1)
 
 
-def ranking(F: NDArray, violation: NDArray) -> NDArray:
+def ranking(F: Floats, violation: Floats) -> Ints:
     """The order (n,) the walk ranks candidates in, best first: by F (n,) plus the
     nominal design's violation (n,), a refused design behind a feasible one whose F is
     worse by less than the refusal's violation, a non-finite violation last; ties keep
@@ -115,7 +118,7 @@ def keep(feasible_start: bool, feasible_centred: bool, share_start: float,
     return share_centred > share_start
 
 
-def centre(problem: Problem, draws: Draws, x0: NDArray, generations: int, step: float,
+def centre(problem: Problem, draws: Draws, x0: Floats, generations: int, step: float,
            rng: np.random.Generator) -> Centred:
     """Minimise F from ``x0`` (n_var,), SI, for ``generations`` CMA-ES generations of
     the default population, initial step ``step`` (a fraction of each variable's range;

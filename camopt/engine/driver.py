@@ -14,7 +14,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.config import LoadedConfig
 from camopt.core import batch
@@ -36,6 +35,7 @@ from camopt.engine.setup import (  # noqa: F401
     validate,
 )
 from camopt.errors import SolverError
+from camopt.mechanics import Floats
 from camopt.solvers import Solver, StopReason
 from camopt.solvers.base import Budget
 
@@ -155,7 +155,7 @@ def _stop(solver: Solver, start: float, max_nfev: int | None, max_s: float | Non
 CONVERGENCE_TOL = 1e-6
 
 
-def converged_iteration(best_f: NDArray, best_v: NDArray, tol: float = CONVERGENCE_TOL) -> int:
+def converged_iteration(best_f: Floats, best_v: Floats, tol: float = CONVERGENCE_TOL) -> int:
     """First iteration (1-based) from which the best objective stays within ``tol`` of its
     final value with the final violation."""
     if best_f.size == 0:

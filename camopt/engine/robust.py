@@ -56,6 +56,9 @@ spawn_key=(i, ROBUST_KEY, 0))``, its selection's from ``(i, ROBUST_KEY, 1)``, th
 check's from ``SeedSequence(run.seed, spawn_key=(ROBUST_KEY, CHECK_KEY))``; never the
 solver's generator, so the search itself is unchanged by the draws and results do not
 depend on the worker count.
+
+:mod:`camopt.engine.centring` is imported where used (only a run with ``centre_generations``
+centres).
 """
 
 from __future__ import annotations
@@ -66,7 +69,6 @@ from dataclasses import dataclass
 from typing import Any, cast
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.config.models import CaseConfig, RobustSection
 from camopt.core import stats
@@ -94,6 +96,7 @@ from camopt.core.variation import (
     variants_of,
 )
 from camopt.errors import ConfigError
+from camopt.mechanics import Bools, Floats, Ints
 
 SCREENED = 1e6
 """Added to the yield column of a candidate not sampled (its nominal design infeasible)."""
@@ -146,7 +149,7 @@ def plan(problem: Problem, case: CaseConfig, spec: RobustSection, tolerances: di
     return Plan(spec, tuple(varies), ranges, fields, variants_of(problem))
 
 
-def _values(problem: Problem, plan: Plan, X: NDArray, unit: NDArray) -> NDArray:
+def _values(problem: Problem, plan: Plan, X: Floats, unit: Floats) -> Floats:
     """Input values of every candidate at every draw, (n * S, k) in input units, candidate-
     major: candidate ``i``'s samples are rows ``i S .. i S + S - 1``."""
     n, (S, k) = len(X), unit.shape
@@ -169,18 +172,18 @@ class Sampled:
     (n, S), each sample's worst constraint (n, S; +inf for a non-finite objective) and
     each draw's model variant (S,; -1: every variant)."""
 
-    g: NDArray
-    f: NDArray
-    worst: NDArray
-    variant: NDArray
+    g: Floats
+    f: Floats
+    worst: Floats
+    variant: Ints
 
     @property
-    def feasible(self) -> NDArray:
+    def feasible(self) -> Bools:
         """(n, S) bool: the sample meets every constraint with a finite objective."""
         return self.worst <= FEASIBILITY_TOL
 
 
-def sample(problem: Problem, plan: Plan, X: NDArray, unit: NDArray,
+def sample(problem: Problem, plan: Plan, X: Floats, unit: Floats,
            progress: RowsDone | None = None, first: int = 0) -> Sampled:
     """Evaluate designs ``X`` (n, n_var) at draws ``unit`` (S, k): n x S rows in chunks of
     ``plan.spec.chunk_rows`` (:mod:`camopt.core.batch`); draws outside an input's physical
@@ -200,7 +203,7 @@ def sample(problem: Problem, plan: Plan, X: NDArray, unit: NDArray,
     return Sampled(g, f, worst, variant)
 
 
-def _worst(g: NDArray, f: NDArray) -> NDArray:
+def _worst(g: Floats, f: Floats) -> Floats:
     """Each row's worst constraint (n,), +inf for a non-finite objective (-inf without
     constraints)."""
     worst = g.max(axis=1) if g.shape[1] else np.full(len(g), -np.inf)
@@ -227,14 +230,14 @@ class Raced:
     (n,), its pass share over the draws it was evaluated on (n,), the objective statistic
     (n,) and the draws evaluated (n,; a prefix of the S)."""
 
-    g: NDArray
-    worst: NDArray
-    estimate: NDArray
-    f: NDArray
-    evaluated: NDArray
+    g: Floats
+    worst: Floats
+    estimate: Floats
+    f: Floats
+    evaluated: Floats
 
 
-def race(problem: Problem, plan: Plan, X: NDArray, unit: NDArray, k: int) -> Raced:
+def race(problem: Problem, plan: Plan, X: Floats, unit: Floats, k: int) -> Raced:
     """Designs ``X`` (n, n_var) on draws ``unit`` (S, k_in), their evaluation decided by
     the 0-based order statistic ``k`` of each draw's worst constraint: it is <= 0 iff at
     least k + 1 draws pass, so a candidate that has failed more than S - k - 1 draws
@@ -292,7 +295,7 @@ def confident_index(target: float, samples: int, confidence: float) -> int:
     return max(need, 1) - 1
 
 
-def statistic(f: NDArray, objective: str, quantile: float) -> NDArray:
+def statistic(f: Floats, objective: str, quantile: float) -> Floats:
     """The objective's mean over samples with a finite value, or its quantile (the next
     order statistic above, non-finite values counted as +inf), per row of ``f`` (n, S)."""
     if objective == "mean":
@@ -318,12 +321,12 @@ class RobustProblem(Problem, Stochastic):
         self.objective_name = MARGIN if robust_plan.spec.objective == "margin" \
             else base.objective_name
         self.rng = np.random.default_rng(0)
-        self.unit: NDArray | None = None
-        self.nominal_best: tuple[NDArray, float] | None = None
+        self.unit: Floats | None = None
+        self.nominal_best: tuple[Floats, float] | None = None
         """The best design seen whose nominal evaluation is feasible, and its objective."""
         self.draws_evaluated = 0
         """Candidate draws evaluated so far (racing's saving is measured against it)."""
-        self.finalists: tuple[NDArray, NDArray] = (np.empty((0, self.n_var)), np.empty(0))
+        self.finalists: tuple[Floats, Floats] = (np.empty((0, self.n_var)), np.empty(0))
         """Designs (m, n_var) that met the target on their generation's draws, lowest
         objective (m,) first: checked again at the end of the repeat (:meth:`select`)."""
         self.notes: tuple[str, ...] = ()
@@ -342,7 +345,7 @@ class RobustProblem(Problem, Stochastic):
         self.unit = unit_draws(self.rng, spec.samples, len(self.plan.varies),
                                self.plan.distribution)
 
-    def evaluate(self, X: NDArray) -> Evaluation:
+    def evaluate(self, X: Floats) -> Evaluation:
         """Robust objective and constraints of designs ``X`` (n, n_var), SI (module
         docstring); the draws are the current generation's."""
         if self.unit is None:
@@ -355,7 +358,7 @@ class RobustProblem(Problem, Stochastic):
         self._keep_finalists(X, ev)
         return ev
 
-    def evaluate_at(self, X: NDArray, unit: NDArray, k: int) -> Evaluation:
+    def evaluate_at(self, X: Floats, unit: Floats, k: int) -> Evaluation:
         """As :meth:`evaluate` with the draws ``unit`` (S, k) given (any S), ``k`` the
         0-based order statistic that decides the yield column."""
         spec = self.plan.spec
@@ -396,7 +399,7 @@ class RobustProblem(Problem, Stochastic):
             f = g[:, -1].copy()
         return Evaluation(f, g, {**nominal.extras, YIELD: estimate})
 
-    def _keep_finalists(self, X: NDArray, ev: Evaluation) -> None:
+    def _keep_finalists(self, X: Floats, ev: Evaluation) -> None:
         """Keep the ``finalists`` distinct designs with the lowest objective among those
         that met the target on their generation's draws, each with its latest score. A
         finalist evaluated again (a DE parent) that fails the new draws leaves: it passed
@@ -419,7 +422,7 @@ class RobustProblem(Problem, Stochastic):
         keep = np.argsort(fs, kind="stable")[:self.plan.spec.finalists]
         self.finalists = (Xs[keep], fs[keep])
 
-    def select(self, x: NDArray, seed: np.random.SeedSequence) -> tuple[NDArray, Evaluation]:
+    def select(self, x: Floats, seed: np.random.SeedSequence) -> tuple[Floats, Evaluation]:
         """The repeat's result: the solver's best ``x`` and the finalists evaluated on
         ``check_samples`` fresh draws (the same for all), the best of them by Deb's rules,
         a design counting as feasible when the lower bound of its yield's interval (at
@@ -437,8 +440,8 @@ class RobustProblem(Problem, Stochastic):
             return X[i].copy(), ev.take(i)
         return self._centred(X[i].copy(), ev.take(i), unit, k, seed)
 
-    def _centred(self, x: NDArray, ev: Evaluation, unit: NDArray, k: int,
-                 seed: np.random.SeedSequence) -> tuple[NDArray, Evaluation]:
+    def _centred(self, x: Floats, ev: Evaluation, unit: Floats, k: int,
+                 seed: np.random.SeedSequence) -> tuple[Floats, Evaluation]:
         """Yield centring of the selected ``x`` (:mod:`camopt.engine.centring`) on its own
         draws (spawn key ``(*seed.spawn_key, 0)``: none of the search's or the
         selection's), kept if the case accepts it at nominal and not ``x``, or if both
@@ -451,7 +454,7 @@ class RobustProblem(Problem, Stochastic):
                                                            spawn_key=(*seed.spawn_key, 0)))
         fixed = unit_draws(rng, spec.centre_samples, len(plan.varies), plan.distribution)
 
-        def draws(X: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        def draws(X: Floats) -> tuple[Floats, Floats, Floats]:
             s, nominal = sample(base, plan, X, fixed), base.evaluate(X)
             return s.g, s.f, np.where(np.isfinite(nominal.f), nominal.violation, np.inf)
 
@@ -467,17 +470,17 @@ class RobustProblem(Problem, Stochastic):
             return x, ev
         return c.x, self.evaluate_at(c.x[None, :], unit, k)
 
-    def nominal_design(self) -> NDArray | None:
+    def nominal_design(self) -> Floats | None:
         return None if self.nominal_best is None else self.nominal_best[0]
 
-    def draw_dependent(self, ev: Evaluation) -> NDArray:
+    def draw_dependent(self, ev: Evaluation) -> Bools:
         """The rows that were sampled: with ``screen`` an unsampled candidate's columns are
         its nominal design's (its yield estimate is NaN), the same on any draws."""
         if not self.plan.spec.screen:
             return np.ones(len(ev.f), dtype=bool)
         return np.isfinite(np.asarray(ev.extras[YIELD], dtype=float))
 
-    def final_check(self, best: NDArray, seen: Sequence[NDArray], seed: int,
+    def final_check(self, best: Floats, seen: Sequence[Floats], seed: int,
                     progress: RowsDone | None = None) -> dict[str, Any]:
         """The best design and the best nominally feasible design ``seen`` (lowest nominal
         objective over the repeats) checked on the same fresh draws (:func:`check`)."""
@@ -491,7 +494,7 @@ class RobustProblem(Problem, Stochastic):
             result["nominal"] = {**checked[1], "x": self.base.to_display(designs[1])}
         return result
 
-    def _remember(self, X: NDArray, nominal: Evaluation) -> None:
+    def _remember(self, X: Floats, nominal: Evaluation) -> None:
         ok = np.flatnonzero(nominal.feasible)
         if ok.size:
             i = ok[np.argmin(nominal.f[ok])]
@@ -499,13 +502,13 @@ class RobustProblem(Problem, Stochastic):
                 self.nominal_best = (X[i].copy(), float(nominal.f[i]))
 
     # the case's single-design outputs describe the nominal design
-    def metrics(self, x: NDArray) -> Mapping[str, object]:
+    def metrics(self, x: Floats) -> Mapping[str, object]:
         return self.base.metrics(x)
 
-    def analysis(self, x: NDArray) -> dict[str, NDArray]:
+    def analysis(self, x: Floats) -> dict[str, Floats]:
         return self.base.analysis(x)
 
-    def initial_x(self) -> NDArray | None:
+    def initial_x(self) -> Floats | None:
         return self.base.initial_x()
 
     def objective_floor(self) -> ObjectiveFloor | None:
@@ -520,8 +523,8 @@ class RobustProblem(Problem, Stochastic):
 class RobustRepairable(RobustProblem, Repairable):
     """A robust problem whose swarm corrections are its case's."""
 
-    def repair(self, X: NDArray, rng: np.random.Generator,
-               probability: Mapping[str, float]) -> NDArray:
+    def repair(self, X: Floats, rng: np.random.Generator,
+               probability: Mapping[str, float]) -> Floats:
         return cast(Repairable, self.base).repair(X, rng, probability)
 
     def repair_schedule(self) -> Mapping[str, tuple[float, float]]:
@@ -531,14 +534,14 @@ class RobustRepairable(RobustProblem, Repairable):
 class RobustFamily(RobustProblem, HasFamily):
     """A robust problem searching its case's one-degree-of-freedom family."""
 
-    def family(self) -> NDArray:
+    def family(self) -> Floats:
         return cast(HasFamily, self.base).family()
 
 
 class RobustResiduals(RobustProblem, HasResiduals):
     """A robust problem with its case's residual equations."""
 
-    def residuals(self, X: NDArray) -> NDArray:
+    def residuals(self, X: Floats) -> Floats:
         return cast(HasResiduals, self.base).residuals(X)
 
 
@@ -569,7 +572,7 @@ def repeat_seed(child: np.random.SeedSequence, stage: int = 0) -> np.random.Seed
                                   spawn_key=(*child.spawn_key, ROBUST_KEY, stage))
 
 
-def check(problem: RobustProblem, designs: Sequence[NDArray], seed: int,
+def check(problem: RobustProblem, designs: Sequence[Floats], seed: int,
           progress: RowsDone | None = None) -> list[dict[str, Any]]:
     """The final check: designs (SI) evaluated at ``check_samples`` fresh draws, the same
     draws for every design. Per design: nominal objective, mean and quantile objective,

@@ -6,7 +6,9 @@ Tiny cells are sent to workers in batches sized so a batch takes about ``BATCH_S
 (measured on the results so far), which keeps the scheduling cost per cell small, and
 never more than a share of the cells left, so the workers finish together; a kill loses
 at most the batches running. The parent prepares the grid points' problems before it
-forks the workers, which inherit them (a worker prepares only a point it lacks)."""
+forks the workers, which inherit them (a worker prepares only a point it lacks).
+
+dask.distributed is imported where used: it is an optional dependency (``--scheduler``)."""
 
 from __future__ import annotations
 
@@ -30,8 +32,9 @@ from camopt.core.perf import fork_pool, kill_pool, pin_blas_threads, tune_alloca
 from camopt.core.problem import Problem
 from camopt.core.record import Repeat
 from camopt.engine import interrupts
-from camopt.engine.driver import prepare, run_repeat, validate
+from camopt.engine.driver import run_repeat
 from camopt.engine.interrupts import deferred
+from camopt.engine.setup import prepare, validate
 from camopt.errors import CamoptError, ConfigError, SolverError
 from camopt.solvers import Solver
 

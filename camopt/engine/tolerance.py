@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from camopt.cases import build_problem, get_case, run_requirements
 from camopt.core.batch import RowsDone
 from camopt.core.problem import FEASIBILITY_TOL, Evaluation, Problem
+from camopt.core.record import ExpectedYield
 from camopt.core.runview import RunView
 from camopt.core.stats import per_variant, share_interval
 from camopt.core.variation import (  # noqa: F401 - Distribution, parse_vary: the CLI's names
@@ -171,7 +172,7 @@ def shared_constants(ev: Evaluation) -> Evaluation:
     coefficient no varied input moves, a flag, a quantity the design does not have: NaN),
     held as that value broadcast to the rows: a read-only view of 8 bytes instead of
     8 bytes a row (the VCB describes 50 metrics, several of them constant: 8 MB each at
-    10^6 samples; issue #36). Every value read is the same."""
+    10^6 samples). Every value read is the same."""
     extras = {}
     for name, values in ev.extras.items():
         a = np.asarray(values)
@@ -318,7 +319,7 @@ def requirement_yields(t: Tolerance, columns: dict[str, NDArray]) -> list[dict[s
 def average_ranks(values: NDArray) -> NDArray:
     """Ranks 1..n of a 1-D array, ties given the average of their ranks: what
     ``scipy.stats.rankdata`` (method "average") returns, the same floats (each rank is a
-    whole or half number), without importing scipy.stats (~1.2 s; issue #36: ``camopt
+    whole or half number), without importing scipy.stats (~1.2 s: ``camopt
     show`` estimates an older archive's yield)."""
     a = np.asarray(values)
     order = np.argsort(a, kind="mergesort")
@@ -346,7 +347,7 @@ def spearman_columns(inputs: NDArray, columns: dict[str, NDArray]
     Metrics are grouped by their dropped rows first, so one group's input ranks (n x k)
     are held at a time.
 
-    The sums are exact (issue #36): twice the centred ranks are integers
+    The sums are exact: twice the centred ranks are integers
     (:func:`doubled_ranks`), the inputs' held as int32 (4 bytes an input and sample:
     10^6 samples under 1 GiB) and their products summed in int64 (:data:`EXACT_RANK_ROWS`),
     so rho is the exact ratio rounded once, whatever the summation order or the BLAS
@@ -410,7 +411,7 @@ and a 95 % interval about +-5 points wide at a yield near one half (``camopt tol
 a sharper one)."""
 
 
-def expected_yield(run: RunView, samples: int = EXPECTED_YIELD_SAMPLES) -> dict[str, Any]:
+def expected_yield(run: RunView, samples: int = EXPECTED_YIELD_SAMPLES) -> ExpectedYield:
     """The quick expected yield of a run's best design: the share of ``samples`` draws of
     the case's default tolerances (:func:`default_varies`, uniform) whose design meets every
     requirement of the run (the run's constraints included), with its Clopper-Pearson 95 % interval,

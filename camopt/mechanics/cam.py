@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.mechanics import Floats, FloatsLike
 from camopt.mechanics.trig import sincos
@@ -28,13 +27,13 @@ def base_angle(l2: FloatsLike, l6: FloatsLike, distance: FloatsLike) -> Floats:
 class Follower:
     """Follower motion on a cam-angle grid: the angle xi + phi with its cos and sin."""
 
-    theta_c: NDArray
+    theta_c: Floats
     xi: float
-    angle: NDArray  # xi + phi
-    dphi: NDArray
-    ddphi: NDArray
-    cos_a: NDArray
-    sin_a: NDArray
+    angle: Floats  # xi + phi
+    dphi: Floats
+    ddphi: Floats
+    cos_a: Floats
+    sin_a: Floats
 
     @property
     def phi(self) -> Floats:
@@ -42,7 +41,7 @@ class Follower:
         return self.angle - self.xi
 
     @classmethod
-    def polynomial(cls, a: NDArray, theta_c: NDArray, xi: float) -> Follower:
+    def polynomial(cls, a: Floats, theta_c: Floats, xi: float) -> Follower:
         """Polynomial motion phi = sum_k a_k theta_c^k, with phi' and phi'' (Eqs 6, 12,
         15: the paper's cubic when ``a`` is (n, 4); (n, d + 1) for degree d) on a 1-D grid
         ``theta_c``, as one matrix product per derivative."""

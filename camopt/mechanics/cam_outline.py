@@ -49,7 +49,7 @@ class Segment:
     start: float
     end: float
     law: str
-    ends: NDArray
+    ends: Floats
 
 
 @dataclass(frozen=True)
@@ -120,7 +120,7 @@ class CamOutline:
         return lines
 
 
-def hermite5(u: NDArray, start: NDArray, end: NDArray, span: NDArray | float
+def hermite5(u: Floats, start: Floats, end: Floats, span: Floats | float
              ) -> tuple[Floats, Floats, Floats]:
     """The quintic with value, slope and curvature ``start`` and ``end`` (..., 3) at the
     two ends of an interval of length ``span`` (..., ), on ``u`` (m,) in [0, 1]; returns
@@ -142,7 +142,7 @@ def hermite5(u: NDArray, start: NDArray, end: NDArray, span: NDArray | float
     return value, slope / s, accel / (s * s)
 
 
-def _follower(theta: NDArray, phi: NDArray, dphi: NDArray, ddphi: NDArray, xi: float
+def _follower(theta: Floats, phi: Floats, dphi: Floats, ddphi: Floats, xi: float
               ) -> cam.Follower:
     angle = phi + xi
     return cam.Follower(theta, xi, angle, dphi, ddphi, np.cos(angle), np.sin(angle))
@@ -157,7 +157,7 @@ def _geometry(l2: float, l6: float, rf: float, f: cam.Follower
             cam.pressure_angle(l2, l6, f), cam.curvature_radius(l2, l6, f, rf))
 
 
-def _shortest(start: NDArray, end_of: NDArray, at: float, backwards: bool,
+def _shortest(start: Floats, end_of: Floats, at: float, backwards: bool,
               geometry: tuple[float, float, float, float], limits: tuple[float, float]
               ) -> float:
     """The shortest trial span (rad) of a Hermite segment meeting the limits: it starts
@@ -187,7 +187,7 @@ def _shortest(start: NDArray, end_of: NDArray, at: float, backwards: bool,
     return float(spans[ok[0]] if ok.size else spans[int(np.argmin(excess))])
 
 
-def closed_outline(a: NDArray, end: float, rise_steps: int, xi: float, l2: float,
+def closed_outline(a: Floats, end: float, rise_steps: int, xi: float, l2: float,
                    l6: float, rf: float, curvature_min: float, step: float | None = None
                    ) -> CamOutline:
     """The full-turn outline of the polynomial law ``a`` (d + 1,) over 0..``end`` (rad)
@@ -201,7 +201,7 @@ def closed_outline(a: NDArray, end: float, rise_steps: int, xi: float, l2: float
     h = end / n_rise if step is None else step
     k = np.arange(a.size, dtype=float)
 
-    def law(t: float) -> NDArray:  # phi, phi', phi'' of the design at t
+    def law(t: float) -> Floats:  # phi, phi', phi'' of the design at t
         p = t ** k
         return np.array([a @ p, a[1:] @ (k[1:] * t ** (k[1:] - 1)),
                          a[2:] @ (k[2:] * (k[2:] - 1) * t ** (k[2:] - 2))])
@@ -259,7 +259,7 @@ def closed_outline(a: NDArray, end: float, rise_steps: int, xi: float, l2: float
         hi = -1 if i == rise_at - 1 or i == len(parts) - 1 else None
         keep.append(slice(lo, hi))
 
-    def joined(get: Callable[[tuple], NDArray]) -> Floats:
+    def joined(get: Callable[[tuple], Floats]) -> Floats:
         return np.concatenate([np.ravel(get(p))[s] for p, s in zip(parts, keep)])
 
     pitch = np.concatenate([p[2][0].reshape(-1, 2)[s] for p, s in zip(parts, keep)])

@@ -1,4 +1,7 @@
-"""One-degree-of-freedom equations of motion from kinetic and potential energy."""
+"""One-degree-of-freedom equations of motion from kinetic and potential energy.
+
+scipy.integrate is imported where used (scipy is slow to import; the closed forms need
+none)."""
 
 from __future__ import annotations
 

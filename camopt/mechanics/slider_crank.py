@@ -8,7 +8,6 @@ horizontal line at distance ``span = r2 cos theta2 + r3 cos theta3``.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.mechanics import Floats, FloatsLike
 
@@ -33,7 +32,7 @@ def coupler_angle(r2: FloatsLike, r3: FloatsLike, theta2: FloatsLike, span: Floa
 
 
 def coupler_derivatives(r2: FloatsLike, r3: FloatsLike, theta2: FloatsLike
-                        ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+                        ) -> tuple[Floats, Floats, Floats, Floats, Floats]:
     """theta3, dtheta3/dtheta2, d2theta3/dtheta2^2, ds/dtheta2, d2s/dtheta2^2 along the motion.
 
     theta3 is taken on the fourth-quadrant branch (cos theta3 > 0) and s is the

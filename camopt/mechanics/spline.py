@@ -13,7 +13,6 @@ conditions of Yan et al. (2023), Sec 3.3.1.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.mechanics import Floats
 
@@ -21,7 +20,7 @@ from camopt.mechanics import Floats
 class ClampedNaturalSpline:
     """Cubic splines through N uniform knots, sampled at fixed points ``u`` in [0, N-1]."""
 
-    def __init__(self, n_knots: int, u: NDArray) -> None:
+    def __init__(self, n_knots: int, u: Floats) -> None:
         if n_knots < 3:
             raise ValueError("a spline needs at least 3 knots")
         n = n_knots
@@ -56,13 +55,13 @@ class ClampedNaturalSpline:
         self._vecs = [g @ WM, g @ DM, g @ EM]
         self.G, self.g = G, g
 
-    def __call__(self, r: NDArray, slope0: NDArray) -> tuple[Floats, Floats, Floats]:
+    def __call__(self, r: Floats, slope0: Floats) -> tuple[Floats, Floats, Floats]:
         """S, dS/du and d2S/du2 at the sample points for knot values ``r`` (P, N) and
         start slopes ``slope0`` (P,) in units of r per unit u."""
         d0 = np.asarray(slope0, dtype=float)[:, None]
         S, dS, ddS = (r @ m + d0 * v[None, :] for m, v in zip(self._mats, self._vecs))
         return S, dS, ddS
 
-    def second_derivative_at_knots(self, r: NDArray, slope0: NDArray) -> Floats:
+    def second_derivative_at_knots(self, r: Floats, slope0: Floats) -> Floats:
         """M_j = S''(j) at every knot, (P, N)."""
         return r @ self.G.T + np.asarray(slope0, dtype=float)[:, None] * self.g[None, :]

@@ -13,7 +13,6 @@ little over half the cost of np.cos alone (60 against 108 us for 100 x 141).
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.mechanics import Floats
 
@@ -27,7 +26,7 @@ _COS = np.cos(_K * _STEP)
 _SIN = np.sin(_K * _STEP)
 
 
-def sincos(angle: NDArray, bound: float | None = None) -> tuple[Floats, Floats]:
+def sincos(angle: Floats, bound: float | None = None) -> tuple[Floats, Floats]:
     """cos and sin of ``angle`` (rad, any shape), within 1e-15 of np.cos / np.sin;
     NaN and infinities give NaN as numpy does. A caller that knows |angle| <= ``bound``
     saves the range check."""
@@ -45,7 +44,7 @@ def sincos(angle: NDArray, bound: float | None = None) -> tuple[Floats, Floats]:
     return cos, sin
 
 
-def _reduced(angle: NDArray) -> tuple[Floats, Floats]:
+def _reduced(angle: Floats) -> tuple[Floats, Floats]:
     """sincos for |angle| < _LIMIT."""
     k = np.multiply(angle, 1 / _STEP)
     np.rint(k, out=k)

@@ -7,6 +7,7 @@ less measured (bottom), in mm and ms. Kind-free: plain
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 from matplotlib.figure import Figure
 
@@ -44,6 +45,6 @@ def figures(curves: Sequence[FittedCurve], rms_mm: Mapping[str, float]
     return out
 
 
-def rms_of(summary: Mapping) -> dict[str, float]:
+def rms_of(summary: Mapping[str, Any]) -> dict[str, float]:
     """Each form's ``rms_mm`` from a calibration's JSON summary."""
     return {str(f["form"]): float(f["rms_mm"]) for f in summary.get("forms", [])}

@@ -10,6 +10,8 @@ checked yield, or an ``expected_yield`` the archive stores; else "-"), objective
 and seed. Columns sort on a click, a text box filters, and two ticked runs show only what
 differs between them: the config as run and the results (objective, variables, metrics,
 verdict and requirement values), flattened to ``section.key`` lines.
+
+Jinja2, numpy and the reports are imported where used: listing archives starts without them.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import asdict, dataclass, field
+from html import escape
 from pathlib import Path
 from typing import Any
 
@@ -94,8 +97,8 @@ def expected_yield(view: Any) -> float | None:
     on)."""
     from camopt.reporting.report import judged_yield
 
-    judged = judged_yield(view) or {}
-    return _finite(judged.get("value"))
+    judged = judged_yield(view)
+    return _finite(None if judged is None else judged.value)
 
 
 def run_row(path: Path, listed: dict[str, Any]) -> DashboardRow:
@@ -217,8 +220,6 @@ def _fmt(v: float) -> str:
 def scatter(case: str, found: list[DashboardRow]) -> Chart:
     """Objective against expected yield of one case's runs: a point per run with both,
     coloured by verdict, its name beside it and in its tooltip."""
-    from html import escape
-
     drawn = [r for r in found if r.objective is not None and r.expected_yield is not None]
     objectives = [float(r.objective) for r in drawn if r.objective is not None]
     lo, hi = _span(objectives) if objectives else (0.0, 1.0)
@@ -279,8 +280,6 @@ def parallel(case: str, found: list[DashboardRow]) -> Chart:
     """Parallel coordinates of one case's runs: an axis per design variable, then the
     objective and the expected yield, each scaled to its range over these runs; a line
     per run, coloured by verdict (a value a run lacks breaks its line there)."""
-    from html import escape
-
     names = sorted({k for r in found for k in r.design})
     objective_name = next((r.objective_name for r in found if r.objective_name), "objective")
     axes: list[tuple[str, list[float | None]]] = [

@@ -14,6 +14,7 @@ a group has it, in the first column), json ``STEM.json``, dxf ``STEM.dxf``,
 from __future__ import annotations
 
 import csv
+import datetime
 import io
 import json
 from collections.abc import Iterator
@@ -25,7 +26,7 @@ import numpy as np
 
 from camopt.cases import CaseSpec, get_case
 from camopt.core.runview import RunView
-from camopt.errors import ConfigError
+from camopt.errors import CamoptError, ConfigError
 from camopt.mechanics.cam_outline import CamOutline
 from camopt.reporting import report
 from camopt.units import DEG, MM, TO_DEG
@@ -134,8 +135,6 @@ def points_table(outline: CamOutline, step_deg: float) -> np.ndarray:
     linearly in polar angle between the outline's points (sample it finely:
     :data:`DENSE_DEG`). A profile that is not star-shaped about the pivot (its polar
     angle not monotonic) has no such table: CamoptError."""
-    from camopt.errors import CamoptError
-
     x, y = outline.profile[:, 0] / MM, outline.profile[:, 1] / MM
     polar = np.unwrap(np.arctan2(y, x))
     if polar[-1] < polar[0]:  # the cam turns one way, its outline the other
@@ -277,8 +276,6 @@ def chord_outline(run: RunView, spec: CaseSpec, chord_mm: float
     None when the case has no outline. The step starts from the sagitta of a circle of
     the profile's least radius (chord c errs by c^2 / 8 rho) and shrinks until the
     measured error meets ``chord_mm``."""
-    from camopt.errors import CamoptError
-
     exact = spec.cam_outline(run, REFERENCE_DEG * DEG)
     if exact is None:
         return None
@@ -325,8 +322,6 @@ def title_sheet(run: RunView, spec: CaseSpec, tolerance_mm: float | None,
     """The title block of a run's drawing: part, source archive, dates, the verdict at
     nominal with its failed requirements, profile tolerance, chord error, units and
     rotation."""
-    import datetime
-
     judged = report.verdict(run)
     failed = tuple(c.words for c in judged.checks if c.passed is False)
     if judged.verdict is None or not judged.checks:
@@ -335,9 +330,9 @@ def title_sheet(run: RunView, spec: CaseSpec, tolerance_mm: float | None,
         verdict = f"FAIL at nominal: {len(failed)} requirement{'s' if len(failed) > 1 else ''}"
     else:
         verdict = "PASS at nominal"
-        stored = run.expected_yield or {}
-        if stored.get("value") is not None:
-            verdict += f", expected yield {100 * stored['value']:.1f} %"
+        value = run.expected_yield.get("value")
+        if value is not None:
+            verdict += f", expected yield {100 * value:.1f} %"
     release = not failed
     tclass = run.case.get("tolerance_class") or spec.default_tolerance_class
     rows = [("PART", f"cam of run '{run.run.get('name', Path(run.path).stem)}' "

@@ -1,6 +1,9 @@
 """``camopt report``: one self-contained HTML page per archive (Jinja2 template
 ``templates/report.html.j2``). Every figure is an inline SVG data URI and the style sheet is
-in the page, so it opens without network access and can be handed over as one file."""
+in the page, so it opens without network access and can be handed over as one file.
+
+Jinja2, the archives' readers and the figures (matplotlib) are imported where a report is
+rendered."""
 
 from __future__ import annotations
 

@@ -1,10 +1,13 @@
 """Figures of runs and sweeps: convergence, plus each case's own figures (its spec's
 ``figures``). Every function returns ``{name: Figure}`` so tests can read axes and
-labels; :func:`save` writes them as PNGs."""
+labels; :func:`save` writes them as PNGs.
+
+The archive readers, pydantic and the driver are imported where a plot is made."""
 
 from __future__ import annotations
 
 import io
+import string
 from pathlib import Path
 from typing import Any
 
@@ -15,7 +18,9 @@ from camopt.cases import get_case
 from camopt.core import pareto
 from camopt.core.plotting import PAPER_STYLE, close, figure, new_figure, readable, wrapped
 from camopt.core.runview import RunView
+from camopt.errors import CamoptError, ConfigError
 from camopt.mechanics.cam_outline import CamOutline
+from camopt.units import MM, TO_DEG
 
 
 def _band(histories: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -112,8 +117,6 @@ def motion_diagram(outline: CamOutline) -> Figure:
     velocity, acceleration and jerk (derivatives per cam angle, rad/rad, 1/rad, 1/rad^2)
     against cam angle, the actuated stroke shaded and each segment named. Jerk is the
     acceleration's numerical derivative (the C2 outline's jerk steps at the joints)."""
-    from camopt.units import TO_DEG
-
     theta = outline.theta * TO_DEG
     with np.errstate(all="ignore"):
         jerk = np.gradient(outline.ddphi, outline.theta)
@@ -208,8 +211,6 @@ OUTLINE_CURVES = {"cam-profile": "profile", "cam-pitch-curve": "pitch"}
 def design_letters(labels: list[str]) -> list[str]:
     """``A: <label>``, ``B: <label>``, ...: the legend's names of overlaid designs (the
     titles say ``A vs B``; a run's name, often a timestamp, stays in the legend)."""
-    import string
-
     letters = string.ascii_uppercase
     return [f"{letters[i % 26]}{'' if i < 26 else i // 26}: {label}"
             for i, label in enumerate(labels)]
@@ -223,8 +224,6 @@ def overlay_figures(runs: list[RunView], labels: list[str]) -> dict[str, Figure]
     the title and ``A: <label>`` in the legend (:func:`design_letters`); a curve some
     run's archive lacks is drawn for the others. Runs of different kinds are bad input
     (ConfigError)."""
-    from camopt.errors import ConfigError
-
     kinds = {r.kind for r in runs}
     if len(kinds) > 1:
         raise ConfigError(runs[1].path, "RUN", f"case '{runs[1].kind}' cannot be overlaid "
@@ -233,7 +232,6 @@ def overlay_figures(runs: list[RunView], labels: list[str]) -> dict[str, Figure]
     labels = design_letters(labels)
     title = " vs ".join(n.split(":", 1)[0] for n in labels)
     figs: dict[str, Figure] = {}
-    from camopt.units import MM
 
     outlines = [spec.cam_outline(run) for run in runs]
     for curve in spec.profiles:
@@ -293,8 +291,7 @@ def _objective_name(spec: Any) -> str:
     plain 'objective' when the case cannot be built here (e.g. it names another archive)."""
     from pydantic import ValidationError
 
-    from camopt.engine.driver import prepare, validate
-    from camopt.errors import CamoptError
+    from camopt.engine.setup import prepare, validate
 
     try:
         return str(prepare(validate(spec.data, spec.source))[0].objective_name)

@@ -1,18 +1,25 @@
 """Views of archives for ``show``, ``compare``, ``report`` and ``export`` (no printing
 here): each function builds one of the typed views of :mod:`camopt.reporting.views`,
-whose ``to_json()`` is the JSON output."""
+whose ``to_json()`` is the JSON output.
+
+The case registry, config models, scipy-backed statistics and the tolerance engine are
+imported where used: ``camopt show`` builds its view without them."""
 
 from __future__ import annotations
 
 import math
+import shlex
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from camopt.cases import run_requirements
 from camopt.core import pareto, stats
+from camopt.core.record import ExpectedYield
 from camopt.core.requirements import (
     DEFAULT_YIELD_TARGET,
     Check,
@@ -44,8 +51,8 @@ from camopt.reporting.views import (
     SummaryRow,
     SweepRanking,
     Verdict,
-    jsonable,
 )
+from camopt.reporting.views import jsonable as jsonable  # re-exported for the printers
 
 SHOW_KEYS = ("case", "solver", "best", "repeats", "table")
 
@@ -170,12 +177,12 @@ def reference(run: RunView) -> Reference:
     return Reference(f"reference: {spec.reference or 'paper'}", values)
 
 
-_ESTIMATED: dict[str, dict[str, Any]] = {}
+_ESTIMATED: dict[str, ExpectedYield] = {}
 """Expected yields estimated at show time for archives that lack one, by path (a process
 shows an old archive's estimate once)."""
 
 
-def expected(run: RunView) -> dict[str, Any]:
+def expected(run: RunView) -> ExpectedYield:
     """The best design's quick expected yield (``value``, ``low``, ``high``, ``samples``,
     per-requirement spreads): as ``camopt run`` stored it, else (an archive older than the
     estimate) estimated now, the same way (:func:`camopt.engine.tolerance.expected_yield`,
@@ -261,8 +268,6 @@ def next_step(run: RunView, judged: Verdict) -> str:
     run's (``*_robust.toml``); for a pass below the yield target or at a limit, tolerance
     analysis and the robust config; for a green pass, the report and the DXF. Paths are
     quoted for a shell where they need it (a space, ';')."""
-    import shlex
-
     path = shlex.quote(run.path)
     robust_cfg = robust_sibling(run)
     robust_run = (f"camopt run {shlex.quote(robust_cfg)}" if robust_cfg
@@ -300,8 +305,6 @@ def next_step(run: RunView, judged: Verdict) -> str:
 def next_config(run: RunView) -> str:
     """The case file the run's ``run.next_config`` names (relative to the run's own case
     file) when it exists and is not the run's own, else ''."""
-    from pathlib import Path
-
     name = run.run.get("next_config")
     if not name or not run.config_path:
         return ""
@@ -327,9 +330,6 @@ def robust_sibling(run: RunView) -> str:
     """The robust config beside the run's case file (``configs/vcb_velocity.toml`` ->
     ``configs/vcb_velocity_robust.toml``; else that of the file it ``extends``, else
     ``<kind>_robust.toml``) when it exists, else ''."""
-    import sys
-    from pathlib import Path
-
     if sys.version_info >= (3, 11):
         import tomllib
     else:  # pragma: no cover
@@ -359,19 +359,14 @@ def yield_target(run: RunView) -> float:
     return float(target) if isinstance(target, (int, float)) else DEFAULT_YIELD_TARGET
 
 
-def judged_yield(run: RunView) -> dict[str, Any] | None:
-    """The yield a run's verdict is graded on (``value``, ``low``, ``high``,
-    ``samples``): a robust run's final check on fresh draws, else the stored expected
-    yield (or the one :func:`expected` made at show time; never a new one, as
-    :func:`spreads`); None when there is none."""
+def judged_yield(run: RunView) -> stats.YieldInterval | None:
+    """The yield a run's verdict is graded on: a robust run's final check on fresh draws,
+    else the stored expected yield (or the one :func:`expected` made at show time; never
+    a new one, as :func:`spreads`); None when there is none."""
     checked = (run.robust_check or {}).get("robust") or {}
     if checked.get("yield") is not None:
-        return {"value": checked["yield"], "low": checked.get("yield_low"),
-                "high": checked.get("yield_high"), "samples": checked.get("samples")}
-    estimate = run.expected_yield or _ESTIMATED.get(run.path) or {}
-    if estimate.get("value") is None:
-        return None
-    return {k: estimate.get(k) for k in ("value", "low", "high", "samples")}
+        return stats.YieldInterval.of(checked)
+    return stats.YieldInterval.of(run.expected_yield or _ESTIMATED.get(run.path) or {})
 
 
 def verdict(run: RunView, values: dict[str, Any] | None = None) -> Verdict:

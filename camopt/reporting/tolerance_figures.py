@@ -6,6 +6,7 @@ of one metric with its limits and each input's tolerance in its label."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -149,7 +150,7 @@ def tornado(t: Tolerance | ToleranceSamples, metric: str) -> Figure:
     return fig
 
 
-def _tolerance_label(name: str, tolerances: dict[str, dict]) -> str:
+def _tolerance_label(name: str, tolerances: Mapping[str, Mapping[str, object]]) -> str:
     """``kc1_n_per_mm ±5%`` or ``case.l1_mm ±0.05``: the input and the tolerance used."""
     v = tolerances.get(name)
     if v is None:

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from camopt.core.record import ExpectedYield
 from camopt.core.requirements import (
     GRADE_STYLES,
     Check,
@@ -28,7 +29,7 @@ from camopt.core.requirements import (
     short_sentence,
 )
 from camopt.core.runview import BestView
-from camopt.core.stats import ObjectivesTest, RunStatistics
+from camopt.core.stats import ObjectivesTest, RunStatistics, YieldInterval
 
 Json = dict[str, Any]
 
@@ -49,6 +50,11 @@ def jsonable(value: Any) -> Any:
     return value
 
 
+def json_doc(doc: Mapping[str, Any]) -> Json:
+    """A JSON object: :func:`jsonable` of each of ``doc``'s values."""
+    return {k: jsonable(v) for k, v in doc.items()}
+
+
 @dataclass(frozen=True)
 class Verdict:
     """Requirements judged on one design: the checks (in the case's order), the overall
@@ -61,7 +67,7 @@ class Verdict:
     checks: tuple[Check, ...]
     verdict: str | None
     sentence: str
-    expected_yield: Mapping[str, Any] | None = None
+    expected_yield: YieldInterval | None = None
     yield_target: float | None = None
     nominal: bool = True
 
@@ -69,9 +75,7 @@ class Verdict:
     def yield_low(self) -> float | None:
         """The low end of the expected yield's 95 % interval (what the grade compares with
         the target), or None."""
-        y = self.expected_yield or {}
-        low = y.get("low", y.get("value"))
-        return None if low is None else float(low)
+        return None if self.expected_yield is None else self.expected_yield.low
 
     @property
     def grade(self) -> str | None:
@@ -93,12 +97,12 @@ class Verdict:
         design's verdict."""
         if not self.nominal:
             return ""
-        y = self.expected_yield or {}
-        if y.get("value") is None:
+        y = self.expected_yield
+        if y is None:
             return "expected yield not estimated"
-        text = f"expected yield {100 * float(y['value']):.1f} %"
-        if y.get("low") is not None and y.get("high") is not None:
-            text += f" [{100 * float(y['low']):.1f}, {100 * float(y['high']):.1f}]"
+        text = f"expected yield {100 * y.value:.1f} %"
+        if y.low is not None and y.high is not None:
+            text += f" [{100 * y.low:.1f}, {100 * y.high:.1f}]"
         if self.yield_target is not None:
             below = self.yield_low is not None and self.yield_low < self.yield_target
             text += (f" (target {positional(100 * self.yield_target, 1)} %"
@@ -133,7 +137,7 @@ class Verdict:
         return [c.requirement.name for c in self.checks if c.at_limit]
 
     def to_json(self) -> Json:
-        return jsonable({"requirements": self.requirements, "verdict": self.verdict,
+        return json_doc({"requirements": self.requirements, "verdict": self.verdict,
                          "verdict_grade": self.grade, "sentence": self.sentence,
                          "headline": self.headline, "yield_target": self.yield_target})
 
@@ -154,7 +158,7 @@ class Reference:
         return self.values.get(name, default)
 
     def to_json(self) -> Json:
-        return jsonable({"label": self.label, "values": dict(self.values)})
+        return json_doc({"label": self.label, "values": dict(self.values)})
 
 
 @dataclass(frozen=True)
@@ -177,7 +181,7 @@ class ReferenceVerdict:
         return self.judged.sentence
 
     def to_json(self) -> Json:
-        return jsonable({"label": self.label, "values": dict(self.reference.values),
+        return json_doc({"label": self.label, "values": dict(self.reference.values),
                          "verdict": self.verdict, "verdict_sentence": self.verdict_sentence,
                          "requirements": self.judged.requirements})
 
@@ -197,7 +201,7 @@ class RepeatRow:
     notes: tuple[str, ...]
 
     def to_json(self) -> Json:
-        return jsonable({"seed": self.seed, "objective": self.objective,
+        return json_doc({"seed": self.seed, "objective": self.objective,
                          "feasible": self.feasible, "nfev": self.nfev,
                          "wall_s": self.wall_s, "converged_nit": self.converged_nit,
                          "spawn_key": list(self.spawn_key), "notes": list(self.notes)})
@@ -218,7 +222,7 @@ class RobustYield:
     meets_target: bool | None
 
     def to_json(self) -> Json:
-        return jsonable(asdict(self))
+        return json_doc(asdict(self))
 
 
 @dataclass(frozen=True)
@@ -229,7 +233,7 @@ class RobustRow:
     values: tuple[Any, ...]
 
     def to_json(self) -> Json:
-        return jsonable({"name": self.name, "values": list(self.values)})
+        return json_doc({"name": self.name, "values": list(self.values)})
 
 
 @dataclass(frozen=True)
@@ -243,7 +247,7 @@ class RobustSummary:
     rows: tuple[RobustRow, ...]
 
     def to_json(self) -> Json:
-        return jsonable({"labels": list(self.labels), "samples": self.samples,
+        return json_doc({"labels": list(self.labels), "samples": self.samples,
                          "yield_target": self.yield_target, "rows": list(self.rows)})
 
 
@@ -259,7 +263,7 @@ class SummaryRow:
     reference: Any
 
     def to_json(self) -> Json:
-        return jsonable(asdict(self))
+        return json_doc(asdict(self))
 
 
 @dataclass(frozen=True)
@@ -270,7 +274,7 @@ class Summary:
     rows: tuple[SummaryRow, ...]
 
     def to_json(self) -> Json:
-        return jsonable({"reference_label": self.reference_label, "rows": list(self.rows)})
+        return json_doc({"reference_label": self.reference_label, "rows": list(self.rows)})
 
 
 @dataclass(frozen=True)
@@ -281,7 +285,7 @@ class RobustDoc:
     check: Mapping[str, Any]
 
     def to_json(self) -> Json:
-        return jsonable({"settings": dict(self.settings), "check": dict(self.check)})
+        return json_doc({"settings": dict(self.settings), "check": dict(self.check)})
 
 
 @dataclass(frozen=True)
@@ -293,7 +297,7 @@ class ShowView:
     check and yield; a case's findings (under their own names)."""
 
     verdict: Verdict
-    expected_yield: Mapping[str, Any]
+    expected_yield: ExpectedYield
     next: str
     case: Mapping[str, Any]
     solver: Mapping[str, Any]
@@ -331,7 +335,7 @@ class ShowView:
                    yield_target=self.verdict.yield_target)
         # a case's findings under their own names, never over the contract's keys
         doc.update({k: v for k, v in self.findings.items() if k not in doc})
-        return jsonable(doc)
+        return json_doc(doc)
 
 
 @dataclass(frozen=True)
@@ -368,7 +372,7 @@ class Significance:
         return self.test.threshold
 
     def to_json(self) -> Json:
-        return jsonable({"a": self.a, "b": self.b, **self.test.as_dict(),
+        return json_doc({"a": self.a, "b": self.b, **self.test.as_dict(),
                          "decidable": self.decidable, "success_a": self.success_a,
                          "success_b": self.success_b,
                          "success_p_value": self.success_p_value, "verdict": self.verdict})
@@ -384,7 +388,7 @@ class SameObjective:
     differ: tuple[str, ...]
 
     def to_json(self) -> Json:
-        return jsonable({"runs": list(self.runs), "objective": self.objective,
+        return json_doc({"runs": list(self.runs), "objective": self.objective,
                          "differ": list(self.differ)})
 
 
@@ -428,7 +432,7 @@ class Comparison:
         doc.update(verdict_grade=[v.grade for v in self.verdicts],  # after the older keys
                    verdict_headline=[v.headline for v in self.verdicts],
                    yield_target=[v.yield_target for v in self.verdicts])
-        return jsonable(doc)
+        return json_doc(doc)
 
 
 @dataclass(frozen=True)
@@ -446,7 +450,7 @@ class RankedPoint:
         doc: Json = {"rank": self.rank, "label": self.label, **self.row}
         if self.vs_best is not None:
             doc["vs_best"] = self.vs_best
-        return jsonable(doc)
+        return json_doc(doc)
 
 
 @dataclass(frozen=True)
@@ -464,7 +468,7 @@ class SweepRanking:
     def to_json(self) -> Json:
         """The document ``show --format json`` and ``compare --format json`` write for a
         sweep archive."""
-        return jsonable({"verdict": self.verdict.verdict,
+        return json_doc({"verdict": self.verdict.verdict,
                          "verdict_sentence": self.verdict.sentence,
                          "requirements": self.verdict.requirements, "sweep": self.sweep,
                          "grid": self.grid, "seeds": list(self.seeds),

@@ -9,13 +9,13 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.config.models import SolverOptions
 from camopt.core import batch
 from camopt.core.capabilities import capability_name
 from camopt.core.problem import Evaluation, Problem, deb_best
 from camopt.errors import SolverError
+from camopt.mechanics import Bools, Floats
 
 
 class StopReason(str, enum.Enum):
@@ -101,15 +101,15 @@ class Solver(ABC):
                               f"{', '.join(missing)}; '{problem_class.__name__}' does not")
 
     @abstractmethod
-    def ask(self) -> NDArray:
+    def ask(self) -> Floats:
         """Candidates to evaluate next, shape (k, n_var), SI."""
 
     @abstractmethod
-    def tell(self, X: NDArray, ev: Evaluation) -> None:
+    def tell(self, X: Floats, ev: Evaluation) -> None:
         """Take the evaluation of the candidates from the last ask."""
 
     @abstractmethod
-    def best(self) -> tuple[NDArray, Evaluation]:
+    def best(self) -> tuple[Floats, Evaluation]:
         """The best design so far and its evaluation (one row)."""
 
     @abstractmethod
@@ -128,13 +128,13 @@ class Solver(ABC):
         """Plain-language findings for the run's summary (e.g. non-unique optima)."""
         return []
 
-    def population_objectives(self) -> NDArray | None:
+    def population_objectives(self) -> Floats | None:
         """The current population's objectives, for the archive's mean-objective history
         (None: the last evaluated batch stands in)."""
         return None
 
 
-def better(f_a: NDArray, v_a: NDArray, f_b: NDArray, v_b: NDArray) -> NDArray:
+def better(f_a: Floats, v_a: Floats, f_b: Floats, v_b: Floats) -> Bools:
     """Deb's feasibility rules: a beats b if less violated, or equally violated and lower f."""
     return (v_a < v_b) | ((v_a == v_b) & (f_a < f_b))
 
@@ -144,9 +144,9 @@ class BestSoFar:
     does not keep it: CMA-ES, NSGA-II)."""
 
     def __init__(self) -> None:
-        self.design: tuple[NDArray, Evaluation] | None = None
+        self.design: tuple[Floats, Evaluation] | None = None
 
-    def offer(self, X: NDArray, ev: Evaluation) -> None:
+    def offer(self, X: Floats, ev: Evaluation) -> None:
         """Keep the best row of a told batch if it beats the best so far."""
         i = best_index(ev)
         held = self.design
@@ -154,13 +154,13 @@ class BestSoFar:
                                   held[1].violation)[0]:
             self.design = (X[i].copy(), ev.take(i))
 
-    def get(self) -> tuple[NDArray, Evaluation]:
+    def get(self) -> tuple[Floats, Evaluation]:
         """A copy of the best design and its evaluation."""
         assert self.design is not None, "nothing told yet"
         return self.design[0].copy(), self.design[1]
 
 
-def snap(problem: Problem, X: NDArray) -> NDArray:
+def snap(problem: Problem, X: Floats) -> Floats:
     """Clip to bounds and round integer variables."""
     X = np.clip(X, problem.lower, problem.upper)
     mask = problem.integer
@@ -174,7 +174,7 @@ def best_index(ev: Evaluation) -> int:
     return deb_best(ev.f, ev.violation)
 
 
-def design_rows(problem: Problem, X: NDArray) -> list[dict[str, Any]]:
+def design_rows(problem: Problem, X: Floats) -> list[dict[str, Any]]:
     """One table row per candidate: variables in display units, the case's descriptive
     metrics (:meth:`Problem.describe`), objective, feasibility, active and violated
     constraints. Tables are not a hot path."""

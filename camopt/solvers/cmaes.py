@@ -28,11 +28,11 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
 from camopt.core.problem import Evaluation, Problem
+from camopt.mechanics import Floats, Ints
 from camopt.solvers.base import BestSoFar, Solver, StopReason, snap
 from camopt.solvers.registry import register_solver
 
@@ -41,7 +41,7 @@ class CMACore:
     """CMA-ES state in the unit box (Hansen 2016, Table 1): ``ask`` draws a generation,
     ``tell`` takes its ranking (0 = best)."""
 
-    def __init__(self, u0: NDArray, sigma: float, rng: np.random.Generator,
+    def __init__(self, u0: Floats, sigma: float, rng: np.random.Generator,
                  popsize: int | None = None) -> None:
         n = self.n = len(u0)
         self.rng = rng
@@ -65,12 +65,12 @@ class CMACore:
         self.ps = np.zeros(n)
         self.generation = 0
 
-    def ask(self) -> NDArray:
+    def ask(self) -> Floats:
         """One generation, (lam, n), clipped into [0, 1]."""
         Z = self.rng.standard_normal((self.lam, self.n))
         return np.clip(self.mean + self.sigma * (Z * self.D) @ self.B.T, 0.0, 1.0)
 
-    def tell(self, U: NDArray, order: NDArray) -> None:
+    def tell(self, U: Floats, order: Ints) -> None:
         """Update from the generation ``U`` and its indices best first (``order``)."""
         n, cs, cc = self.n, self.cs, self.cc
         self.generation += 1
@@ -98,7 +98,7 @@ class CMACore:
         return float(self.sigma * self.D.max())
 
 
-def deb_order(f: NDArray, violation: NDArray) -> NDArray:
+def deb_order(f: Floats, violation: Floats) -> Ints:
     """Indices best first by Deb's rules (violation, then objective; NaN as +inf)."""
     f = np.where(np.isnan(f), np.inf, f)
     return np.lexsort((f, np.where(np.isnan(violation), np.inf, violation)))
@@ -157,10 +157,10 @@ class CMAES(Solver):
     def max_iterations(self) -> int:
         return self.options.generations
 
-    def ask(self) -> NDArray:
+    def ask(self) -> Floats:
         return snap(self.problem, self.problem.from_unit(self.core.ask()))
 
-    def tell(self, X: NDArray, ev: Evaluation) -> None:
+    def tell(self, X: Floats, ev: Evaluation) -> None:
         self.nfev += len(X)
         self.nit += 1
         order = deb_order(ev.f, ev.violation)
@@ -192,7 +192,7 @@ class CMAES(Solver):
         self.core = CMACore(self.rng.random(self.core.n), self.options.sigma, self.rng, lam)
         self._history = []
 
-    def best(self) -> tuple[NDArray, Evaluation]:
+    def best(self) -> tuple[Floats, Evaluation]:
         return self._best.get()
 
     def stop_reason(self) -> StopReason | None:

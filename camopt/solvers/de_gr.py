@@ -12,18 +12,18 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION
 from camopt.core.capabilities import Stochastic
 from camopt.core.problem import Evaluation, Problem
+from camopt.mechanics import Floats
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
 from camopt.solvers.polish import PolishableOptions, Polishing
 from camopt.solvers.registry import register_solver
 
 
-def best1(pop: NDArray, best: NDArray, factor: float, rng: np.random.Generator) -> NDArray:
+def best1(pop: Floats, best: Floats, factor: float, rng: np.random.Generator) -> Floats:
     """DE/best/1 mutants (n, d): best + F (x_r1 - x_r2) with r1 != r2, both != i, drawn
     per row from the population ``pop`` (n, d)."""
     n = len(pop)
@@ -33,8 +33,8 @@ def best1(pop: NDArray, best: NDArray, factor: float, rng: np.random.Generator) 
     return best + factor * (pop[idx[:, 0]] - pop[idx[:, 1]])
 
 
-def binomial_crossover(pop: NDArray, mutant: NDArray, rate: float, rng: np.random.Generator
-                       ) -> NDArray:
+def binomial_crossover(pop: Floats, mutant: Floats, rate: float, rng: np.random.Generator
+                       ) -> Floats:
     """Trials (n, d): each gene from the mutant with probability ``rate`` (CR), else from
     the parent, and one random gene per row from the mutant whatever CR is."""
     n, d = pop.shape
@@ -72,7 +72,7 @@ class DEGR(Polishing, Solver):
                  ) -> None:
         super().__init__(problem, options, rng)
         self.lo, self.hi = problem.lower, problem.upper
-        self.pop: NDArray | None = None
+        self.pop: Floats | None = None
         self.ev: Evaluation | None = None
         self._trial = False
         # parents are evaluated again on each generation's draws (Stochastic's docstring)
@@ -82,7 +82,7 @@ class DEGR(Polishing, Solver):
     def max_iterations(self) -> int:
         return self.options.generations + (self.options.polish is not None)
 
-    def ask(self) -> NDArray:
+    def ask(self) -> Floats:
         if self.polish_pending():
             return self.polish_ask()
         n = self.options.population
@@ -104,7 +104,7 @@ class DEGR(Polishing, Solver):
             return np.vstack([snap(self.problem, trial), self.pop[self._again]])
         return snap(self.problem, trial)
 
-    def tell(self, X: NDArray, ev: Evaluation) -> None:
+    def tell(self, X: Floats, ev: Evaluation) -> None:
         if self.polish_tell(X, ev):
             return
         self.nfev += len(X)
@@ -128,13 +128,13 @@ class DEGR(Polishing, Solver):
         assert self.ev is not None
         return best_index(self.ev)
 
-    def population_best(self) -> tuple[NDArray, Evaluation]:
+    def population_best(self) -> tuple[Floats, Evaluation]:
         """The population's best design by Deb's rules and its evaluation (one row)."""
         i = self._best_index()
         assert self.pop is not None and self.ev is not None
         return self.pop[i].copy(), self.ev.take(i)
 
-    def population_objectives(self) -> NDArray:
+    def population_objectives(self) -> Floats:
         assert self.ev is not None
         return self.ev.f
 

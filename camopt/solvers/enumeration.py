@@ -10,11 +10,11 @@ from __future__ import annotations
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.config.models import SolverOptions
 from camopt.core.capabilities import HasFamily
 from camopt.core.problem import Evaluation, Problem
+from camopt.mechanics import Floats
 from camopt.solvers.base import Solver, StopReason, best_index, design_rows
 from camopt.solvers.registry import register_solver
 
@@ -38,22 +38,22 @@ class Enumeration(Solver):
     def __init__(self, problem: Problem, options: EnumerationOptions, rng: np.random.Generator
                  ) -> None:
         super().__init__(problem, options, rng)
-        self.X: NDArray | None = None
+        self.X: Floats | None = None
         self.ev: Evaluation | None = None
 
     def max_iterations(self) -> int:
         return 1
 
-    def ask(self) -> NDArray:
+    def ask(self) -> Floats:
         assert isinstance(self.problem, HasFamily)
         return np.atleast_2d(self.problem.family())
 
-    def tell(self, X: NDArray, ev: Evaluation) -> None:
+    def tell(self, X: Floats, ev: Evaluation) -> None:
         self.X, self.ev = X, ev
         self.nfev += len(X)
         self.nit += 1
 
-    def best(self) -> tuple[NDArray, Evaluation]:
+    def best(self) -> tuple[Floats, Evaluation]:
         assert self.X is not None and self.ev is not None
         i = best_index(self.ev)
         return self.X[i].copy(), self.ev.take(i)

@@ -5,12 +5,12 @@ from __future__ import annotations
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import SolverOptions
 from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
+from camopt.mechanics import Floats
 from camopt.solvers.base import Solver, StopReason, best_index, design_rows
 from camopt.solvers.registry import register_solver
 
@@ -48,15 +48,15 @@ class Evaluate(Solver):
     def max_iterations(self) -> int:
         return 1
 
-    def ask(self) -> NDArray:
+    def ask(self) -> Floats:
         return self.X.copy()
 
-    def tell(self, X: NDArray, ev: Evaluation) -> None:
+    def tell(self, X: Floats, ev: Evaluation) -> None:
         self.ev = ev
         self.nfev += len(X)
         self.nit += 1
 
-    def best(self) -> tuple[NDArray, Evaluation]:
+    def best(self) -> tuple[Floats, Evaluation]:
         assert self.ev is not None
         i = best_index(self.ev)
         return self.X[i].copy(), self.ev.take(i)

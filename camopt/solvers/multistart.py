@@ -28,20 +28,36 @@ before it left). Without a limit reached the meter changes nothing.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.config.models import SolverOptions
 from camopt.core.perf import fork_pool, kill_pool
 from camopt.core.problem import Evaluation, Problem
+from camopt.mechanics import Bools, Floats
 from camopt.solvers.base import Budget, Solver, StopReason, best_index
 
 _SOLVING: MultiStart | None = None  # the solver whose starts forked workers solve
 
 
-def _solve_start(i: int) -> tuple[NDArray, dict[str, Any]]:
+class StartRecord(TypedDict, total=False):
+    """A local solve's record, one per start (the table's columns beside the design):
+    whether it converged (``success``) inside the bounds (``in_bounds``), the local
+    solver's ``message`` and evaluations (``nfev``), where the run's budget stopped it
+    (``stopped``), and what a solver adds (``residual_max``, ``jacobian_cond``: a root
+    finder's largest residual and its Jacobian's condition number)."""
+
+    success: bool
+    message: str
+    nfev: int
+    in_bounds: bool
+    stopped: StopReason
+    residual_max: float
+    jacobian_cond: float
+
+
+def _solve_start(i: int) -> tuple[Floats, StartRecord]:
     assert _SOLVING is not None
     return _SOLVING.solve_within_budget(_SOLVING.starts[i])
 
@@ -65,12 +81,12 @@ class Meter:
     def __init__(self, budget: Budget, used: int) -> None:
         self.budget, self.used = budget, used
         self.count = 0
-        self.best: tuple[NDArray, float] | None = None
+        self.best: tuple[Floats, float] | None = None
 
-    def wrap(self, fun: Callable[[NDArray], Any], score: Callable[[Any], float]
-             ) -> Callable[[NDArray], Any]:
+    def wrap(self, fun: Callable[[Floats], Any], score: Callable[[Any], float]
+             ) -> Callable[[Floats], Any]:
         """``fun`` (of the bounds-normalised variables) with each call counted."""
-        def metered(u: NDArray) -> Any:
+        def metered(u: Floats) -> Any:
             reason = self.budget.spent(self.used + self.count + 1)
             if reason is not None:
                 raise BudgetSpent(reason)
@@ -103,16 +119,16 @@ class MultiStart(Solver):
         super().__init__(problem, options, rng)
         self.lo, self.hi = problem.lower, problem.upper
         self.starts = self._starts()
-        self.results: list[dict[str, Any]] = []
-        self.X: list[NDArray] = []
+        self.results: list[StartRecord] = []
+        self.X: list[Floats] = []
         self.ev: Evaluation | None = None
-        self._solved: list[tuple[NDArray, dict[str, Any]]] | None = None
+        self._solved: list[tuple[Floats, StartRecord]] | None = None
         self.meter: Meter | None = None
         """The running start's meter (None: no run limit set)."""
         self.stopped: StopReason | None = None
         """The run's limit that stopped a start's local solve, if one did."""
 
-    def _starts(self) -> NDArray:
+    def _starts(self) -> Floats:
         n = self.options.starts
         first = []
         initial = self.problem.initial_x()
@@ -126,23 +142,23 @@ class MultiStart(Solver):
     def max_iterations(self) -> int:
         return len(self.starts)
 
-    def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:  # pragma: no cover
+    def local_solve(self, x0: Floats) -> tuple[Floats, StartRecord]:  # pragma: no cover
         """One scipy local solve from ``x0``: its end point and a record (success, nfev,
         ...). The function handed to scipy goes through :meth:`metered`."""
         raise NotImplementedError
 
-    def metered(self, fun: Callable[[NDArray], Any], score: Callable[[Any], float]
-                ) -> Callable[[NDArray], Any]:
+    def metered(self, fun: Callable[[Floats], Any], score: Callable[[Any], float]
+                ) -> Callable[[Floats], Any]:
         """``fun`` as a local solve hands it to scipy: counted by the running start's
         :class:`Meter` (unchanged when the run sets no limit)."""
         return fun if self.meter is None else self.meter.wrap(fun, score)
 
-    def stopped_record(self, x: NDArray) -> dict[str, Any]:
+    def stopped_record(self, x: Floats) -> StartRecord:
         """A stopped start's record beyond success, message and nfev (subclasses add
         what their table shows of every start)."""
         return {}
 
-    def solve_within_budget(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:
+    def solve_within_budget(self, x0: Floats) -> tuple[Floats, StartRecord]:
         """:meth:`local_solve` under the run's budget (:attr:`Solver.budget`): unchanged
         while it holds; once spent, the best point the solve evaluated (unconverged,
         never a design) with a record saying where it stopped (``stopped``: the limit)."""
@@ -164,7 +180,7 @@ class MultiStart(Solver):
         finally:
             self.meter = None
 
-    def _solve_all(self) -> list[tuple[NDArray, dict[str, Any]]]:
+    def _solve_all(self) -> list[tuple[Floats, StartRecord]]:
         """Every start's local solve in ``jobs`` forked workers, in start order."""
         global _SOLVING
         _SOLVING = self
@@ -179,7 +195,7 @@ class MultiStart(Solver):
         pool.shutdown(wait=True)
         return solved
 
-    def ask(self) -> NDArray:
+    def ask(self) -> Floats:
         parallel = self.jobs > 1 and len(self.starts) > 1 and self.budget.max_nfev is None
         if parallel and self._solved is None:
             self._solved = self._solve_all()
@@ -193,18 +209,18 @@ class MultiStart(Solver):
         self.nfev += info.pop("nfev", 0)
         return x[None, :]
 
-    def tell(self, X: NDArray, ev: Evaluation) -> None:
+    def tell(self, X: Floats, ev: Evaluation) -> None:
         self.nfev += len(X)
         self.nit += 1
         self.X.append(X[0])
         self.ev = ev if self.ev is None else Evaluation.concat([self.ev, ev])
 
-    def converged(self) -> NDArray:
+    def converged(self) -> Bools:
         """Which starts converged inside the bounds (the only end points that are designs)."""
         return np.array([bool(r["success"]) and bool(r["in_bounds"]) for r in self.results],
                         dtype=bool)
 
-    def best(self) -> tuple[NDArray, Evaluation]:
+    def best(self) -> tuple[Floats, Evaluation]:
         """The best converged start by Deb's rules; with none, the first start's end point
         with objective +inf (infeasible by construction: it is not a solution)."""
         assert self.ev is not None
@@ -220,15 +236,15 @@ class MultiStart(Solver):
             return self.stopped
         return StopReason.EXHAUSTED if self.nit >= len(self.starts) else None
 
-    def reached(self) -> NDArray:
+    def reached(self) -> Bools:
         """Which starts count as having reached an optimum (subclasses refine; never one
         that did not converge inside the bounds)."""
         return self.converged()
 
-    def clusters(self) -> NDArray:
+    def clusters(self) -> Floats:
         """Cluster id of each end point that reached an optimum (-1 for the others)."""
         ids = np.full(len(self.X), -1)
-        centres: list[NDArray] = []
+        centres: list[Floats] = []
         ok = self.reached()
         for i, x in enumerate(self.X):
             if not ok[i]:

@@ -1,19 +1,21 @@
 """``newton_pp``: precision-point equations solved by scipy's root finder from several
-starts (Ahn et al., Sec 3: n + 1 precision points give n equations)."""
+starts (Ahn et al., Sec 3: n + 1 precision points give n equations).
+
+scipy.optimize is imported where a start is solved (scipy is slow to import)."""
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import MAX_STARTS
 from camopt.core.capabilities import HasResiduals
 from camopt.core.problem import Problem
 from camopt.errors import SolverError
-from camopt.solvers.multistart import MultiStart, MultiStartOptions
+from camopt.mechanics import Floats
+from camopt.solvers.multistart import MultiStart, MultiStartOptions, StartRecord
 from camopt.solvers.registry import register_solver
 
 
@@ -51,10 +53,10 @@ class NewtonPP(MultiStart):
             raise SolverError(f"newton_pp needs as many equations as unknowns: the case has "
                               f"{n_eq} equations for {problem.n_var} unknowns")
 
-    def _residual(self, u: NDArray) -> NDArray:
+    def _residual(self, u: Floats) -> Floats:
         return self.equations.residuals(self.problem.from_unit(u)[None, :])[0]
 
-    def jacobian_condition(self, x: NDArray) -> float:
+    def jacobian_condition(self, x: Floats) -> float:
         """Condition number of the residuals' Jacobian (central differences, in the
         bounds-normalised variables), evaluated in one vectorised call."""
         u = self.problem.to_unit(x)
@@ -65,7 +67,7 @@ class NewtonPP(MultiStart):
         J = (R[: len(u)] - R[len(u):]).T / (2 * h)
         return float(np.linalg.cond(J))
 
-    def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:
+    def local_solve(self, x0: Floats) -> tuple[Floats, StartRecord]:
         from scipy.optimize import root  # scipy.optimize: 0.5 s, only for a run
 
         equations = self.metered(self._residual, lambda r: float(np.max(np.abs(r))))
@@ -80,7 +82,7 @@ class NewtonPP(MultiStart):
                    "in_bounds": bool(np.all((x >= self.lo) & (x <= self.hi))),
                    "message": str(sol.message), "nfev": int(sol.nfev)}
 
-    def stopped_record(self, x: NDArray) -> dict[str, Any]:
+    def stopped_record(self, x: Floats) -> StartRecord:
         """A start the run's budget stopped: its best point's largest residual (no
         condition number: it is not a root)."""
         residual = float(np.max(np.abs(self.equations.residuals(x[None, :])[0])))

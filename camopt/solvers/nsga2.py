@@ -23,6 +23,9 @@ by rank and crowding; then the least violation), and runs its ``generations``.
 pymoo draws from ``algorithm.random_state``; the plugin hands it the repeat's own
 generator (after ``setup``, which would otherwise seed a fresh one), so the same seed
 gives the same front. The CMA-ES start draws from the same generator.
+
+pymoo is imported where the search runs (it is slow to import; ``camopt solvers`` lists this
+one without it).
 """
 
 from __future__ import annotations
@@ -30,13 +33,13 @@ from __future__ import annotations
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
 from camopt.core.capabilities import Repairable
 from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
+from camopt.mechanics import Floats
 from camopt.solvers.base import BestSoFar, Solver, StopReason, design_rows, snap
 from camopt.solvers.cmaes import CMACore, deb_order
 from camopt.solvers.registry import register_solver
@@ -128,7 +131,7 @@ class NSGA2(Solver):
         # the CMA-ES start: its generations, its core and every design it evaluated
         self.start_generations = -(-options.cmaes_evaluations // options.cmaes_population)
         self.start: CMACore | None = None
-        self._pool: list[tuple[NDArray, NDArray, NDArray]] = []
+        self._pool: list[tuple[Floats, Floats, Floats]] = []
         self.algorithm: Any = None
         if self.start_generations:
             initial = problem.initial_x()
@@ -141,7 +144,7 @@ class NSGA2(Solver):
         self._pending: Any = None
         self._best = BestSoFar()
 
-    def _nsga2(self, sampling: NDArray | None) -> Any:
+    def _nsga2(self, sampling: Floats | None) -> Any:
         """pymoo's NSGA-II set up on the problem, drawing from the repeat's generator;
         ``sampling``: its first population (None: pymoo's uniform random one)."""
         nsga2, no_termination, sbx, pm = self._pymoo
@@ -165,14 +168,14 @@ class NSGA2(Solver):
     def max_iterations(self) -> int:
         return self.start_generations + self.options.generations
 
-    def objective_matrix(self, ev: Evaluation) -> NDArray:
+    def objective_matrix(self, ev: Evaluation) -> Floats:
         """The objectives of an evaluation as columns, (n_pop, n_obj), in their own units
         (maximised ones not negated)."""
         cols = [ev.f if o == self.problem.objective_name else ev.extras[o]
                 for o in self.objectives]
         return np.column_stack([np.asarray(c, dtype=float) for c in cols])
 
-    def pymoo_fg(self, ev: Evaluation) -> tuple[NDArray, NDArray]:
+    def pymoo_fg(self, ev: Evaluation) -> tuple[Floats, Floats]:
         """The objectives in minimisation form and the constraints as pymoo takes them,
         (n_pop, n_obj) and (n_pop, n_constr + 1): non-finite values as :data:`_BAD`, the
         last constraint whether every objective is finite."""
@@ -181,7 +184,7 @@ class NSGA2(Solver):
         G = np.column_stack([ev.g, np.where(finite, -1.0, 1.0)])
         return np.where(np.isfinite(F), F, _BAD), np.where(np.isfinite(G), G, _BAD)
 
-    def ask(self) -> NDArray:
+    def ask(self) -> Floats:
         if self.start is not None:
             return snap(self.problem, self.problem.from_unit(self.start.ask()))
         pop = self.algorithm.ask()
@@ -195,7 +198,7 @@ class NSGA2(Solver):
         self._pending = pop
         return X.copy()
 
-    def tell(self, X: NDArray, ev: Evaluation) -> None:
+    def tell(self, X: Floats, ev: Evaluation) -> None:
         from pymoo.core.evaluator import Evaluator
         from pymoo.problems.static import StaticProblem
 
@@ -215,7 +218,7 @@ class NSGA2(Solver):
         Evaluator().eval(StaticProblem(self.pproblem, F=F, G=G), pop)
         self.algorithm.tell(infills=pop)
 
-    def _first_population(self) -> NDArray:
+    def _first_population(self) -> Floats:
         """NSGA-II's first population: ``population`` of the CMA-ES start's designs, picked
         by NSGA-II's own survival (feasible ones by rank and crowding, then the least
         violation), (population, n_var)."""
@@ -231,10 +234,10 @@ class NSGA2(Solver):
                                     random_state=self.rng)
         return np.asarray(kept.get("X"), dtype=float)
 
-    def best(self) -> tuple[NDArray, Evaluation]:
+    def best(self) -> tuple[Floats, Evaluation]:
         return self._best.get()
 
-    def pareto_set(self) -> NDArray:
+    def pareto_set(self) -> Floats:
         """The designs of the final non-dominated set, (n_front, n_var), SI, ordered by the
         first objective (feasible ones only when any is feasible); none before NSGA-II
         has run (within a CMA-ES start)."""

@@ -12,6 +12,9 @@ which the driver hands the solver: every evaluation of every stage goes through 
 that counts them and stops the scipy solve (an exception out of its objective) before a
 batch would pass the budget or once the time is spent; the polish then ends on the best
 design it evaluated. Without a limit reached the meter changes nothing.
+
+scipy.optimize and the CMA-ES core are imported where a polish runs (scipy is slow to
+import).
 """
 
 from __future__ import annotations
@@ -20,12 +23,12 @@ from collections.abc import Callable
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from camopt.config.models import MAX_LOCAL_ITERATIONS, SolverOptions
 from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
+from camopt.mechanics import Floats
 from camopt.solvers.base import Budget, StopReason, better
 
 _BAD = 1e6  # stands for a non-finite objective or constraint inside SLSQP
@@ -92,15 +95,15 @@ class _Metered(Problem):
     spent, raises :class:`_BudgetSpent` instead of being evaluated."""
 
     def __init__(self, base: Problem, budget: Budget, used: int,
-                 rank: Callable[[Evaluation], tuple[NDArray, NDArray]]) -> None:
+                 rank: Callable[[Evaluation], tuple[Floats, Floats]]) -> None:
         self.base, self.budget, self.used, self.rank = base, budget, used, rank
         self.variables = base.variables
         self.constraint_names = base.constraint_names
         self.objective_name = base.objective_name
         self.count = 0
-        self.best: tuple[NDArray, NDArray, NDArray] | None = None
+        self.best: tuple[Floats, Floats, Floats] | None = None
 
-    def evaluate(self, X: NDArray) -> Evaluation:
+    def evaluate(self, X: Floats) -> Evaluation:
         X = np.atleast_2d(X)
         reason = self.budget.spent(self.used + self.count + len(X))
         if reason is not None:
@@ -114,17 +117,17 @@ class _Metered(Problem):
         return ev
 
 
-def polish(problem: Problem, x0: NDArray, options: PolishOptions,
-           rng: np.random.Generator | None = None) -> tuple[NDArray, int, str]:
+def polish(problem: Problem, x0: Floats, options: PolishOptions,
+           rng: np.random.Generator | None = None) -> tuple[Floats, int, str]:
     """Polish ``x0``: SLSQP on the continuous variables; with integer variables, the
     integer-aware search of :func:`polish_mixed`. End point, evaluations, message."""
     end, nfev, message, _ = polish_within(problem, x0, options, rng, Budget(), 0)
     return end, nfev, message
 
 
-def polish_within(problem: Problem, x0: NDArray, options: PolishOptions,
+def polish_within(problem: Problem, x0: Floats, options: PolishOptions,
                   rng: np.random.Generator | None, budget: Budget, used: int
-                  ) -> tuple[NDArray, int, str, StopReason | None]:
+                  ) -> tuple[Floats, int, str, StopReason | None]:
     """:func:`polish` under the run's ``budget``, of which ``used`` evaluations are
     spent; one more is kept for the end point's own evaluation by the driver. End point,
     evaluations, message, and the limit that stopped the polish (None: it ran to its
@@ -142,8 +145,8 @@ def polish_within(problem: Problem, x0: NDArray, options: PolishOptions,
                 f"{metered.count} evaluations; the best design it evaluated", stop.reason)
 
 
-def polish_mixed(problem: Problem, x0: NDArray, options: PolishOptions,
-                 rng: np.random.Generator | None = None) -> tuple[NDArray, int, str]:
+def polish_mixed(problem: Problem, x0: Floats, options: PolishOptions,
+                 rng: np.random.Generator | None = None) -> tuple[Floats, int, str]:
     """Integer-aware polish: fix the integer variables, polish the continuous ones
     (:func:`polish_continuous`), then step each integer variable to its neighbours,
     polishing the continuous ones again at each, and move while Deb's rules prefer the
@@ -152,9 +155,9 @@ def polish_mixed(problem: Problem, x0: NDArray, options: PolishOptions,
     ints = np.flatnonzero(problem.integer)
     nfev = 0
 
-    seen: dict[bytes, tuple[NDArray, Evaluation]] = {}
+    seen: dict[bytes, tuple[Floats, Evaluation]] = {}
 
-    def local(x: NDArray) -> tuple[NDArray, Evaluation]:
+    def local(x: Floats) -> tuple[Floats, Evaluation]:
         nonlocal nfev
         key = x[ints].tobytes()  # each integer combination is polished once
         if key not in seen:
@@ -185,8 +188,8 @@ def polish_mixed(problem: Problem, x0: NDArray, options: PolishOptions,
     return x, nfev, (f"integer-aware: {len(seen)} integer designs polished; {moves}")
 
 
-def polish_continuous(problem: Problem, x0: NDArray, options: PolishOptions,
-                      rng: np.random.Generator | None = None) -> tuple[NDArray, int, str]:
+def polish_continuous(problem: Problem, x0: Floats, options: PolishOptions,
+                      rng: np.random.Generator | None = None) -> tuple[Floats, int, str]:
     """Each stage of ``options.method`` in turn over the continuous variables (integer ones
     held at ``x0``'s values), each from the better (Deb's rules) of the previous stage's
     start and end: end point, evaluations and the stages' messages."""
@@ -209,14 +212,14 @@ def polish_continuous(problem: Problem, x0: NDArray, options: PolishOptions,
     return x, nfev, "; ".join(messages)
 
 
-def _unit_map(problem: Problem, x0: NDArray) -> tuple[NDArray, Any]:
+def _unit_map(problem: Problem, x0: Floats) -> tuple[Floats, Any]:
     """The continuous variables of ``x0`` in bounds-normalised coordinates, and the map
     from such coordinates back to a full SI design (integer variables held at ``x0``'s)."""
     x0 = np.asarray(x0, dtype=float)
     free = ~problem.integer
     lo, span = problem.lower[free], problem.upper[free] - problem.lower[free]
 
-    def design(U: NDArray) -> NDArray:
+    def design(U: Floats) -> Floats:
         U = np.asarray(U, dtype=float)
         X = np.broadcast_to(x0, U.shape[:-1] + x0.shape).copy()
         X[..., free] = lo + U * span
@@ -226,7 +229,7 @@ def _unit_map(problem: Problem, x0: NDArray) -> tuple[NDArray, Any]:
 
 
 def _score(problem: Problem, ev: Evaluation, options: PolishOptions
-           ) -> tuple[NDArray, NDArray]:
+           ) -> tuple[Floats, Floats]:
     """What the polish ranks by (Deb's rules): the ``minimise`` metric (+inf where not
     finite) and the violation plus the excess over ``limits``, each (n,)."""
     name = options.minimise
@@ -235,7 +238,7 @@ def _score(problem: Problem, ev: Evaluation, options: PolishOptions
             ev.violation + _limit_excess(problem, ev, options))
 
 
-def _limit_excess(problem: Problem, ev: Evaluation, options: PolishOptions) -> NDArray:
+def _limit_excess(problem: Problem, ev: Evaluation, options: PolishOptions) -> Floats:
     """Normalised excess of each candidate over ``options.limits`` (0 where within), (n,)."""
     out = np.zeros(len(ev.f))
     for name, cap in options.limits.items():
@@ -244,8 +247,8 @@ def _limit_excess(problem: Problem, ev: Evaluation, options: PolishOptions) -> N
     return np.where(np.isnan(out), np.inf, out)
 
 
-def _cmaes(problem: Problem, x0: NDArray, options: PolishOptions, rng: np.random.Generator
-           ) -> tuple[NDArray, int, str]:
+def _cmaes(problem: Problem, x0: Floats, options: PolishOptions, rng: np.random.Generator
+           ) -> tuple[Floats, int, str]:
     """CMA-ES (:mod:`camopt.solvers.cmaes`) from ``x0`` over the continuous variables, in
     bounds-normalised coordinates, ranking each generation by Deb's rules on
     (violation + excess over ``limits``, ``minimise`` metric): the case's penalty scale
@@ -278,8 +281,8 @@ def _cmaes(problem: Problem, x0: NDArray, options: PolishOptions, rng: np.random
     return design(best_u), nfev, f"CMA-ES {nfev} evaluations (stops: {', '.join(stops)})"
 
 
-def _slsqp(problem: Problem, x0: NDArray, options: PolishOptions
-           ) -> tuple[NDArray, int, str]:
+def _slsqp(problem: Problem, x0: Floats, options: PolishOptions
+           ) -> tuple[Floats, int, str]:
     """SLSQP in bounds-normalised coordinates from ``x0`` over the continuous variables
     (integer ones held at ``x0``'s values): end point, evaluations and scipy's message."""
     start, design = _unit_map(problem, x0)
@@ -287,7 +290,7 @@ def _slsqp(problem: Problem, x0: NDArray, options: PolishOptions
     cache: dict[bytes, Evaluation] = {}
     keep = 2 * (n_free + 2)
 
-    def evaluate(u: NDArray) -> Evaluation:
+    def evaluate(u: Floats) -> Evaluation:
         # SLSQP asks for f and then g at each point, and differences both at the same
         # n_free + 1 points (the same absolute step): one evaluation serves both (the
         # constraints' Jacobian evaluated again at every point was half the polish's time)
@@ -304,11 +307,11 @@ def _slsqp(problem: Problem, x0: NDArray, options: PolishOptions
             return float(ev.f[0])
         return float(ev.extras[name][0])
 
-    def objective(u: NDArray) -> float:
+    def objective(u: Floats) -> float:
         v = metric(evaluate(u), options.minimise)
         return v if np.isfinite(v) else _BAD
 
-    def constraints(u: NDArray, margin: float) -> NDArray:
+    def constraints(u: Floats, margin: float) -> Floats:
         ev = evaluate(u)
         caps = [(cap - metric(ev, k)) / abs(cap) if cap else -metric(ev, k)
                 for k, cap in options.limits.items()]
@@ -340,7 +343,7 @@ def _slsqp(problem: Problem, x0: NDArray, options: PolishOptions
     # then walk from the anchor toward SLSQP's end point to the last feasible point
     target = max(100 * options.margin, 1e-6)
 
-    def excess(u: NDArray) -> float:  # in units of the target margin: O(1) near the bound
+    def excess(u: Floats) -> float:  # in units of the target margin: O(1) near the bound
         return float(np.sum(np.clip(1 - constraints(u, 0.0) / target, 0, None) ** 2))
 
     # derivative-free (the same kinks stall gradients), from a small simplex at the end
@@ -377,7 +380,7 @@ class Polishing:
     nit: int
     rng: np.random.Generator
     budget: Budget
-    _polished: tuple[NDArray, Evaluation] | None = None
+    _polished: tuple[Floats, Evaluation] | None = None
     _polishing = False
     polish_message = ""
     polish_stopped: StopReason | None = None
@@ -390,7 +393,7 @@ class Polishing:
     def budget_spent(self) -> bool:  # pragma: no cover - each solver says
         raise NotImplementedError
 
-    def population_best(self) -> tuple[NDArray, Evaluation]:  # pragma: no cover
+    def population_best(self) -> tuple[Floats, Evaluation]:  # pragma: no cover
         raise NotImplementedError
 
     def check_polish(self) -> None:
@@ -410,7 +413,7 @@ class Polishing:
         return (self.options.polish is not None and self.budget_spent()
                 and self._polished is None)
 
-    def polish_ask(self) -> NDArray:
+    def polish_ask(self) -> Floats:
         """Run the polish from the population's best; its end point, (1, n_var)."""
         x, _ = self.population_best()
         end, nfev, self.polish_message, self.polish_stopped = polish_within(
@@ -419,7 +422,7 @@ class Polishing:
         self._polishing = True
         return end[None, :]
 
-    def polish_tell(self, X: NDArray, ev: Evaluation) -> bool:
+    def polish_tell(self, X: Floats, ev: Evaluation) -> bool:
         """Take the polished point if this tell is the polish's; True when it was."""
         if not self._polishing:
             return False
@@ -429,7 +432,7 @@ class Polishing:
         self._polished = (X[0].copy(), ev.take(0))
         return True
 
-    def with_polish(self, x: NDArray, ev: Evaluation) -> tuple[NDArray, Evaluation]:
+    def with_polish(self, x: Floats, ev: Evaluation) -> tuple[Floats, Evaluation]:
         """The better of the population's best and the polished design."""
         if self._polished is None:
             return x, ev
@@ -438,7 +441,7 @@ class Polishing:
             return px.copy(), pev
         return x, ev
 
-    def best(self) -> tuple[NDArray, Evaluation]:
+    def best(self) -> tuple[Floats, Evaluation]:
         return self.with_polish(*self.population_best())
 
     def notes(self) -> list[str]:

@@ -13,13 +13,13 @@ from __future__ import annotations
 from typing import Annotated, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, AsTuple, SolverOptions
 from camopt.core.capabilities import Repairable
 from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
+from camopt.mechanics import Floats
 from camopt.solvers.base import Solver, StopReason, best_index, better, snap
 from camopt.solvers.polish import PolishableOptions, Polishing
 from camopt.solvers.registry import register_solver
@@ -86,11 +86,11 @@ class PSO(Polishing, Solver):
                                   f"{', '.join(map(repr, unknown))}; the case's corrections: "
                                   f"{', '.join(self.schedule)}")
             self.schedule.update({k: (a, b) for k, (a, b) in given.items()})
-        self.X: NDArray | None = None
-        self.V: NDArray | None = None
-        self.P: NDArray | None = None
+        self.X: Floats | None = None
+        self.V: Floats | None = None
+        self.P: Floats | None = None
         self.pev: Evaluation | None = None
-        self.cur_f: NDArray | None = None
+        self.cur_f: Floats | None = None
 
     def max_iterations(self) -> int:
         return self.options.iterations + (self.options.polish is not None)
@@ -104,12 +104,12 @@ class PSO(Polishing, Solver):
         frac = self.nit / max(self.options.iterations - 1, 1)
         return {k: a + (b - a) * frac for k, (a, b) in self.schedule.items()}
 
-    def _repair(self, X: NDArray) -> NDArray:
+    def _repair(self, X: Floats) -> Floats:
         if self.repairer is None:
             return X
         return snap(self.problem, self.repairer.repair(X, self.rng, self.probabilities()))
 
-    def ask(self) -> NDArray:
+    def ask(self) -> Floats:
         if self.polish_pending():
             return self.polish_ask()
         o, n, d = self.options, self.options.particles, self.problem.n_var
@@ -129,7 +129,7 @@ class PSO(Polishing, Solver):
         self.V = V
         return self._repair(snap(self.problem, X))
 
-    def tell(self, X: NDArray, ev: Evaluation) -> None:
+    def tell(self, X: Floats, ev: Evaluation) -> None:
         if self.polish_tell(X, ev):
             return
         self.nfev += len(X)
@@ -144,12 +144,12 @@ class PSO(Polishing, Solver):
         self.P = np.where(win[:, None], X, self.P)
         self.pev = ev.where(win, self.pev)
 
-    def population_best(self) -> tuple[NDArray, Evaluation]:
+    def population_best(self) -> tuple[Floats, Evaluation]:
         assert self.P is not None and self.pev is not None
         i = best_index(self.pev)
         return self.P[i].copy(), self.pev.take(i)
 
-    def population_objectives(self) -> NDArray:
+    def population_objectives(self) -> Floats:
         assert self.cur_f is not None
         return self.cur_f
 

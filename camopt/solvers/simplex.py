@@ -1,18 +1,20 @@
 """``simplex``: the modified simplex method, i.e. scipy's Nelder-Mead with bounds
-(adaptive parameters), as a generic local optimiser from one or several starts."""
+(adaptive parameters), as a generic local optimiser from one or several starts.
+
+scipy.optimize is imported where a start is solved (scipy is slow to import)."""
 
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import Field
 
 from camopt.config.models import MAX_LOCAL_ITERATIONS, MAX_STARTS
 from camopt.core.problem import FEASIBILITY_TOL
-from camopt.solvers.multistart import MultiStart, MultiStartOptions
+from camopt.mechanics import Bools, Floats
+from camopt.solvers.multistart import MultiStart, MultiStartOptions, StartRecord
 from camopt.solvers.registry import register_solver
 
 
@@ -46,7 +48,7 @@ class Simplex(MultiStart):
     summary = "modified simplex: scipy Nelder-Mead with bounds, multi-start (generic)"
     test_options = {"starts": 3}
 
-    def _objective(self, u: NDArray) -> float:
+    def _objective(self, u: Floats) -> float:
         """The objective plus ``penalty`` times the violation (:attr:`Evaluation.violation`,
         here for the one row in Python: scipy calls this once per evaluation and the
         array path's dozen numpy calls on two numbers were a tenth of its cost; the same
@@ -60,7 +62,7 @@ class Simplex(MultiStart):
                 violation = math.inf
         return float(ev.f[0]) + self.options.penalty * violation
 
-    def local_solve(self, x0: NDArray) -> tuple[NDArray, dict[str, Any]]:
+    def local_solve(self, x0: Floats) -> tuple[Floats, StartRecord]:
         from scipy.optimize import minimize  # scipy.optimize: 0.5 s, only for a run
 
         o = self.options
@@ -76,7 +78,7 @@ class Simplex(MultiStart):
         return x, {"success": bool(res.success), "message": str(res.message),
                    "nfev": int(res.nfev)}
 
-    def reached(self) -> NDArray:
+    def reached(self) -> Bools:
         """Starts whose end point is feasible and within optimum_tol of the best objective
         (Nelder-Mead's own flag only says whether its tolerances were met in maxiter: on a
         flat valley a start can reach the optimum's level without meeting them). The

@@ -9,6 +9,7 @@ import pytest
 from scipy.stats import binom, binomtest
 
 from camopt.core.stats import (
+    YieldInterval,
     compare_objectives,
     compare_success,
     equivalence_threshold,
@@ -168,3 +169,15 @@ def test_fishers_test_on_success_counts_is_the_hypergeometric_sum(k_a, n_a, k_b,
     assert compare_success(k_a, n_a, k_b, n_b) == pytest.approx(
         _fisher_by_hand(k_a, n_a, k_b, n_b), rel=1e-12)
     assert compare_success(k_a, n_a, k_b, 0) == 1.0
+
+
+def test_a_yield_interval_reads_both_documents():
+    """The expected yield's document (value, low, high) and a robust check's (yield,
+    yield_low, yield_high) give the same interval; no value, none."""
+    y = YieldInterval(0.97, 0.94, 0.99, 2000)
+    assert YieldInterval.of({"value": 0.97, "low": 0.94, "high": 0.99, "samples": 2000}) == y
+    assert YieldInterval.of({"yield": 0.97, "yield_low": 0.94, "yield_high": 0.99,
+                             "samples": 2000, "confidence": 0.95}) == y
+    assert YieldInterval.of({"value": None, "reason": "no tolerances"}) is None
+    assert YieldInterval.of({"value": 0.5}) == YieldInterval(0.5)
+    assert y.as_dict() == {"value": 0.97, "low": 0.94, "high": 0.99, "samples": 2000}

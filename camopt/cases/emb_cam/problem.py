@@ -6,6 +6,9 @@ working profile is the cubic spline through (theta0 + j dtheta, r_j), clamped to
 the non-working arc at the start (Eqs 19-20) and natural at the end; theta0 and
 theta_a follow from the boundary geometry (Eqs 22-24). The whole swarm is
 analysed at once on a common normalised grid (``mechanics.spline``).
+
+scipy.special is imported where used (only the fitness with the clamping ramp needs it;
+scipy is slow to import).
 """
 
 from __future__ import annotations
@@ -14,11 +17,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.emb_cam.config import EmbCamConfig
 from camopt.core.capabilities import Repairable
 from camopt.core.problem import Evaluation, Problem, Variable
+from camopt.mechanics import Bools, Floats
 from camopt.mechanics import polar_cam as pc
 from camopt.mechanics.spline import ClampedNaturalSpline
 from camopt.units import KN, MM, MPA, SQRT_MPA, TO_DEG
@@ -34,7 +37,7 @@ REPAIR_DEFAULTS = {  # trigger probability (first iteration, last iteration), Se
 }
 
 
-def _interp_rows(x: NDArray, y: NDArray, level: float) -> NDArray:
+def _interp_rows(x: Floats, y: Floats, level: float) -> Floats:
     """Per row, the x where the increasing y first reaches ``level`` (linear; NaN if never)."""
     above = y >= level
     k = np.argmax(above, axis=1)
@@ -48,8 +51,8 @@ def _interp_rows(x: NDArray, y: NDArray, level: float) -> NDArray:
     return np.where(above.any(axis=1), out, np.nan)
 
 
-def knot_warp(x: NDArray, density: tuple[float, float, float] | None
-              ) -> tuple[NDArray, NDArray, NDArray]:
+def knot_warp(x: Floats, density: tuple[float, float, float] | None
+              ) -> tuple[Floats, Floats, Floats]:
     """Profile-angle fraction w(x) of spline parameter fraction x, with w' and w''.
 
     Uniform (w = x) reproduces Eq 25; otherwise the key points' density is
@@ -79,24 +82,24 @@ class CamProfile:
     the key-point angle step ``dtheta``, offset ``e``, tangent angle ``kappa`` and the key
     radii ``r_keys`` (P, N)."""
 
-    r: NDArray
-    dr: NDArray
-    theta: NDArray
-    l: NDArray
-    oa: NDArray
-    s: NDArray
-    alpha: NDArray
-    rotation: NDArray
-    force: NDArray
-    torque: NDArray
-    rho: NDArray
-    sigma: NDArray
-    oa0: NDArray
-    theta0: NDArray
-    dtheta: NDArray
-    e: NDArray
-    kappa: NDArray
-    r_keys: NDArray
+    r: Floats
+    dr: Floats
+    theta: Floats
+    l: Floats
+    oa: Floats
+    s: Floats
+    alpha: Floats
+    rotation: Floats
+    force: Floats
+    torque: Floats
+    rho: Floats
+    sigma: Floats
+    oa0: Floats
+    theta0: Floats
+    dtheta: Floats
+    e: Floats
+    kappa: Floats
+    r_keys: Floats
 
     def row(self, i: int) -> CamProfile:
         """Particle ``i`` alone, every field indexed (1-D curves, scalars)."""
@@ -112,17 +115,17 @@ class CamMeasures:
     clamping (Pa), largest radius of curvature (m), and the torque's RMS deviation from a
     straight line over the clamping section (% of the peak)."""
 
-    clearance_angle: NDArray
-    slope_var: NDArray
-    peak_torque: NDArray
-    curvature_steps: NDArray
-    tan_clearance: NDArray
-    tan_clamping: NDArray
-    lift: NDArray
-    max_rotation: NDArray
-    sigma_max: NDArray
-    rho_max: NDArray
-    ramp_rms_pct: NDArray
+    clearance_angle: Floats
+    slope_var: Floats
+    peak_torque: Floats
+    curvature_steps: Floats
+    tan_clearance: Floats
+    tan_clamping: Floats
+    lift: Floats
+    max_rotation: Floats
+    sigma_max: Floats
+    rho_max: Floats
+    ramp_rms_pct: Floats
 
 
 class EmbCamProblem(Problem, Repairable):
@@ -165,27 +168,27 @@ class EmbCamProblem(Problem, Repairable):
         self.constraint_names = tuple(names)
 
     # ---- geometry --------------------------------------------------------------------
-    def unpack(self, X: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    def unpack(self, X: Floats) -> tuple[Floats, Floats, Floats]:
         """Key radii with r0 = r_st first (P, N), kappa (P,) and e (P,) of particles X (Eq 26)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         r = np.column_stack([np.full(len(X), self.r_st), X[:, : self.n - 1]])
         return r, X[:, self.n - 1], X[:, self.n]
 
-    def boundary(self, r: NDArray, kappa: NDArray, e: NDArray
-                 ) -> tuple[NDArray, NDArray, NDArray]:
+    def boundary(self, r: Floats, kappa: Floats, e: Floats
+                 ) -> tuple[Floats, Floats, Floats]:
         """|OA| at the start, theta0 and the total profile angle theta_a (Eqs 22-24)."""
         oa0 = pc.start_distance(self.r_st, self.rg, kappa)  # Eq 22
         theta_a = pc.total_profile_angle(oa0, self.r_st, r[:, -1], self.rg)  # Eq 23
         theta0 = pc.initial_profile_angle(oa0, self.r_st, e, self.rg)  # Eq 24
         return oa0, theta0, theta_a
 
-    def knot_steps(self, theta_a: NDArray) -> NDArray:
+    def knot_steps(self, theta_a: Floats) -> Floats:
         """Profile-angle steps between adjacent key points, (P, N - 1) (Eq 25)."""
         return theta_a[:, None] * np.diff(self.knot_w)[None, :]
 
-    def _polar(self, X: NDArray, spline: ClampedNaturalSpline, dw: NDArray
-               ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray,
-                          tuple[NDArray, NDArray, NDArray]]:
+    def _polar(self, X: Floats, spline: ClampedNaturalSpline, dw: Floats
+               ) -> tuple[Floats, Floats, Floats, Floats, Floats, Floats, Floats, Floats,
+                          tuple[Floats, Floats, Floats]]:
         """Key radii, kappa, e, Eqs 22-24's boundary and the spline S, dS/du, d2S/du2 with
         d theta / du at ``spline``'s samples (``dw`` the warp's slope there), (P, K)."""
         r_keys, kappa, e = self.unpack(X)
@@ -195,14 +198,14 @@ class EmbCamProblem(Problem, Repairable):
         slope0 = self.r_st * np.tan(kappa) * th_u[:, 0]  # Eq 20 in per-u units
         return r_keys, kappa, e, oa0, theta0, theta_a, span, th_u, spline(r_keys, slope0)
 
-    def _height(self, r: NDArray, dr: NDArray, e: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    def _height(self, r: Floats, dr: Floats, e: Floats) -> tuple[Floats, Floats, Floats]:
         """Normal arm (Eq 8), |OA| (Eq 9) and follower height (Eq 10), (P, K)."""
         with np.errstate(invalid="ignore", divide="ignore"):
             l = pc.normal_arm(r, dr)  # Eq 8
             oa = pc.center_distance(r, l, self.rg)  # Eq 9
             return l, oa, pc.follower_height(oa, e[:, None])  # Eq 10
 
-    def lift(self, X: NDArray) -> NDArray:
+    def lift(self, X: Floats) -> Floats:
         """Final lift s at the last sample (Eq 11), (P,), m: the profile at its two end
         samples only (the lift reads nothing between them), the same numbers as
         ``profile(X).s[:, -1]`` at 2 of its samples' cost."""
@@ -211,7 +214,7 @@ class EmbCamProblem(Problem, Repairable):
             h = self._height(S, dS / th_u, e)[2]
         return h[:, 0] - h[:, -1]
 
-    def profile(self, X: NDArray) -> CamProfile:
+    def profile(self, X: Floats) -> CamProfile:
         """Every quantity of Sec 2.3 along the working profile, (P, K) arrays (SI)."""
         r_keys, kappa, e, oa0, theta0, theta_a, span, th_u, (S, dS, ddS) = self._polar(
             X, self.spline, self.dw)
@@ -264,7 +267,7 @@ class EmbCamProblem(Problem, Repairable):
         )
 
     @staticmethod
-    def _ramp_rms(rot: NDArray, T: NDArray, mask: NDArray) -> NDArray:
+    def _ramp_rms(rot: Floats, T: Floats, mask: Bools) -> Floats:
         """RMS deviation of T(phi) from its least-squares line over the clamping section,
         in % of the peak torque (per particle, vectorised)."""
         w = mask.astype(float)
@@ -278,7 +281,7 @@ class EmbCamProblem(Problem, Repairable):
         peak = np.max(np.where(mask, T, 0), axis=1)
         return 100 * np.sqrt((resid**2).sum(axis=1) / n) / np.where(peak > 0, peak, np.inf)
 
-    def evaluate(self, X: NDArray) -> Evaluation:
+    def evaluate(self, X: Floats) -> Evaluation:
         """Fitness of Eq 29 (Eq 27 plus the penalties of Eq 30), the constraints of Eq 28 and
         the options (rotation cap, clearance angle, torque ramp), normalised; peak torque,
         clearance angle, rotation, lift and ramp deviation as extras."""
@@ -321,8 +324,8 @@ class EmbCamProblem(Problem, Repairable):
         """Trigger probability of each correction at the first and last iteration."""
         return REPAIR_DEFAULTS
 
-    def repair(self, X: NDArray, rng: np.random.Generator, probability: Mapping[str, float]
-               ) -> NDArray:
+    def repair(self, X: Floats, rng: np.random.Generator, probability: Mapping[str, float]
+               ) -> Floats:
         """The paper's three corrections, each applied to a particle with the given
         probability: parameter ranges, adjacent key points (Eqs 31-36), lift stretch (Eq 37)."""
         X = np.array(X, dtype=float)
@@ -359,7 +362,7 @@ class EmbCamProblem(Problem, Repairable):
                 + self.r_st
         return X
 
-    def _adjacent(self, X: NDArray, rng: np.random.Generator) -> NDArray:
+    def _adjacent(self, X: Floats, rng: np.random.Generator) -> Floats:
         """Reinitialise, with bias, each key radius that breaks r_{j-1} < r_j < |OB_jmax|
         and shift the following ones by the same amount (Eq 35)."""
         n = self.n
@@ -380,7 +383,7 @@ class EmbCamProblem(Problem, Repairable):
         X[:, : n - 1] = r[:, 1:]
         return X
 
-    def _cap(self, r: NDArray, j: int, oa0: NDArray, steps: NDArray) -> NDArray:
+    def _cap(self, r: Floats, j: int, oa0: Floats, steps: Floats) -> Floats:
         """|OB_jmax| (Eq 32 for j = 1, Appendix A.3 for j >= 2); ``steps`` (P, N-1) are
         the profile-angle steps between key points (all equal with uniform key points)."""
         rg = self.rg
@@ -398,11 +401,11 @@ class EmbCamProblem(Problem, Repairable):
             return pc.max_radius_on_ring(oa, angle, rg)
 
     # ---- single-design output ------------------------------------------------------
-    def _clamping_curves(self, x: NDArray) -> tuple[CamProfile, NDArray]:
+    def _clamping_curves(self, x: Floats) -> tuple[CamProfile, Bools]:
         p = self.profile(x[None, :]).row(0)
         return p, p.s > self.x1
 
-    def metrics(self, x: NDArray) -> dict[str, float]:
+    def metrics(self, x: Floats) -> dict[str, float]:
         """Headline numbers, the ideal-screw comparison (Eqs 45-46) and the physical floor."""
         x = np.asarray(x, dtype=float)
         measured = self.measures(self.profile(x[None, :]))
@@ -437,7 +440,7 @@ class EmbCamProblem(Problem, Repairable):
         }
         return out
 
-    def analysis(self, x: NDArray) -> dict[str, NDArray]:
+    def analysis(self, x: Floats) -> dict[str, Floats]:
         """Profile (working and non-working segments) and the curves against rotation."""
         x = np.asarray(x, dtype=float)
         p, _ = self._clamping_curves(x)

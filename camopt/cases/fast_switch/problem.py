@@ -19,13 +19,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.fast_switch.config import FastSwitchConfig
 from camopt.core.capabilities import HasFamily, VariesCase
 from camopt.core.problem import FEASIBILITY_TOL, Evaluation, Problem, Variable
 from camopt.errors import ConfigError
-from camopt.mechanics import dynamics, springs
+from camopt.mechanics import Floats, dynamics, springs
 from camopt.mechanics.slider_crank import coupler_angle, coupler_derivatives, crank_angle_for_span
 from camopt.units import DEG, GPA, MM, MPA, TO_DEG, TO_MM, TO_MS
 
@@ -59,22 +58,22 @@ class SwitchDesign:
     x8 spring rate (N/m), x9 coils, x10 g, x11 theta3f, x12 theta30, x13 theta20; and
     ``cos20``, cos theta20 before clipping (outside [-1, 1]: the loop cannot close, R9b)."""
 
-    x1: NDArray
-    x2: NDArray
-    x3: NDArray
-    x4: NDArray
-    x5: NDArray
-    x6: NDArray
-    x7: NDArray
-    x8: NDArray
-    x9: NDArray
-    x10: NDArray
-    x11: NDArray
-    x12: NDArray
-    x13: NDArray
-    cos20: NDArray
+    x1: Floats
+    x2: Floats
+    x3: Floats
+    x4: Floats
+    x5: Floats
+    x6: Floats
+    x7: Floats
+    x8: Floats
+    x9: Floats
+    x10: Floats
+    x11: Floats
+    x12: Floats
+    x13: Floats
+    cos20: Floats
 
-    def display(self) -> dict[str, NDArray]:
+    def display(self) -> dict[str, Floats]:
         """x1..x13 under their archive names in display units (``DESIGN_NAMES``)."""
         return {name: getattr(self, key) * scale for key, (name, scale) in DESIGN_NAMES.items()}
 
@@ -113,28 +112,28 @@ class SwitchParameters:
             d_strength=d if c.wire_strength_d_unit == "m" else c.wire_diameter_mm,
         )
 
-    def rate(self, coils: NDArray) -> NDArray:
+    def rate(self, coils: Floats) -> Floats:
         """Spring rate (N/m) of each coil count (R13, Eq 21)."""
         return np.asarray(springs.helical_rate(self.d, self.D, self.G, coils))  # R13, Eq 21
 
-    def strength(self, k: NDArray, deflection: NDArray) -> NDArray:
+    def strength(self, k: Floats, deflection: Floats) -> Floats:
         """Shear-strength use at a deflection (m); <= 1 is safe (R14/R15, Eqs 22-23)."""
         return np.asarray(springs.strength_ratio(k, deflection, self.d, self.D, self.A, self.m,
                                                  self.d_strength))  # R14/R15, Eqs 22-23
 
-    def effective_mass(self, r2: NDArray) -> NDArray:
+    def effective_mass(self, r2: Floats) -> Floats:
         """Effective mass m' (kg) for crank length r2 (m) (Eq 32)."""
         return self.M4 + 0.083 * self.M2 * self.L**2 / r2**2 + 0.021 * self.M3  # Eq 32
 
-    def velocity_coefficient(self, r2: NDArray, r3: NDArray) -> NDArray:
+    def velocity_coefficient(self, r2: Floats, r3: Floats) -> Floats:
         """Velocity-dependent coefficient c (kg/s) of the approximate damping (Eq 33)."""
         M2L2 = self.M2 * self.L**2
         return (0.0083 * M2L2 / r2**3 + 0.0042 * self.M3 / r3 + 0.033 * M2L2 / (r2**2 * r3)
                 + 0.067 * self.M3 / r2)  # Eq 33
 
 
-def closure_time(xi: NDArray, omega: NDArray, sf: NDArray, sud: NDArray, s0: NDArray
-                 ) -> NDArray:
+def closure_time(xi: Floats, omega: Floats, sf: Floats, sud: Floats, s0: Floats
+                 ) -> Floats:
     """Closure time of Eq 39 on the branch the motion crosses first.
 
     s - sud = (s0 - sud)/sqrt(1 - xi^2) sin(wd t + phi), phi = atan(sqrt(1 - xi^2)/xi) (Eq 34):
@@ -177,7 +176,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         self.constraint_names = PRINTED_CONSTRAINTS if printed else CORRECTED_CONSTRAINTS
 
     # ---- the 13-variable model -------------------------------------------------------
-    def complete(self, X: NDArray) -> SwitchDesign:
+    def complete(self, X: Floats) -> SwitchDesign:
         """x1..x13 from the reduced variables (n, 6), solving R13, R17, R18, R10, R11, R8, R9
         exactly."""
         p = self.p
@@ -194,12 +193,12 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         x12 = coupler_angle(x7, x6, x13, span0)
         return SwitchDesign(x1, x2, x3, x4, x5, x6, x7, x8, N, x10, x11, x12, x13, cos20)
 
-    def full_model(self, x: SwitchDesign) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
+    def full_model(self, x: SwitchDesign) -> tuple[dict[str, Floats], dict[str, Floats]]:
         """Inequalities R1-R21 (normalised, <= 0 feasible) and equality residuals R8-R18,
         each (n,), keyed by the paper's constraint names."""
         return self.inequalities(x), self.equalities(x)
 
-    def inequalities(self, x: SwitchDesign) -> dict[str, NDArray]:
+    def inequalities(self, x: SwitchDesign) -> dict[str, Floats]:
         """The full model's inequalities R1-R21, normalised (<= 0 feasible), each (n,)."""
         p = self.p
         x1, x2, x3, x4, x5, x7 = x.x1, x.x2, x.x3, x.x4, x.x5, x.x7
@@ -224,7 +223,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
                 "R21": self._branch(x3, x4),
             }
 
-    def equalities(self, x: SwitchDesign) -> dict[str, NDArray]:
+    def equalities(self, x: SwitchDesign) -> dict[str, Floats]:
         """The full model's equality residuals R8-R18 (zero where the loop closes), each
         (n,); ``complete`` solves them, so they are a check, not read by the search."""
         p = self.p
@@ -241,7 +240,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
                 "R18": x2 / np.sqrt(x8 / p.effective_mass(x7)) - 1.0,  # Eq 36
             }
 
-    def _branch(self, x3: NDArray, x4: NDArray) -> NDArray:
+    def _branch(self, x3: Floats, x4: Floats) -> Floats:
         """R21: case I (x4/x3 <= 1), case II (x3/x4 <= 1), or both (active iff x3 == x4)."""
         if self.config.branch == "I":
             return x4 / x3 - 1.0  # Eq 59
@@ -250,7 +249,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         return -np.abs(x3 / x4 - 1.0)
 
     # ---- Problem interface ---------------------------------------------------------------
-    def evaluate(self, X: NDArray) -> Evaluation:
+    def evaluate(self, X: Floats) -> Evaluation:
         """Closure time in ms (Eq 39 on the right arcsine branch, or Eq 58 as printed), the
         reduced problem's constraints, and what a search may name as an objective: the
         closure time and the spring's stress margin (% below its strength at the worse of
@@ -259,7 +258,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         per design, which a search does not need)."""
         return self._evaluate(X)[0]
 
-    def describe(self, X: NDArray) -> Evaluation:
+    def describe(self, X: Floats) -> Evaluation:
         """As :meth:`evaluate`, plus x1..x13 in display units and the largest equality
         residual R8-R18 of the full model."""
         ev, x = self._evaluate(X)
@@ -273,7 +272,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         """The spring's wire and coil diameters (:data:`SPRING_FIELDS`)."""
         return SPRING_FIELDS
 
-    def describe_with(self, X: NDArray, fields: Mapping[str, NDArray]) -> Evaluation:
+    def describe_with(self, X: Floats, fields: Mapping[str, Floats]) -> Evaluation:
         """As :meth:`describe`, with the spring's wire and/or coil diameter (mm) per row.
         Every equation reads the Nomenclature parameters from ``self.p`` and broadcasts
         over rows, so the parameters are rebuilt with (n,) arrays for the call."""
@@ -288,7 +287,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         finally:
             self.p = saved
 
-    def _evaluate(self, X: NDArray) -> tuple[Evaluation, SwitchDesign]:
+    def _evaluate(self, X: Floats) -> tuple[Evaluation, SwitchDesign]:
         X = np.atleast_2d(np.asarray(X, dtype=float))
         x = self.complete(X)
         full = self.inequalities(x)
@@ -301,8 +300,8 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
                   "spring_stress_margin_pct": -100.0 * np.maximum(full["R14"], full["R15"])}
         return Evaluation(f=f, g=g, extras=extras), x
 
-    def _corrected(self, x: SwitchDesign, g_full: dict[str, NDArray]
-                   ) -> tuple[NDArray, NDArray]:
+    def _corrected(self, x: SwitchDesign, g_full: dict[str, Floats]
+                   ) -> tuple[Floats, Floats]:
         with np.errstate(divide="ignore", invalid="ignore"):
             extra = {
                 "R10a": x.x7 / x.x6 - 1.0,  # Eq 43
@@ -313,7 +312,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         g = np.column_stack([{**g_full, **extra}[name] for name in self.constraint_names])
         return f, g
 
-    def _printed(self, x: SwitchDesign) -> tuple[NDArray, NDArray]:
+    def _printed(self, x: SwitchDesign) -> tuple[Floats, Floats]:
         """The 7-variable statement exactly as printed after Eq 57 (including its errors)."""
         p = self.p
         x1, x3, x4, x5, x6, x7, x8 = x.x1, x.x3, x.x4, x.x5, x.x6, x.x7, x.x8
@@ -347,7 +346,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         return f, np.column_stack([g[name] for name in self.constraint_names])
 
     # ---- capabilities ----------------------------------------------------------------
-    def family(self) -> NDArray:
+    def family(self) -> Floats:
         """The one-degree-of-freedom family left by R2, R4, R14, R16, R21 active (Eq 86).
 
         One member per integer coil count; R4 active is solved exactly by the law of cosines
@@ -365,7 +364,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         x6 = np.sqrt(b**2 + x7**2)  # R2 with Eq 56
         return np.column_stack([N, x3, x4, x5, x6, x7])
 
-    def metrics(self, x: NDArray) -> dict[str, object]:
+    def metrics(self, x: Floats) -> dict[str, object]:
         """Headline metrics of one design, with the exact-dynamics closure time.
 
         The exact motion is integrated only for a design the reduced problem finds
@@ -389,7 +388,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         out["joint_load_n"] = float((g_full["R20"][0] + 1.0) * self.p.F_rated)  # R20, Eq 41
         return out
 
-    def exact_closure(self, x: NDArray) -> dynamics.Travel:
+    def exact_closure(self, x: Floats) -> dynamics.Travel:
         """Integrate the exact 1-DOF motion of Eqs 2-3 until theta2 = 90 deg.
 
         T = (I2 theta2'^2 + I3 theta3'^2 + M4 s'^2)/2 with I2 = M2 L^2/12, I3 = M3 r3^2/12
@@ -421,7 +420,7 @@ class FastSwitchProblem(Problem, HasFamily, VariesCase):
         return dynamics.time_to_reach(mass, mass_slope, force, theta20, np.pi / 2, t_max=1.0,
                                       max_calls=EXACT_MAX_CALLS)
 
-    def analysis(self, x: NDArray) -> dict[str, NDArray]:
+    def analysis(self, x: Floats) -> dict[str, Floats]:
         """Curves for the archive: exact motion theta2(t), spring length s(t); none for a
         design :meth:`metrics` does not integrate (infeasible, or the ODE capped)."""
         ev = self.evaluate(np.atleast_2d(x))

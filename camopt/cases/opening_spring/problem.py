@@ -12,6 +12,9 @@ motion here is Lagrange's equation for exactly the energies of Eq 5:
     J(th) th'' + J'(th) th'^2 / 2 = -dV/dth + Q,   J = I_o + n_c m_c (d cos th)^2,
     V = (n_s/2) k (L - l0)^2 + m_f g C_f sin(psi + th) - n_c m_c g d sin th,
     Q = -n_c F_r d cos th  (the self-closing force resists opening).
+
+scipy.integrate is imported where used (only the exact motion of one design needs it; scipy
+is slow to import).
 """
 
 from __future__ import annotations
@@ -19,11 +22,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.opening_spring.config import OpeningSpringConfig
 from camopt.core.capabilities import HasResiduals
 from camopt.core.problem import Evaluation, Problem, Variable
+from camopt.mechanics import Floats
 from camopt.units import DEG, MM, MS, N_PER_MM
 
 # parameter -> (config bounds field, factor from the TOML unit to SI)
@@ -42,9 +45,9 @@ PARAMETERS = {
 class Motion:
     """A simulated opening: time (s), angle, rate, and the travel event times."""
 
-    t: NDArray
-    theta: NDArray
-    rate: NDArray
+    t: Floats
+    theta: Floats
+    rate: Floats
     time_9mm: float
     time_10mm: float
 
@@ -94,14 +97,14 @@ class OpeningSpringProblem(Problem, HasResiduals):
         self._reference = self.x_of(c.original) if c.regularization > 0 else None
 
     # ---- desired motion ---------------------------------------------------------------
-    def desired(self, t: NDArray | float) -> tuple[NDArray, NDArray]:
+    def desired(self, t: Floats | float) -> tuple[Floats, Floats]:
         """theta and theta' of Eq 7."""
         c0, c1, c2, c3 = self.c3
         t = np.asarray(t, dtype=float)
         return c0 + t * (c1 + t * (c2 + t * c3)), c1 + t * (2 * c2 + 3 * c3 * t)
 
     # ---- parameters -------------------------------------------------------------------
-    def params(self, X: NDArray) -> dict[str, NDArray]:
+    def params(self, X: Floats) -> dict[str, Floats]:
         """Every parameter in SI as (n, 1) columns: the free ones from X, the rest fixed."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         c = self.config
@@ -112,18 +115,18 @@ class OpeningSpringProblem(Problem, HasResiduals):
         out["t_mm"] = np.full((len(X), 1), c.t_mm * MM)
         return out
 
-    def initial_x(self) -> NDArray:
+    def initial_x(self) -> Floats:
         """The config's values of the free parameters (SI)."""
         return np.array([getattr(self.config, n) * PARAMETERS[n][1] for n in self.config.free])
 
-    def x_of(self, values: dict[str, float]) -> NDArray:
+    def x_of(self, values: dict[str, float]) -> Floats:
         """SI design of the free parameters from a {name: TOML-unit value} dict; parameters
         not given take the config's values."""
         return np.array([values.get(n, getattr(self.config, n)) * PARAMETERS[n][1]
                          for n in self.config.free])
 
     # ---- energies (Eq 5) -------------------------------------------------------------
-    def spring_length(self, p: dict[str, NDArray], theta: NDArray) -> tuple[NDArray, NDArray]:
+    def spring_length(self, p: dict[str, Floats], theta: Floats) -> tuple[Floats, Floats]:
         """l' and dl'/dtheta of one spring (Eq 5)."""
         s, t = p["s_mm"], p["t_mm"]
         x = s * np.cos(theta) - t * np.sin(theta)
@@ -132,13 +135,13 @@ class OpeningSpringProblem(Problem, HasResiduals):
         length = np.sqrt(dx_ * dx_ + dy_ * dy_)
         return length, (dx_ * y - dy_ * x) / length
 
-    def inertia(self, p: dict[str, NDArray], theta: NDArray) -> NDArray:
+    def inertia(self, p: dict[str, Floats], theta: Floats) -> Floats:
         """Generalised inertia J(theta) = I_o + n_c m_c (d cos theta)^2 (kg m^2, Eq 5)."""
         c = self.config
         return p["inertia_kg_m2"] + c.contact_count * c.contact_mass_kg * (
             self.d * np.cos(theta)) ** 2
 
-    def potential(self, p: dict[str, NDArray], theta: NDArray) -> NDArray:
+    def potential(self, p: dict[str, Floats], theta: Floats) -> Floats:
         """V_e + V_g (Eq 5), with the contacts falling as the breaker opens (Eq 8's sign)."""
         c = self.config
         length, _ = self.spring_length(p, theta)
@@ -148,20 +151,20 @@ class OpeningSpringProblem(Problem, HasResiduals):
                    - c.contact_count * c.contact_mass_kg * c.gravity * self.d * np.sin(theta))
         return elastic + gravity
 
-    def work_nc(self, p: dict[str, NDArray], theta: NDArray) -> NDArray:
+    def work_nc(self, p: dict[str, Floats], theta: Floats) -> Floats:
         """Work of the self-closing forces from theta0 (Eq 5 with Eq 8's sign)."""
         c = self.config
         return -c.contact_count * p["self_closing_force_n"] * self.d * (
             np.sin(theta) - np.sin(self.theta0))
 
-    def energy_balance(self, p: dict[str, NDArray], theta: NDArray, rate: NDArray) -> NDArray:
+    def energy_balance(self, p: dict[str, Floats], theta: Floats, rate: Floats) -> Floats:
         """Left side of Eq 5 at (theta, rate) against the initial point; zero when satisfied."""
         kinetic = 0.5 * self.inertia(p, theta) * rate**2
         kinetic0 = 0.5 * self.inertia(p, self.theta0) * self.rate0**2
         return (self.potential(p, self.theta0) - self.potential(p, theta)
                 + self.work_nc(p, theta) - (kinetic - kinetic0))  # Eq 5
 
-    def rate_from_energy(self, p: dict[str, NDArray], theta: NDArray) -> NDArray:
+    def rate_from_energy(self, p: dict[str, Floats], theta: Floats) -> Floats:
         """theta' at theta that Eq 5 gives; negative when the energy cannot reach theta."""
         kinetic0 = 0.5 * self.inertia(p, self.theta0) * self.rate0**2
         kinetic = (kinetic0 + self.potential(p, self.theta0) - self.potential(p, theta)
@@ -170,18 +173,18 @@ class OpeningSpringProblem(Problem, HasResiduals):
         return np.sign(sq) * np.sqrt(np.abs(sq))
 
     # ---- Problem interface ----------------------------------------------------------
-    def residuals(self, X: NDArray) -> NDArray:
+    def residuals(self, X: Floats) -> Floats:
         """Eq 5 at precision points 1..P-1, divided by the initial kinetic energy (n, P-1)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         available, inertia, _ = self._energies(X)
         return self._residuals(available, inertia)
 
-    def _residuals(self, available: NDArray, inertia: NDArray) -> NDArray:
+    def _residuals(self, available: Floats, inertia: Floats) -> Floats:
         k = 1 + self._n_points
         return ((available - 0.5 * inertia[:, 1:k] * self.points_rate**2)[:, 1:]
                 / self.energy_scale)
 
-    def _energies(self, X: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    def _energies(self, X: Floats) -> tuple[Floats, Floats, Floats]:
         """The lean path of :meth:`energy_balance` (the local solvers call it once per
         design, tens of thousands of times): one spring geometry over every angle visited,
         constants from :meth:`_precompute`. Returns the kinetic energy Eq 5 makes
@@ -202,12 +205,12 @@ class OpeningSpringProblem(Problem, HasResiduals):
                      + self._value(X, "self_closing_force_n") * self._closing_shape[1:k])
         return available, inertia, length
 
-    def _value(self, X: NDArray, name: str) -> NDArray | float:
+    def _value(self, X: Floats, name: str) -> Floats | float:
         """A parameter in SI: an (n, 1) column of X if free, else the config's scalar."""
         i = self._free.get(name)
         return self._fixed[name] if i is None else X[:, i : i + 1]
 
-    def evaluate(self, X: NDArray) -> Evaluation:
+    def evaluate(self, X: Floats) -> Evaluation:
         """Design mode: squared velocity error at the precision points (Eq 4, (rad/s)^2,
         plus the optional regularisation); identify mode: squared energy residuals (Eq 5).
         Constraints: the springs stay extended and the energy reaches every point.
@@ -237,7 +240,7 @@ class OpeningSpringProblem(Problem, HasResiduals):
         g[:, 1] = rate.min(axis=1) / -self.rate0  # the energy reaches every point
         return Evaluation(f=np.where(np.isfinite(f), f, np.inf), g=g)
 
-    def residual_max(self, X: NDArray) -> NDArray:
+    def residual_max(self, X: Floats) -> Floats:
         """Largest |Eq 5 residual| over the precision points per design (n,), relative to
         the initial kinetic energy (0 with a single point)."""
         if self._n_points < 2:
@@ -245,7 +248,7 @@ class OpeningSpringProblem(Problem, HasResiduals):
         return np.abs(self.residuals(X)).max(axis=1)
 
     # ---- simulation -----------------------------------------------------------------
-    def simulate(self, x: NDArray, t_max: float = 0.05) -> Motion:
+    def simulate(self, x: Floats, t_max: float = 0.05) -> Motion:
         """Integrate the equation of motion from (theta0, theta0') at t0 with solve_ivp until
         the contacts have travelled the gap (event), recording 9 mm and 10 mm."""
         c = self.config
@@ -253,7 +256,7 @@ class OpeningSpringProblem(Problem, HasResiduals):
         n_c, m_c, d = c.contact_count, c.contact_mass_kg, self.d
         psi = c.follower_centroid_deg * DEG
 
-        def rhs(_t: float, y: NDArray) -> list[float]:
+        def rhs(_t: float, y: Floats) -> list[float]:
             th, w = y
             length, dlen = self.spring_length(p, th)
             dV = (c.spring_count * p["k_n_per_mm"] * (length - p["l0_mm"]) * dlen
@@ -265,7 +268,7 @@ class OpeningSpringProblem(Problem, HasResiduals):
             return [w, (-dV + q - 0.5 * dJ * w * w) / J]
 
         def travel(mm: float):
-            def event(_t: float, y: NDArray) -> float:
+            def event(_t: float, y: Floats) -> float:
                 return d * (np.sin(y[0]) - np.sin(self.theta0)) - mm * MM
             event.direction = 1  # type: ignore[attr-defined]
             return event
@@ -280,13 +283,13 @@ class OpeningSpringProblem(Problem, HasResiduals):
         times = [float(e[0] - self.t0) if e.size else np.nan for e in sol.t_events]
         return Motion(sol.t, sol.y[0], sol.y[1], times[0], times[1])
 
-    def tracking(self, x: NDArray) -> dict[str, float]:
+    def tracking(self, x: Floats) -> dict[str, float]:
         """Velocity error of the motion against Eq 7 over the desired angles, one design
         (:meth:`tracking_rows`)."""
         rows = self.tracking_rows(np.asarray(x, dtype=float)[None, :])
         return {key: float(v[0]) for key, v in rows.items()}
 
-    def tracking_rows(self, X: NDArray) -> dict[str, NDArray]:
+    def tracking_rows(self, X: Floats) -> dict[str, Floats]:
         """Velocity error against Eq 7 over 400 desired angles and the travel times to 9
         and 10 mm of n designs at once (n,), by the work-energy equation of the equation
         of motion (module docstring): every force is a function of theta, so theta'(theta)
@@ -317,8 +320,8 @@ class OpeningSpringProblem(Problem, HasResiduals):
             "avg_opening_velocity_m_s": velocity,
         }
 
-    def _travel_time(self, p: dict[str, NDArray], theta: float, panels: int = 16,
-                     nodes: int = 16) -> NDArray:
+    def _travel_time(self, p: dict[str, Floats], theta: float, panels: int = 16,
+                     nodes: int = 16) -> Floats:
         """Time from theta0 to ``theta`` (s, (n,)), NaN where the energy stops short."""
         x, w = np.polynomial.legendre.leggauss(nodes)
         edges = np.linspace(self.theta0, theta, panels + 1)
@@ -331,12 +334,12 @@ class OpeningSpringProblem(Problem, HasResiduals):
         end = self.rate_from_energy(p, np.array([[theta]]))[:, 0]
         return np.where(np.all(rate > 0, axis=1) & (end > 0), time, np.nan)
 
-    def design_values(self, x: NDArray) -> dict[str, float]:
+    def design_values(self, x: Floats) -> dict[str, float]:
         """All spring and lumped parameters of a design, in TOML units."""
         p = self.params(x[None, :])
         return {name: float(p[name][0, 0] / PARAMETERS[name][1]) for name in PARAMETERS}
 
-    def others(self) -> dict[str, tuple[OpeningSpringProblem, NDArray]]:
+    def others(self) -> dict[str, tuple[OpeningSpringProblem, Floats]]:
         """The original design and the config's compare_designs, each as (problem, x)."""
         c = self.config
         if c.mode != "design":
@@ -349,7 +352,7 @@ class OpeningSpringProblem(Problem, HasResiduals):
             out[label] = (variant, variant.x_of(values))
         return out
 
-    def metrics(self, x: NDArray) -> dict[str, object]:
+    def metrics(self, x: Floats) -> dict[str, object]:
         """Tracking of the design and, prefixed by their labels, of the original and the
         config's compare_designs (e.g. Table 1's columns)."""
         x = np.asarray(x, dtype=float)
@@ -360,13 +363,13 @@ class OpeningSpringProblem(Problem, HasResiduals):
             out.update({f"{label}_{k}": v for k, v in problem.tracking(design).items()})
         return out
 
-    def describe(self, X: NDArray) -> Evaluation:
+    def describe(self, X: Floats) -> Evaluation:
         """Evaluation plus each design's tracking (:meth:`tracking_rows`, one call)."""
         ev = self.evaluate(X)
         return Evaluation(ev.f, ev.g, {"energy_residual_rel": self.residual_max(X),
                                        **self.tracking_rows(X)})
 
-    def analysis(self, x: NDArray) -> dict[str, NDArray]:
+    def analysis(self, x: Floats) -> dict[str, Floats]:
         """Desired and simulated theta(t), theta'(t) for the design and the original."""
         t = np.linspace(self.t0, self.ts, 200)
         th_d, rate_d = self.desired(t)

@@ -6,9 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.vcb.dynamics import ClosingEvents
+from camopt.mechanics import Bools, Floats, Ints
 from camopt.units import MS
 
 
@@ -23,23 +23,23 @@ class MotionBand:
     the cam does not release and latch (``not_latched``), and the least and greatest of
     every :data:`BANDED` motion quantity (SI)."""
 
-    velocity_low: NDArray
-    velocity_high: NDArray
-    latched: NDArray
-    kinetic_low: NDArray
-    kinetic_high: NDArray
-    reach_low: NDArray
-    release_ratio_low: NDArray
+    velocity_low: Floats
+    velocity_high: Floats
+    latched: Bools
+    kinetic_low: Floats
+    kinetic_high: Floats
+    reach_low: Floats
+    release_ratio_low: Floats
     sets: int
-    not_latched: NDArray
-    low: dict[str, NDArray]
-    high: dict[str, NDArray]
+    not_latched: Ints
+    low: dict[str, Floats]
+    high: dict[str, Floats]
 
     @classmethod
     def of(cls, nominal: ClosingEvents, members: ClosingEvents | None = None, k: int = 0
            ) -> MotionBand:
         """The band of ``nominal`` (n designs) and ``members`` (k sets x n designs)."""
-        def stack(name: str) -> NDArray:
+        def stack(name: str) -> Floats:
             first = getattr(nominal, name)[None, :]
             if members is None:
                 return first
@@ -48,14 +48,15 @@ class MotionBand:
         # among stalling designs still sees how far it is from the requirement
         v = np.nan_to_num(stack("closing_velocity_avg"), nan=0.0)
         fields = {field: stack(field) for field, _, _ in BANDED.values()}
+        latched = np.asarray(stack("latched"), dtype=bool)
         with np.errstate(invalid="ignore"):
             return cls(velocity_low=v.min(axis=0), velocity_high=v.max(axis=0),
-                       latched=np.asarray(stack("latched").all(axis=0)),
+                       latched=np.asarray(latched.all(axis=0)),
                        kinetic_low=stack("final_kinetic").min(axis=0),
                        kinetic_high=stack("final_kinetic").max(axis=0),
                        reach_low=stack("reach").min(axis=0),
                        release_ratio_low=stack("release_torque_ratio").min(axis=0),
-                       sets=k + 1, not_latched=(~stack("latched")).sum(axis=0),
+                       sets=k + 1, not_latched=(~latched).sum(axis=0),
                        low={f: a.min(axis=0) for f, a in fields.items()},
                        high={f: a.max(axis=0) for f, a in fields.items()})
 

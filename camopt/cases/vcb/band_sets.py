@@ -8,11 +8,11 @@ from __future__ import annotations
 from dataclasses import dataclass, fields, replace
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import VcbConfig
 from camopt.cases.vcb.dynamics import MotionParameters
 from camopt.cases.vcb.forms import form_of
+from camopt.mechanics import Floats
 from camopt.units import DEG
 
 
@@ -38,14 +38,14 @@ def identified(c: VcbConfig) -> MotionParameters:
                             rod_damping_n_s_per_m=c.rod_damping_n_s_per_m)
 
 
-def band_rows(c: VcbConfig) -> NDArray:
+def band_rows(c: VcbConfig) -> Floats:
     """``dynamics_band`` as eight-value rows (k, 8): a six-value row (the shipped form)
     takes the same friction for the free rotation and the case's efficiency."""
     return np.array([tuple(r) + ((r[5], c.efficiency) if len(r) == 6 else ())
                      for r in c.dynamics_band], dtype=float).reshape(-1, 8)
 
 
-def parameter_sets(rows: NDArray, c: VcbConfig | None = None) -> MotionParameters:
+def parameter_sets(rows: Floats, c: VcbConfig | None = None) -> MotionParameters:
     """Eight-value band rows (k, 8) as k parameter sets (SI), with the case ``c``'s
     spring mass and rod damping (one value for every set; none without ``c``)."""
     return MotionParameters(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4] * DEG,
@@ -65,7 +65,7 @@ def joined(form: FormSets, efficiency: float) -> MotionParameters:
                                for f in fields(MotionParameters)})
 
 
-def form_sets(c: VcbConfig, band: NDArray, dynamics: MotionParameters
+def form_sets(c: VcbConfig, band: Floats, dynamics: MotionParameters
               ) -> tuple[FormSets, ...]:
     """The sets of every model form in the band (the identified parameters' form
     first): each form's closing is judged under its own fit (the identified set

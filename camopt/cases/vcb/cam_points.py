@@ -16,10 +16,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.vcb.curves import read_table
 from camopt.errors import ConfigError
+from camopt.mechanics import Floats
 from camopt.units import DEG
 
 CAM_COLUMNS = {"cam_angle_deg": DEG, "cam_angle_rad": 1.0}
@@ -32,7 +32,7 @@ COVER_DEG = 0.5
 """The points must reach within this of both ends of the stroke (deg)."""
 
 
-def read_cam_points(path: str | Path, end: float) -> NDArray:
+def read_cam_points(path: str | Path, end: float) -> Floats:
     """The follower-law coefficients a0..ad (rad/rad^k, (d + 1,), d = 3..5) of the cam in
     a points file (module docstring); ``end`` the stroke's last cam angle (rad)."""
     name = str(path)

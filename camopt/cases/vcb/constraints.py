@@ -10,13 +10,12 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.vcb.band import MotionBand
 from camopt.cases.vcb.config import VcbConfig
 from camopt.cases.vcb.dynamics import ClosingMotion
 from camopt.cases.vcb.model import ForceBalance, Kinematics, VcbModel, unassembled
-from camopt.mechanics import cam, fourbar, hertz
+from camopt.mechanics import Floats, cam, fourbar, hertz
 from camopt.units import DEG, GPA, MM, MPA
 
 
@@ -32,20 +31,20 @@ class Terms:
     model: VcbModel
     kin: Kinematics
     bal: ForceBalance
-    link: NDArray
-    phi_top: NDArray
-    tau_max: NDArray
+    link: Floats
+    phi_top: Floats
+    tau_max: Floats
     motion: ClosingMotion | None
     band: MotionBand | None
-    setting: NDArray | None = None
+    setting: Floats | None = None
     """The longest nut travel the factory setting needs under any of the form's sets (m,
     (n,); +inf: none reaches the velocity), where the run sets its breakers
     (:meth:`VcbProblem.as_set`)."""
-    setting_velocity: NDArray | None = None
+    setting_velocity: Floats | None = None
     """The velocity each breaker is set to (m/s, (n,)), with :attr:`setting`."""
 
     @property
-    def travel(self) -> NDArray:
+    def travel(self) -> Floats:
         """Rod travel opened to closed (m), (n,)."""
         return self.kin.s1[:, -1]
 
@@ -61,7 +60,7 @@ class Terms:
         return self.config.closing_velocity_m_s
 
     @cached_property
-    def cam_torque_min(self) -> NDArray:
+    def cam_torque_min(self) -> Floats:
         """Least torque the cam passes to the roller over the part of the stroke it
         reaches (N m), (n,)."""
         assert self.motion is not None
@@ -69,13 +68,13 @@ class Terms:
         return np.min(np.where(np.isfinite(mo.time), mo.cam_torque, np.inf), axis=1)
 
     @cached_property
-    def lift_off_ratio(self) -> NDArray:
+    def lift_off_ratio(self) -> Floats:
         """:attr:`cam_torque_min` as a share of the closing springs' mean driving torque
         over the stroke (driving work / stroke angle), (n,): 0 is the lift-off limit."""
         return self.cam_torque_min * self.model.theta_c[-1] / self.bal.driving
 
     @cached_property
-    def pickup_tau(self) -> NDArray:
+    def pickup_tau(self) -> Floats:
         """Largest shear stress beneath the cam-roller contact at the pick-up impact (Pa),
         (n,): the band's greatest impact loss stored elastically in the Hertz line contact
         of the profile's radius where the cam meets the roller (theta_c = 0) and the roller
@@ -94,7 +93,7 @@ class Terms:
         return hertz.line_contact(force, rho, m.rf, length, e_eq)[2]
 
     @cached_property
-    def psi_max(self) -> NDArray:
+    def psi_max(self) -> Floats:
         """Largest pressure angle along the stroke (deg), (n,)."""
         m = self.model
         return np.max(np.abs(cam.pressure_angle(m.l2, m.l6, self.kin.follower)), axis=1) / DEG
@@ -106,10 +105,10 @@ class Constraint:
 
     name: str
     applies: Callable[[VcbConfig], bool]
-    g: Callable[[Terms], NDArray]
+    g: Callable[[Terms], Floats]
 
 
-def _latch(q: Terms) -> NDArray:
+def _latch(q: Terms) -> Floats:
     """Continuous across the limit: the kinetic energy left (share of the driving work)
     when the cam latches, the share of the stroke it misses when it stalls; the worst
     parameter set of the band."""
@@ -118,7 +117,7 @@ def _latch(q: Terms) -> NDArray:
                     c.latch_energy_min_j + driving * (1 - band.reach_low)) / driving
 
 
-def _setting(q: Terms) -> NDArray:
+def _setting(q: Terms) -> Floats:
     """The factory setting's constraint: the longest nut travel any of the form's sets
     needs within the nut's reach, and the set breaker's velocity under every set (as
     computed for the verdict) within :data:`SETTING_MISS` of the setting (a stall or kink

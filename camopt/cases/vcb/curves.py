@@ -13,6 +13,9 @@ from any sampled curve, measured or simulated, the same way: closing time (comma
 touch), the average contact velocity between two calculation points on the travel, total
 travel, contact wipe, over-travel and rebound. Without a contact channel the touch is
 where the travel reaches the case's contact gap (``contact_gap_mm``), as the model has it.
+
+scipy.signal is imported where used (the smoothing of a measured curve; scipy is slow to
+import).
 """
 
 from __future__ import annotations
@@ -25,10 +28,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.config.loader import read_regular_file
 from camopt.errors import ConfigError
+from camopt.mechanics import Floats
 from camopt.units import MM, MS, TO_MS
 
 MAX_SAMPLES = 200_000
@@ -65,13 +68,13 @@ class TravelCurve:
     (their units)."""
 
     source: str
-    time: NDArray
-    travel: NDArray
+    time: Floats
+    travel: Floats
     noise: float
     columns: tuple[str, str] = ("time_ms", "travel_mm")
 
 
-def noise_level(y: NDArray) -> float:
+def noise_level(y: Floats) -> float:
     """Standard deviation of white noise on a sampled travel curve, from its second
     differences d2 (var(d2) = 6 sigma^2 for white noise). Second differences remove the
     travel's straight pieces (at rest, and at 10 kHz a closing's curvature adds ~1e-6 m,
@@ -90,7 +93,7 @@ def noise_level(y: NDArray) -> float:
     return quartile if mad > 1.5 * quartile else mad
 
 
-def motion_start(travel: NDArray, noise: float) -> int:
+def motion_start(travel: Floats, noise: float) -> int:
     """Index of the first sample where the curve has left its rest for good: above the
     first sample by 5 noise levels and 2 % of its stroke (0 if it starts moving)."""
     span = float(np.max(travel) - travel[0])
@@ -99,7 +102,7 @@ def motion_start(travel: NDArray, noise: float) -> int:
 
 
 def read_table(path: str | Path, columns: Sequence[Mapping[str, float]], key: str,
-               max_rows: int = MAX_SAMPLES) -> tuple[list[str], NDArray]:
+               max_rows: int = MAX_SAMPLES) -> tuple[list[str], Floats]:
     """The numeric columns of a CSV file with a header: for each entry of ``columns``
     (the accepted names with their SI factors) exactly one header name; other columns
     ignored. Returns the names found and the data (rows, len(columns)) in SI. Refused as
@@ -229,7 +232,7 @@ def check_scale(curve: TravelCurve, stroke: float, points: VelocityPoints) -> No
                           f"{VELOCITY_RANGE_M_S[0]:g}-{VELOCITY_RANGE_M_S[1]:g} m/s: {hint}")
 
 
-def smoothed(travel: NDArray, noise: float, time: NDArray) -> tuple[NDArray, float]:
+def smoothed(travel: Floats, noise: float, time: Floats) -> tuple[Floats, float]:
     """The travel smoothed for reading peaks, and the smoothed noise level (m): a
     Savitzky-Golay filter (quadratic, scipy) over ~1 ms of samples (at least 5, at most a
     quarter of the curve); the curve itself where it has no noise or too few samples. A
@@ -247,7 +250,7 @@ def smoothed(travel: NDArray, noise: float, time: NDArray) -> tuple[NDArray, flo
     return savgol_filter(travel, window, 2, mode="interp"), noise * gain
 
 
-def robust_peak(travel: NDArray, noise: float, time: NDArray) -> float:
+def robust_peak(travel: Floats, noise: float, time: Floats) -> float:
     """The furthest travel (m), read from the :func:`smoothed` curve."""
     return float(np.max(smoothed(travel, noise, time)[0]))
 
@@ -318,7 +321,7 @@ class AnalyserQuantities:
     notes: tuple[str, ...] = ()
 
 
-def first_time_at(time: NDArray, travel: NDArray, level: float) -> float | None:
+def first_time_at(time: Floats, travel: Floats, level: float) -> float | None:
     """Time (s) the curve first reaches ``level`` (m), linearly between samples; None if
     it never does."""
     above = travel >= level
@@ -331,7 +334,7 @@ def first_time_at(time: NDArray, travel: NDArray, level: float) -> float | None:
     return float(t0 + (level - s0) / (s1 - s0) * (t1 - t0))
 
 
-def analyse(time: NDArray, travel: NDArray, gap: float, points: VelocityPoints,
+def analyse(time: Floats, travel: Floats, gap: float, points: VelocityPoints,
             rebounds: bool = True) -> AnalyserQuantities:
     """The analyser's quantities of one sampled closing, ``time`` (s) from the command
     and ``travel`` (m) from rest, (m,) each. ``rebounds`` False: the curve comes from a

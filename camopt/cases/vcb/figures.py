@@ -1,8 +1,12 @@
 """Figures of a VCB run: cam profile, pressure angle, curvature, contact stresses and the
-forces along the stroke, each for the optimum beside the vendor's design."""
+forces along the stroke, each for the optimum beside the vendor's design.
+
+The cam's outline is imported where a figure draws it (matplotlib figures are drawn on
+request only)."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import replace
 
 import numpy as np
@@ -12,6 +16,7 @@ from camopt.cases.vcb.paper import PAPER
 from camopt.cases.vcb.requirements import CLOSING_VELOCITY_M_S
 from camopt.core.plotting import PAPER_STYLE, log_scale_if_spread, new_figure
 from camopt.core.runview import RunView
+from camopt.mechanics import Floats
 from camopt.mechanics.cam_outline import CamOutline
 from camopt.units import DEG, MM, TO_DEG
 
@@ -111,7 +116,7 @@ def _outline(run: RunView, prefix: str) -> CamOutline | None:
         return None
 
 
-def _cam_torque(a: dict) -> Figure:
+def _cam_torque(a: Mapping[str, Floats]) -> Figure:
     """Torque on the cam against cam angle: the closing springs' drive and the load's
     resistance along the stroke (quasi-static, the slopes of the archived works, N m per
     rad), and the torque the cam passes to the roller during the closing (dynamics)."""
@@ -139,7 +144,7 @@ def _cam_torque(a: dict) -> Figure:
     return fig
 
 
-def _window(a: dict, prefix: str, gap: float) -> tuple[float, float] | None:
+def _window(a: Mapping[str, Floats], prefix: str, gap: float) -> tuple[float, float] | None:
     """Times (ms) at which the movable contact has covered 2/3 of its gap and all of it:
     the window the average closing velocity is taken over (the last third of the contact
     stroke, Sec 2.1), read off the archived rod travel, which the contacts follow until
@@ -154,7 +159,7 @@ def _window(a: dict, prefix: str, gap: float) -> tuple[float, float] | None:
                  for i, level in zip(first, (2 * gap / 3, gap)))  # type: ignore[return-value]
 
 
-def _finite(metrics: dict, names: list[str]) -> list[float] | None:
+def _finite(metrics: Mapping[str, object], names: list[str]) -> list[float] | None:
     """The metrics ``names`` as floats, or None unless all are finite numbers."""
     values = [metrics.get(n) for n in names]
     if all(isinstance(v, (int, float)) and np.isfinite(v) for v in values):
@@ -162,7 +167,7 @@ def _finite(metrics: dict, names: list[str]) -> list[float] | None:
     return None
 
 
-def _dynamics(a: dict, run: RunView) -> dict[str, Figure]:
+def _dynamics(a: Mapping[str, Floats], run: RunView) -> dict[str, Figure]:
     """Closing against time: displacements and velocities of rod and movable contact, with
     what a breaker engineer reads on them: the contact gap, the window of the average
     closing velocity (shaded), the requirement band (green), the optimum's average over

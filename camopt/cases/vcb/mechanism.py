@@ -3,15 +3,18 @@ follower law, springs, masses, inertias and friction, all SI and plain floats.
 
 Read from the run's problem (its stored config and the design's variables): the geometry
 and parameters only, never camopt's closing dynamics, so the multibody model is an
-independent check of them."""
+independent check of them.
+
+:class:`~camopt.cases.vcb.problem.VcbProblem` is imported where used: a mechanism read from
+an archive needs no problem."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
 import numpy as np
-from numpy.typing import NDArray
 
+from camopt.mechanics import Floats
 from camopt.units import DEG, MM
 
 
@@ -66,18 +69,18 @@ class Mechanism:
     coupler_mass: float = 0.0
     """Beyond camopt's model: the coupler DL's own mass (kg, a uniform bar), 0 = massless."""
 
-    def phi(self, theta: NDArray) -> NDArray:
+    def phi(self, theta: Floats) -> Floats:
         """Follower swing phi (rad) at cam angles ``theta``."""
         return np.polynomial.polynomial.polyval(theta, np.asarray(self.law))
 
-    def roller(self, phi: NDArray) -> NDArray:
+    def roller(self, phi: Floats) -> Floats:
         """Roller centre D (m), (..., 2), at follower swing ``phi``: link BD turned
         clockwise from BO by xi + phi."""
         angle = self.bo_angle - (self.xi + np.asarray(phi))
         b = np.asarray(self.pivot_b)
         return b + self.l2 * np.stack([np.cos(angle), np.sin(angle)], axis=-1)
 
-    def pitch_curve(self, points: int) -> NDArray:
+    def pitch_curve(self, points: int) -> Floats:
         """The roller centre's path in the cam's frame (the frame at theta_c = 0), (points,
         2) m, over theta_c = 0 .. cam_end: the pitch curve the cam profile is offset from
         by the roller radius."""
@@ -86,12 +89,12 @@ class Mechanism:
         c, s = np.cos(theta), np.sin(theta)  # rotate back by -theta
         return np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=1)
 
-    def ground_e(self) -> NDArray:
+    def ground_e(self) -> Floats:
         """The output link's pivot E (m)."""
         return np.asarray(self.pivot_b) + self.l1 * np.array([np.cos(self.theta1),
                                                                np.sin(self.theta1)])
 
-    def coupler_point(self, d: NDArray) -> NDArray:
+    def coupler_point(self, d: Floats) -> Floats:
         """L, the coupler-output joint, for roller centre ``d``: where the circles about D
         (l3) and E (l4) meet, on the assembly branch with L to the left of D -> E
         (the opened vendor linkage's; a branch change would need the links to pass
@@ -105,7 +108,7 @@ class Mechanism:
         normal = np.array([-u[1], u[0]])  # left of D -> E
         return d + a * u + h * normal
 
-    def rod_point(self, l_point: NDArray) -> NDArray:
+    def rod_point(self, l_point: Floats) -> Floats:
         """M, the arm's end that lifts the rod, for the coupler point L."""
         e = self.ground_e()
         th4 = np.arctan2(l_point[1] - e[1], l_point[0] - e[0])
@@ -122,7 +125,7 @@ class Mechanism:
         return height(theta) - height(0.0)
 
 
-def mechanism_of(problem: object, x: NDArray) -> Mechanism:
+def mechanism_of(problem: object, x: Floats) -> Mechanism:
     """The mechanism of design ``x`` (SI variables) of a VCB run's problem: its decoded
     cam law, springs and linkage, the config's fixed geometry and loads, the identified
     motion parameters (the release moved with a design's latch) and, for a breaker set at

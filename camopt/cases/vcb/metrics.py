@@ -6,17 +6,17 @@ reports, the cam's shape (pressure angle, curvature, normal force, output range)
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.vcb.band import BANDED, band_ends
 from camopt.cases.vcb.constraints import Terms
 from camopt.cases.vcb.dynamics import ClosingMotion
 from camopt.cases.vcb.model import follower_dwell, row_max
 from camopt.cases.vcb.setting import Setting
+from camopt.mechanics import Floats
 from camopt.units import DEG, MM, MPA
 
 
-def setting_metrics(setting: Setting) -> dict[str, NDArray]:
+def setting_metrics(setting: Setting) -> dict[str, Floats]:
     """The nut travel the factory setting needs (mm; +inf: none reaches the velocity):
     the set needing the most, and the form's fit."""
     return {"preload_setting_mm": setting.longest / MM,
@@ -24,14 +24,14 @@ def setting_metrics(setting: Setting) -> dict[str, NDArray]:
 
 
 def motion_metrics(motion: ClosingMotion, q: Terms, latch_delay_ms: float | None
-                   ) -> dict[str, NDArray]:
+                   ) -> dict[str, Floats]:
     """The closing under the identified parameters (``motion``) and the band over the sets
     equally consistent with the ADAMS data (``dynamics_band``, ``q.spread``): every
     velocity and time, the latch's energy and margins. The analyser's closing time,
     command to touch, is ``latch_delay_ms`` + the touch time (where the case gives it)."""
     spread = q.spread
     closes = np.isfinite(spread.high["touch_time"])  # every set touches
-    extras: dict[str, NDArray] = {
+    extras: dict[str, Floats] = {
         "closing_velocity_avg_m_s": motion.closing_velocity_avg,
         # undefined (NaN: "n/a, fails") where a set never brings the contacts together;
         # the constraints keep the band's finite stand-in (0 m/s) so a search among
@@ -63,8 +63,8 @@ def motion_metrics(motion: ClosingMotion, q: Terms, latch_delay_ms: float | None
     return extras
 
 
-def shape_metrics(q: Terms, A: NDArray, torque: NDArray, zeros: NDArray
-                  ) -> dict[str, NDArray]:
+def shape_metrics(q: Terms, A: Floats, torque: Floats, zeros: Floats
+                  ) -> dict[str, Floats]:
     """The cam's shape for tables and reports: the law's coefficients, the largest
     pressure angle, the least convex radius, the largest normal force, the follower's
     dwell, Eq 39's sum and mean and the output's range. ``torque`` the closing springs'

@@ -9,13 +9,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import VcbConfig
 from camopt.cases.vcb.dynamics import MotionParameters
 from camopt.cases.vcb.model import Loads, VcbModel
 from camopt.errors import ConfigError
-from camopt.mechanics import cam
+from camopt.mechanics import Bools, Floats, Ints, cam
 from camopt.units import DEG, MM, N_PER_MM
 
 LINK_FIELDS = ("l1_mm", "l3_mm", "l4_mm", "l5_mm", "theta1_deg")
@@ -37,27 +36,27 @@ class Parts:
     eps; a form without one keeps 1); ``profile_rad`` (n,) the follower's angle offset
     from the cam profile's radial error."""
 
-    link: NDArray | None = None
-    pre: NDArray | None = None
-    opening_k: NDArray | None = None
-    wipe_k: NDArray | None = None
-    friction_scale: NDArray | None = None
-    efficiency_shift: NDArray | None = None
-    profile_rad: NDArray | None = None
+    link: Floats | None = None
+    pre: Floats | None = None
+    opening_k: Floats | None = None
+    wipe_k: Floats | None = None
+    friction_scale: Floats | None = None
+    efficiency_shift: Floats | None = None
+    profile_rad: Floats | None = None
 
-    def take(self, rows: NDArray) -> Parts:
+    def take(self, rows: Bools | Ints) -> Parts:
         """The parts of the designs ``rows`` (bool or index array)."""
         return Parts(*(None if v is None else v[rows] for v in
                        (self.link, self.pre, self.opening_k, self.wipe_k, self.friction_scale,
                         self.efficiency_shift, self.profile_rad)))
 
 
-def case_pre(c: VcbConfig, n: int) -> NDArray:
+def case_pre(c: VcbConfig, n: int) -> Floats:
     """(n, 2) m: the case's closing-spring compressions in the opened state, every row."""
     return np.tile([c.kc1_precompression_mm * MM, c.kc2_precompression_mm * MM], (n, 1))
 
 
-def parts_of(n: int, fields: Mapping[str, NDArray], allowed: tuple[str, ...], c: VcbConfig,
+def parts_of(n: int, fields: Mapping[str, Floats], allowed: tuple[str, ...], c: VcbConfig,
              model: VcbModel) -> Parts:
     """The :class:`Parts` of n rows from per-row case fields (their units); a field
     outside ``allowed`` is refused (a :class:`ConfigError` naming the ones that can)."""
@@ -66,7 +65,7 @@ def parts_of(n: int, fields: Mapping[str, NDArray], allowed: tuple[str, ...], c:
         raise ConfigError("case", unknown[0], "cannot vary per design; fields that can: "
                           f"{', '.join(allowed) or 'none'}")
 
-    def col(name: str) -> NDArray:
+    def col(name: str) -> Floats:
         return np.broadcast_to(np.asarray(fields[name], dtype=float), (n,))
     link = None
     if any(f in fields for f in LINK_FIELDS):
@@ -109,7 +108,7 @@ def loads_of(load: Loads, efficiency: float, parts: Parts | None) -> Loads:
                    efficiency=eff)
 
 
-def as_made(sets: MotionParameters, k: int, n: int, moved: NDArray, parts: Parts | None,
+def as_made(sets: MotionParameters, k: int, n: int, moved: Floats, parts: Parts | None,
             efficiency: float) -> MotionParameters:
     """``k`` parameter sets for n designs (k n rows, set-major): each design's latch
     ``moved`` (n,) from the identified one moves every set's, and its parts scale the
@@ -133,7 +132,7 @@ def as_made(sets: MotionParameters, k: int, n: int, moved: NDArray, parts: Parts
     return out
 
 
-def profile_offset(model: VcbModel, c: VcbConfig, error_mm: NDArray | float) -> NDArray:
+def profile_offset(model: VcbModel, c: VcbConfig, error_mm: Floats | float) -> Floats:
     """The follower's angle offset (rad) from a cam profile made ``error_mm`` oversize
     (a uniform offset along its normal): the roller sits that much further from O, so
     the follower angle at the base circle moves by the change of Eq 10's base angle,
@@ -143,11 +142,11 @@ def profile_offset(model: VcbModel, c: VcbConfig, error_mm: NDArray | float) -> 
                       - cam.base_angle(model.l2, model.l6, rp), dtype=float)
 
 
-def profiled(A: NDArray, parts: Parts | None, model: VcbModel, c: VcbConfig) -> NDArray:
+def profiled(A: Floats, parts: Parts | None, model: VcbModel, c: VcbConfig) -> Floats:
     """The follower law's coefficients ``A`` with the cam profile's error (the row's,
     else the config's ``cam_profile_error_mm``) in a0."""
     if parts is not None and parts.profile_rad is not None:
-        offset: NDArray | float = parts.profile_rad
+        offset: Floats | float = parts.profile_rad
     elif c.cam_profile_error_mm:
         offset = float(profile_offset(model, c, c.cam_profile_error_mm))
     else:

@@ -7,7 +7,6 @@ from collections.abc import Mapping
 from dataclasses import replace
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.vcb import life
 from camopt.cases.vcb.band import MotionBand
@@ -32,7 +31,7 @@ from camopt.cases.vcb.verdict import worst_of
 from camopt.core.capabilities import HasVariants, VariesCase
 from camopt.core.problem import Evaluation, ObjectiveFloor, Problem, Variable
 from camopt.errors import ConfigError
-from camopt.mechanics import cam, hertz
+from camopt.mechanics import Floats, Ints, cam, hertz
 from camopt.units import DEG, MM, MPA, N_PER_MM, TO_MS, TO_N_PER_MM
 
 
@@ -100,14 +99,14 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         draws"): a design drawn in form ``i`` is judged under that form's sets alone."""
         return tuple(f.name for f in self.forms) if len(self.forms) > 1 else ()
 
-    def _cam(self, d: CamDesign) -> tuple[NDArray, NDArray]:
+    def _cam(self, d: CamDesign) -> tuple[Floats, Floats]:
         a0 = self.model.phi0() if d.a0 is None else d.a0
         coefficients = np.array([a0, d.a1, d.a2, d.a3, d.a4, d.a5])
         degree = 5 if d.a5 else 4 if d.a4 else 3  # the paper's cubic unless a design has more
         return coefficients[:degree + 1], np.array([d.kc1_n_per_mm, d.kc2_n_per_mm]) * N_PER_MM
 
-    def designs(self, X: NDArray, link: NDArray | None = None
-                ) -> tuple[NDArray, NDArray, NDArray]:
+    def designs(self, X: Floats, link: Floats | None = None
+                ) -> tuple[Floats, Floats, Floats]:
         """Follower-law coefficients (n, d + 1: the cubic's 4, or with a4/a5 as design
         variables 5 or 6), spring rates (n, 2) and linkage (n, 5) of each row; step 1 takes
         the config's linkage unless ``link`` (n, 5) gives one per row."""
@@ -127,7 +126,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         depend on it: docs/design.md, Sec Performance)."""
         return ObjectiveFloor(0.0, "the objective is an absolute value")
 
-    def vendor_x(self) -> NDArray:
+    def vendor_x(self) -> Floats:
         """The vendor's design in this step's variables (initial design of Tables 6, 7)."""
         if self.config.step == "cam":
             c = self.config
@@ -144,11 +143,11 @@ class VcbProblem(Problem, VariesCase, HasVariants):
                          c.kc2_n_per_mm * N_PER_MM, higher, release, setting]
         return self.model.vendor_link.copy()
 
-    def evaluate(self, X: NDArray) -> Evaluation:
+    def evaluate(self, X: Floats) -> Evaluation:
         """Objective and constraints, with the metrics the search needs (hot path)."""
         return self._evaluate(X, detail=False)
 
-    def describe(self, X: NDArray) -> Evaluation:
+    def describe(self, X: Floats) -> Evaluation:
         """As :meth:`evaluate`, plus descriptive metrics (pressure angle, curvature,
         normal force, output range) for tables and reports."""
         return self._evaluate(X, detail=True)
@@ -159,7 +158,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         parts (:data:`PART_FIELDS`)."""
         return (LINK_FIELDS if self.config.step == "cam" else ()) + PART_FIELDS
 
-    def describe_with(self, X: NDArray, fields: Mapping[str, NDArray]) -> Evaluation:
+    def describe_with(self, X: Floats, fields: Mapping[str, Floats]) -> Evaluation:
         """As :meth:`describe`, with the named fields (mm, deg, N/mm, N m) per row: the
         linkage array the kinematics already takes per design, and the parts
         (:class:`Parts`); the loads' preloads stay those of the config's linkage (they
@@ -167,7 +166,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         X = np.atleast_2d(np.asarray(X, dtype=float))
         return self._evaluate(X, detail=True, parts=self.parts(len(X), fields))
 
-    def describe_variants(self, X: NDArray, fields: Mapping[str, NDArray], variant: NDArray,
+    def describe_variants(self, X: Floats, fields: Mapping[str, Floats], variant: Ints,
                           detail: bool = True) -> Evaluation:
         """As :meth:`describe_with`, each row judged under the sets of its model form
         ``variants()[variant[i]]`` alone (-1: every form, the case's own evaluation);
@@ -185,7 +184,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             return pieces[0]
         return Evaluation.concat(pieces).take(np.argsort(np.concatenate(order), kind="stable"))
 
-    def parts(self, n: int, fields: Mapping[str, NDArray]) -> Parts:
+    def parts(self, n: int, fields: Mapping[str, Floats]) -> Parts:
         """The :class:`Parts` of n rows from per-row case fields (their units)."""
         return parts_of(n, fields, self.case_fields(), self.config, self.model)
 
@@ -193,7 +192,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         """The resisting loads, with the parts' spring rates and efficiency per row."""
         return loads_of(self.load, self.config.efficiency, parts)
 
-    def motion(self, X: NDArray, link: NDArray | None = None, parts: Parts | None = None,
+    def motion(self, X: Floats, link: Floats | None = None, parts: Parts | None = None,
                form: int | None = None) -> ClosingMotion:
         """Closing dynamics of each row of ``X`` with the identified parameters
         (:mod:`camopt.cases.vcb.dynamics`), or model form ``form``'s fit, with each
@@ -211,16 +210,16 @@ class VcbProblem(Problem, VariesCase, HasVariants):
                               params, self.config.dynamics_steps,
                               pre=None if parts is None else parts.pre)
 
-    def _moved(self, X: NDArray, n: int) -> NDArray:
+    def _moved(self, X: Floats, n: int) -> Floats:
         """How far each design's latch lies from the identified one (rad), (n,)."""
         return np.broadcast_to(self.release_offset(X) - self.config.release_offset_deg * DEG,
                                (n,))
 
-    def profiled(self, A: NDArray, parts: Parts | None) -> NDArray:
+    def profiled(self, A: Floats, parts: Parts | None) -> Floats:
         """The follower law ``A`` with the cam profile's error (the row's or the case's)."""
         return profiled(A, parts, self.model, self.config)
 
-    def as_set(self, X: NDArray, parts: Parts | None, form: int | None = None
+    def as_set(self, X: Floats, parts: Parts | None, form: int | None = None
                ) -> tuple[Parts | None, Setting | None]:
         """Each breaker of ``X`` (n rows, its ``parts`` as made) set at the factory, where
         the run has ``velocity_setting_bounds_m_s`` (:mod:`camopt.cases.vcb.setting`).
@@ -246,7 +245,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         A_rows, kc_rows, link_rows = (np.tile(a, (k, 1)) for a in (A, kc, link))
         loads = self.loads(parts).tiled(k)
 
-        def velocity_of(pre: NDArray, rows: NDArray) -> NDArray:
+        def velocity_of(pre: Floats, rows: Ints) -> Floats:
             total = k * n
             return closing_events(
                 m, rows_of(A_rows, rows, total), rows_of(kc_rows, rows, total),
@@ -258,7 +257,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
                                    c.preload_setting_range_mm, c.preload_setting_resolution_mm)
         return replace(parts, pre=pre), setting
 
-    def release_offset(self, X: NDArray) -> NDArray | float:
+    def release_offset(self, X: Floats) -> Floats | float:
         """Where the closing latch holds the charged spring crank, past its dead centre,
         for each row of ``X`` (rad, (n,) or one for all): the design variable
         ``release_offset_deg`` when the run has it, else the step-1 design's (step 2) or
@@ -267,9 +266,9 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             return self.case_release
         return np.atleast_2d(np.asarray(X, dtype=float))[:, self.release_column]
 
-    def motion_band(self, X: NDArray, nominal: ClosingMotion, link: NDArray | None = None,
+    def motion_band(self, X: Floats, nominal: ClosingMotion, link: Floats | None = None,
                     parts: Parts | None = None, form: int | None = None,
-                    member_pre: NDArray | None = None) -> MotionBand:
+                    member_pre: Floats | None = None) -> MotionBand:
         """The closing of each row under every parameter set of ``dynamics_band`` (or of
         model form ``form``'s) and the nominal one (``nominal``, already computed): the
         extremes per design. One vectorised call over (sets x designs) rows;
@@ -298,7 +297,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
                                     sets=k, pre=None if parts is None else parts.pre)
         return MotionBand.of(nominal, events, k)
 
-    def _evaluate(self, X: NDArray, detail: bool, parts: Parts | None = None,
+    def _evaluate(self, X: Floats, detail: bool, parts: Parts | None = None,
                   form: int | None = None) -> Evaluation:
         if form is None and self.setting_column is not None and len(self.forms) > 1:
             return self._worst_form(X, detail, parts)
@@ -319,7 +318,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         """Whether a design is judged at the end of its life too (:mod:`.life`)."""
         return life.ages(self.config, self.search_dynamics)
 
-    def _judge(self, X: NDArray, detail: bool, parts: Parts | None, setting: Setting | None,
+    def _judge(self, X: Floats, detail: bool, parts: Parts | None, setting: Setting | None,
                form: int | None) -> Evaluation:
         """Objective, constraints and metrics of n breakers with their ``parts`` (set at
         the factory by ``setting``, where the run sets them) under form ``form``'s sets."""
@@ -365,7 +364,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             extras.update(shape_metrics(q, A, torque, zeros))
         return Evaluation(f=f, g=G, extras=extras)
 
-    def _worst_form(self, X: NDArray, detail: bool, parts: Parts | None) -> Evaluation:
+    def _worst_form(self, X: Floats, detail: bool, parts: Parts | None) -> Evaluation:
         """The case's own verdict on a breaker set at the factory, over every kept model
         form: whichever form is the breaker's, the analyser reads it and the nut sets it,
         so each form is judged with its own setting (:meth:`as_set`), and the verdict is
@@ -376,7 +375,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         return worst_of(each, self.config.penalty, sum_counts=True)
 
     # ---- single-design output ----------------------------------------------------
-    def _metrics_of(self, x: NDArray) -> dict[str, object]:
+    def _metrics_of(self, x: Floats) -> dict[str, object]:
         ev = self.describe(x[None, :])
         out: dict[str, object] = {k: float(v[0]) for k, v in ev.extras.items()}
         ends = [float(ev.extras[k][0]) for k in ("output_start_deg", "output_end_deg")]
@@ -385,7 +384,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         out["feasible"] = float(ev.feasible[0])
         return out
 
-    def metrics(self, x: NDArray) -> dict[str, object]:
+    def metrics(self, x: Floats) -> dict[str, object]:
         """Headline metrics of the design and, prefixed ``initial_``, of the vendor's."""
         out = self._metrics_of(np.asarray(x, dtype=float))
         vendor = self._metrics_of(self.vendor_x())
@@ -393,7 +392,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         out["initial_objective"] = float(self.evaluate(self.vendor_x()[None, :]).f[0])
         return out
 
-    def curves(self, x: NDArray) -> dict[str, NDArray]:
+    def curves(self, x: Floats) -> dict[str, Floats]:
         """Analysis curves of one design along the closing stroke (display units)."""
         m = self.model
         A, kc, link = self.designs(x)
@@ -423,7 +422,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             **self._motion_curves(x, parts),
         }
 
-    def _motion_curves(self, x: NDArray, parts: Parts | None = None) -> dict[str, NDArray]:
+    def _motion_curves(self, x: Floats, parts: Parts | None = None) -> dict[str, Floats]:
         """Closing dynamics of one design (its ``parts``) against time (display units)."""
         mo = self.motion(x, parts=parts)
         shown = np.isfinite(mo.time[0])
@@ -437,7 +436,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             "dyn_cam_torque_nm": mo.cam_torque[0, shown],
         }
 
-    def analysis(self, x: NDArray) -> dict[str, NDArray]:
+    def analysis(self, x: Floats) -> dict[str, Floats]:
         """Curves of the design and of the vendor's initial design (``initial_`` prefix)."""
         out = self.curves(np.asarray(x, dtype=float))
         out.update({f"initial_{k}": v for k, v in self.curves(self.vendor_x()).items()})

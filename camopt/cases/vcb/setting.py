@@ -17,8 +17,8 @@ from dataclasses import dataclass, fields, replace
 from typing import TypeVar
 
 import numpy as np
-from numpy.typing import NDArray
 
+from camopt.mechanics import Floats, Ints
 from camopt.units import MM
 
 SETTING_TRIAL_MM = 2.0
@@ -33,25 +33,25 @@ class Setting:
     (None without other sets), and the nut travel each set needs, ``needed`` (k + 1, n) m
     (the fit's first; +inf: none reaches the velocity)."""
 
-    member_pre: NDArray | None
-    needed: NDArray
+    member_pre: Floats | None
+    needed: Floats
 
     @property
-    def longest(self) -> NDArray:
+    def longest(self) -> Floats:
         """(n,) the needed travel of the set that needs the most, with its sign."""
         return longest(self.needed)
 
 
-def longest(travels: NDArray) -> NDArray:
+def longest(travels: Floats) -> Floats:
     """(n,) each column's entry of largest magnitude, with its sign, of ``travels``
     (k, n): the nut must reach the set that needs the most, whichever way it turns."""
     index = np.argmax(np.abs(travels), axis=0)
     return np.take_along_axis(travels, index[None], axis=0)[0]
 
 
-def nut_setting(velocity: Callable[[NDArray, NDArray], NDArray], base: NDArray,
-                target: NDArray, sets: int, reach_mm: float, step_mm: float = 0.0
-                ) -> tuple[NDArray, Setting]:
+def nut_setting(velocity: Callable[[Floats, Ints], Floats], base: Floats,
+                target: Floats, sets: int, reach_mm: float, step_mm: float = 0.0
+                ) -> tuple[Floats, Setting]:
     """The nut travel that sets n breakers under ``sets`` parameter sets each (k n rows,
     set-major, the fit first): ``velocity(pre, rows)`` the average closing velocity of
     rows ``rows`` with closing-spring compressions ``pre`` (len(rows), 2) m (NaN: the
@@ -64,7 +64,7 @@ def nut_setting(velocity: Callable[[NDArray, NDArray], NDArray], base: NDArray,
     rows = len(base)
     n = rows // sets
 
-    def squared_speed(d: NDArray, which: NDArray) -> NDArray:
+    def squared_speed(d: Floats, which: Ints) -> Floats:
         return np.asarray(np.nan_to_num(velocity(base[which] + d[:, None], which),
                                         nan=0.0) ** 2)
 
@@ -77,8 +77,8 @@ def nut_setting(velocity: Callable[[NDArray, NDArray], NDArray], base: NDArray,
     return pre[:n], Setting(pre[n:] if sets > 1 else None, needed.reshape(sets, n))
 
 
-def nut_travel(squared_speed: Callable[[NDArray, NDArray], NDArray], target: NDArray,
-               trial: float, reach: float) -> NDArray:
+def nut_travel(squared_speed: Callable[[Floats, Ints], Floats], target: Floats,
+               trial: float, reach: float) -> Floats:
     """The nut travel d (m, (rows,)) at which each row's squared closing velocity,
     ``squared_speed(d, rows)`` (0 where the breaker stalls), is ``target``; +inf where no
     travel within ``reach`` closes it at all.
@@ -114,8 +114,8 @@ def nut_travel(squared_speed: Callable[[NDArray, NDArray], NDArray], target: NDA
     return needed
 
 
-def _secant(d_a: NDArray, d_b: NDArray, w_a: NDArray, w_b: NDArray, goal: NDArray
-            ) -> NDArray:
+def _secant(d_a: Floats, d_b: Floats, w_a: Floats, w_b: Floats, goal: Floats
+            ) -> Floats:
     """The root of the line through (d_a, w_a), (d_b, w_b) at ``goal``; +inf where either
     point stalls (w = 0) or the line is flat."""
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -126,12 +126,12 @@ def _secant(d_a: NDArray, d_b: NDArray, w_a: NDArray, w_b: NDArray, goal: NDArra
 _Rows = TypeVar("_Rows")
 
 
-def rows_of(value: _Rows, rows: NDArray, total: int) -> _Rows:
+def rows_of(value: _Rows, rows: Ints, total: int) -> _Rows:
     """``value`` (an array, or a dataclass of arrays and shared numbers) at ``rows`` of its
     ``total`` rows: every array whose first axis has ``total`` rows is indexed, the rest
     (one value for every row) kept."""
     if isinstance(value, np.ndarray):
-        return value[rows] if value.ndim and len(value) == total else value
+        return value[rows] if value.ndim and len(value) == total else value  # type: ignore[return-value]
     return replace(value, **{f.name: rows_of(getattr(value, f.name), rows, total)  # type: ignore[type-var]
                              for f in fields(value)  # type: ignore[arg-type]
                              if isinstance(getattr(value, f.name), np.ndarray)})

@@ -11,12 +11,12 @@ import warnings
 from enum import Enum
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.vcb.band import BANDED, band_ends
 from camopt.cases.vcb.life import LIFE_END_METRICS
 from camopt.cases.vcb.setting import longest
 from camopt.core.problem import Evaluation
+from camopt.mechanics import Floats
 
 
 class Reduction(Enum):
@@ -66,7 +66,7 @@ REDUCTIONS: dict[str, Reduction] = {
 the first judgement's value: the identified form's, or the start of life's."""
 
 
-def reduce(rule: Reduction, stack: NDArray, sum_counts: bool) -> NDArray:
+def reduce(rule: Reduction, stack: Floats, sum_counts: bool) -> Floats:
     """``stack`` (judgements, n) reduced by ``rule`` to (n,)."""
     with np.errstate(invalid="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns stay NaN
