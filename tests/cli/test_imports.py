@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 HEAVY = ("numpy", "scipy", "scipy.stats", "h5py", "pymoo", "matplotlib", "dask",
-         "jinja2", "ezdxf", "camopt.engine.driver", "camopt.cases", "camopt.archive")
+         "jinja2", "ezdxf", "numba", "camopt.engine.driver", "camopt.cases", "camopt.archive")
 
 ROOT = Path(__file__).resolve().parents[2]
 ARCHIVE = str(ROOT / "tests" / "data" / "archives" / "run_main_52e31ad.h5")
