@@ -1,4 +1,5 @@
-"""Calibration of the VCB closing dynamics on measured travel curves (issue #32).
+"""Calibration of the VCB closing dynamics on measured travel curves: the model the
+fitting (:mod:`camopt.core.fitting`) runs on, and what the fits mean for the VCB.
 
 Each curve belongs to a design (the case's reference cam and springs unless the curve
 names others) and is timed from the close command; the model's closing starts at the
@@ -9,34 +10,26 @@ simulates for designs and parameter rows) the fit is
 
     min over (p, d)  sum_curves sum_samples  rho( ((s_model(t_i - d_c; p) - s_i) / sigma_c)^2 )
 
-robust least squares (scipy ``least_squares``, ``loss="soft_l1"``, ``f_scale`` 3: samples
-further than ~3 noise levels from the model, an analyser's spikes, count linearly, not
-quadratically; the profiles' re-fits by :meth:`Calibration.fit_many`, a Levenberg-Marquardt
-that runs them side by side in one vectorised simulation) in the log of each positive
-parameter, with one latch delay d_c per curve unless given (a nuisance parameter), sigma_c
-each curve's noise (its second differences,
-:func:`camopt.cases.vcb.curves.noise_level`). Samples before the motion are fitted too: the
-model holds the rod at rest until the cam meets the roller, so they fix the delay plus the
-free rotation's time; the curve's zero is the median of those samples.
+the robust least squares of :mod:`camopt.core.fitting` (soft-l1: an analyser's spikes
+count linearly) in the log of each positive parameter, with one latch delay d_c shared by
+every curve without a measured one (a nuisance parameter: the same breaker's coil and
+latch), sigma_c each curve's noise (its second differences,
+:func:`camopt.cases.vcb.curves.noise_level`). Samples before the motion are fitted too:
+the model holds the rod at rest until the cam meets the roller, so they fix the delay
+plus the free rotation's time; the curve's zero is the median of those samples.
 
-Intervals are **profile likelihood** (not a posterior): for each parameter in turn, fixed
-at values stepped away from the optimum and every other parameter re-fitted, the 95 %
-interval is where the cost rises by chi2(1, 0.95) / 2 = 1.92 times the fit's reduced
-chi-square s^2 = 2 cost / (N - P) (so a model that misfits gets wider intervals, not
-narrower). A parameter whose profile stays under the threshold up to a search bound is
-"not identified" by the curves (its interval reaches the bound). Samples along a travel
-curve are not quite independent (the model's misfit is smooth), so these intervals are
-the ones white noise would give; ``docs/calibration.md`` says so.
+Intervals are the fitting module's profile likelihood (linearised for a form not kept).
+Samples along a travel curve are not quite independent (the model's misfit is smooth),
+so these intervals are the ones white noise would give; ``docs/calibration.md`` says so.
+Predictions (closing velocity over the case's window, touch time) for designs get the
+wider of their envelope over every re-fitted parameter vector met on the profiles
+within the threshold and the linearised interval.
 
-Predictions (closing velocity over the case's window, touch time) for designs without a
-curve get the envelope of their values over every re-fitted parameter vector met on the
-profiles within the threshold.
-
-A form is **kept** (:func:`keep`) when its RMS misfit is at most 1.5 times the best
-form's, or 1.5 times the curves' noise, whichever is larger: the identification's rule
-(``form_keep_ratio`` times the best form's largest residual, or ``form_keep_pct``) with
-the RMS misfit for the largest residual and the noise for the absolute floor. A form
-not kept gets linearised intervals instead of profiles (:meth:`Calibration.fit`).
+A form is **kept** by :func:`camopt.core.fitting.keep` on its RMS misfit (the
+identification's rule, ``form_keep_ratio`` times the best form's largest residual or
+``form_keep_pct``, with the RMS misfit for the largest residual and the noise for the
+absolute floor), a form adding one term to another by :func:`nested_keep`, and where some
+form explains the curves, only if its residuals pass the test too.
 """
 
 from __future__ import annotations
@@ -58,18 +51,30 @@ from camopt.cases.vcb.curves import (
 from camopt.cases.vcb.dynamics import ClosingMotion
 from camopt.cases.vcb.forms import CURVE_FORMS, ModelForm
 from camopt.cases.vcb.model import Kinematics, Loads, VcbModel
+from camopt.core.fitting import (
+    CHI2_95_1DOF,
+    CHI2_99_1DOF,
+    IDENTIFIED_WITHIN,
+    Optimum,
+    ParameterEstimate,
+    ResidualTest,
+    delta_sd,
+    estimate,
+    keep,
+    likelihood_ratio,
+    optimum,
+    residual_test,
+)
 from camopt.units import DEG, MM, MS
 
-CHI2_95_1DOF = 3.841458820694124
-"""chi-square quantile, 1 degree of freedom, 0.95 (scipy.stats.chi2.ppf(0.95, 1))."""
-ROBUST_SCALE = 3.0
-"""soft-l1 loss scale in noise levels: quadratic within, linear beyond."""
-IDENTIFIED_WITHIN = 0.05
-"""A parameter counts as identified when its 95 % interval is closed inside the search
-bounds and lies within +-5 % of its value (the accuracy a designer asks of a calibrated
-value: the truth, inside the interval, is then within 5 %); the latch delay, within
-+-IDENTIFIED_DELAY_MS."""
 IDENTIFIED_DELAY_MS = 0.25
+"""The latch delay counts as identified when its closed 95 % interval lies within this
+(ms) of its value (the positive parameters: within
+:data:`~camopt.core.fitting.IDENTIFIED_WITHIN`)."""
+NEAR_BOUND_DELAY_MS = 0.1
+"""The latch delay is at its search bound within this (ms)."""
+
+
 MAX_DELAY_S = 0.1
 """Upper search bound of a fitted latch delay (s)."""
 FINE_STEP_S = 1e-5
@@ -199,21 +204,6 @@ class CurveCase:
 
 
 @dataclass(frozen=True)
-class ParameterEstimate:
-    """A fitted parameter (its unit): value, 95 % profile-likelihood interval (low, high;
-    a search bound where the profile does not cross the threshold) and whether the curves
-    identify it (:data:`IDENTIFIED_WITHIN`)."""
-
-    name: str
-    unit: str
-    value: float
-    low: float
-    high: float
-    identified: bool
-    at_bound: bool = False
-
-
-@dataclass(frozen=True)
 class Prediction:
     """A design's predicted closing (the case's closing velocity, m/s, and its touch time
     from the release, s) at the fit and its low/high over the profiles."""
@@ -243,74 +233,6 @@ class CurveFit:
     measured_quantities: AnalyserQuantities
     fitted_quantities: AnalyserQuantities
     noise: float = 0.0
-
-
-RMS_RATIO_LIMIT = 1.5
-"""A form explains the curves only if the RMS of its residuals, in units of each curve's
-noise (winsorised at :data:`WINSOR` noise levels: a few analyser spikes do not count), is
-at most this: the keep rule's noise floor. 1.5 rather than 1.1: the noise estimate is a
-median of second differences, exact for Gaussian noise but up to ~1.4 times low for
-heavier-tailed noise (Laplace), and the structure test catches a smooth misfit below it."""
-STRUCTURE_Z_LIMIT = 3.0
-"""... and only if its residuals show no serial structure: the Durbin-Watson statistic d
-(pooled over the curves) is not below 2 by more than this many of its standard errors
-under white noise, 2 / sqrt(N) (one-sided, p ~ 0.0013: with a dozen forms and curves a
-correct form is rarely flagged by chance)."""
-WINSOR = 5.0
-"""Residuals beyond this many noise levels count as this many in the residual test."""
-NEAR_BOUND_FACTOR = 1.5
-"""A positive parameter is at its search bound when its fitted value is within this
-factor of it or a tenth of its search range's log, whichever is less (an efficiency's
-0.2..1 gives 1.17); the latch delay within :data:`NEAR_BOUND_DELAY_MS`."""
-NEAR_BOUND_DELAY_MS = 0.1
-
-
-def near_bound(q: float, lower: float, upper: float, log: bool) -> bool:
-    """Whether a fitted coordinate ``q`` is at or near its search bounds (``log``: the log
-    of a positive parameter, near: :data:`NEAR_BOUND_FACTOR`; else the latch delay
-    in ms, within :data:`NEAR_BOUND_DELAY_MS`). A parameter there is not measured by the
-    curves but held by the search: often a form standing in for physics it lacks."""
-    room = (min(np.log(NEAR_BOUND_FACTOR), 0.1 * (upper - lower)) if log
-            else NEAR_BOUND_DELAY_MS)
-    return bool(q - lower <= room or upper - q <= room)
-
-
-@dataclass(frozen=True)
-class ResidualTest:
-    """A form's residuals against the curves' noise (:func:`residual_test`): ``noise``
-    the curves' RMS noise level (m, each curve's estimated from its own samples,
-    :func:`camopt.cases.vcb.curves.noise_level`), ``rms_ratio`` the residuals' RMS in
-    noise levels (winsorised), ``durbin_watson`` d = sum (e_i - e_i-1)^2 / sum e_i^2 of
-    the normalised residuals within each curve, pooled (2 for white residuals, toward 0
-    for a smooth misfit), ``structure_z`` = (2 - d) sqrt(N) / 2 its distance below 2 in
-    standard errors, and the number of samples N."""
-
-    noise: float
-    rms_ratio: float
-    durbin_watson: float
-    structure_z: float
-    samples: int
-
-    def passes(self) -> bool:
-        """Residuals at the noise (:data:`RMS_RATIO_LIMIT`) and without structure
-        (:data:`STRUCTURE_Z_LIMIT`)."""
-        return self.rms_ratio <= RMS_RATIO_LIMIT and self.structure_z <= STRUCTURE_Z_LIMIT
-
-
-def residual_test(residuals: Sequence[NDArray], sigma: Sequence[float]) -> ResidualTest:
-    """The test of a fit's residuals (m, one array per curve) against each curve's noise
-    ``sigma`` (m): :class:`ResidualTest`. Normalised by the noise and winsorised at
-    :data:`WINSOR`; the Durbin-Watson sums run within each curve (no difference across
-    two curves) and are pooled."""
-    e = [np.clip(np.asarray(r) / s, -WINSOR, WINSOR) for r, s in zip(residuals, sigma)]
-    n = sum(len(x) for x in e)
-    squares = sum(float(np.sum(x * x)) for x in e)
-    steps = sum(float(np.sum(np.diff(x) ** 2)) for x in e)
-    counts = np.array([len(x) for x in e])
-    noise = float(np.sqrt(np.sum(counts * np.square(sigma)) / max(n, 1)))
-    d = steps / squares if squares > 0 else 2.0
-    return ResidualTest(noise, float(np.sqrt(squares / max(n, 1))), d,
-                        (2.0 - d) * np.sqrt(n) / 2.0, n)
 
 
 def missing_physics(fit: FormFit, gap: float) -> str:
@@ -368,48 +290,10 @@ class FormFit:
     kept_note: str = ""
 
 
-@dataclass(frozen=True)
-class Optimum:
-    """A form's best fit: fitted coordinates ``q`` (n,), its robust cost, the linearised
-    covariance of q ((J^T J)^-1 s^2, (n, n)), the reduced chi-square s^2 (at least 1) and
-    the RMS misfit (m)."""
-
-    q: NDArray
-    cost: float
-    cov: NDArray
-    s2: float
-    rms: float
-
-
-@dataclass
-class _Profile:
-    """The state of one coordinate's profile in one direction (:meth:`Calibration.
-    _profiles`): its coordinate ``j``, direction, the optimum's value of it
-    (``origin``) and the room to the search bound, the step ``d`` from the optimum now
-    tried, the furthest inside (``near``, its cost rise) and the nearest outside (``far``:
-    distance, rise), the last re-fitted vector inside, those inside, and the end (None:
-    open to a bound)."""
-
-    j: int
-    sign: float
-    origin: float
-    room: float
-    d: float
-    last: NDArray
-    near: float = 0.0
-    near_rise: float = 0.0
-    far: tuple[float, float] | None = None
-    inside: list[NDArray] = field(default_factory=list)
-    done: bool = False
-    end: float | None = None
-    steps: int = 0
-
-
 class Calibration:
-    """Fits one model form to the curves (module docstring). ``steps`` the form's grid
-    (the case's ``dynamics_steps``)."""
-
-    MAX_PROFILE_STEPS = 10
+    """One model form and the curves: the :class:`~camopt.core.capabilities.Fittable` the
+    fitting runs on (module docstring) and the form's report from its fit. ``steps`` the
+    form's grid (the case's ``dynamics_steps``)."""
 
     def __init__(self, config: VcbConfig, form: ModelForm, curves: Sequence[CurveCase],
                  points: VelocityPoints | None = None) -> None:
@@ -428,6 +312,8 @@ class Calibration:
         self.lower = np.r_[lo, np.zeros(shared)]
         self.upper = np.r_[hi, np.full(shared, MAX_DELAY_S / MS)]
         self.log = np.array([p.log for p in self.parameters] + [False] * shared)
+        self.accuracy = np.where(self.log, IDENTIFIED_WITHIN, IDENTIFIED_DELAY_MS)
+        self.bound_room = np.full(len(self.log), NEAR_BOUND_DELAY_MS)
         self.sigma = np.array([max(c.curve.noise, 1e-3 * MM) for c in self.curves])
         self.n_samples = sum(len(c.curve.time) for c in self.curves)
 
@@ -459,97 +345,12 @@ class Calibration:
         return np.concatenate([(s - c.curve.travel) / sig for s, c, sig
                                in zip(sims, self.curves, self.sigma)], axis=1)
 
-    # ---- fitting ---------------------------------------------------------------------
-    def fit_many(self, Q0: NDArray, fixed: NDArray | None = None, tol: float = 1e-9,
-                 atol: float = 0.0, max_iter: int = 60) -> tuple[NDArray, NDArray]:
-        """Robust least squares from each start of ``Q0`` (B, n) at once; ``fixed`` (B,)
-        the coordinate each row keeps at its start (-1: none). Returns the fits (B, n)
-        and their costs (B,) (0.5 sum rho, as scipy's ``least_squares``).
-
-        Levenberg-Marquardt with Marquardt's scaling on iteratively reweighted least
-        squares (soft-l1: weights w = 1 / sqrt(1 + (r / C)^2), C = :data:`ROBUST_SCALE`):
-        the step solves (J^T W J + lambda diag(J^T W J)) dq = -J^T W r, J by forward
-        differences; a step is kept when it lowers the robust cost (lambda / 3), else
-        lambda x 4; a row stops when a kept step lowers its cost by less than ``tol``
-        relative or ``atol``, or lambda exceeds 1e10, or after ``max_iter`` steps.
-
-        Each step is one vectorised simulation of the trials and their forward steps,
-        k (n + 1) parameter rows for the k rows still running: the Jacobian at a trial is
-        ready when the trial is kept, and the last one still holds when it is not. The
-        profiles' re-fits so run side by side for little more than the price of one (the
-        model's cost grows slowly with the rows)."""
-        Q = np.clip(np.atleast_2d(np.asarray(Q0, dtype=float)), self.lower, self.upper)
-        B, n = Q.shape
-        free = np.ones((B, n), dtype=bool)
-        if fixed is not None:
-            rows = np.flatnonzero(np.asarray(fixed) >= 0)
-            free[rows, np.asarray(fixed)[rows]] = False
-        R, J = self._with_jacobian(Q, free)
-        cost = _robust_cost(R)
-        lam = np.full(B, 1e-3)
-        active = np.ones(B, dtype=bool)
-        eye = np.eye(n)
-        for _ in range(max_iter):
-            idx = np.flatnonzero(active)
-            if len(idx) == 0:
-                break
-            q, r, Jk = Q[idx], R[idx], J[idx]
-            w = 1.0 / np.sqrt(1.0 + (r / ROBUST_SCALE) ** 2)
-            g = np.einsum("knm,km->kn", Jk, w * r)
-            # a coordinate on a bound that the descent would push out of it sits this
-            # step out (an active set: clipping its step instead stalls the others)
-            held = ((q <= self.lower + 1e-12) & (g > 0)) | ((q >= self.upper - 1e-12) & (g < 0))
-            Jk = Jk * ~held[:, :, None]
-            g = np.where(held, 0.0, g)
-            H = np.einsum("knm,kjm,km->knj", Jk, Jk, w)
-            diag = np.einsum("knn->kn", H)
-            scale = np.maximum(diag, 1e-12 * diag.max(axis=1, keepdims=True) + 1e-300)
-            A = H + (lam[idx][:, None] * scale)[:, :, None] * eye
-            # pinv: a parameter the curves do not see (a zero column) takes no step
-            step = -(np.linalg.pinv(A) @ g[:, :, None])[:, :, 0]
-            trial = np.clip(q + step, self.lower, self.upper)
-            Rt, Jt = self._with_jacobian(trial, free[idx])
-            ct = _robust_cost(Rt)
-            better = ct < cost[idx]
-            gain = cost[idx] - ct
-            good = idx[better]
-            Q[good], R[good], J[good], cost[good] = (trial[better], Rt[better], Jt[better],
-                                                     ct[better])
-            lam[good] /= 3.0
-            lam[idx[~better]] *= 4.0
-            moved = np.max(np.abs(trial - q), axis=1)
-            done = (better & ((gain <= np.maximum(tol * ct, atol)) | (moved < 1e-9))) | (
-                lam[idx] > 1e10)
-            active[idx[done]] = False
-        return Q, cost
-
-    def _with_jacobian(self, Q: NDArray, free: NDArray) -> tuple[NDArray, NDArray]:
-        """Residuals (k, N) at the rows of ``Q`` (k, n) and their Jacobians' transposes
-        (k, n, N) by forward differences (step 1e-6 max(1, |q|)), zero in the columns
-        ``free`` (k, n) marks fixed: one simulation of k (n + 1) rows."""
-        k, n = Q.shape
-        h = 1e-6 * np.maximum(1.0, np.abs(Q))
-        rows = np.concatenate([Q[:, None, :], Q[:, None, :] + np.eye(n)[None] * h[:, :, None]],
-                              axis=1)
-        Rall = self.residuals(rows.reshape(k * (n + 1), n)).reshape(k, n + 1, -1)
-        J = (Rall[:, 1:] - Rall[:, :1]) / h[:, :, None]
-        return Rall[:, 0], J * free[:, :, None]
-
-    def _fit(self, q0: NDArray) -> tuple[NDArray, float]:
-        """The fit from ``q0``: scipy's ``least_squares`` (trust region reflective,
-        soft-l1, tight tolerances: the optimum every profile is measured from; its
-        trust region follows the narrow valleys of a single curve better than
-        :meth:`fit_many`'s Levenberg-Marquardt). Returns q and the cost."""
-        from scipy.optimize import least_squares
-
-        def fun(z: NDArray) -> NDArray:
-            return self.residuals(z)[0]
-
-        z0 = np.clip(q0, self.lower + 1e-9, self.upper - 1e-9)
-        sol = least_squares(fun, z0, jac=self._jacobian, bounds=(self.lower, self.upper),
-                            loss="soft_l1", f_scale=ROBUST_SCALE, x_scale=1.0, max_nfev=100,
-                            ftol=1e-8, xtol=1e-8)
-        return sol.x, float(sol.cost)
+    def rms(self, q: NDArray) -> float:
+        """RMS misfit (m) at ``q`` over every sample of every curve."""
+        R = self.residuals(q)[0]
+        sig = np.concatenate([np.full(len(c.curve.time), s)
+                              for c, s in zip(self.curves, self.sigma)])
+        return float(np.sqrt(np.mean((R * sig) ** 2)))
 
     def start(self) -> NDArray:
         """The form's case values and, for each fitted delay, the delay that puts the
@@ -566,128 +367,24 @@ class Calibration:
         return np.r_[q, np.mean(delays)] if delays else q
 
     def optimum(self) -> Optimum:
-        """The best fit from two starts: the case's values and a perturbation of the
-        first fit's end, keeping the better (the cost surface of a delay and a release
-        offset has shallow valleys); its linearised covariance and RMS misfit."""
-        q, cost = self._fit(self.start())
-        q2, cost2 = self._fit(q + 0.05 * self.log)
-        if cost2 < cost:
-            q, cost = q2, cost2
-        dof = max(self.n_samples - len(q), 1)
-        s2 = max(2 * cost / dof, 1.0)
-        J = self._jacobian(q)
-        return Optimum(q, cost, np.linalg.pinv(J.T @ J) * s2, s2, self._rms(q))
+        """The best fit from the form's case values (:func:`camopt.core.fitting.optimum`)."""
+        return optimum(self, self.start())
 
     def fit(self, opt: Optimum | None = None, profiled: bool = True) -> FormFit:
-        """The fit (``opt``, else :meth:`optimum`), its intervals and the report of this
-        form. ``profiled``: profile-likelihood intervals (module docstring); else
-        linearised ones, q +- 1.96 sd of the covariance in the fitted coordinates (the log
-        of a positive parameter), for a form the curves reject (not kept: its values
-        calibrate nothing, and a misfitting form's profiles wander far for little)."""
+        """The fit (``opt``, else :meth:`optimum`), its intervals
+        (:func:`camopt.core.fitting.estimate`: profile likelihood, or linearised for a form
+        the curves reject) and the report of this form."""
         o = opt or self.optimum()
-        q, cov = o.q, o.cov
-        sd = np.sqrt(np.maximum(np.diag(cov), 1e-12))
-        corr = cov / np.outer(sd, sd)
-        rise = 0.5 * CHI2_95_1DOF * o.s2
-        ends: dict[tuple[int, float], float | None] = {}
-        members = [q]
-        if profiled:
-            for key, prof in self._profiles(q, o.cost, cov, rise).items():
-                ends[key] = prof.end
-                members += prof.inside
-        else:
-            for j in range(len(q)):
-                for sign in (-1.0, 1.0):
-                    x = q[j] + sign * np.sqrt(CHI2_95_1DOF) * sd[j]
-                    inside = bool(self.lower[j] <= x <= self.upper[j])
-                    ends[(j, sign)] = x if inside else None
-                    # the linearised conditional optimum there: the band's member
-                    m = np.clip(q + _valley(cov, j) * (x - q[j]), self.lower, self.upper)
-                    members.append(m)
-        ests = []
-        for j, (name, unit) in enumerate(self.names()):
-            lo_q, hi_q = ends[(j, -1.0)], ends[(j, 1.0)]
-            low = _out(lo_q if lo_q is not None else self.lower[j], self.log[j])
-            high = _out(hi_q if hi_q is not None else self.upper[j], self.log[j])
-            value = _out(q[j], self.log[j])
-            # identified: a closed profile interval inside the search bounds, within
-            # IDENTIFIED_WITHIN of the value (the delay: IDENTIFIED_DELAY_MS); a form not
-            # kept identifies nothing
-            reach = max(value - low, high - value)
-            identified = bool(profiled and lo_q is not None and hi_q is not None and (
-                reach <= IDENTIFIED_WITHIN * abs(value) if self.log[j]
-                else reach <= IDENTIFIED_DELAY_MS))
-            ests.append(ParameterEstimate(name, unit, value, low, high, identified,
-                                          near_bound(q[j], self.lower[j], self.upper[j],
-                                                     bool(self.log[j]))))
-        P_band, _ = self.values(np.array(members))
-        return FormFit(self.form.name, self.form.summary, o.rms, tuple(ests), corr,
-                       self._curve_fits(q), (), P_band,
+        est = estimate(self, o, self.names(), profiled)
+        P_band, _ = self.values(est.members)
+        return FormFit(self.form.name, self.form.summary, o.rms, est.parameters,
+                       est.correlation, self._curve_fits(o.q), (), P_band,
                        intervals="profile" if profiled else "linearised")
 
     def names(self) -> list[tuple[str, str]]:
         """(name, unit) of every fitted coordinate: the form's, then the latch delay."""
         return [(p.name, p.unit) for p in self.parameters] + (
             [("latch_delay_ms", "ms")] if self.free_delay else [])
-
-    def _costs(self, Q: NDArray) -> NDArray:
-        """The robust cost (0.5 sum rho, as least_squares's) of each row of Q, (k,)."""
-        return _robust_cost(self.residuals(Q))
-
-    def _jacobian(self, q: NDArray) -> NDArray:
-        h = 1e-6 * np.maximum(1.0, np.abs(q))
-        R = self.residuals(np.vstack([q, q + np.diag(h)]))
-        return ((R[1:] - R[0]) / h[:, None]).T
-
-    def _profiles(self, q: NDArray, cost: float, cov: NDArray, rise: float
-                  ) -> dict[tuple[int, float], _Profile]:
-        """Every coordinate's profile from the optimum ``q`` (cost ``cost``) in both
-        directions, side by side (:meth:`fit_many` re-fits them together): coordinate j
-        fixed at 1.5, 3, 6, ... linearised standard deviations (``cov``) from the
-        optimum, the others re-fitted, until the cost rises by more than ``rise``; a rise
-        of more than 4 ``rise`` (a cliff: the profile is not a parabola there) is bisected
-        until the bracket holds at most that, and the crossing is placed in the bracket
-        as on a parabola through the optimum. A profile's end is None where it reaches
-        the search bound, or :data:`MAX_PROFILE_STEPS` re-fits, under the threshold."""
-        out = {}
-        for j in range(len(q)):
-            for sign in (-1.0, 1.0):
-                bound = self.upper[j] if sign > 0 else self.lower[j]
-                room = abs(bound - q[j])
-                # a coordinate the curves do not see (no variance) starts at its bound
-                first = 1.5 * float(np.sqrt(cov[j, j])) if cov[j, j] > 0 else room
-                out[(j, sign)] = _Profile(j, sign, float(q[j]), room, min(first, room), q)
-        for _ in range(self.MAX_PROFILE_STEPS):
-            live = [p for p in out.values() if not p.done]
-            if not live:
-                break
-            # start from the better of the last inside point moved along j alone and the
-            # linearised conditional optimum (the valley's direction near the optimum)
-            starts = []
-            for p in live:
-                x = q[p.j] + p.sign * p.d
-                two = np.vstack([p.last, q + _valley(cov, p.j) * (x - q[p.j])])
-                two = np.clip(two, self.lower + 1e-9, self.upper - 1e-9)
-                two[:, p.j] = x
-                starts.append(two)
-            S = np.vstack(starts)
-            c2 = self._costs(S).reshape(len(live), 2)
-            S0 = S.reshape(len(live), 2, -1)[np.arange(len(live)), np.argmin(c2, axis=1)]
-            # a re-fit needs its cost to a small part of the threshold, not to round-off
-            trials, costs = self.fit_many(S0, np.array([p.j for p in live]), atol=0.005 * rise,
-                                          max_iter=50)
-            for p, trial, c in zip(live, trials, costs):
-                _advance(p, trial, float(c - cost), rise)
-        for p in out.values():
-            if not p.done:
-                _finish(p, rise)
-        return out
-
-    def _rms(self, q: NDArray) -> float:
-        R = self.residuals(q)[0]
-        sig = np.concatenate([np.full(len(c.curve.time), s)
-                              for c, s in zip(self.curves, self.sigma)])
-        return float(np.sqrt(np.mean((R * sig) ** 2)))
 
     def _curve_fits(self, q: NDArray) -> tuple[CurveFit, ...]:
         """Each curve's fit at ``q``: the model at the samples' times, and the analyser's
@@ -729,22 +426,24 @@ class Calibration:
         ``best`` (P,): low and high the wider of their envelope over the fit's band and,
         given the optimum ``opt``, the linearised 95 % interval +-1.96 sqrt(g^T C g)
         (g the prediction's gradient in the fitted coordinates by forward differences, C
-        the optimum's covariance). The envelope alone is the profiles' extremes along
-        each parameter's axis; a prediction that moves with several parameters at once
-        lies off those axes, and the envelope alone covered a third design's true
-        velocity in too few noisy curves (tests/cases/test_vcb_calibrate.py's coverage
-        study)."""
+        the optimum's covariance: :func:`camopt.core.fitting.delta_sd`). The envelope
+        alone is the profiles' extremes along each parameter's axis; a prediction that
+        moves with several parameters at once lies off those axes, and the envelope alone
+        covered a third design's true velocity in too few noisy curves (the coverage
+        study of tests/cases/test_vcb_calibrate.py)."""
         P = np.vstack([best, fit.band])
         v, t = velocity(self.form, self.model, designs, P, self.steps)
         sd_v = sd_t = np.zeros(len(designs))
         if opt is not None:
-            h = 1e-6 * np.maximum(1.0, np.abs(opt.q))
-            Q = np.vstack([opt.q, opt.q + np.diag(h)])
-            vq, tq = velocity(self.form, self.model, designs, self.values(Q)[0], self.steps)
-            with np.errstate(invalid="ignore"):
-                gv, gt = (vq[1:] - vq[:1]) / h[:, None], (tq[1:] - tq[:1]) / h[:, None]
-                sd_v = np.sqrt(np.einsum("in,ij,jn->n", gv, opt.cov, gv))
-                sd_t = np.sqrt(np.einsum("in,ij,jn->n", gt, opt.cov, gt))
+            n = len(designs)
+
+            def both(Q: NDArray) -> NDArray:
+                vq, tq = velocity(self.form, self.model, designs, self.values(Q)[0],
+                                  self.steps)
+                return np.hstack([vq, tq])
+
+            sd = delta_sd(both, opt)
+            sd_v, sd_t = sd[:n], sd[n:]
         z = np.sqrt(CHI2_95_1DOF)
         with np.errstate(invalid="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: never touches
@@ -755,80 +454,6 @@ class Calibration:
                 float(np.nanmin(np.r_[t[:, i], t[0, i] - z * sd_t[i]])),
                 float(np.nanmax(np.r_[t[:, i], t[0, i] + z * sd_t[i]])))
                 for i, d in enumerate(designs))
-
-
-def _valley(cov: NDArray, j: int) -> NDArray:
-    """How the linearised conditional optimum moves per unit of coordinate j (n,):
-    column j of the covariance over its variance. A coordinate the curves do not see
-    (a zero column of the Jacobian: zero variance in the pseudo-inverse) moves alone:
-    the others have nothing to trade against it (0 / 0 there was NaN, and a
-    RuntimeWarning)."""
-    if cov[j, j] > 0:
-        return cov[:, j] / cov[j, j]
-    return np.eye(len(cov))[j]
-
-
-def _robust_cost(R: NDArray) -> NDArray:
-    """soft-l1 cost of residual rows ``R`` (k, N), (k,): 0.5 C^2 sum 2 (sqrt(1 + (r/C)^2)
-    - 1), scipy ``least_squares``'s with ``f_scale`` C = :data:`ROBUST_SCALE`."""
-    z = (R / ROBUST_SCALE) ** 2
-    return 0.5 * ROBUST_SCALE**2 * np.sum(2 * (np.sqrt(1 + z) - 1), axis=1)
-
-
-def _advance(p: _Profile, trial: NDArray, r: float, rise: float) -> None:
-    """One re-fit of profile ``p`` at its step ``p.d``, the cost risen by ``r``: the next
-    step (doubling while inside, bisecting once outside) or the end."""
-    p.steps += 1
-    if r <= rise:
-        p.inside.append(trial)
-        p.last, p.near, p.near_rise = trial, p.d, max(r, 0.0)
-        if p.far is None and p.d >= p.room:
-            p.done, p.end = True, None  # open up to the search bound
-            return
-        p.d = min(2 * p.d, p.room) if p.far is None else 0.5 * (p.near + p.far[0])
-    else:
-        p.far = (p.d, r)
-        if r <= 4 * rise or p.far[0] - p.near < 1e-4:
-            _finish(p, rise)
-            return
-        p.d = 0.5 * (p.near + p.far[0])
-
-
-def _finish(p: _Profile, rise: float) -> None:
-    """The end of profile ``p``: None without a point outside, else the crossing in the
-    bracket (near, far) on a parabola rise ~ a (distance)^2 through its two ends."""
-    p.done = True
-    if p.far is None:
-        p.end = None
-        return
-    a = (p.far[1] - p.near_rise) / max(p.far[0] ** 2 - p.near**2, 1e-300)
-    at = np.sqrt(p.near**2 + (rise - p.near_rise) / a) if a > 0 else p.far[0]
-    p.end = float(p.origin + p.sign * float(np.clip(at, p.near, p.far[0])))
-
-
-def _out(q: float, log: bool) -> float:
-    return float(np.exp(q)) if log else float(q)
-
-
-KEEP_RATIO = 1.5
-"""A form is kept when its RMS misfit is at most this many times the best form's or the
-curves' noise, whichever is larger (identification's ``form_keep_ratio``, 1.5: a form
-that fits about as well as the best, or to within the analyser's noise, is as
-credible)."""
-
-
-def keep(rms: Sequence[float], noise: float) -> list[bool]:
-    """Which forms are kept by their RMS misfits ``rms`` (m): at most
-    :data:`KEEP_RATIO` times the larger of the best form's and ``noise`` (m, the curves'
-    RMS noise level)."""
-    if not rms:
-        return []
-    limit = KEEP_RATIO * max(min(rms), noise)
-    return [r <= limit for r in rms]
-
-
-CHI2_99_1DOF = 6.634896601021214
-"""chi-square quantile, 1 degree of freedom, 0.99 (scipy.stats.chi2.ppf(0.99, 1))."""
 
 
 def nested_keep(forms: Sequence[ModelForm], optima: Sequence[Optimum], kept: Sequence[bool]
@@ -845,7 +470,7 @@ def nested_keep(forms: Sequence[ModelForm], optima: Sequence[Optimum], kept: Seq
         if form.base is None or form.base not in names or not k:
             out.append((k, ""))
             continue
-        ratio = 2 * (optima[names.index(form.base)].cost - opt.cost) / opt.s2
+        ratio = likelihood_ratio(optima[names.index(form.base)], opt)
         out.append((True, "") if ratio >= CHI2_99_1DOF else (
             False, f"not kept: its {form.extra.replace('_', ' ')} does not improve on "
             f"{form.base} (likelihood ratio {ratio:.2f} < {CHI2_99_1DOF:.2f})"))
@@ -856,8 +481,9 @@ def calibrate(config: VcbConfig, curves: Sequence[CurveCase],
               forms: Sequence[ModelForm] = CURVE_FORMS, predict: Sequence[Design] = (),
               points: VelocityPoints | None = None) -> tuple[FormFit, ...]:
     """Fit every form (default :data:`~camopt.cases.vcb.forms.CURVE_FORMS`) to the curves
-    jointly, mark the forms kept (:func:`keep`, :func:`nested_keep`; where some form
-    explains the curves, a form whose residuals fail the test is not kept), find the
+    jointly, mark the forms kept (:func:`~camopt.core.fitting.keep`, :func:`nested_keep`;
+    where some form explains the curves, a form whose residuals fail the test is not
+    kept), find the
     intervals (profile likelihood for the kept forms, linearised for the others:
     :meth:`Calibration.fit`) and predict ``predict``'s designs (the curves' designs if
     empty)."""

@@ -21,9 +21,6 @@ from typing import Any
 import numpy as np
 
 from camopt.cases.vcb.calibrate import (
-    KEEP_RATIO,
-    RMS_RATIO_LIMIT,
-    STRUCTURE_Z_LIMIT,
     CurveCase,
     Design,
     FormFit,
@@ -44,6 +41,7 @@ from camopt.cases.vcb.forms import BAND_COLUMNS, CURVE_FORM_NAMES, CURVE_FORMS, 
 from camopt.cases.vcb.model import VcbModel
 from camopt.config.models import CaseConfig, toml_comment, toml_string
 from camopt.core.calibration import CalibrationRequest, FittedCurve
+from camopt.core.fitting import KEEP_RATIO, RMS_RATIO_LIMIT, STRUCTURE_Z_LIMIT
 from camopt.errors import ConfigError
 from camopt.units import DEG, MM, MS, N_PER_MM
 

@@ -24,6 +24,8 @@ from camopt.cases.vcb.config import VcbDynamicsIdentifyConfig, VcbIdentifyConfig
 from camopt.cases.vcb.dynamics import MotionParameters, opening_motion
 from camopt.cases.vcb.forms import BAND_COLUMNS, FORMS, INERTIAS, ModelForm, get_form
 from camopt.cases.vcb.model import VcbModel
+from camopt.core.fitting import Identifiability, central_jacobian
+from camopt.core.fitting import identifiability as core_identifiability
 from camopt.core.problem import Evaluation, Problem, Variable
 from camopt.units import DEG, MM, MS, N_PER_MM
 
@@ -222,12 +224,11 @@ def fit(problem: VcbDynamicsIdentification, start: NDArray, drop: int | None = N
 def log_jacobian(problem: VcbDynamicsIdentification, x: NDArray, step: float = 1e-6
                  ) -> NDArray:
     """d residual / d log parameter at ``x`` (p,), (7, p), by central differences of
-    ``step`` in every log parameter, all 2 p simulations in one vectorised call."""
-    # a parameter at zero (a lower bound of 0) is taken at 1e-9, the log bounds' floor
-    q = np.log(np.maximum(x, 1e-9))[None, :] + step * np.vstack([np.eye(len(x)),
-                                                                  -np.eye(len(x))])
-    r = problem.residuals(problem.predict(np.exp(q)))
-    return ((r[:len(x)] - r[len(x):]) / (2 * step)).T
+    ``step`` in every log parameter (:func:`camopt.core.fitting.central_jacobian`), all
+    2 p simulations in one vectorised call. A parameter at zero (a lower bound of 0) is
+    taken at 1e-9, the log bounds' floor."""
+    return central_jacobian(lambda Q: problem.residuals(problem.predict(np.exp(Q))),
+                            np.log(np.maximum(x, 1e-9)), step)
 
 
 def leave_one_out(problem: VcbDynamicsIdentification, best: NDArray
@@ -384,49 +385,8 @@ def fit_forms(config: VcbDynamicsIdentifyConfig, start: dict[str, float]
     return tuple(replace(f, kept=f.max_residual_pct <= limit) for f in fits)
 
 
-@dataclass(frozen=True)
-class Identifiability:
-    """What the seven data determine about a form's parameters at its fit, from the
-    Jacobian J of the relative residuals with respect to the log parameters (7, p):
-    its ``singular_values`` (descending) and condition number, the parameters'
-    ``correlations`` (p, p, from (J^T J)^-1) and the ``determined`` combinations: the
-    right singular vectors whose singular value is at least ``DETERMINED`` of the
-    largest, each a product of the parameters' powers (log-linear) with its singular
-    value; the rest (``undetermined``) move the fit by less than that."""
-
-    names: tuple[str, ...]
-    singular_values: NDArray
-    correlations: NDArray
-    determined: tuple[dict[str, float], ...]
-    undetermined: tuple[dict[str, float], ...]
-
-    DETERMINED = 0.01
-
-    def to_json(self) -> dict[str, object]:
-        s = self.singular_values
-        return {"parameters": list(self.names), "singular_values": s.tolist(),
-                "condition": float(s[0] / s[-1]) if s[-1] > 0 else float("inf"),
-                "correlations": {a: {b: float(self.correlations[i, j])
-                                     for j, b in enumerate(self.names)}
-                                 for i, a in enumerate(self.names)},
-                "determined": list(self.determined), "undetermined": list(self.undetermined)}
-
-
 def identifiability(problem: VcbDynamicsIdentification, x: NDArray) -> Identifiability:
-    """:class:`Identifiability` of ``problem``'s form at parameters ``x`` (p,)."""
-    jac = log_jacobian(problem, x)
-    _, s, vt = np.linalg.svd(jac, full_matrices=False)
-    cov = np.linalg.pinv(jac.T @ jac)
-    sd = np.sqrt(np.abs(np.diag(cov)))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        corr = cov / np.outer(sd, sd)
-
-    def combination(i: int) -> dict[str, float]:
-        v = vt[i] * np.sign(vt[i][np.argmax(np.abs(vt[i]))])  # largest exponent positive
-        return {"singular_value": float(s[i]),
-                **{f"exponent_{n}": float(c) for n, c in zip(problem.names, v)}}
-
-    determined = s >= Identifiability.DETERMINED * s[0]
-    return Identifiability(problem.names, s, corr,
-                           tuple(combination(int(i)) for i in np.flatnonzero(determined)),
-                           tuple(combination(int(i)) for i in np.flatnonzero(~determined)))
+    """What the seven data determine about ``problem``'s form at parameters ``x`` (p,):
+    :func:`camopt.core.fitting.identifiability` of the relative residuals' Jacobian with
+    respect to the log parameters (:func:`log_jacobian`)."""
+    return core_identifiability(log_jacobian(problem, x), problem.names)
