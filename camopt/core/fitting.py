@@ -85,6 +85,21 @@ MAX_PROFILE_STEPS = 10
 """Re-fits per profile and direction before it is taken as open."""
 
 
+INTERVALS = ("profile likelihood, 95 % (chi2(1) / 2 = 1.92 times the reduced chi-square "
+             "rise of the robust cost)")
+"""The profile-likelihood intervals, as reports state them."""
+LINEARISED = ("linearised, 95 % (+-1.96 standard deviations of (J^T J)^-1 s^2 in the fitted "
+              "coordinates): a form not kept is not profiled")
+"""The linearised intervals of a model not kept, as reports state them."""
+KEEP_RULE = (f"kept: RMS misfit at most {KEEP_RATIO:g} x the best form's or the curves' "
+             "noise, whichever is larger")
+""":func:`keep`, as reports state it."""
+EXPLAINS_RULE = (f"explains: kept, residual RMS at most {RMS_RATIO_LIMIT:g} x the noise "
+                 f"and Durbin-Watson not below 2 by more than {STRUCTURE_Z_LIMIT:g} "
+                 "standard errors")
+""":meth:`ResidualTest.passes` of a kept model, as reports state it."""
+
+
 @dataclass(frozen=True)
 class Optimum:
     """A model's best fit: fitted coordinates ``q`` (n,), its robust cost, the linearised

@@ -8,13 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camopt.cases.vcb.calibrate import (
-    Calibration,
-    CurveCase,
-    Design,
-    calibrate,
-    sample_travel,
-)
+from camopt.cases.vcb.calibrate import Calibration, CurveCase, calibrate
+from camopt.cases.vcb.calibration_model import Design
 from camopt.cases.vcb.curves import read_curve
 from camopt.cases.vcb.forms import get_form
 from camopt.cases.vcb.problem import VcbProblem
@@ -138,19 +133,6 @@ def test_the_fit_does_not_depend_on_the_integration_grid(problem):
     assert np.max(np.abs(a - fine)) < 0.05 * vcb_ode.NOISE_M
 
 
-def test_sample_travel_interpolates_holds_and_rests():
-    """Rows with their own time grids: linear between nodes, 0 before the first, the last
-    value after the latch, the last finite value after a stall (inf times), and a row
-    that never moves (inf from the start) at 0."""
-    time = np.array([[1.0, 2.0, 3.0], [0.5, 1.0, np.inf], [np.inf, np.inf, np.inf]])
-    rod = np.array([[0.0, 1.0, 3.0], [0.0, 2.0, 2.5], [0.0, 1.0, 2.0]])
-    query = np.array([[0.0, 1.5, 2.5, 9.0]] * 3)
-    out = sample_travel(time, rod, query)
-    np.testing.assert_allclose(out[0], [0.0, 0.5, 2.0, 3.0])
-    np.testing.assert_allclose(out[1], [0.0, 2.0, 2.0, 2.0])
-    np.testing.assert_allclose(out[2], [0.0, 0.0, 0.0, 0.0])
-
-
 def test_remembered_kinematics_give_the_same_bits(problem):
     """The calibration's model remembers kinematics by input: residuals at two parameter
     batches are bit-identical to the plain model's (the same computation repeated)."""
@@ -188,7 +170,7 @@ def test_curves_with_physics_the_rigid_forms_lack(problem, physics, term, truth)
     velocity (the ODE's, same physics) inside its interval. Measured: explained by the
     form with the missing term, its value within 20 % of the truth (the dashpot's curves
     are explained by the springs' mass too, both forms' predictions holding the truth)."""
-    from camopt.cases.vcb.calibrate import verdict
+    from camopt.cases.vcb.calibration_verdict import verdict
     from camopt.cases.vcb.curves import TravelCurve, noise_level
     from camopt.cases.vcb.forms import CURVE_FORMS
 
@@ -254,16 +236,16 @@ def test_95_percent_intervals_cover_the_truth_in_noisy_model_curves(problem):
     average; 90 % leaves room for the chance of 140 draws, ~1.8 % standard error;
     measured 138 of 140, ~17 s CPU). Curves of the model: the study tests the intervals,
     not the model."""
-    from camopt.cases.vcb.calibrate import sample_travel, travel
+    from camopt.cases.vcb.calibration_model import sample_travel, travel
     from camopt.cases.vcb.curves import TravelCurve
 
     truth = np.array([TRUTH[name] for name in FORM.parameters])
     delay = vcb_ode.LATCH_DELAY_S
     designs = [_design(problem, "vendor"), _design(problem, "stiff")]
     third = Design("third", problem.model.vendor_a, np.array([8.5, 8.5]) * N_PER_MM)
-    from camopt.cases.vcb.calibrate import _KinematicsMemo, velocity
+    from camopt.cases.vcb.calibration_model import KinematicsMemo, velocity
 
-    model = _KinematicsMemo(problem.config)
+    model = KinematicsMemo(problem.config)
     steps = problem.config.dynamics_steps
     time, rod = travel(FORM, model, designs, truth[None, :], steps)
     v_true = velocity(FORM, model, [third], truth[None, :], steps)[0][0, 0]
@@ -287,3 +269,23 @@ def test_95_percent_intervals_cover_the_truth_in_noisy_model_curves(problem):
         held, total = held + ok, total + 1
         misses += [] if ok else ["velocity"]
     assert held / total >= 0.9, (held, total, misses)
+
+
+def test_a_form_with_one_more_term_is_kept_on_its_likelihood_ratio():
+    """The dashpot form over its base: a cost 4 lower at s^2 = 1.2 is a ratio of 6.67,
+    above chi2(1, 0.99) = 6.63: kept; 3.9 lower (6.5) is not, and says why. A base form
+    and a form already not kept pass through unchanged."""
+    from camopt.cases.vcb.calibrate import nested_keep
+    from camopt.core.fitting import Optimum
+
+    forms = [get_form("efficiency_coulomb"), get_form("efficiency_coulomb_dashpot")]
+
+    def opt(cost, s2=1.2):
+        return Optimum(np.zeros(1), cost, np.eye(1), s2, 0.0)
+
+    assert nested_keep(forms, [opt(10.0), opt(6.0)], [True, True]) == [(True, ""),
+                                                                       (True, "")]
+    (base, (kept, why)) = nested_keep(forms, [opt(10.0), opt(6.1)], [True, True])
+    assert base == (True, "") and not kept and "likelihood ratio 6.50 < 6.63" in why
+    assert nested_keep(forms, [opt(10.0), opt(0.0)], [False, False]) == [(False, ""),
+                                                                        (False, "")]

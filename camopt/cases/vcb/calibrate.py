@@ -41,6 +41,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.cases.vcb.calibration_model import (
+    Design,
+    KinematicsMemo,
+    sample_travel,
+    travel,
+    velocity,
+)
 from camopt.cases.vcb.config import VcbConfig
 from camopt.cases.vcb.curves import (
     AnalyserQuantities,
@@ -48,9 +55,7 @@ from camopt.cases.vcb.curves import (
     VelocityPoints,
     analyse,
 )
-from camopt.cases.vcb.dynamics import ClosingMotion
 from camopt.cases.vcb.forms import CURVE_FORMS, ModelForm
-from camopt.cases.vcb.model import Kinematics, Loads, VcbModel
 from camopt.core.fitting import (
     CHI2_95_1DOF,
     CHI2_99_1DOF,
@@ -65,7 +70,7 @@ from camopt.core.fitting import (
     optimum,
     residual_test,
 )
-from camopt.units import DEG, MM, MS
+from camopt.units import MM, MS
 
 IDENTIFIED_DELAY_MS = 0.25
 """The latch delay counts as identified when its closed 95 % interval lies within this
@@ -82,116 +87,6 @@ FINE_STEP_S = 1e-5
 MIN_WINDOW_SAMPLES = 10
 """A measured curve with fewer samples between the contact velocity's calculation points
 reads its closing time and contact velocity from the fit (resampled)."""
-
-
-@dataclass(frozen=True)
-class Design:
-    """The design a curve (or a prediction) belongs to: follower-law coefficients ``a``
-    (d + 1,) rad/rad^k, spring rates ``kc`` (2,) N/m, and a label."""
-
-    label: str
-    a: NDArray
-    kc: NDArray
-
-
-def closing(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: NDArray,
-            steps: int) -> ClosingMotion:
-    """The closing of every design under every parameter row of ``P`` (k, p) of
-    ``form`` (:meth:`~camopt.cases.vcb.forms.ModelForm.closing`): k x n rows,
-    parameter-major (row 0 for every design, then row 1, ...), the case's linkage and
-    resisting loads."""
-    P = np.atleast_2d(P)
-    k, n = len(P), len(designs)
-    degree = max(len(d.a) for d in designs)
-    A = np.array([np.pad(d.a, (0, degree - len(d.a))) for d in designs])
-    kc = np.array([d.kc for d in designs])
-    link = np.tile(model.vendor_link, (k * n, 1))
-    rod_offset = model.c.rod_arm_offset_deg * DEG
-    return form.closing(model, np.tile(A, (k, 1)), np.tile(kc, (k, 1)), link, rod_offset,
-                        _loads(model), np.repeat(P, n, axis=0),
-                        model.c.follower_inertia_kg_m2, steps)
-
-
-def travel(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: NDArray,
-           steps: int) -> tuple[NDArray, NDArray]:
-    """Time from the release (s) and rod travel (m) of each design under each parameter
-    row of ``P`` (k, p): arrays (k, n, m) on the form's own grid, time increasing along m
-    (inf after a stall)."""
-    mo = closing(form, model, designs, P, steps)
-    k, n = len(np.atleast_2d(P)), len(designs)
-    return mo.time.reshape(k, n, -1), mo.rod.reshape(k, n, -1)
-
-
-def velocity(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: NDArray,
-             steps: int) -> tuple[NDArray, NDArray]:
-    """The case's closing velocity (m/s) and the touch time from the release (s) of each
-    design under each parameter row of ``P`` (k, p), (k, n) each."""
-    mo = closing(form, model, designs, P, steps)
-    k, n = len(np.atleast_2d(P)), len(designs)
-    return mo.closing_velocity_avg.reshape(k, n), mo.touch_time.reshape(k, n)
-
-
-class _KinematicsMemo(VcbModel):
-    """The case's model with its kinematics remembered by input (a calibration simulates
-    the same few designs, tiled by as many parameter rows, hundreds of times: the
-    kinematics depend on the designs alone; ~20 % of an evaluation). The arrays kept are
-    read-only, so nothing downstream can change them in place."""
-
-    SIZE = 16
-
-    def __init__(self, config: VcbConfig) -> None:
-        super().__init__(config)
-        self._memo: dict[tuple, Kinematics] = {}
-
-    def kinematics(self, A: NDArray, link: NDArray, rod_offset: NDArray | float,
-                   theta_c: NDArray | None = None) -> Kinematics:
-        key = tuple(np.asarray(v, dtype=float).tobytes() + bytes(str(np.shape(v)), "ascii")
-                    for v in (A, link, rod_offset, () if theta_c is None else theta_c))
-        kin = self._memo.get(key)
-        if kin is None:
-            kin = super().kinematics(A, link, rod_offset, theta_c)
-            for a in (kin.cos4, kin.sin4, kin.s1, kin.ds1, kin.follower.dphi):
-                a.setflags(write=False)
-            if len(self._memo) >= self.SIZE:
-                self._memo.pop(next(iter(self._memo)))
-            self._memo[key] = kin
-        return kin
-
-
-def _loads(model: VcbModel) -> Loads:
-    """The case's resisting loads, with the rod travel of its reference design."""
-    c = model.c
-    kin = model.kinematics(model.vendor_a[None, :], model.vendor_link[None, :],
-                           c.rod_arm_offset_deg * DEG)
-    return model.loads(float(kin.s1[0, -1]), c.opening_arm_ratio, c.free_contact_force_n)
-
-
-def sample_travel(time: NDArray, rod: NDArray, query: NDArray) -> NDArray:
-    """Rod travel of each row at the query times (s from the release), linearly between
-    the model's nodes, 0 before its first node, its last value after the last (the latch)
-    or a stall: rows ``time``/``rod`` (r, m), ``query`` (r, q); one searchsorted for all
-    rows (each row shifted past the previous one's span)."""
-    r, m = time.shape
-    never = ~np.isfinite(time[:, 0])  # the cam never leaves the release: no motion
-    t = np.where(np.isfinite(time), time, np.nan)
-    t[never, 0] = 0.0
-    last = np.nanmax(t, axis=1, keepdims=True)
-    t = np.where(np.isnan(t), last + 1.0 + np.arange(m) * 1e-9, t)  # held after a stall
-    # the nodes a stalled row never reaches hold its last reached travel
-    reached = np.maximum(np.sum(np.isfinite(time), axis=1) - 1, 0)
-    rod = np.where(np.isfinite(time), rod, rod[np.arange(r), reached][:, None])
-    span = np.max(t[:, -1] - np.minimum(t[:, 0], np.min(query, axis=1))) + 10.0
-    shift = (np.arange(r) * span)[:, None]
-    flat = (t + shift).ravel()
-    q = np.clip(query, t[:, :1], t[:, -1:]) + shift
-    idx = np.clip(np.searchsorted(flat, q.ravel(), side="right"), 1, r * m - 1).reshape(q.shape)
-    row0 = (np.arange(r) * m)[:, None]
-    idx = np.clip(idx, row0 + 1, row0 + m - 1)
-    f_rod = rod.ravel()
-    t0, t1 = flat[idx - 1], flat[idx]
-    w = np.clip((q - t0) / (t1 - t0), 0.0, 1.0)
-    out = (1 - w) * f_rod[idx - 1] + w * f_rod[idx]
-    return np.where((query < t[:, :1]) | never[:, None], 0.0, out)
 
 
 @dataclass(frozen=True)
@@ -235,34 +130,6 @@ class CurveFit:
     noise: float = 0.0
 
 
-def missing_physics(fit: FormFit, gap: float) -> str:
-    """Where a form's misfit lies along the closing and what typically shows there: the
-    residuals' excess over the noise (sum of squares less N sigma^2) before the motion,
-    in the stroke to the touch and from the touch on. A reading, not a fit: a smooth
-    misfit of the moving part fits several missing effects alike (a distributed mass and
-    a dashpot both leave an S-shaped residual across the touch), so it names them all."""
-    parts = {"before the motion": 0.0, "in the stroke to the touch": 0.0,
-             "from the touch to the latch": 0.0}
-    for c in fit.curves:
-        r = c.fitted - c.measured
-        moving = c.measured > 0.05 * np.max(c.measured)
-        first = int(np.argmax(moving)) if moving.any() else len(r)
-        touched = c.measured >= gap
-        t_touch = int(np.argmax(touched)) if touched.any() else len(r)
-        for name, z in zip(parts, (slice(0, first), slice(first, t_touch),
-                                   slice(t_touch, len(r)))):
-            seg = r[z]
-            parts[name] += max(float(np.sum(seg * seg)) - seg.size * c.noise**2, 0.0)
-    where = max(parts, key=lambda k: parts[k])
-    if where == "before the motion":
-        return ("the misfit is largest before the motion: a latch delay that differs "
-                "between the curves (give each its measured latch_delay_ms), a release "
-                "that is not instantaneous, or a transducer offset")
-    return (f"the misfit is largest {where}: likely missing from the rigid model with "
-            "Coulomb losses: the closing springs' own mass (inertia along the stroke), "
-            "viscous damping (a dashpot or buffer on the rod), the contacts' compliance")
-
-
 @dataclass(frozen=True)
 class FormFit:
     """The calibration of one model form: RMS misfit over every sample (m), the
@@ -298,7 +165,7 @@ class Calibration:
     def __init__(self, config: VcbConfig, form: ModelForm, curves: Sequence[CurveCase],
                  points: VelocityPoints | None = None) -> None:
         self.config, self.form, self.curves = config, form, tuple(curves)
-        self.model = _KinematicsMemo(config)
+        self.model = KinematicsMemo(config)
         self.steps = config.dynamics_steps
         self.points = points or VelocityPoints.last_third(config.contact_gap_mm * MM)
         self.designs = [c.design for c in self.curves]
@@ -509,76 +376,6 @@ def calibrate(config: VcbConfig, curves: Sequence[CurveCase],
         out.append(replace(fit, predictions=cal.predict(fit, designs, best, opt), kept=k,
                            residuals=test, explains=k and test.passes(), kept_note=why))
     return tuple(out)
-
-
-PREDICTION_SPREAD = 0.02
-"""Forms that explain the curves but predict a design's closing velocity further apart
-than this (relative) are told apart by no curve: a warning says so."""
-
-
-@dataclass(frozen=True)
-class Verdict:
-    """Whether any form explains the curves (``explained``, those ``forms``), the
-    one-line ``headline`` a report leads and ends with, and ``warnings``: parameters at a
-    search bound, explaining forms whose predictions disagree."""
-
-    explained: bool
-    forms: tuple[str, ...]
-    headline: str
-    warnings: tuple[str, ...]
-
-
-def verdict(fits: Sequence[FormFit], gap: float) -> Verdict:
-    """The verdict on fitted forms (:func:`calibrate`'s) of curves whose contact gap is
-    ``gap`` (m): explained by the forms that explain them (:attr:`FormFit.explains`),
-    else NOT EXPLAINED with the best form's residual test and where its misfit lies
-    (:func:`missing_physics`)."""
-    good = [f for f in fits if f.explains]
-    warn: list[str] = []
-    for f in fits:
-        if not f.kept:
-            continue
-        for p in f.parameters:
-            if p.at_bound:
-                warn.append(f"form {f.form}: {p.name} = {p.value:.4g} {p.unit} is at its "
-                            "search bound: the curves do not measure it (the form may "
-                            "stand in for physics it lacks)")
-    if good:
-        by_design: dict[str, list[float]] = {}
-        for f in good:
-            for pr in f.predictions:
-                by_design.setdefault(pr.design, []).append(pr.closing_velocity)
-        for design, v in by_design.items():
-            lo, hi = float(np.nanmin(v)), float(np.nanmax(v))
-            if len(v) > 1 and hi - lo > PREDICTION_SPREAD * abs(hi):
-                warn.append(f"design {design}: the forms that explain the curves predict a "
-                            f"closing velocity of {lo:.3f} to {hi:.3f} m/s: the curves do "
-                            "not tell them apart (a curve with other springs does)")
-        coarse: dict[str, list[float]] = {}
-        for f in good:
-            for c in f.curves:
-                q = c.measured_quantities
-                if q.contact_velocity is not None and any("resampled" in n for n in q.notes):
-                    coarse.setdefault(c.source, []).append(q.contact_velocity)
-        for source, v in coarse.items():
-            lo, hi = min(v), max(v)
-            warn.append(f"curve {source} is sampled too coarsely for its contact velocity: "
-                        "read from the fit"
-                        + (f", {lo:.3f} to {hi:.3f} m/s over the forms that explain it"
-                           if hi - lo > PREDICTION_SPREAD * hi else ""))
-        names = ", ".join(f.form for f in good)
-        head = (f"verdict: explained by form{'s' if len(good) > 1 else ''} {names} "
-                "(residuals at the curves' noise, without structure)")
-        return Verdict(True, tuple(f.form for f in good), head, tuple(warn))
-    best = min(fits, key=lambda f: f.rms)
-    t = best.residuals
-    detail = "" if t is None else (
-        f"best form {best.form}: residual RMS {best.rms / t.noise:.2f} x the noise "
-        f"({t.noise / MM:.4f} mm), Durbin-Watson {t.durbin_watson:.2f} "
-        f"({t.structure_z:.1f} standard errors below 2)")
-    head = (f"verdict: NOT EXPLAINED: no model form fits the curves to their noise; {detail}; "
-            f"{missing_physics(best, gap)}")
-    return Verdict(False, (), head, tuple(warn))
 
 
 def _unique(designs: Sequence[Design]) -> list[Design]:
