@@ -15,9 +15,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
-from numpy.typing import NDArray
-
 from camopt.core.fitting import ParameterEstimate, ResidualTest
+from camopt.mechanics import Floats
 
 
 @dataclass(frozen=True)
@@ -51,9 +50,9 @@ class FittedCurve:
     form: str
     source: str
     design: str
-    time_s: NDArray
-    measured_m: NDArray
-    fitted_m: NDArray
+    time_s: Floats
+    measured_m: Floats
+    fitted_m: Floats
 
 
 class CalibrationReport(Protocol):
@@ -104,7 +103,7 @@ class ModelFit(Protocol):
     @property
     def parameters(self) -> tuple[ParameterEstimate, ...]: ...
     @property
-    def correlation(self) -> NDArray: ...
+    def correlation(self) -> Floats: ...
     @property
     def kept(self) -> bool: ...
     @property

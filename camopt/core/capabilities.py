@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from camopt.core.problem import Evaluation
+from camopt.mechanics import Floats
 
 
 @runtime_checkable
@@ -146,26 +147,26 @@ class Fittable(Protocol):
     residuals of rows of coordinates in units of the data's noise and its RMS misfit.
     Another case fits through the same seam by offering these."""
 
-    lower: NDArray
+    lower: Floats
     """(n,) lower search bounds of the fitted coordinates."""
-    upper: NDArray
+    upper: Floats
     """(n,) upper search bounds."""
-    log: NDArray
+    log: NDArray[np.bool_]
     """(n,) bool: the coordinate is the log of a positive parameter."""
-    accuracy: NDArray
+    accuracy: Floats
     """(n,) how close the data must pin a parameter for it to count as identified:
     relative for a log coordinate (:data:`camopt.core.fitting.IDENTIFIED_WITHIN`), in
     the coordinate's unit otherwise."""
-    bound_room: NDArray
+    bound_room: Floats
     """(n,) how near its search bound a coordinate that is not a log is "at" it (its
     unit); a log coordinate's room is the fitting module's rule."""
 
-    def residuals(self, Q: NDArray) -> NDArray:
+    def residuals(self, Q: Floats) -> Floats:
         """Normalised residuals (k, N), (model - measured) / noise, of the rows of ``Q``
         (k, n), one vectorised evaluation."""
         ...
 
-    def rms(self, q: NDArray) -> float:
+    def rms(self, q: Floats) -> float:
         """The RMS misfit at ``q`` (n,) in the data's unit (not normalised)."""
         ...
 

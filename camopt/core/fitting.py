@@ -42,9 +42,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.core.capabilities import Fittable
+from camopt.mechanics import Floats
 
 CHI2_95_1DOF = 3.841458820694124
 """chi-square quantile, 1 degree of freedom, 0.95 (scipy.stats.chi2.ppf(0.95, 1))."""
@@ -106,9 +106,9 @@ class Optimum:
     covariance of q ((J^T J)^-1 s^2, (n, n)), the reduced chi-square s^2 (at least 1) and
     the RMS misfit (the model's :meth:`~camopt.core.capabilities.Fittable.rms`)."""
 
-    q: NDArray
+    q: Floats
     cost: float
-    cov: NDArray
+    cov: Floats
     s2: float
     rms: float
 
@@ -135,26 +135,28 @@ class Estimates:
     first (k, n), in fitted coordinates."""
 
     parameters: tuple[ParameterEstimate, ...]
-    correlation: NDArray
-    members: NDArray
+    correlation: Floats
+    members: Floats
 
 
-def robust_cost(R: NDArray) -> NDArray:
+def robust_cost(R: Floats) -> Floats:
     """soft-l1 cost of residual rows ``R`` (k, N), (k,): 0.5 C^2 sum 2 (sqrt(1 + (r/C)^2)
     - 1), scipy ``least_squares``'s with ``f_scale`` C = :data:`ROBUST_SCALE`."""
     z = (R / ROBUST_SCALE) ** 2
-    return 0.5 * ROBUST_SCALE**2 * np.sum(2 * (np.sqrt(1 + z) - 1), axis=1)
+    cost: Floats = 0.5 * ROBUST_SCALE**2 * np.sum(2 * (np.sqrt(1 + z) - 1), axis=1)
+    return cost
 
 
-def jacobian(model: Fittable, q: NDArray) -> NDArray:
+def jacobian(model: Fittable, q: Floats) -> Floats:
     """The residuals' Jacobian at ``q`` (n,), (N, n), by forward differences of step
     1e-6 max(1, |q_j|): one evaluation of n + 1 rows."""
     h = 1e-6 * np.maximum(1.0, np.abs(q))
     R = model.residuals(np.vstack([q, q + np.diag(h)]))
-    return ((R[1:] - R[0]) / h[:, None]).T
+    J: Floats = ((R[1:] - R[0]) / h[:, None]).T
+    return J
 
 
-def with_jacobian(model: Fittable, Q: NDArray, free: NDArray) -> tuple[NDArray, NDArray]:
+def with_jacobian(model: Fittable, Q: Floats, free: Floats) -> tuple[Floats, Floats]:
     """Residuals (k, N) at the rows of ``Q`` (k, n) and their Jacobians' transposes
     (k, n, N) by forward differences (step 1e-6 max(1, |q|)), zero in the columns
     ``free`` (k, n) marks fixed: one evaluation of k (n + 1) rows."""
@@ -167,8 +169,8 @@ def with_jacobian(model: Fittable, Q: NDArray, free: NDArray) -> tuple[NDArray, 
     return Rall[:, 0], J * free[:, :, None]
 
 
-def fit_many(model: Fittable, Q0: NDArray, fixed: NDArray | None = None, tol: float = 1e-9,
-             atol: float = 0.0, max_iter: int = 60) -> tuple[NDArray, NDArray]:
+def fit_many(model: Fittable, Q0: Floats, fixed: Floats | None = None, tol: float = 1e-9,
+             atol: float = 0.0, max_iter: int = 60) -> tuple[Floats, Floats]:
     """Robust least squares from each start of ``Q0`` (B, n) at once; ``fixed`` (B,) the
     coordinate each row keeps at its start (-1: none). Returns the fits (B, n) and their
     costs (B,) (0.5 sum rho, as scipy's ``least_squares``).
@@ -232,17 +234,18 @@ def fit_many(model: Fittable, Q0: NDArray, fixed: NDArray | None = None, tol: fl
     return Q, cost
 
 
-def least_squares_fit(model: Fittable, q0: NDArray) -> tuple[NDArray, float]:
+def least_squares_fit(model: Fittable, q0: Floats) -> tuple[Floats, float]:
     """The fit from ``q0``: scipy's ``least_squares`` (trust region reflective, soft-l1,
     tight tolerances: the optimum every profile is measured from; its trust region follows
     the narrow valleys of a single curve better than :func:`fit_many`'s
     Levenberg-Marquardt). Returns q and the cost."""
     from scipy.optimize import least_squares  # lazy: module docstring
 
-    def fun(z: NDArray) -> NDArray:
-        return model.residuals(z)[0]
+    def fun(z: Floats) -> Floats:
+        r: Floats = model.residuals(z)[0]
+        return r
 
-    def jac(z: NDArray) -> NDArray:
+    def jac(z: Floats) -> Floats:
         return jacobian(model, z)
 
     z0 = np.clip(q0, model.lower + 1e-9, model.upper - 1e-9)
@@ -252,7 +255,7 @@ def least_squares_fit(model: Fittable, q0: NDArray) -> tuple[NDArray, float]:
     return sol.x, float(sol.cost)
 
 
-def optimum(model: Fittable, start: NDArray) -> Optimum:
+def optimum(model: Fittable, start: Floats) -> Optimum:
     """The best fit from two starts: ``start`` and the first fit's end with every log
     coordinate moved by 0.05 (the cost surface of a delay and an angle has shallow
     valleys), the better kept; its linearised covariance (J^T J)^+ s^2 with the reduced
@@ -327,7 +330,7 @@ class ResidualTest:
         return self.rms_ratio <= RMS_RATIO_LIMIT and self.structure_z <= STRUCTURE_Z_LIMIT
 
 
-def residual_test(residuals: Sequence[NDArray], sigma: Sequence[float]) -> ResidualTest:
+def residual_test(residuals: Sequence[Floats], sigma: Sequence[float]) -> ResidualTest:
     """The test of a fit's residuals (one array per data set) against each set's noise
     ``sigma`` (same unit): :class:`ResidualTest`. Normalised by the noise and winsorised
     at :data:`WINSOR`; the Durbin-Watson sums run within each set (no difference across
@@ -343,7 +346,7 @@ def residual_test(residuals: Sequence[NDArray], sigma: Sequence[float]) -> Resid
                         (2.0 - d) * np.sqrt(n) / 2.0, n)
 
 
-def delta_sd(values: Callable[[NDArray], NDArray], opt: Optimum) -> NDArray:
+def delta_sd(values: Callable[[Floats], Floats], opt: Optimum) -> Floats:
     """The linearised (delta-method) standard deviation sqrt(g^T C g) of predictions at
     the optimum ``opt``: ``values`` maps rows of fitted coordinates (k, n) to predictions
     (k, m); g by forward differences of step 1e-6 max(1, |q_j|), C the optimum's
@@ -352,7 +355,7 @@ def delta_sd(values: Callable[[NDArray], NDArray], opt: Optimum) -> NDArray:
     Y = values(np.vstack([opt.q, opt.q + np.diag(h)]))
     with np.errstate(invalid="ignore"):
         G = (Y[1:] - Y[:1]) / h[:, None]
-        sd: NDArray = np.sqrt(np.einsum("in,ij,jn->n", G, opt.cov, G))
+        sd: Floats = np.sqrt(np.einsum("in,ij,jn->n", G, opt.cov, G))
     return sd
 
 
@@ -369,28 +372,30 @@ class _Profile:
     origin: float
     room: float
     d: float
-    last: NDArray
+    last: Floats
     near: float = 0.0
     near_rise: float = 0.0
     far: tuple[float, float] | None = None
-    inside: list[NDArray] = field(default_factory=list)
+    inside: list[Floats] = field(default_factory=list)
     done: bool = False
     end: float | None = None
     steps: int = 0
 
 
-def _valley(cov: NDArray, j: int) -> NDArray:
+def _valley(cov: Floats, j: int) -> Floats:
     """How the linearised conditional optimum moves per unit of coordinate j (n,):
     column j of the covariance over its variance. A coordinate the data do not see
     (a zero column of the Jacobian: zero variance in the pseudo-inverse) moves alone:
     the others have nothing to trade against it (0 / 0 there was NaN, and a
     RuntimeWarning)."""
     if cov[j, j] > 0:
-        return cov[:, j] / cov[j, j]
-    return np.eye(len(cov))[j]
+        moved: Floats = cov[:, j] / cov[j, j]
+        return moved
+    alone: Floats = np.eye(len(cov))[j]
+    return alone
 
 
-def _advance(p: _Profile, trial: NDArray, r: float, rise: float) -> None:
+def _advance(p: _Profile, trial: Floats, r: float, rise: float) -> None:
     """One re-fit of profile ``p`` at its step ``p.d``, the cost risen by ``r``: the next
     step (doubling while inside, bisecting once outside) or the end."""
     p.steps += 1
@@ -421,7 +426,7 @@ def _finish(p: _Profile, rise: float) -> None:
     p.end = float(p.origin + p.sign * float(np.clip(at, p.near, p.far[0])))
 
 
-def profiles(model: Fittable, q: NDArray, cost: float, cov: NDArray, rise: float
+def profiles(model: Fittable, q: Floats, cost: float, cov: Floats, rise: float
              ) -> dict[tuple[int, float], _Profile]:
     """Every coordinate's profile from the optimum ``q`` (cost ``cost``) in both
     directions, side by side (:func:`fit_many` re-fits them together): coordinate j fixed
@@ -523,8 +528,8 @@ class Identifiability:
     move the fit by less than that."""
 
     names: tuple[str, ...]
-    singular_values: NDArray
-    correlations: NDArray
+    singular_values: Floats
+    correlations: Floats
     determined: tuple[dict[str, float], ...]
     undetermined: tuple[dict[str, float], ...]
 
@@ -538,7 +543,7 @@ class Identifiability:
                 "determined": list(self.determined), "undetermined": list(self.undetermined)}
 
 
-def identifiability(jac: NDArray, names: Sequence[str]) -> Identifiability:
+def identifiability(jac: Floats, names: Sequence[str]) -> Identifiability:
     """:class:`Identifiability` from the Jacobian ``jac`` (m, p) of the residuals with
     respect to the log parameters ``names`` (p,)."""
     _, s, vt = np.linalg.svd(jac, full_matrices=False)
@@ -558,11 +563,12 @@ def identifiability(jac: NDArray, names: Sequence[str]) -> Identifiability:
                            tuple(combination(int(i)) for i in np.flatnonzero(~determined)))
 
 
-def central_jacobian(fun: Callable[[NDArray], NDArray], q: NDArray, step: float = 1e-6
-                     ) -> NDArray:
+def central_jacobian(fun: Callable[[Floats], Floats], q: Floats, step: float = 1e-6
+                     ) -> Floats:
     """d fun / d q at ``q`` (p,), (m, p), by central differences of ``step`` in every
     coordinate: ``fun`` maps rows (k, p) to residual rows (k, m), all 2 p rows in one
     call."""
     n = len(q)
     r = fun(q[None, :] + step * np.vstack([np.eye(n), -np.eye(n)]))
-    return ((r[:n] - r[n:]) / (2 * step)).T
+    J: Floats = ((r[:n] - r[n:]) / (2 * step)).T
+    return J

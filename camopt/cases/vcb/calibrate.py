@@ -39,7 +39,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.vcb.calibration_model import (
     Design,
@@ -70,6 +69,7 @@ from camopt.core.fitting import (
     optimum,
     residual_test,
 )
+from camopt.mechanics import Floats
 from camopt.units import MM, MS
 
 IDENTIFIED_DELAY_MS = 0.25
@@ -121,9 +121,9 @@ class CurveFit:
     source: str
     design: str
     latch_delay: float
-    time: NDArray
-    measured: NDArray
-    fitted: NDArray
+    time: Floats
+    measured: Floats
+    fitted: Floats
     rms: float
     measured_quantities: AnalyserQuantities
     fitted_quantities: AnalyserQuantities
@@ -146,10 +146,10 @@ class FormFit:
     description: str
     rms: float
     parameters: tuple[ParameterEstimate, ...]
-    correlation: NDArray
+    correlation: Floats
     curves: tuple[CurveFit, ...]
     predictions: tuple[Prediction, ...]
-    band: NDArray = field(repr=False)
+    band: Floats = field(repr=False)
     kept: bool = True
     intervals: str = "profile"
     residuals: ResidualTest | None = None
@@ -185,7 +185,7 @@ class Calibration:
         self.n_samples = sum(len(c.curve.time) for c in self.curves)
 
     # ---- parameter vectors: q (fitted coordinates) <-> form values and delays --------
-    def values(self, Q: NDArray) -> tuple[NDArray, NDArray]:
+    def values(self, Q: Floats) -> tuple[Floats, Floats]:
         """Form parameters (k, P) in their units and every curve's delay (k, n) s."""
         Q = np.atleast_2d(Q)
         v = np.where(self.log, np.exp(np.minimum(Q, 700)), Q)
@@ -194,7 +194,7 @@ class Calibration:
             delays[:, self.free_delay] = v[:, self.n_form:self.n_form + 1] * MS
         return v[:, :self.n_form], delays
 
-    def simulate(self, Q: NDArray) -> list[NDArray]:
+    def simulate(self, Q: Floats) -> list[Floats]:
         """Simulated travel (m) at each curve's sample times, per curve (k, m_c)."""
         P, delays = self.values(Q)
         time, rod = travel(self.form, self.model, self.designs, P, self.steps)
@@ -206,20 +206,20 @@ class Calibration:
                 query, (k, len(c.curve.time)))))
         return out
 
-    def residuals(self, Q: NDArray) -> NDArray:
+    def residuals(self, Q: Floats) -> Floats:
         """Normalised residuals (k, N): (model - measured) / sigma, every curve."""
         sims = self.simulate(Q)
         return np.concatenate([(s - c.curve.travel) / sig for s, c, sig
                                in zip(sims, self.curves, self.sigma)], axis=1)
 
-    def rms(self, q: NDArray) -> float:
+    def rms(self, q: Floats) -> float:
         """RMS misfit (m) at ``q`` over every sample of every curve."""
         R = self.residuals(q)[0]
         sig = np.concatenate([np.full(len(c.curve.time), s)
                               for c, s in zip(self.curves, self.sigma)])
         return float(np.sqrt(np.mean((R * sig) ** 2)))
 
-    def start(self) -> NDArray:
+    def start(self) -> Floats:
         """The form's case values and, for each fitted delay, the delay that puts the
         model's first motion on the curve's (from a quick look at the curves)."""
         p0 = self.form.start(self.config)
@@ -253,7 +253,7 @@ class Calibration:
         return [(p.name, p.unit) for p in self.parameters] + (
             [("latch_delay_ms", "ms")] if self.free_delay else [])
 
-    def _curve_fits(self, q: NDArray) -> tuple[CurveFit, ...]:
+    def _curve_fits(self, q: Floats) -> tuple[CurveFit, ...]:
         """Each curve's fit at ``q``: the model at the samples' times, and the analyser's
         quantities of the measured curve and of the model sampled every
         :data:`FINE_STEP_S` (the fit's own reading, at any sampling rate of the curve).
@@ -287,7 +287,7 @@ class Calibration:
                 float(self.sigma[i])))
         return tuple(out)
 
-    def predict(self, fit: FormFit, designs: Sequence[Design], best: NDArray,
+    def predict(self, fit: FormFit, designs: Sequence[Design], best: Floats,
                 opt: Optimum | None = None) -> tuple[Prediction, ...]:
         """Closing velocity and touch time of ``designs`` at the fitted form parameters
         ``best`` (P,): low and high the wider of their envelope over the fit's band and,
@@ -304,7 +304,7 @@ class Calibration:
         if opt is not None:
             n = len(designs)
 
-            def both(Q: NDArray) -> NDArray:
+            def both(Q: Floats) -> Floats:
                 vq, tq = velocity(self.form, self.model, designs, self.values(Q)[0],
                                   self.steps)
                 return np.hstack([vq, tq])

@@ -8,12 +8,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import VcbConfig
 from camopt.cases.vcb.dynamics import ClosingMotion
 from camopt.cases.vcb.forms import ModelForm
 from camopt.cases.vcb.model import Kinematics, Loads, VcbModel
+from camopt.mechanics import Floats
 from camopt.units import DEG
 
 
@@ -23,11 +23,11 @@ class Design:
     (d + 1,) rad/rad^k, spring rates ``kc`` (2,) N/m, and a label."""
 
     label: str
-    a: NDArray
-    kc: NDArray
+    a: Floats
+    kc: Floats
 
 
-def closing(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: NDArray,
+def closing(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: Floats,
             steps: int) -> ClosingMotion:
     """The closing of every design under every parameter row of ``P`` (k, p) of
     ``form`` (:meth:`~camopt.cases.vcb.forms.ModelForm.closing`): k x n rows,
@@ -45,8 +45,8 @@ def closing(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: NDAr
                         model.c.follower_inertia_kg_m2, steps)
 
 
-def travel(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: NDArray,
-           steps: int) -> tuple[NDArray, NDArray]:
+def travel(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: Floats,
+           steps: int) -> tuple[Floats, Floats]:
     """Time from the release (s) and rod travel (m) of each design under each parameter
     row of ``P`` (k, p): arrays (k, n, m) on the form's own grid, time increasing along m
     (inf after a stall)."""
@@ -55,8 +55,8 @@ def travel(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: NDArr
     return mo.time.reshape(k, n, -1), mo.rod.reshape(k, n, -1)
 
 
-def velocity(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: NDArray,
-             steps: int) -> tuple[NDArray, NDArray]:
+def velocity(form: ModelForm, model: VcbModel, designs: Sequence[Design], P: Floats,
+             steps: int) -> tuple[Floats, Floats]:
     """The case's closing velocity (m/s) and the touch time from the release (s) of each
     design under each parameter row of ``P`` (k, p), (k, n) each."""
     mo = closing(form, model, designs, P, steps)
@@ -74,10 +74,10 @@ class KinematicsMemo(VcbModel):
 
     def __init__(self, config: VcbConfig) -> None:
         super().__init__(config)
-        self._memo: dict[tuple, Kinematics] = {}
+        self._memo: dict[tuple[bytes, ...], Kinematics] = {}
 
-    def kinematics(self, A: NDArray, link: NDArray, rod_offset: NDArray | float,
-                   theta_c: NDArray | None = None) -> Kinematics:
+    def kinematics(self, A: Floats, link: Floats, rod_offset: Floats | float,
+                   theta_c: Floats | None = None) -> Kinematics:
         key = tuple(np.asarray(v, dtype=float).tobytes() + bytes(str(np.shape(v)), "ascii")
                     for v in (A, link, rod_offset, () if theta_c is None else theta_c))
         kin = self._memo.get(key)
@@ -99,7 +99,7 @@ def _loads(model: VcbModel) -> Loads:
     return model.loads(float(kin.s1[0, -1]), c.opening_arm_ratio, c.free_contact_force_n)
 
 
-def sample_travel(time: NDArray, rod: NDArray, query: NDArray) -> NDArray:
+def sample_travel(time: Floats, rod: Floats, query: Floats) -> Floats:
     """Rod travel of each row at the query times (s from the release), linearly between
     the model's nodes, 0 before its first node, its last value after the last (the latch)
     or a stall: rows ``time``/``rod`` (r, m), ``query`` (r, q); one searchsorted for all
