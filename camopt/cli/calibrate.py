@@ -1,4 +1,4 @@
-"""``camopt calibrate``: fit a case's dynamics to measured travel curves (issue #32).
+"""``camopt calibrate``: fit a case's dynamics to measured travel curves.
 
 ``--set KEY=VALUE`` belongs to the ``--curve`` before it (that curve's design or latch
 delay); a ``--set`` before the first ``--curve`` overrides the case file as in ``camopt

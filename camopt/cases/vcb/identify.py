@@ -10,7 +10,11 @@ The dynamics' parameters (J_cam, m_rod, m_c, the closing crank's release offset,
 friction torque at the cam shaft) from the vendor design's seven ADAMS data (Sec 3.2,
 Table 4): :class:`VcbDynamicsIdentification`, with the leave-one-out validation
 (:func:`leave_one_out`) and the parameter sets equally consistent with the data
-(:func:`consistent_band`) that give every prediction its band.
+(:func:`consistent_band`) that give every prediction its band; the Jacobian's
+identifiability is :mod:`camopt.core.fitting`'s.
+
+``scipy.optimize`` is imported inside :func:`fit` only: the case's Problem is built by
+``validate``, which must not load it.
 """
 
 from __future__ import annotations
@@ -202,7 +206,7 @@ def fit(problem: VcbDynamicsIdentification, start: Floats, drop: int | None = No
         ) -> Floats:
     """Least squares (scipy, trust region in log parameters, within the bounds) of the
     data, without datum ``drop`` when given; returns the parameters (p,)."""
-    from scipy.optimize import least_squares  # only here: keeps the case's import light
+    from scipy.optimize import least_squares  # lazy: module docstring
 
     keep = np.array([i != drop for i in range(len(DATA))])
     lower = np.log(np.maximum([v.lower for v in problem.variables], 1e-9))
