@@ -13,6 +13,7 @@ from camopt.cases.vcb.calibration_model import Design
 from camopt.cases.vcb.curves import read_curve
 from camopt.cases.vcb.forms import get_form
 from camopt.cases.vcb.problem import VcbProblem
+from camopt.core.capabilities import Fittable
 from camopt.units import MM, MS, N_PER_MM
 from tests.cases import vcb_ode
 from tests.conftest import CONFIGS
@@ -140,6 +141,7 @@ def test_remembered_kinematics_give_the_same_bits(problem):
 
     curves = [_curve(problem, "vendor"), _curve(problem, "stiff")]
     cal = Calibration(problem.config, FORM, curves)
+    assert isinstance(cal, Fittable)  # the seam the core fitting runs on
     q = cal.start()
     Q = np.vstack([q, q + 0.01])
     memo = [cal.residuals(q), cal.residuals(Q), cal.residuals(q)]

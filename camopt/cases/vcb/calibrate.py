@@ -55,6 +55,7 @@ from camopt.cases.vcb.curves import (
     analyse,
 )
 from camopt.cases.vcb.forms import CURVE_FORMS, ModelForm
+from camopt.core.capabilities import Fittable
 from camopt.core.fitting import (
     CHI2_95_1DOF,
     CHI2_99_1DOF,
@@ -78,8 +79,6 @@ IDENTIFIED_DELAY_MS = 0.25
 :data:`~camopt.core.fitting.IDENTIFIED_WITHIN`)."""
 NEAR_BOUND_DELAY_MS = 0.1
 """The latch delay is at its search bound within this (ms)."""
-
-
 MAX_DELAY_S = 0.1
 """Upper search bound of a fitted latch delay (s)."""
 FINE_STEP_S = 1e-5
@@ -136,10 +135,11 @@ class FormFit:
     parameters (the form's, then the fitted latch delay in ms, if any), their correlation
     matrix at the optimum (linearised: (J^T J)^-1 s^2), the curves, the predictions,
     ``band``: the form's parameter rows met on the profiles inside the intervals, the fit
-    first, whether the form is ``kept`` (:func:`keep`), how its ``intervals`` were
-    found (``profile``: profile likelihood; ``linearised``: a form not kept), the test of
-    its residuals against the curves' noise (:func:`residual_test`) and whether it
-    ``explains`` the curves (kept, and its residuals pass: :meth:`ResidualTest.passes`),
+    first, whether the form is ``kept`` (:func:`~camopt.core.fitting.keep`), how its
+    ``intervals`` were found (``profile``: profile likelihood; ``linearised``: a form not
+    kept), the test of its residuals against the curves' noise
+    (:func:`~camopt.core.fitting.residual_test`) and whether it ``explains`` the curves
+    (kept, and its residuals pass: :meth:`~camopt.core.fitting.ResidualTest.passes`),
     and why a form with more physics is not kept (``kept_note``: :func:`nested_keep`)."""
 
     form: str
@@ -157,7 +157,7 @@ class FormFit:
     kept_note: str = ""
 
 
-class Calibration:
+class Calibration(Fittable):
     """One model form and the curves: the :class:`~camopt.core.capabilities.Fittable` the
     fitting runs on (module docstring) and the form's report from its fit. ``steps`` the
     form's grid (the case's ``dynamics_steps``)."""
