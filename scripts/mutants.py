@@ -21,7 +21,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 TESTS = ["tests/mechanics", "tests/cases", "tests/engine/test_sweep.py", "tests/solvers",
          "tests/core/test_stats.py", "tests/engine/test_driver.py", "tests/core/test_record.py",
-         "tests/engine/test_robust.py", "tests/reporting/test_tolerance_figures.py"]
+         "tests/engine/test_robust.py", "tests/reporting/test_tolerance_figures.py",
+         "tests/core/test_fitting.py"]
 
 # name: (file, original text, mutated text); each original must occur exactly once
 MUTANTS: dict[str, tuple[str, str, str]] = {
@@ -164,6 +165,29 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
     "stats_mw_one_sided": ("camopt/core/stats.py", 'alternative="two-sided"', 'alternative="less"'),
     "stats_verdict": ("camopt/core/stats.py", 'if test["p_a_better"] > 0.5',
                       'if test["p_a_better"] < 0.5'),
+    # fitting: the profile-likelihood threshold and each rule that judges a fit
+    "fit_profile_threshold": ("camopt/core/fitting.py", "rise = 0.5 * CHI2_95_1DOF * opt.s2",
+                              "rise = 2.0 * CHI2_95_1DOF * opt.s2"),
+    "fit_identified": ("camopt/core/fitting.py", "reach <= accuracy * abs(value) if log",
+                       "reach > accuracy * abs(value) if log"),
+    "fit_identified_open": ("camopt/core/fitting.py", "return bool(closed and (",
+                            "return bool((not closed) and ("),
+    "fit_determined": ("camopt/core/fitting.py", "determined = s >= DETERMINED * s[0]",
+                       "determined = s < DETERMINED * s[0]"),
+    "fit_rms_ratio": ("camopt/core/fitting.py", "return self.rms_ratio <= RMS_RATIO_LIMIT and",
+                      "return self.rms_ratio > RMS_RATIO_LIMIT and"),
+    "fit_durbin_watson": ("camopt/core/fitting.py", "and self.structure_z <= STRUCTURE_Z_LIMIT",
+                          "and self.structure_z > STRUCTURE_Z_LIMIT"),
+    "fit_at_bound": ("camopt/core/fitting.py",
+                     "return bool(q - lower <= room or upper - q <= room)",
+                     "return bool(q - lower > room and upper - q > room)"),
+    "fit_keep": ("camopt/core/fitting.py", "return [r <= limit for r in rms]",
+                 "return [r > limit for r in rms]"),
+    "fit_nested_keep": ("camopt/cases/vcb/calibrate.py", "if ratio >= CHI2_99_1DOF else",
+                        "if ratio < CHI2_99_1DOF else"),
+    "vcb_verdict_forms": ("camopt/cases/vcb/calibration_verdict.py",
+                          "good = [f for f in fits if f.explains]",
+                          "good = [f for f in fits if not f.explains]"),
 }
 
 # the tests that mirror each mutated module (a subset of the fast tests above): a mutant
@@ -189,6 +213,9 @@ MIRROR = {
     "camopt/reporting/tolerance_figures.py": ["tests/reporting/test_tolerance_figures.py"],
     "camopt/solvers/polish.py": ["tests/solvers/test_polish.py"],
     "camopt/solvers/multistart.py": ["tests/solvers/test_multistart.py"],
+    "camopt/core/fitting.py": ["tests/core/test_fitting.py"],
+    "camopt/cases/vcb/calibrate.py": ["tests/cases/test_vcb_calibrate.py"],
+    "camopt/cases/vcb/calibration_verdict.py": ["tests/cases/test_vcb_calibration_verdict.py"],
 }
 
 
