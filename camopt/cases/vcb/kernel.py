@@ -116,10 +116,12 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
                 springs_torque: NDArray, resisting: NDArray, resisting_torque: NDArray,
                 cam: NDArray, follower_kg: NDArray, rod: NDArray, contacts: NDArray,
                 friction: NDArray, eps: NDArray, omega_free: NDArray, t_free: NDArray,
-                resisting_gap: NDArray, out: NDArray) -> None:
-    """The closing's events of every row into ``out`` (9, rows): cam contact time, touch
+                resisting_gap: NDArray, torque_min: bool, out: NDArray) -> None:
+    """The closing's events of every row into ``out`` (10, rows): cam contact time, touch
     time, touch velocity, average closing velocity, closing time, final kinetic energy,
-    touch loss, latched (1/0), reach. Geometry (nd, m) per design, the rest (rows,)."""
+    touch loss, latched (1/0), reach and, where ``torque_min``, the least torque the cam
+    passes on over the nodes it reaches (:func:`_torque_min`; else nan). Geometry (nd, m)
+    per design, the rest (rows,)."""
     nd, m = s1.shape
     rows = len(cam)
     end = theta[m - 1]
@@ -128,6 +130,8 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
     kin = np.empty(m)
     slope = np.empty(m)
     t_b = np.empty(m)
+    t_a = np.empty(m)
+    om_a = np.empty(m)
     for r in range(rows):
         i = r % nd
         moving = rod[r] + contacts[r]
@@ -189,16 +193,19 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
         reached = touched and not (stall <= theta_touch)
         if touched:
             ja_k = c_kg + f_kg * dphi[i, k] * dphi[i, k] + rod[r] * ds1[i, k] * ds1[i, k]
-            om_a_k = math.sqrt(max(2 * (ke_b[k] - loss) / ja_k, 0.0))
-            first_cell = (theta[k] - theta_touch) * 0.5 * (1 / omega_touch + 1 / om_a_k)
+            om_a[k] = math.sqrt(max(2 * (ke_b[k] - loss) / ja_k, 0.0))
+            first_cell = (theta[k] - theta_touch) * 0.5 * (1 / omega_touch + 1 / om_a[k])
             t_k = t_touch + first_cell
+            t_a[k] = t_k
             total = 0.0
-            g_prev = dtheta_du[k] / om_a_k
+            g_prev = dtheta_du[k] / om_a[k]
             for j in range(k + 1, m):
                 ja = c_kg + f_kg * dphi[i, j] * dphi[i, j] + rod[r] * ds1[i, j] * ds1[i, j]
-                g = dtheta_du[j] / math.sqrt(max(2 * (ke_b[j] - loss) / ja, 0.0))
+                om_a[j] = math.sqrt(max(2 * (ke_b[j] - loss) / ja, 0.0))
+                g = dtheta_du[j] / om_a[j]
                 total += 0.5 * (g + g_prev) * du
                 g_prev = g
+                t_a[j] = t_k + total
             t_end = t_k + total
         else:
             t_end = t_b[m - 1]
@@ -213,6 +220,55 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
         out[6, r] = loss
         out[7, r] = 1.0 if latched else 0.0
         out[8, r] = 1.0 if latched else (0.0 if math.isnan(stall) else stall) / end
+        if torque_min:
+            # omega and time per node as curves_of has them, in om_b and t_b
+            start = k if touched else m
+            for j in range(start, m):
+                om_b[j] = om_a[j]
+                t_b[j] = t_a[j]
+            if math.isnan(stall):
+                stalled_at = m
+            else:  # numpy.searchsorted (left): the first node at or beyond the stall
+                stalled_at = 0
+                while stalled_at < m and theta[stalled_at] < stall:
+                    stalled_at += 1
+            if not math.isfinite(t_free[r]):
+                stalled_at = 1
+            stalled_at = max(stalled_at, 1)
+            out[9, r] = _torque_min(theta, om_b, t_b, springs_torque[i], e, fr, c_kg,
+                                    stalled_at)
+        else:
+            out[9, r] = math.nan
+
+
+@njit(cache=True, error_model="numpy")
+def _torque_min(theta: NDArray, omega: NDArray, time: NDArray, springs_torque: NDArray,
+                eps: float, friction: float, cam: float, stalled_at: int) -> float:
+    """The least torque the cam passes to the roller, eps T_s - T_f - J_cam omega
+    domega/dtheta, over the nodes before ``stalled_at`` with a finite time (inf if none;
+    nan if any is nan, as numpy's min): omega domega/dtheta = 1/2 d(omega^2)/dtheta by
+    :func:`numpy.gradient`'s formulas on the uneven nodes (second order inside, one-sided
+    at the ends)."""
+    m = len(theta)
+    low = math.inf
+    for j in range(min(stalled_at, m)):
+        if not math.isfinite(time[j]):
+            continue
+        if j == 0:
+            slope = (omega[1] ** 2 - omega[0] ** 2) / (theta[1] - theta[0])
+        elif j == m - 1:
+            slope = (omega[j] ** 2 - omega[j - 1] ** 2) / (theta[j] - theta[j - 1])
+        else:
+            h1 = theta[j] - theta[j - 1]
+            h2 = theta[j + 1] - theta[j]
+            slope = (-h2 / (h1 * (h1 + h2)) * omega[j - 1] ** 2
+                     + (h2 - h1) / (h1 * h2) * omega[j] ** 2
+                     + h1 / (h2 * (h1 + h2)) * omega[j + 1] ** 2)
+        value = (eps * springs_torque[j] - friction) - cam * (0.5 * slope)
+        if math.isnan(value):
+            return math.nan
+        low = min(low, value)
+    return low
 
 
 @njit(cache=True, error_model="numpy")
@@ -291,3 +347,72 @@ def free_rotation(start: NDArray, kc1: NDArray, kc2: NDArray, p1: NDArray, p2: N
         out[0, r] = math.sqrt(max(2 * kinetic[m - 1] / inertia[r], 0.0))
         out[1, r] = total / (3 * steps)
         out[2, r] = 1.0 if math.isfinite(_first_zero(turn, kinetic, torque)) else 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDArray,
+                     kc: NDArray, pre: NDArray, extension: NDArray, spring_rate: NDArray,
+                     loads: NDArray, gap: float, xi: float, l2: float, theta_bo: float,
+                     out: NDArray) -> None:
+    """:func:`camopt.cases.vcb.dynamics.closing_inputs` of every design into ``out``
+    (7, nd, m): phi', s1, ds1/dtheta, the closing springs' energy and torque, the
+    resisting springs' energy V_r(s1) and torque Fr ds1/dtheta, on the nodes ``theta``
+    (m,). Per design: the law's coefficients ``A`` (nd, d + 1, by Horner's rule), the
+    linkage ``link`` (nd, 5) and ``rod_offset`` (nd,) (the four-bar of
+    :func:`camopt.mechanics.fourbar.output_motion` on its mirrored branch, the rod of
+    :meth:`VcbModel.kinematics`), spring rates ``kc`` and compressions ``pre`` (nd, 2) and
+    the loads' opening k, arm, stretch, contact k, preload and free-contact force
+    ``loads`` (6, nd) (:class:`~camopt.cases.vcb.model.Loads`); the springs' extension and
+    rate on the nodes (m,) are shared."""
+    nd, d1 = A.shape
+    m = len(theta)
+    for i in range(nd):
+        l1, l3, l4, l5, th1 = link[i, 0], link[i, 1], link[i, 2], link[i, 3], link[i, 4]
+        frame = theta_bo - th1
+        c1, s1f = math.cos(frame), math.sin(frame)
+        k24 = 2 * l2 * l4
+        k12 = 2 * l1 * l2
+        lengths = l3 ** 2 - l1 ** 2 - l4 ** 2 - l2 ** 2
+        beta = rod_offset[i] + theta_bo
+        p, q = l5 * math.cos(beta), l5 * math.sin(beta)
+        k1, k2, p1, p2 = kc[i, 0], kc[i, 1], pre[i, 0], pre[i, 1]
+        ok, arm, x0 = loads[0, i], loads[1, i], loads[2, i]
+        wk, wp, fc = loads[3, i], loads[4, i], loads[5, i]
+        y0 = 0.0
+        for j in range(m):
+            t = theta[j]
+            phi = A[i, d1 - 1]
+            dphi = (d1 - 1) * A[i, d1 - 1]
+            for k in range(d1 - 2, -1, -1):
+                phi = A[i, k] + t * phi
+                if k > 0:
+                    dphi = k * A[i, k] + t * dphi
+            angle = phi + xi
+            c2, s2 = math.cos(angle), math.sin(angle)
+            a = -k24 * c2 + 2 * l1 * l4 * c1
+            b = -k24 * s2 + 2 * l1 * l4 * s1f
+            c = k12 * c1 * c2 + k12 * s1f * s2 + lengths
+            norm = a * a + b * b
+            root = math.sqrt(norm - c * c)
+            c4 = (a * c + b * root) / norm  # the branch -1
+            s4 = (b * c - a * root) / norm
+            rate = (-k24 * (s2 * c4 - c2 * s4) - k12 * c1 * s2 + k12 * s1f * c2) / root
+            y = s4 * p - c4 * q
+            if j == 0:
+                y0 = y
+            s1 = y - y0
+            ds1 = (s4 * q + c4 * p) * rate * dphi
+            ext = extension[j]
+            out[0, i, j] = dphi
+            out[1, i, j] = s1
+            out[2, i, j] = ds1
+            out[3, i, j] = 0.5 * (k1 * (p1 - ext) ** 2 + k2 * (p2 - ext) ** 2)
+            out[4, i, j] = (k1 * (p1 - ext) + k2 * (p2 - ext)) * spring_rate[j]
+            stretch = x0 + arm * s1
+            # numpy's maximum and minimum: a NaN (no assembly) stays NaN
+            wipe = (s1 - gap if s1 - gap > 0.0 or math.isnan(s1) else 0.0) + wp
+            closed = gap if s1 > gap else s1
+            out[5, i, j] = (0.5 * ok * (stretch * stretch - x0 * x0)
+                            + 0.5 * wk * (wipe * wipe - wp * wp) - fc * closed)
+            force = s1 * wk + wk * (wp - gap) if s1 >= gap else -fc
+            out[6, i, j] = (force + s1 * (arm * ok * arm) + arm * ok * x0) * ds1

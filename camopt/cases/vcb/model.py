@@ -183,6 +183,7 @@ class VcbModel:
         # where the cam meets the roller, QOX + theta0 (Sec 2.2 Step 8)
         self.dead_centre = float(np.arctan2(self.G[1], self.G[0]))
         self.contact_crank_angle = (c.preset_qox_deg + c.theta0_deg) * DEG
+        self._graded: dict[int, tuple[NDArray, NDArray, NDArray]] = {}
 
     # ---- geometry ---------------------------------------------------------------
     def closing_spring_geometry(self, theta_c: NDArray, pre_rotation: float | None = None
@@ -206,6 +207,18 @@ class VcbModel:
         q_open = l8 * np.array([np.cos(c.preset_qox_deg * DEG), np.sin(c.preset_qox_deg * DEG)])
         rate = -(gx * (-l8 * sin) + gy * (l8 * cos)) / length
         return length - np.hypot(*(self.G - q_open)), rate
+
+    def graded_springs(self, steps: int) -> tuple[NDArray, NDArray, NDArray]:
+        """The closing's graded cam-angle grid on ``steps`` intervals
+        (:func:`camopt.cases.vcb.locate.graded_grid`) with the springs' extension and
+        rate there (:meth:`closing_spring_geometry`), (steps + 1,) each; computed once
+        per step count."""
+        if steps not in self._graded:
+            from camopt.cases.vcb.locate import graded_grid  # locate imports no model
+
+            theta = graded_grid(self.theta_c[-1], steps)[0]
+            self._graded[steps] = (theta, *self.closing_spring_geometry(theta))
+        return self._graded[steps]
 
     def spring_crank(self) -> tuple[float, float, float, float, float]:
         """The closing springs' crank as numbers: l8 (m), G's x and y (m), the crank angle
