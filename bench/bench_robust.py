@@ -11,7 +11,8 @@ centring's cost (``centre_generations``) by the same run without it.
 
 ``python -m bench.bench_robust [CONFIG ...] [--generations N]``: only those robust
 configs (e.g. ``vcb_velocity_robust``), and every run at N generations (a reduced budget
-while developing; the ratio is then for N generations).
+while developing; the ratio is then for N generations); ``--ratio-only``: the robust
+repeat and the nominal one alone.
 """
 
 from __future__ import annotations
@@ -40,6 +41,9 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("configs", nargs="*", help="robust configs to measure (default all)")
     parser.add_argument("--generations", type=int, default=None)
+    parser.add_argument("--ratio-only", action="store_true",
+                        help="only the robust repeat and the nominal one (no runs without "
+                        "[robust], centring or racing)")
     args = parser.parse_args(argv)
     tune_allocator()
     for robust_name, nominal_name in PAIRS:
@@ -61,8 +65,13 @@ def main(argv: list[str] | None = None) -> None:
             budget = f"{gens} generations"
         robust_s, draws = _cpu(cfg)
         unraced = dataclasses.replace(cfg, robust=cfg.robust.model_copy(update={"race": 0}))
-        same_s, _ = _cpu(dataclasses.replace(cfg, robust=None))
         shipped_s, _ = _cpu(load(CONFIGS / f"{nominal_name}.toml", same_gens))
+        if args.ratio_only:
+            print(f"{robust_name}: robust {robust_s:.1f} s CPU; {nominal_name}.toml at "
+                  f"{budget} {shipped_s:.1f} s: {robust_s / shipped_s:.1f}x (goal <= 10x)",
+                  flush=True)
+            continue
+        same_s, _ = _cpu(dataclasses.replace(cfg, robust=None))
         line = (f"{robust_name}: robust {robust_s:.1f} s CPU ({cfg.robust.samples} draws, "
                 f"race {cfg.robust.race}, {draws} candidate draws evaluated; "
                 f"{cfg.robust.finalists} finalists x {cfg.robust.check_samples}); "

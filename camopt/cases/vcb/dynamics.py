@@ -52,7 +52,7 @@ vectorises over a population and needs no time stepping (``docs/design.md``).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import functools
 from types import ModuleType
 
 import numpy as np
@@ -117,7 +117,7 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     kernel = compiled()
     if kernel is None or _extra(params):
         return motion_of(state())
-    events, low = _compiled(kernel.band_events, model, A, kc, link, rod_offset, loads,
+    events, low = _compiled(kernel, model, A, kc, link, rod_offset, loads,
                             params, steps, 1, pre, torque_min=True)
     return ClosingMotion(**vars(events), cam_torque_min=low,
                          curves=lambda: curves_of(state()))
@@ -139,82 +139,74 @@ def closing_events(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
     :func:`closing_state` then :func:`events_of`."""
     kernel = compiled()
     if kernel is not None and not _extra(params):
-        return compiled_events(kernel.band_events, model, A, kc, link, rod_offset, loads,
+        return compiled_events(kernel, model, A, kc, link, rod_offset, loads,
                                params, steps, sets, pre)
     return events_of(closing_state(model, A, kc, link, rod_offset, loads, params, steps,
                                    sets, pre))
 
 
-def compiled_events(band_events: Callable[..., None], model: VcbModel, A: NDArray,
-                    kc: NDArray, link: NDArray, rod_offset: NDArray | float, loads: Loads,
+def compiled_events(kernel: ModuleType, model: VcbModel, A: NDArray, kc: NDArray,
+                    link: NDArray, rod_offset: NDArray | float, loads: Loads,
                     params: MotionParameters, steps: int, sets: int = 1,
                     pre: NDArray | None = None) -> ClosingEvents:
-    """:func:`closing_events` through the compiled ``band_events``
-    (:func:`camopt.cases.vcb.kernel.band_events`)."""
-    return _compiled(band_events, model, A, kc, link, rod_offset, loads, params, steps, sets,
+    """:func:`closing_events` through the compiled ``kernel``
+    (:func:`camopt.cases.vcb.kernel.closing_rows`)."""
+    return _compiled(kernel, model, A, kc, link, rod_offset, loads, params, steps, sets,
                      pre)[0]
 
 
-def _compiled(band_events: Callable[..., None], model: VcbModel, A: NDArray, kc: NDArray,
-              link: NDArray, rod_offset: NDArray | float, loads: Loads,
-              params: MotionParameters, steps: int, sets: int, pre: NDArray | None,
-              torque_min: bool = False) -> tuple[ClosingEvents, NDArray]:
-    """The events through ``band_events``, and the least cam torque per row where
-    ``torque_min`` (else nan): the geometry once per design and the free rotation and the
-    pick-up impact in numpy, the rest in the kernel."""
-    n = len(A) * sets
-    p = params.columns(n, model.c.efficiency)
-    theta, dtheta_du = graded_grid(model.theta_c[-1], steps)
-    kernel = compiled()
-    inputs = (closing_inputs(model, A, kc, link, rod_offset, loads, theta, pre)
-              if kernel is None else _geometry(kernel, model, A, kc, link, rod_offset, loads,
-                                               steps, pre))
-    kc_rows = np.tile(kc, (sets, 1)) if sets > 1 else kc
-    pre_rows = None if pre is None else np.tile(pre, (sets, 1)) if sets > 1 else pre
-    release_ratio = release_torque_ratio(model, kc_rows, p, pre_rows)
-    omega_free, t_free = rotation_of(model, kc_rows, p, free_steps(steps), pre_rows,
-                                     release_ratio)
-    # the pick-up impact as closing_state has it (the same operations: the same bits)
-    dphi0, ds1_0 = (np.tile(inputs[i][:, 0], sets) for i in (0, 2))
-    j0 = (p.cam_kg_m2[:, 0] + p.follower_kg_m2[:, 0] * dphi0 * dphi0
-          + (p.rod_kg + p.contacts_kg)[:, 0] * ds1_0 * ds1_0)
-    omega0 = p.cam_kg_m2[:, 0] * omega_free / j0
-    pickup_loss = 0.5 * p.cam_kg_m2[:, 0] * omega_free**2 - 0.5 * j0 * omega0**2
-    rows_loads = loads.tiled(sets) if sets > 1 else loads  # a part's springs per design
-    resisting_gap = np.broadcast_to(
-        rows_loads.resistant_energy(np.full((n, 1), loads.gap))[:, 0], (n,))
-    out = np.empty((10, n))
-    columns = (p.cam_kg_m2, p.follower_kg_m2, p.rod_kg, p.contacts_kg, p.friction_nm,
-               p.efficiency)
-    band_events(theta, dtheta_du, 1.0 / steps, float(loads.gap),
-                *(np.ascontiguousarray(a, dtype=float) for a in inputs),
-                *(np.ascontiguousarray(c[:, 0], dtype=float) for c in columns),
-                np.ascontiguousarray(omega_free, dtype=float),
-                np.ascontiguousarray(t_free, dtype=float),
-                np.ascontiguousarray(resisting_gap, dtype=float), torque_min, out)
+def _compiled(kernel: ModuleType, model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
+              rod_offset: NDArray | float, loads: Loads, params: MotionParameters,
+              steps: int, sets: int, pre: NDArray | None, torque_min: bool = False
+              ) -> tuple[ClosingEvents, NDArray]:
+    """The events through ``kernel.closing_rows`` (the geometry once per design, the free
+    rotation, the pick-up impact and the driven closing per row, in one call), and the
+    least cam torque per row where ``torque_min`` (else nan). The inputs go in as they
+    are: one value per design (``nd`` rows) or per row (``sets`` x nd), or one number."""
+    nd = len(A)
+    n = nd * sets
+    theta, dtheta_du, u, weights = _grids(float(model.theta_c[-1]), steps)
+    _, extension, spring_rate = model.graded_springs(steps)
+    table = _table((params.cam_kg_m2, params.follower_kg_m2, params.rod_kg,
+                    params.contacts_kg, params.friction_nm,
+                    model.c.efficiency if params.efficiency is None else params.efficiency,
+                    params.friction_nm if params.release_friction_nm is None
+                    else params.release_friction_nm, params.release_offset_rad), n)
+    loads_table = _table((loads.opening_k, loads.opening_arm, loads.opening_stretch_open,
+                          loads.wipe_k, loads.wipe_preload, loads.free_contact), nd)
+    pre_rows = _table(model.precompressions(pre), nd).T
+    out = np.empty((12, n))
+    kernel.closing_rows(
+        theta, dtheta_du, 1.0 / steps, np.ascontiguousarray(A, dtype=float),
+        np.ascontiguousarray(link, dtype=float), per_row(rod_offset, nd),
+        np.ascontiguousarray(kc, dtype=float), np.ascontiguousarray(pre_rows), extension,
+        spring_rate,
+        loads_table, float(loads.gap), model.xi, model.l2, model.theta_bo, table,
+        model.release_crank, u, weights, torque_min, out)
     return ClosingEvents(
         cam_contact_time=out[0], touch_time=out[1], touch_velocity=out[2],
         closing_velocity_avg=out[3], closing_time=out[4], final_kinetic=out[5],
-        touch_loss=out[6], latched=out[7] > 0, reach=out[8],
-        release_torque_ratio=release_ratio,
-        pickup_loss=pickup_loss), out[9]
+        touch_loss=out[6], latched=out[7] > 0, reach=out[8], release_torque_ratio=out[10],
+        pickup_loss=out[11]), out[9]
 
 
-def _geometry(kernel: ModuleType, model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
-              rod_offset: NDArray | float, loads: Loads, steps: int, pre: NDArray | None
-              ) -> tuple[NDArray, ...]:
-    """:func:`closing_inputs` through ``kernel.closing_geometry`` (the same quantities,
-    the law by Horner's rule and the angles by libm: within rounding of numpy's)."""
-    nd = len(A)
-    theta, extension, spring_rate = model.graded_springs(steps)
-    out = np.empty((7, nd, theta.size))
-    p1, p2 = model.precompressions(pre)
-    table = np.stack([per_row(v, nd) for v in (
-        loads.opening_k, loads.opening_arm, loads.opening_stretch_open, loads.wipe_k,
-        loads.wipe_preload, loads.free_contact)])
-    kernel.closing_geometry(
-        theta, np.ascontiguousarray(A, dtype=float), np.ascontiguousarray(link, dtype=float),
-        per_row(rod_offset, nd), np.ascontiguousarray(kc, dtype=float),
-        np.column_stack([per_row(p1, nd), per_row(p2, nd)]), extension, spring_rate, table,
-        float(loads.gap), model.xi, model.l2, model.theta_bo, out)
-    return tuple(out)
+def _table(values: tuple[NDArray | float, ...], n: int) -> NDArray:
+    """Numbers, (n,) arrays or (n, 1) columns as the rows of a (len(values), n) table."""
+    out = np.empty((len(values), n))
+    for i, v in enumerate(values):
+        out[i] = np.ravel(v)
+    return out
+
+
+@functools.lru_cache(maxsize=8)
+def _grids(end: float, steps: int) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """The driven closing's graded grid and dtheta/du (:func:`graded_grid`), and the free
+    rotation's u grid and Simpson weights (:func:`free_steps`, made even), per stroke and
+    step count (read only)."""
+    theta, dtheta_du = graded_grid(end, steps)
+    free = free_steps(steps)
+    free += free % 2
+    u = np.linspace(0.0, 1.0, free + 1)
+    weights = np.ones(free + 1)
+    weights[1:-1:2], weights[2:-1:2] = 4.0, 2.0
+    return theta, dtheta_du, u, weights

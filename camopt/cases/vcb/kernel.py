@@ -416,3 +416,78 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
                             + 0.5 * wk * (wipe * wipe - wp * wp) - fc * closed)
             force = s1 * wk + wk * (wp - gap) if s1 >= gap else -fc
             out[6, i, j] = (force + s1 * (arm * ok * arm) + arm * ok * x0) * ds1
+
+
+@njit(cache=True, error_model="numpy")
+def closing_rows(theta: NDArray, dtheta_du: NDArray, du: float, A: NDArray, link: NDArray,
+                 rod_offset: NDArray, kc: NDArray, pre: NDArray, extension: NDArray,
+                 spring_rate: NDArray, loads: NDArray, gap: float, xi: float, l2: float,
+                 theta_bo: float, params: NDArray, crank: NDArray, u: NDArray,
+                 weights: NDArray, torque_min: bool, out: NDArray) -> None:
+    """The whole closing of every row into ``out`` (12, rows): :func:`band_events`'s ten
+    rows, then the release torque ratio and the pick-up impact's loss. The geometry of
+    each design (:func:`closing_geometry`, inputs as there), then per row (set-major,
+    design ``r % nd``) the parameters ``params`` (8, rows: J_cam, J_f, m_rod, m_c, T_f,
+    eps, the free rotation's T_f, the release offset), the release torque ratio
+    eps T_s / T_f at the release (as ``rotation.release_torque_ratio``), the free
+    rotation (:func:`free_rotation` on the sinh grid ``u`` with Simpson's ``weights``;
+    ``crank`` (7,): l8, G's x and y, the crank angle at theta_c = 0, the springs' open
+    length, the dead centre and the crank angle at the roller), the plastic pick-up of
+    the roller at rest (generalised momentum kept) and the resisting springs' energy at
+    the contacts' gap."""
+    nd, m = A.shape[0], len(theta)
+    rows = params.shape[1]
+    geometry = np.empty((7, nd, m))
+    closing_geometry(theta, A, link, rod_offset, kc, pre, extension, spring_rate, loads, gap,
+                     xi, l2, theta_bo, geometry)
+    l8, gx, gy, base, open_length, dead, contact = (crank[0], crank[1], crank[2], crank[3],
+                                                    crank[4], crank[5], crank[6])
+    start = np.empty(rows)
+    row_kc = np.empty((2, rows))
+    row_pre = np.empty((2, rows))
+    resisting_gap = np.empty(rows)
+    for r in range(rows):
+        i = r % nd
+        start[r] = dead + params[7, r] - contact
+        row_kc[0, r], row_kc[1, r] = kc[i, 0], kc[i, 1]
+        row_pre[0, r], row_pre[1, r] = pre[i, 0], pre[i, 1]
+        x0 = loads[2, i]
+        stretch = x0 + loads[1, i] * gap
+        wp = loads[4, i]
+        resisting_gap[r] = (0.5 * loads[0, i] * (stretch * stretch - x0 * x0)
+                            + 0.5 * loads[3, i] * (wp * wp - wp * wp) - loads[5, i] * gap)
+    rotation = np.empty((3, rows))
+    free_rotation(start, row_kc[0], row_kc[1], row_pre[0], row_pre[1], params[5], params[6],
+                  params[0], u, weights, l8, gx, gy, base, open_length, rotation)
+    omega_free = np.empty(rows)
+    t_free = np.empty(rows)
+    for r in range(rows):
+        i = r % nd
+        # the springs' torque on the cam at rest at the release (closing_spring_geometry)
+        angle = base + start[r]
+        cos, sin = math.cos(angle), math.sin(angle)
+        qx, qy = gx - l8 * cos, gy - l8 * sin
+        length = math.hypot(qx, qy)
+        ext = length - open_length
+        rate = -(qx * (-l8 * sin) + qy * (l8 * cos)) / length
+        torque = (kc[i, 0] * (pre[i, 0] - ext) + kc[i, 1] * (pre[i, 1] - ext)) * rate
+        driving = params[5, r] * max(torque, 0.0)
+        friction = params[6, r]
+        if friction > 0:
+            ratio = driving / friction
+        else:
+            ratio = math.inf if driving > 0 else 0.0
+        starts = params[7, r] > 0 and start[r] < 0 and ratio > 1
+        stuck = not starts or rotation[2, r] > 0 or not math.isfinite(rotation[1, r])
+        omega_free[r] = 0.0 if stuck else rotation[0, r]
+        t_free[r] = math.inf if stuck else rotation[1, r]
+        cam = params[0, r]
+        dphi0, ds1_0 = geometry[0, i, 0], geometry[2, i, 0]
+        j0 = cam + params[1, r] * dphi0 * dphi0 + (params[2, r] + params[3, r]) * ds1_0 * ds1_0
+        omega0 = cam * omega_free[r] / j0
+        out[10, r] = ratio
+        out[11, r] = 0.5 * cam * omega_free[r] ** 2 - 0.5 * j0 * omega0 ** 2
+    band_events(theta, dtheta_du, du, gap, geometry[0], geometry[1], geometry[2], geometry[3],
+                geometry[4], geometry[5], geometry[6], params[0], params[1], params[2],
+                params[3], params[4], params[5], omega_free, t_free, resisting_gap,
+                torque_min, out)
