@@ -166,7 +166,6 @@ def _compiled(kernel: ModuleType, model: VcbModel, A: NDArray, kc: NDArray, link
     nd = len(A)
     n = nd * sets
     theta, dtheta_du, u, weights = _grids(float(model.theta_c[-1]), steps)
-    _, extension, spring_rate = model.graded_springs(steps)
     table = _table((params.cam_kg_m2, params.follower_kg_m2, params.rod_kg,
                     params.contacts_kg, params.friction_nm,
                     model.c.efficiency if params.efficiency is None else params.efficiency,
@@ -175,19 +174,44 @@ def _compiled(kernel: ModuleType, model: VcbModel, A: NDArray, kc: NDArray, link
     loads_table = _table((loads.opening_k, loads.opening_arm, loads.opening_stretch_open,
                           loads.wipe_k, loads.wipe_preload, loads.free_contact), nd)
     pre_rows = _table(model.precompressions(pre), nd).T
+    pre_rows = np.ascontiguousarray(pre_rows)
+    kc = np.ascontiguousarray(kc, dtype=float)
+    geometry = _geometry(kernel, model, steps, A, link, per_row(rod_offset, nd), kc, pre_rows,
+                         loads_table, float(loads.gap))
     out = np.empty((12, n))
-    kernel.closing_rows(
-        theta, dtheta_du, 1.0 / steps, np.ascontiguousarray(A, dtype=float),
-        np.ascontiguousarray(link, dtype=float), per_row(rod_offset, nd),
-        np.ascontiguousarray(kc, dtype=float), np.ascontiguousarray(pre_rows), extension,
-        spring_rate,
-        loads_table, float(loads.gap), model.xi, model.l2, model.theta_bo, table,
-        model.release_crank, u, weights, torque_min, out)
+    kernel.closing_rows(theta, dtheta_du, 1.0 / steps, geometry, kc, pre_rows, loads_table,
+                        float(loads.gap), table, model.release_crank, u, weights, torque_min,
+                        out)
     return ClosingEvents(
         cam_contact_time=out[0], touch_time=out[1], touch_velocity=out[2],
         closing_velocity_avg=out[3], closing_time=out[4], final_kinetic=out[5],
         touch_loss=out[6], latched=out[7] > 0, reach=out[8], release_torque_ratio=out[10],
         pickup_loss=out[11]), out[9]
+
+
+_LAST: dict[tuple[object, ...], NDArray] = {}
+"""The last geometry :func:`_geometry` computed, by its inputs."""
+
+
+def _geometry(kernel: ModuleType, model: VcbModel, steps: int, A: NDArray, link: NDArray,
+              rod_offset: NDArray, kc: NDArray, pre: NDArray, loads: NDArray, gap: float
+              ) -> NDArray:
+    """``kernel.closing_geometry`` of nd designs on the graded grid of ``steps``, (7, nd,
+    m). The last result is kept by its inputs' bytes: the nominal closing and its band
+    evaluate the same designs one after the other, and the second reads the first's."""
+    A = np.ascontiguousarray(A, dtype=float)
+    link = np.ascontiguousarray(link, dtype=float)
+    key = (model, steps, gap, A.shape, *(a.tobytes() for a in (A, link, rod_offset, kc, pre,
+                                                                loads)))
+    if key in _LAST:
+        return _LAST[key]
+    theta, extension, spring_rate = model.graded_springs(steps)
+    out = np.empty((7, len(A), theta.size))
+    kernel.closing_geometry(theta, A, link, rod_offset, kc, pre, extension, spring_rate, loads,
+                            gap, model.xi, model.l2, model.theta_bo, out)
+    _LAST.clear()
+    _LAST[key] = out
+    return out
 
 
 def _table(values: tuple[NDArray | float, ...], n: int) -> NDArray:

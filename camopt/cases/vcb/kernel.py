@@ -419,27 +419,23 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
 
 
 @njit(cache=True, error_model="numpy")
-def closing_rows(theta: NDArray, dtheta_du: NDArray, du: float, A: NDArray, link: NDArray,
-                 rod_offset: NDArray, kc: NDArray, pre: NDArray, extension: NDArray,
-                 spring_rate: NDArray, loads: NDArray, gap: float, xi: float, l2: float,
-                 theta_bo: float, params: NDArray, crank: NDArray, u: NDArray,
-                 weights: NDArray, torque_min: bool, out: NDArray) -> None:
+def closing_rows(theta: NDArray, dtheta_du: NDArray, du: float, geometry: NDArray,
+                 kc: NDArray, pre: NDArray, loads: NDArray, gap: float, params: NDArray,
+                 crank: NDArray, u: NDArray, weights: NDArray, torque_min: bool,
+                 out: NDArray) -> None:
     """The whole closing of every row into ``out`` (12, rows): :func:`band_events`'s ten
-    rows, then the release torque ratio and the pick-up impact's loss. The geometry of
-    each design (:func:`closing_geometry`, inputs as there), then per row (set-major,
-    design ``r % nd``) the parameters ``params`` (8, rows: J_cam, J_f, m_rod, m_c, T_f,
-    eps, the free rotation's T_f, the release offset), the release torque ratio
-    eps T_s / T_f at the release (as ``rotation.release_torque_ratio``), the free
-    rotation (:func:`free_rotation` on the sinh grid ``u`` with Simpson's ``weights``;
-    ``crank`` (7,): l8, G's x and y, the crank angle at theta_c = 0, the springs' open
-    length, the dead centre and the crank angle at the roller), the plastic pick-up of
-    the roller at rest (generalised momentum kept) and the resisting springs' energy at
-    the contacts' gap."""
-    nd, m = A.shape[0], len(theta)
+    rows, then the release torque ratio and the pick-up impact's loss. From each design's
+    ``geometry`` (7, nd, m: :func:`closing_geometry`, with its ``kc``, ``pre`` and
+    ``loads`` as there), per row (set-major, design ``r % nd``) with the parameters
+    ``params`` (8, rows: J_cam, J_f, m_rod, m_c, T_f, eps, the free rotation's T_f, the
+    release offset): the release torque ratio eps T_s / T_f at the release (as
+    ``rotation.release_torque_ratio``), the free rotation (:func:`free_rotation` on the
+    sinh grid ``u`` with Simpson's ``weights``; ``crank`` (7,): l8, G's x and y, the crank
+    angle at theta_c = 0, the springs' open length, the dead centre and the crank angle
+    at the roller), the plastic pick-up of the roller at rest (generalised momentum kept)
+    and the resisting springs' energy at the contacts' gap, then the driven closing."""
+    nd = geometry.shape[1]
     rows = params.shape[1]
-    geometry = np.empty((7, nd, m))
-    closing_geometry(theta, A, link, rod_offset, kc, pre, extension, spring_rate, loads, gap,
-                     xi, l2, theta_bo, geometry)
     l8, gx, gy, base, open_length, dead, contact = (crank[0], crank[1], crank[2], crank[3],
                                                     crank[4], crank[5], crank[6])
     start = np.empty(rows)
