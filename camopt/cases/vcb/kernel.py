@@ -140,14 +140,11 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
         j0 = c_kg + f_kg * dphi[i, 0] * dphi[i, 0] + moving * ds1[i, 0] * ds1[i, 0]
         omega0 = c_kg * omega_free[r] / j0
         kinetic0 = 0.5 * j0 * omega0 ** 2
-        for j in range(m):
-            jb = c_kg + f_kg * dphi[i, j] * dphi[i, j] + moving * ds1[i, j] * ds1[i, j]
-            ke = kinetic0 + e * (spring[i, 0] - spring[i, j]) - resisting[i, j]
-            ke -= fr * theta[j]
-            ke_b[j] = ke
-            om_b[j] = math.sqrt(max(2 * ke / jb, 0.0))
         k, w = _crossing(s1[i], gap)
         touched = k > 0
+        # the speed and time before the touch are read up to its interval (k): beyond it
+        # the after-touch speed takes over
+        limit = k + 1 if touched else m
         theta_touch = _at(theta, k, w)
         ds1_touch = _at(ds1[i], k, w)
         dphi_touch = _at(dphi[i], k, w)
@@ -163,25 +160,27 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
                                                               v_touch))
             loss = 0.5 * contacts[r] * vt ** 2
         for j in range(m):
-            if touched and j >= k:
-                kin[j] = ke_b[j] - loss
-            else:
-                kin[j] = ke_b[j]
+            ke = kinetic0 + e * (spring[i, 0] - spring[i, j]) - resisting[i, j]
+            ke -= fr * theta[j]
+            ke_b[j] = ke
+            kin[j] = ke - loss if touched and j >= k else ke
             slope[j] = (e * springs_torque[i, j] - fr) - resisting_torque[i, j]
-            # t_b's integrand; its ends below
-            t_b[j] = dtheta_du[j] / om_b[j]
+            if j < limit:  # t_b's integrand; its ends below
+                jb = c_kg + f_kg * dphi[i, j] * dphi[i, j] + moving * ds1[i, j] * ds1[i, j]
+                om_b[j] = math.sqrt(max(2 * ke / jb, 0.0))
+                t_b[j] = dtheta_du[j] / om_b[j]
         stall = _first_zero(theta, kin, slope)
         if not math.isfinite(t_free[r]):
             stall = 0.0
         # time before the touch (dynamics._cumulative_time, then + t_free)
         if dtheta_du[0] == 0:
             t_b[0] = 0.0 if om_b[0] > 0 else t_b[1]
-        if dtheta_du[m - 1] == 0:
+        if limit == m and dtheta_du[m - 1] == 0:
             t_b[m - 1] = 0.0 if om_b[m - 1] > 0 else t_b[m - 2]
         g_prev = t_b[0]
         acc = 0.0
         t_b[0] = t_free[r] + 0.0
-        for j in range(1, m):
+        for j in range(1, limit):
             g = t_b[j]
             acc += 0.5 * (g + g_prev) * du
             g_prev = g
@@ -308,17 +307,21 @@ def _net(turn: float, cos0: float, sin0: float, length0: float, l8: float, gx: f
 def free_rotation(start: NDArray, kc1: NDArray, kc2: NDArray, p1: NDArray, p2: NDArray,
                   eps: NDArray, friction: NDArray, inertia: NDArray, u: NDArray,
                   weights: NDArray, l8: float, gx: float, gy: float, base: float,
-                  open_length: float, out: NDArray) -> None:
+                  open_length: float, skip: NDArray, out: NDArray) -> None:
     """:func:`camopt.cases.vcb.dynamics.free_rotation`'s speed at the roller, time and
     whether the energy reaches zero on the way, per row into ``out`` (3, rows): the same
     sinh grid and Simpson sum, one row at a time (rows (rows,) each, the grid ``u`` and
-    Simpson's ``weights`` (steps + 1,))."""
+    Simpson's ``weights`` (steps + 1,)); a row where ``skip`` (the cam does not start)
+    gets no speed and an infinite time."""
     m = len(u)
     steps = m - 1
     turn = np.empty(m)
     kinetic = np.empty(m)
     torque = np.empty(m)
     for r in range(len(start)):
+        if skip[r]:
+            out[0, r], out[1, r], out[2, r] = 0.0, math.inf, 1.0
+            continue
         span = -start[r]
         a0 = base + start[r]
         cos0, sin0 = math.cos(a0), math.sin(a0)
@@ -452,11 +455,8 @@ def closing_rows(theta: NDArray, dtheta_du: NDArray, du: float, geometry: NDArra
         wp = loads[4, i]
         resisting_gap[r] = (0.5 * loads[0, i] * (stretch * stretch - x0 * x0)
                             + 0.5 * loads[3, i] * (wp * wp - wp * wp) - loads[5, i] * gap)
-    rotation = np.empty((3, rows))
-    free_rotation(start, row_kc[0], row_kc[1], row_pre[0], row_pre[1], params[5], params[6],
-                  params[0], u, weights, l8, gx, gy, base, open_length, rotation)
-    omega_free = np.empty(rows)
-    t_free = np.empty(rows)
+    ratio = np.empty(rows)
+    skip = np.empty(rows, dtype=np.bool_)
     for r in range(rows):
         i = r % nd
         # the springs' torque on the cam at rest at the release (closing_spring_geometry)
@@ -470,18 +470,25 @@ def closing_rows(theta: NDArray, dtheta_du: NDArray, du: float, geometry: NDArra
         driving = params[5, r] * max(torque, 0.0)
         friction = params[6, r]
         if friction > 0:
-            ratio = driving / friction
+            ratio[r] = driving / friction
         else:
-            ratio = math.inf if driving > 0 else 0.0
-        starts = params[7, r] > 0 and start[r] < 0 and ratio > 1
-        stuck = not starts or rotation[2, r] > 0 or not math.isfinite(rotation[1, r])
+            ratio[r] = math.inf if driving > 0 else 0.0
+        skip[r] = not (params[7, r] > 0 and start[r] < 0 and ratio[r] > 1)
+    rotation = np.empty((3, rows))
+    free_rotation(start, row_kc[0], row_kc[1], row_pre[0], row_pre[1], params[5], params[6],
+                  params[0], u, weights, l8, gx, gy, base, open_length, skip, rotation)
+    omega_free = np.empty(rows)
+    t_free = np.empty(rows)
+    for r in range(rows):
+        i = r % nd
+        stuck = skip[r] or rotation[2, r] > 0 or not math.isfinite(rotation[1, r])
         omega_free[r] = 0.0 if stuck else rotation[0, r]
         t_free[r] = math.inf if stuck else rotation[1, r]
         cam = params[0, r]
         dphi0, ds1_0 = geometry[0, i, 0], geometry[2, i, 0]
         j0 = cam + params[1, r] * dphi0 * dphi0 + (params[2, r] + params[3, r]) * ds1_0 * ds1_0
         omega0 = cam * omega_free[r] / j0
-        out[10, r] = ratio
+        out[10, r] = ratio[r]
         out[11, r] = 0.5 * cam * omega_free[r] ** 2 - 0.5 * j0 * omega0 ** 2
     band_events(theta, dtheta_du, du, gap, geometry[0], geometry[1], geometry[2], geometry[3],
                 geometry[4], geometry[5], geometry[6], params[0], params[1], params[2],

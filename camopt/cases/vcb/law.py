@@ -46,7 +46,10 @@ def _polynomial_rate_zeros(A: NDArray, end: float) -> NDArray:
             if not left:
                 break
             lead = np.abs(c[:, deg]) > 1e-12 * scale
-            rows = lead & np.all(np.abs(c[:, deg + 1:]) <= 1e-12 * scale[:, None], axis=1)
+            if deg == d - 1:  # nothing above the top degree
+                rows = lead
+            else:
+                rows = lead & np.all(np.abs(c[:, deg + 1:]) <= 1e-12 * scale[:, None], axis=1)
             count = int(rows.sum())
             if not count:
                 continue

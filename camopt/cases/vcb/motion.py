@@ -65,10 +65,15 @@ class MotionParameters:
         """Each of k parameter sets repeated for n designs in a row: (k n,) arrays ordered
         set-major (set 0 for every design, then set 1, ...); unset fields stay unset, and
         a plain number (one value for every set) stays one."""
-        return replace(self, **{f.name: np.repeat(np.ravel(np.asarray(getattr(self, f.name),
-                                                                      dtype=float)), n)
-                                for f in fields(self) if getattr(self, f.name) is not None
-                                and np.ndim(getattr(self, f.name)) > 0})
+        changes = {}
+        for name in _FIELDS:
+            v = getattr(self, name)
+            if v is not None and np.ndim(v) > 0:
+                changes[name] = np.repeat(np.ravel(np.asarray(v, dtype=float)), n)
+        return replace(self, **changes)
+
+
+_FIELDS = tuple(f.name for f in fields(MotionParameters))
 
 
 @dataclass(frozen=True)

@@ -97,7 +97,7 @@ def rotation_of(model: VcbModel, kc: NDArray, p: ParameterColumns, steps: int,
         kernel.free_rotation(*(np.ascontiguousarray(v, dtype=float) for v in (
             start[:, 0], kc[:, 0], kc[:, 1], *pair, p.efficiency[:, 0],
             p.release_friction_nm[:, 0], p.cam_kg_m2[:, 0], u, weights)),
-            *model.spring_crank(), out)
+            *model.spring_crank(), ~starts, out)
         omega_end, time, stops = out[0], out[1], out[2] > 0
     else:
         omega_end, time, stops = _free_rotation(model, kc, p, start, u, weights, pre)
