@@ -48,6 +48,12 @@ ADAMS datum (``configs/vcb_identify_dynamics.toml``, :mod:`camopt.cases.vcb.iden
 in ``tests/cases/test_vcb_dynamics.py``. Own equations rather than a multibody library: the
 mechanism is one degree of freedom in every phase, so the work-energy form is exact,
 vectorises over a population and needs no time stepping (``docs/design.md``).
+
+Modules: :mod:`~camopt.cases.vcb.motion` (parameters and results),
+:mod:`~camopt.cases.vcb.locate` (grids and event location),
+:mod:`~camopt.cases.vcb.rotation` (the free rotation), :mod:`~camopt.cases.vcb.closing`
+(the driven closing in numpy, the reference), :mod:`~camopt.cases.vcb.opening`, and
+:mod:`~camopt.cases.vcb.kernel` (the closing compiled); this one holds the entry points.
 """
 
 from __future__ import annotations

@@ -1,32 +1,29 @@
-"""The closing's events compiled: one fused loop per row over the cam-angle nodes (numba).
+"""The closing compiled: one call per evaluation, one fused loop per row (numba).
 
-The same arithmetic as :func:`camopt.cases.vcb.dynamics.closing_state` followed by
-:func:`~camopt.cases.vcb.dynamics.events_of`, operation for operation (the work-energy
-equation before and after the contacts' touch, the touch's interpolation and plastic
-loss, :func:`~camopt.cases.vcb.dynamics.first_zero`'s Hermite scan and bisection, the
-trapezoid times, the average closing velocity over the last third of the contact stroke),
-without the (rows, nodes) temporaries numpy needs for each step: a band member is read
-in one pass over its 401 nodes. The numpy path stays the reference;
-``tests/cases/test_vcb_kernel.py`` compares the two to 1e-12 (relative) on random
-designs and at the near-balance release (torque ratio 0.999 and 1.001).
+:func:`closing_rows` computes what :func:`camopt.cases.vcb.dynamics.closing_state`
+followed by :func:`~camopt.cases.vcb.dynamics.events_of` does, with the same equations:
+the node geometry of each design (:func:`closing_geometry`: the follower law by Horner's
+rule, the four-bar and rod of :meth:`VcbModel.kinematics`, the springs' energies and
+torques, Eqs 6, 3, 23-24), then per row the release torque ratio, the free rotation
+(:func:`free_rotation`, the sinh grid and Simpson sum), the pick-up impact, the
+work-energy equation before and after the contacts' touch with the touch's plastic loss,
+the first zero of the kinetic energy (:func:`_first_zero`, Hermite scan and bisection),
+the trapezoid times, the average closing velocity over the last third of the contact
+stroke and, where asked, the least torque the cam passes on (:func:`_torque_min`).
+No (rows, nodes) temporaries: a row is read in one pass over its nodes. The numpy path
+stays the reference; ``tests/cases/test_vcb_kernel.py`` compares the two (events to
+1e-12 relative on random designs and at the near-balance release, the geometry within
+rounding, the least torque to 1e-9 of the driving torque).
 
-Why numba (``docs/design.md``): the loop is plain float arithmetic over arrays, which
+Why numba (``docs/design.md``): the loops are plain float arithmetic over arrays, which
 numba compiles from this Python source with no build step; ``cache=True`` keeps the
-machine code beside the module, so the ~1-2 s compile is paid once per install, and only
-by a command that evaluates a VCB (:mod:`camopt.cases.vcb.dynamics` imports this module
-inside :func:`~camopt.cases.vcb.dynamics.closing_events`; ``validate`` and ``show`` never
-do). Importing this module raises ImportError where numba is not installed: the caller
-then takes the numpy path.
+machine code beside the module (or in the user's cache folder), so the compile is paid
+once per install, and only by a command that evaluates a VCB
+(:func:`camopt.cases.vcb.motion.compiled` imports this module at the first evaluation;
+``validate`` and ``show`` never do). Importing this module raises ImportError where numba
+is not installed: the caller then takes the numpy path.
 
-Beside it, the free rotation from the release (:func:`free_rotation`, the sinh grid and
-Simpson sum of :func:`camopt.cases.vcb.dynamics.free_rotation`) and the first zero of the
-kinetic energy for any rows (:func:`first_zero_rows`), which the numpy path takes where
-:func:`camopt.cases.vcb.dynamics.compiled` gives this module.
-
-Inputs per design (``nd`` rows, set-major rows ``r = set * nd + design`` read design
-``r % nd``): the geometry of :func:`~camopt.cases.vcb.dynamics.closing_inputs`; per row:
-the resolved parameter columns, the free rotation's speed and time and the resistant
-energy at the gap.
+Rows are set-major: row ``r = set * nd + design`` reads design ``r % nd``.
 """
 
 from __future__ import annotations
