@@ -394,8 +394,9 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
             c = k12 * c1 * c2 + k12 * s1f * s2 + lengths
             norm = a * a + b * b
             root = math.sqrt(norm - c * c)
-            c4 = (a * c + b * root) / norm  # the branch -1
-            s4 = (b * c - a * root) / norm
+            inv = 1.0 / norm
+            c4 = (a * c + b * root) * inv  # the branch -1
+            s4 = (b * c - a * root) * inv
             rate = (-k24 * (s2 * c4 - c2 * s4) - k12 * c1 * s2 + k12 * s1f * c2) / root
             y = s4 * p - c4 * q
             if j == 0:
