@@ -132,7 +132,8 @@ def closing_motion(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
 def _extra(params: MotionParameters) -> bool:
     """Whether the parameters hold a term the kernel has not (the springs' own mass, a
     rod dashpot): those take the numpy path."""
-    return bool(np.any(params.spring_kg) or np.any(params.rod_damping_n_s_per_m))
+    return any(bool(v) if isinstance(v, float | int) else bool(np.any(v))
+               for v in (params.spring_kg, params.rod_damping_n_s_per_m))
 
 
 def closing_events(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
