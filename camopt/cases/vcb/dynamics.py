@@ -225,7 +225,7 @@ def _table(values: tuple[NDArray | float, ...], n: int) -> NDArray:
     """Numbers, (n,) arrays or (n, 1) columns as the rows of a (len(values), n) table."""
     out = np.empty((len(values), n))
     for i, v in enumerate(values):
-        out[i] = np.ravel(v)
+        out[i] = v if isinstance(v, float) else np.ravel(v)
     return out
 
 

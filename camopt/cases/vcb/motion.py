@@ -69,7 +69,7 @@ class MotionParameters:
         for name in _FIELDS:
             v = getattr(self, name)
             if v is not None and np.ndim(v) > 0:
-                changes[name] = np.repeat(np.ravel(np.asarray(v, dtype=float)), n)
+                changes[name] = np.ravel(np.asarray(v, dtype=float)).repeat(n)
         return replace(self, **changes)
 
 
