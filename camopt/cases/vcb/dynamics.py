@@ -197,27 +197,32 @@ def _compiled(kernel: ModuleType, model: VcbModel, A: NDArray, kc: NDArray, link
 
 
 _LAST: dict[tuple[object, ...], NDArray] = {}
-"""The last geometry :func:`_geometry` computed, by its inputs."""
+"""The last geometry :func:`_geometry` computed, by its inputs, until it is read."""
+KEPT_BYTES = 32 * 2**20
+"""The largest geometry kept for the next call (a population of ~1,400 designs on 401
+nodes; the search's row chunks are 256)."""
 
 
 def _geometry(kernel: ModuleType, model: VcbModel, steps: int, A: NDArray, link: NDArray,
               rod_offset: NDArray, kc: NDArray, pre: NDArray, loads: NDArray, gap: float
               ) -> NDArray:
     """``kernel.closing_geometry`` of nd designs on the graded grid of ``steps``, (7, nd,
-    m). The last result is kept by its inputs' bytes: the nominal closing and its band
-    evaluate the same designs one after the other, and the second reads the first's."""
+    m). The last result is kept by its inputs' bytes until it is read once: the nominal
+    closing and its band evaluate the same designs one after the other, and the second
+    reads the first's."""
     A = np.ascontiguousarray(A, dtype=float)
     link = np.ascontiguousarray(link, dtype=float)
     key = (model, steps, gap, A.shape, *(a.tobytes() for a in (A, link, rod_offset, kc, pre,
                                                                 loads)))
     if key in _LAST:
-        return _LAST[key]
+        return _LAST.pop(key)  # read once: nothing held between evaluations
     theta, extension, spring_rate = model.graded_springs(steps)
     out = np.empty((7, len(A), theta.size))
     kernel.closing_geometry(theta, A, link, rod_offset, kc, pre, extension, spring_rate, loads,
                             gap, model.xi, model.l2, model.theta_bo, out)
     _LAST.clear()
-    _LAST[key] = out
+    if out.nbytes <= KEPT_BYTES:
+        _LAST[key] = out
     return out
 
 
