@@ -2,7 +2,8 @@
 
 :func:`closing_rows` computes what :func:`camopt.cases.vcb.dynamics.closing_state`
 followed by :func:`~camopt.cases.vcb.dynamics.events_of` does, with the same equations:
-the node geometry of each design (:func:`closing_geometry`: the follower law by Horner's
+the node geometry of each design (:func:`~camopt.cases.vcb.kernel_geometry.closing_geometry`,
+its own module: the follower law by Horner's
 rule, the four-bar and rod of :meth:`VcbModel.kinematics`, the springs' energies and
 torques, Eqs 6, 3, 23-24), then per row the release torque ratio, the free rotation
 (:func:`free_rotation`, the sinh grid and Simpson sum), the pick-up impact, the
@@ -33,6 +34,11 @@ import math
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
+
+from camopt.cases.vcb.kernel_geometry import closing_geometry  # re-exported
+
+__all__ = ["band_events", "closing_geometry", "closing_rows", "first_zero_rows",
+           "free_rotation"]
 
 HERMITE_POINTS = 16  # as camopt.cases.vcb.dynamics.HERMITE_POINTS
 BISECTIONS = 30  # as camopt.cases.vcb.dynamics.BISECTIONS
@@ -347,76 +353,6 @@ def free_rotation(start: NDArray, kc1: NDArray, kc2: NDArray, p1: NDArray, p2: N
         out[0, r] = math.sqrt(max(2 * kinetic[m - 1] / inertia[r], 0.0))
         out[1, r] = total / (3 * steps)
         out[2, r] = 1.0 if math.isfinite(_first_zero(turn, kinetic, torque)) else 0.0
-
-
-@njit(cache=True, error_model="numpy")
-def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDArray,
-                     kc: NDArray, pre: NDArray, extension: NDArray, spring_rate: NDArray,
-                     loads: NDArray, gap: float, xi: float, l2: float, theta_bo: float,
-                     out: NDArray) -> None:
-    """:func:`camopt.cases.vcb.dynamics.closing_inputs` of every design into ``out``
-    (7, nd, m): phi', s1, ds1/dtheta, the closing springs' energy and torque, the
-    resisting springs' energy V_r(s1) and torque Fr ds1/dtheta, on the nodes ``theta``
-    (m,). Per design: the law's coefficients ``A`` (nd, d + 1, by Horner's rule), the
-    linkage ``link`` (nd, 5) and ``rod_offset`` (nd,) (the four-bar of
-    :func:`camopt.mechanics.fourbar.output_motion` on its mirrored branch, the rod of
-    :meth:`VcbModel.kinematics`), spring rates ``kc`` and compressions ``pre`` (nd, 2) and
-    the loads' opening k, arm, stretch, contact k, preload and free-contact force
-    ``loads`` (6, nd) (:class:`~camopt.cases.vcb.model.Loads`); the springs' extension and
-    rate on the nodes (m,) are shared."""
-    nd, d1 = A.shape
-    m = len(theta)
-    for i in range(nd):
-        l1, l3, l4, l5, th1 = link[i, 0], link[i, 1], link[i, 2], link[i, 3], link[i, 4]
-        frame = theta_bo - th1
-        c1, s1f = math.cos(frame), math.sin(frame)
-        k24 = 2 * l2 * l4
-        k12 = 2 * l1 * l2
-        lengths = l3 ** 2 - l1 ** 2 - l4 ** 2 - l2 ** 2
-        beta = rod_offset[i] + theta_bo
-        p, q = l5 * math.cos(beta), l5 * math.sin(beta)
-        k1, k2, p1, p2 = kc[i, 0], kc[i, 1], pre[i, 0], pre[i, 1]
-        ok, arm, x0 = loads[0, i], loads[1, i], loads[2, i]
-        wk, wp, fc = loads[3, i], loads[4, i], loads[5, i]
-        y0 = 0.0
-        for j in range(m):
-            t = theta[j]
-            phi = A[i, d1 - 1]
-            dphi = (d1 - 1) * A[i, d1 - 1]
-            for k in range(d1 - 2, -1, -1):
-                phi = A[i, k] + t * phi
-                if k > 0:
-                    dphi = k * A[i, k] + t * dphi
-            angle = phi + xi
-            c2, s2 = math.cos(angle), math.sin(angle)
-            a = -k24 * c2 + 2 * l1 * l4 * c1
-            b = -k24 * s2 + 2 * l1 * l4 * s1f
-            c = k12 * c1 * c2 + k12 * s1f * s2 + lengths
-            norm = a * a + b * b
-            root = math.sqrt(norm - c * c)
-            inv = 1.0 / norm
-            c4 = (a * c + b * root) * inv  # the branch -1
-            s4 = (b * c - a * root) * inv
-            rate = (-k24 * (s2 * c4 - c2 * s4) - k12 * c1 * s2 + k12 * s1f * c2) / root
-            y = s4 * p - c4 * q
-            if j == 0:
-                y0 = y
-            s1 = y - y0
-            ds1 = (s4 * q + c4 * p) * rate * dphi
-            ext = extension[j]
-            out[0, i, j] = dphi
-            out[1, i, j] = s1
-            out[2, i, j] = ds1
-            out[3, i, j] = 0.5 * (k1 * (p1 - ext) ** 2 + k2 * (p2 - ext) ** 2)
-            out[4, i, j] = (k1 * (p1 - ext) + k2 * (p2 - ext)) * spring_rate[j]
-            stretch = x0 + arm * s1
-            # numpy's maximum and minimum: a NaN (no assembly) stays NaN
-            wipe = (s1 - gap if s1 - gap > 0.0 or math.isnan(s1) else 0.0) + wp
-            closed = gap if s1 > gap else s1
-            out[5, i, j] = (0.5 * ok * (stretch * stretch - x0 * x0)
-                            + 0.5 * wk * (wipe * wipe - wp * wp) - fc * closed)
-            force = s1 * wk + wk * (wp - gap) if s1 >= gap else -fc
-            out[6, i, j] = (force + s1 * (arm * ok * arm) + arm * ok * x0) * ds1
 
 
 @njit(cache=True, error_model="numpy")
