@@ -184,3 +184,66 @@ def test_step_two_refuses_a_cam_set_at_the_factory(tmp_path):
     with pytest.raises(ConfigError, match="set at the factory"):
         archive.resolve_references(load(CONFIGS / "vcb_fourbar.toml",
                                         f'case.cam_archive="{step1}"'))
+
+
+def test_a_weak_breaker_the_nut_can_still_set_is_set(config, X):
+    """A breaker that stalls as made and at the 2 mm trial (friction twice the case's) is
+    not off the secant's line but off the closing: the nut is tried at its end and set
+    there, each set at its own travel (~49 mm of a 60 mm reach), the velocity within
+    1e-3 m/s. Before, one stalling trial made it "not settable" whatever the reach."""
+    problem = build_problem(config.model_copy(update={"preload_setting_range_mm": 60.0}))
+    x = X[16:17].copy()
+    x[:, -1] = problem.variables[-1].upper
+    fields = {"cam_friction_nm": np.array([config.cam_friction_nm * 2.0])}
+    parts = problem.parts(1, fields)
+    made = problem.describe_variants(x, fields, np.zeros(1, dtype=int))
+    _, setting = problem.as_set(x, parts, 0)
+    assert np.all(np.isfinite(setting.needed)) and np.all(setting.needed > 0.03)
+    assert np.all(setting.needed < 0.06)
+    # the same breaker as made stalls at both trials (the case this test is about)
+    bare = build_problem(config.model_copy(update={"velocity_setting_bounds_m_s": None}))
+    for trial in (0.0, 2.0):
+        unset = {**fields, **{f"kc{i}_precompression_mm": np.array(
+            [getattr(config, f"kc{i}_precompression_mm") + trial]) for i in (1, 2)}}
+        assert np.isnan(bare.describe_variants(x[:, :-1], unset, np.zeros(1, dtype=int))
+                        .extras["closing_velocity_avg_m_s"][0])
+    assert made.g[0, problem.constraint_names.index("preload_setting")] <= 0
+    for end in ("low", "high"):
+        assert made.extras[f"closing_velocity_{end}_m_s"][0] == pytest.approx(x[0, -1], abs=1e-3)
+
+
+def test_a_long_travel_takes_a_second_step(config, X):
+    """A setting 13 mm away (friction 20 % high) is a long extrapolation from the 0 and
+    2 mm trials (0.05 % off in one step, 6 % at 26 mm): the second step from the nearest
+    point sets it within 1e-5 m/s."""
+    problem = build_problem(config.model_copy(update={"preload_setting_range_mm": 30.0}))
+    x = X[16:17].copy()
+    x[:, -1] = problem.variables[-1].upper
+    fields = {"cam_friction_nm": np.array([config.cam_friction_nm * 1.2])}
+    made = problem.describe_variants(x, fields, np.zeros(1, dtype=int))
+    assert made.extras["preload_setting_fit_mm"][0] > 10.0
+    for end in ("low", "high"):
+        assert made.extras[f"closing_velocity_{end}_m_s"][0] == pytest.approx(x[0, -1], abs=1e-5)
+
+
+def test_the_nut_turns_by_whole_steps(config, X):
+    """With a resolution, every set's travel is a whole number of steps (the nearest to
+    the exact setting), and the set velocity moves off the setting by at most what half a
+    step does: here under 1 % at 0.5 mm, while the exact setting is within 1e-3 m/s."""
+    stepped = build_problem(config.model_copy(update={"preload_setting_resolution_mm": 0.5}))
+    exact = build_problem(config)
+    x = X[:48]
+    parts = stepped.parts(len(x), {})
+    _, fine = exact.as_set(x, parts)
+    _, coarse = stepped.as_set(x, parts)
+    both = np.isfinite(fine.needed) & np.isfinite(coarse.needed)
+    assert both.sum() > 20
+    steps = coarse.needed[both] / 5e-4
+    np.testing.assert_allclose(steps, np.round(steps), rtol=0, atol=1e-9)
+    assert np.abs(coarse.needed[both] - fine.needed[both]).max() <= 2.5e-4 + 1e-9
+    assert np.any(np.abs(coarse.needed[both] - fine.needed[both]) > 1e-4)  # rounding happened
+    ev = stepped.describe(x)
+    ok = ev.g[:, stepped.constraint_names.index("preload_setting")] <= 0
+    assert ok.sum() >= 3  # random designs: most need more than the 10 mm the nut has
+    off = np.abs(ev.extras["closing_velocity_avg_m_s"][ok] / x[ok, -1] - 1)
+    assert off.max() < 0.01 and off.max() > 1e-4

@@ -85,7 +85,7 @@ VCB_ROLES: dict[str, FieldRole] = {
         opening_k_n_per_mm opening_stretch_closed_mm wipe_k_n_per_mm wipe_count
         wipe_compression_closed_mm contact_gap_mm cam_modulus_gpa poisson
         contact_length_mm shear_yield_mpa cam_design tolerance_class cam_profile_error_mm
-        preload_setting_range_mm"""),
+        preload_setting_range_mm preload_setting_resolution_mm"""),
     **roles_of("identified", """rod_arm_offset_deg opening_arm_ratio free_contact_force_n
         alpha efficiency cam_inertia_kg_m2 follower_inertia_kg_m2 rod_mass_kg
         contacts_mass_kg release_offset_deg cam_friction_nm latch_delay_ms spring_mass_kg
@@ -383,6 +383,11 @@ class VcbCamStep(VcbMechanism):
         PRELOAD_SETTING_RANGE_MM, gt=0, le=100, description="how far the setting nut may "
         "move both closing springs' compression from the design's, either way (mm; "
         "constraint with velocity_setting_bounds_m_s) (assumed; docs/assumptions.md)")
+    preload_setting_resolution_mm: float = Field(
+        0.0, ge=0, le=10, description="the smallest step the fitter sets the nut by (mm; "
+        "a nut locked on one of six flats of an M20 x 2.5 guide rod: 0.42; shims: their "
+        "thickness); each breaker's travel is the nearest multiple, so its set velocity "
+        "misses the setting by up to half a step's worth; 0: continuous")
     kc1_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),
                                         description="Eq 38 widened, docs/assumptions.md")
     kc2_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),

@@ -26,7 +26,7 @@ from camopt.cases.vcb.parts import (
     parts_of,
     profiled,
 )
-from camopt.cases.vcb.setting import Setting, nut_setting
+from camopt.cases.vcb.setting import Setting, nut_setting, rows_of
 from camopt.cases.vcb.verdict import worst_of
 from camopt.core.capabilities import HasVariants, VariesCase
 from camopt.core.problem import Evaluation, ObjectiveFloor, Problem, Variable
@@ -245,13 +245,16 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         A_rows, kc_rows, link_rows = (np.tile(a, (k, 1)) for a in (A, kc, link))
         loads = self.loads(parts).tiled(k)
 
-        def velocity(pre: Floats) -> Floats:
-            return closing_events(m, A_rows, kc_rows, link_rows, self.rod_offset, loads,
-                                  params, c.dynamics_steps, pre=pre).closing_velocity_avg
+        def velocity_of(pre: Floats, rows: Ints) -> Floats:
+            total = k * n
+            return closing_events(
+                m, rows_of(A_rows, rows, total), rows_of(kc_rows, rows, total),
+                rows_of(link_rows, rows, total), self.rod_offset, rows_of(loads, rows, total),
+                rows_of(params, rows, total), c.dynamics_steps, pre=pre).closing_velocity_avg
 
-        pre, setting = nut_setting(velocity, np.tile(base, (k, 1)),
+        pre, setting = nut_setting(velocity_of, np.tile(base, (k, 1)),
                                    np.tile(X[:, self.setting_column], k), k,
-                                   c.preload_setting_range_mm)
+                                   c.preload_setting_range_mm, c.preload_setting_resolution_mm)
         return replace(parts, pre=pre), setting
 
     def release_offset(self, X: Floats) -> Floats | float:
