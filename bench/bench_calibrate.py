@@ -11,7 +11,8 @@ import time
 
 import numpy as np
 
-from camopt.cases.vcb.calibrate import CurveCase, Design, calibrate
+from camopt.cases.vcb.calibrate import CurveCase, calibrate
+from camopt.cases.vcb.calibration_model import Design
 from camopt.cases.vcb.curves import TravelCurve, noise_level
 from camopt.cases.vcb.forms import get_form
 from camopt.cases.vcb.problem import VcbProblem

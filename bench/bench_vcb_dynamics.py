@@ -3,10 +3,10 @@ as ``camopt run`` does; the problem from ``prepare``): the search's evaluation o
 ``configs/vcb_velocity.toml`` with the velocity band (the identified parameters and every
 set of ``dynamics_band``) against the same evaluation with the identified set alone (the
 cost of the one-set model the band replaced); the same band evaluation with the compiled
-kernel (camopt/cases/vcb/kernel.py: band events, free rotation, first zero) against the
-numpy path (``CAMOPT_NUMBA=0``), interleaved; and one design per call (what a local
-solver or a figure pays: the fixed cost). CPU time (``time.process_time``), ratios inside
-this one run."""
+kernel (camopt/cases/vcb/kernel.py: the whole closing of the nominal set and of the band,
+one call each) against the numpy path (``CAMOPT_NUMBA=0``), interleaved; and one design
+per call (what a local solver or a figure pays: the fixed cost). CPU time
+(``time.process_time``), ratios inside this one run."""
 
 from __future__ import annotations
 

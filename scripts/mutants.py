@@ -23,7 +23,8 @@ TESTS = ["tests/mechanics", "tests/cases", "tests/engine/test_sweep.py", "tests/
          "tests/core/test_stats.py", "tests/engine/test_driver.py", "tests/core/test_record.py",
          "tests/engine/test_robust.py", "tests/reporting/test_tolerance_figures.py",
          "tests/engine/test_allocation.py", "tests/reporting/test_report.py",
-         "tests/reporting/test_views.py", "tests/core/test_requirements.py"]
+         "tests/reporting/test_views.py", "tests/core/test_requirements.py",
+         "tests/core/test_fitting.py"]
 
 # name: (file, original text, mutated text); each original must occur exactly once
 MUTANTS: dict[str, tuple[str, str, str]] = {
@@ -196,6 +197,29 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
     "fisher_runs_own": ("camopt/reporting/report.py",
                         "stats.compare_success(k_a, len(a), k_b, len(b))",
                         "stats.compare_success(k_b, len(a), k_a, len(b))"),
+    # fitting: the profile-likelihood threshold and each rule that judges a fit
+    "fit_profile_threshold": ("camopt/core/fitting.py", "rise = 0.5 * CHI2_95_1DOF * opt.s2",
+                              "rise = 2.0 * CHI2_95_1DOF * opt.s2"),
+    "fit_identified": ("camopt/core/fitting.py", "reach <= accuracy * abs(value) if log",
+                       "reach > accuracy * abs(value) if log"),
+    "fit_identified_open": ("camopt/core/fitting.py", "return bool(closed and (",
+                            "return bool((not closed) and ("),
+    "fit_determined": ("camopt/core/fitting.py", "determined = s >= DETERMINED * s[0]",
+                       "determined = s < DETERMINED * s[0]"),
+    "fit_rms_ratio": ("camopt/core/fitting.py", "return self.rms_ratio <= RMS_RATIO_LIMIT and",
+                      "return self.rms_ratio > RMS_RATIO_LIMIT and"),
+    "fit_durbin_watson": ("camopt/core/fitting.py", "and self.structure_z <= STRUCTURE_Z_LIMIT",
+                          "and self.structure_z > STRUCTURE_Z_LIMIT"),
+    "fit_at_bound": ("camopt/core/fitting.py",
+                     "return bool(q - lower <= room or upper - q <= room)",
+                     "return bool(q - lower > room and upper - q > room)"),
+    "fit_keep": ("camopt/core/fitting.py", "return [r <= limit for r in rms]",
+                 "return [r > limit for r in rms]"),
+    "fit_nested_keep": ("camopt/cases/vcb/calibrate.py", "if ratio >= CHI2_99_1DOF else",
+                        "if ratio < CHI2_99_1DOF else"),
+    "vcb_verdict_forms": ("camopt/cases/vcb/calibration_verdict.py",
+                          "good = [f for f in fits if f.explains]",
+                          "good = [f for f in fits if not f.explains]"),
 }
 
 # the tests that mirror each mutated module (a subset of the fast tests above): a mutant
@@ -228,6 +252,9 @@ MIRROR = {
     "camopt/reporting/tolerance_figures.py": ["tests/reporting/test_tolerance_figures.py"],
     "camopt/solvers/polish.py": ["tests/solvers/test_polish.py"],
     "camopt/solvers/multistart.py": ["tests/solvers/test_multistart.py"],
+    "camopt/core/fitting.py": ["tests/core/test_fitting.py"],
+    "camopt/cases/vcb/calibrate.py": ["tests/cases/test_vcb_calibrate.py"],
+    "camopt/cases/vcb/calibration_verdict.py": ["tests/cases/test_vcb_calibration_verdict.py"],
 }
 
 

@@ -109,10 +109,52 @@ def test_no_green_pass_below_target_nor_a_fail_that_meets_its_limit(archives):
             if shown is not None and c.passed is not None:
                 assert shown is c.passed, (path.name, cells)
             assert "e-" not in cells[3] and "e+" not in cells[3], (path.name, cells)
-        last = runner.invoke(app, ["show", str(path)]).stdout.splitlines()[-8:]
-        verdicts = [i for i, line in enumerate(last) if line.startswith("verdict: ")]
-        assert verdicts and any(line.startswith("next: ") for line in last[verdicts[-1]:]), \
-            (path.name, last)  # the verdict, then next:, are the last lines
+        assert_closes_on_the_verdict(runner.invoke(app, ["show", str(path)]).stdout,
+                                     doc["next"], path.name)
+
+
+RULE = "─"
+"""The character of the rule before the closing lines (rich's ``Console.rule``)."""
+
+
+def assert_closes_on_the_verdict(text: str, next_line: str, name: str) -> None:
+    """``text`` ends with the closing block: after its last rule, the ``verdict:`` line,
+    then (a robust run's yield), then ``next_line`` and nothing after it; however many
+    lines each wraps to (a fixed count of last lines missed a long verdict's first
+    line)."""
+    lines = text.splitlines()
+    rules = [i for i, line in enumerate(lines) if line and set(line) == {RULE}]
+    assert rules, (name, lines[-8:])
+    closing = lines[rules[-1] + 1:]
+    starts = [line.split(":")[0] for line in closing
+              if line.startswith(("verdict: ", "robust: ", "next: "))]
+    assert closing and closing[0].startswith("verdict: "), (name, closing)
+    assert starts in (["verdict", "next"], ["verdict", "robust", "next"]), (name, closing)
+    assert " ".join(closing).split()[-len(next_line.split()):] == next_line.split(), \
+        (name, closing)  # the next step, whole, ends the output
+
+
+def test_a_long_verdict_still_closes_the_output(capsys):
+    """A verdict, yield and next step each wrapping over several lines at 80 columns: the
+    check above still finds the verdict after the last rule, and fails when something is
+    printed after the closing lines (so it can fail)."""
+    from camopt.cli.layout import print_closing
+    from camopt.reporting.views import RobustYield
+
+    headline = "FAIL: " + ", ".join(f"requirement_{i}_with_a_long_name" for i in range(12))
+    y = RobustYield(value=0.5, low=0.4, high=0.6, samples=200, target=0.95,
+                    meets_target=False)
+    print("the table before")
+    next_line = "next: " + "camopt run configs/x.toml; " * 10
+    print_closing(headline, "red", next_line, y)
+    text = capsys.readouterr().out
+    assert len(text.splitlines()) > 9  # the verdict's first line is not among the last 8
+    assert_closes_on_the_verdict(text, next_line, "long")
+    with pytest.raises(AssertionError):
+        assert_closes_on_the_verdict(text + "a line after the verdict\n", next_line, "long")
+    with pytest.raises(AssertionError):  # the verdict not first after the rule
+        assert_closes_on_the_verdict(text.replace("verdict: ", "verdict- "), next_line,
+                                     "long")
 
 
 @pytest.mark.slow

@@ -32,7 +32,7 @@ if TYPE_CHECKING:
 
     from matplotlib.figure import Figure
 
-    from camopt.core.calibration import CalibrationReport, CalibrationRequest
+    from camopt.core.calibration import Calibrated, CalibrationRequest
     from camopt.core.runview import RunView
     from camopt.mechanics.cam_outline import CamOutline
 
@@ -187,7 +187,8 @@ class CaseSpec:
     """What the factory sets on each unit at assembly, where a run models it."""
     calibration: str | None = None
     """``"module:function"`` that calibrates the case on measured curves (``camopt
-    calibrate``, :mod:`camopt.core.calibration`); None: the case has none."""
+    calibrate``, :mod:`camopt.core.calibration`: it returns a ``Calibrated``); None: the
+    case has none."""
     variable_names: Callable[[Any], tuple[str, ...]] | None = None
     """The design variables' names for a validated config of this kind, without building
     its Problem: ``show`` and ``runs`` check an archive's names with it and import no case
@@ -243,9 +244,10 @@ class CaseSpec:
         return self.problem(config)  # type: ignore[call-arg]
 
     def calibrate(self, config: CaseConfig, request: CalibrationRequest
-                  ) -> CalibrationReport:
-        """Calibrate the case on measured curves; a case without a calibration is a
-        ConfigError naming its kind."""
+                  ) -> Calibrated:
+        """Calibrate the case on measured curves (the fits, the verdict and the case's
+        parts of the report); a case without a calibration is a ConfigError naming its
+        kind."""
         if self.calibration is None:
             raise ConfigError("case", "kind", f"{self.kind!r} has no calibration on "
                               "measured curves")

@@ -164,6 +164,7 @@ def calibrate(
     from camopt.archive.files import write_files
     from camopt.cases.registry import get_case
     from camopt.core.calibration import CalibrationRequest, CurveRequest
+    from camopt.reporting.calibration_report import CalibrationReportView
     from camopt.reporting.report import jsonable
 
     overrides, pairs = pair_sets(ctx.meta.get(RAW, []))
@@ -188,7 +189,7 @@ def calibrate(
             from camopt.archive.files import ensure_folder
 
             ensure_folder(plot, "--plot")
-        report = get_case(config.case.kind).calibrate(config.case, request)
+        report = CalibrationReportView(get_case(config.case.kind).calibrate(config.case, request))
         written = []
         data: Any = report.to_json()
         if plot is not None:

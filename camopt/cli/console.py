@@ -11,7 +11,7 @@ import io
 import os
 import sys
 from collections.abc import Callable, Iterator
-from typing import Any
+from typing import Any, NoReturn
 
 from rich.console import Console
 from rich.markup import escape as markup_escape
@@ -47,8 +47,37 @@ def escape(text: object) -> str:
     return visible(text).translate(_STAND_INS)
 
 
+def reader_left(fd: int) -> NoReturn:
+    """The reader of a pipe on file descriptor ``fd`` has left (``camopt show RUN | head
+    -1``): the rest of the output goes to /dev/null and camopt exits 0 without a word,
+    as a Unix filter does (rich's console and typer would exit 1)."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
+    raise SystemExit(0)
+
+
 class NameConsole(Console):
-    """A rich console that prints what :func:`escape` made of a name as the name."""
+    """A rich console that prints what :func:`escape` made of a name as the name; a closed
+    pipe on stdout ends camopt with exit 0 (:func:`reader_left`), one on stderr sends the
+    rest of stderr's messages nowhere while the command goes on (a run whose progress
+    reader left still finishes and writes its archive)."""
+
+    def on_broken_pipe(self) -> None:
+        self.quiet = True
+        try:
+            fd = self.file.fileno()
+        except (AttributeError, OSError, ValueError):  # not a real file (a test's capture)
+            fd = None
+        if self.stderr:
+            if fd is not None:
+                devnull = os.open(os.devnull, os.O_WRONLY)
+                os.dup2(devnull, fd)
+                os.close(devnull)
+            return
+        if fd is None:
+            raise SystemExit(0)
+        reader_left(fd)
 
     def render_str(self, text: str, **options: Any) -> Text:
         if not any(chr(k) in text for k in _BACK):
@@ -117,7 +146,9 @@ class CheckedOutput(io.RawIOBase):
     ``ulimit -f`` ``show --format json`` exited 0 with its output cut at 1,024 bytes.
     On a failure the descriptor is pointed at /dev/null first, so the rest of the
     output (flushed again at exit) goes nowhere instead of adding a second error; a
-    closed pipe stays a BrokenPipeError (``camopt show | head`` is no error)."""
+    closed pipe (``camopt show RUN | head -1``) is no error: exit 0, from wherever the
+    write was (:func:`reader_left`; a BrokenPipeError would reach typer, which exits 1,
+    or a command's ``errors()``, which calls it a bug)."""
 
     def __init__(self, fd: int, name: str) -> None:
         super().__init__()
@@ -139,7 +170,7 @@ class CheckedOutput(io.RawIOBase):
             try:
                 n = os.write(self.fd, view[done:])
             except BrokenPipeError:
-                raise
+                reader_left(self.fd)
             except OSError as exc:
                 self._discard()
                 raise OutputError(f"{self.name}: write: {exc.strerror or exc}; the output "

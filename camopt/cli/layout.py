@@ -320,14 +320,18 @@ def print_fitted(title: str, rows: list[dict[str, Any]], columns: list[str],
     (the rest are in ``--format json``); the first ``limit`` rows."""
     columns = [c for c in columns if c in rows[0]]
     shown_rows = rows if limit is None else rows[:limit]
-    texts = {c: [cell(r.get(c)) for r in shown_rows] for c in columns}
-    width, kept = 1, list[str]()
-    for c in columns:
-        w = max(len(c), *(len(t) for t in texts[c])) + 3  # padding and a rule
-        if kept and width + w > out.width:
+    from camopt.reporting import report
+
+    raw = {c: [report.format_value(r.get(c)) for r in shown_rows] for c in columns}
+    texts = {c: [escape(t) for t in raw[c]] for c in columns}  # as cell() makes them
+    width, kept, widths = 1, list[str](), list[int]()
+    for c in columns:  # as printed: escape() shows a name as visible() does
+        w = max(cell_len(visible(c)), *(cell_len(visible(t)) for t in raw[c]))
+        if kept and width + w + BORDER > out.width:
             break
         kept.append(c)
-        width += w
+        widths.append(w)
+        width += w + BORDER
     notes = []
     if len(kept) < len(columns):
         notes.append(f"{len(kept)} of {len(columns)} columns")
@@ -335,8 +339,8 @@ def print_fitted(title: str, rows: list[dict[str, Any]], columns: list[str],
         notes.append(f"first {len(shown_rows)} of {len(rows)} rows")
     note = ("; ".join(notes) + "; all: camopt show --format json") if notes else ""
     table = Table(title=escape(f"{title} ({note})" if note else title), title_justify="left")
-    for c in kept:
-        table.add_column(escape(c), justify="right", no_wrap=True)
+    for c, w in zip(kept, widths):  # its width given: rich need not measure every cell
+        table.add_column(escape(c), justify="right", no_wrap=True, width=w)
     for i in range(len(shown_rows)):
         table.add_row(*(texts[c][i] for c in kept))
     out.print(table)

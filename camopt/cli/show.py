@@ -49,13 +49,20 @@ def show(run_paths: Annotated[list[Path], typer.Argument(
     as runs/NAME-*.h5) are each shown, in the order given (a glob's order: oldest
     first, as the names carry the time); with --format json, as a JSON array."""
     from camopt import archive
+    from camopt.errors import ArchiveError
     from camopt.reporting import report
     from camopt.reporting.report import jsonable
 
     with errors():  # every archive read before anything is printed
         loaded: list[tuple[str, Any]] = []
         for path in run_paths:
-            kind = archive.archive_kind(path)
+            try:  # most archives are runs: opened (and checked) once
+                loaded.append(("run", archive.load_run(path)))
+                continue
+            except ArchiveError:
+                kind = archive.archive_kind(path)  # its own error for what no kind reads
+                if kind == "run":
+                    raise
             if kind == "sweep":
                 from camopt.archive.sweeps import load_sweep
 
@@ -68,8 +75,6 @@ def show(run_paths: Annotated[list[Path], typer.Argument(
                 from camopt.archive.calibrations import load_calibration
 
                 loaded.append(("calibration", load_calibration(path)))
-            else:
-                loaded.append(("run", archive.load_run(path)))
     if format is Format.json:
         docs = [report.show(item).to_json() if kind == "run" else calibration_doc(item)
                 if kind == "calibration" else jsonable(item) for kind, item in loaded]

@@ -138,6 +138,38 @@ class Stochastic(Protocol):
         ...
 
 
+@runtime_checkable
+class Fittable(Protocol):
+    """A model fitted to measured data by :mod:`camopt.core.fitting` (a case's calibration
+    on measured curves): fitted coordinates q (n,), each a parameter or, where ``log``, the
+    log of a positive one, searched inside [``lower``, ``upper``]; the model gives the
+    residuals of rows of coordinates in units of the data's noise and its RMS misfit.
+    Another case fits through the same seam by offering these."""
+
+    lower: Floats
+    """(n,) lower search bounds of the fitted coordinates."""
+    upper: Floats
+    """(n,) upper search bounds."""
+    log: Bools
+    """(n,) bool: the coordinate is the log of a positive parameter."""
+    accuracy: Floats
+    """(n,) how close the data must pin a parameter for it to count as identified:
+    relative for a log coordinate (:data:`camopt.core.fitting.IDENTIFIED_WITHIN`), in
+    the coordinate's unit otherwise."""
+    bound_room: Floats
+    """(n,) how near its search bound a coordinate that is not a log is "at" it (its
+    unit); a log coordinate's room is the fitting module's rule."""
+
+    def residuals(self, Q: Floats) -> Floats:
+        """Normalised residuals (k, N), (model - measured) / noise, of the rows of ``Q``
+        (k, n), one vectorised evaluation."""
+        ...
+
+    def rms(self, q: Floats) -> float:
+        """The RMS misfit at ``q`` (n,) in the data's unit (not normalised)."""
+        ...
+
+
 CAPABILITIES = {"family": HasFamily, "repair": Repairable, "residuals": HasResiduals,
                 "case_fields": VariesCase, "variants": HasVariants}
 """Capability names as a solver's error messages and ``camopt solvers`` spell them."""

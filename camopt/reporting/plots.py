@@ -24,13 +24,18 @@ from camopt.units import MM, TO_DEG
 
 
 def _band(histories: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Median and inter-quartile band of best-so-far curves (shorter ones hold their end)."""
+    """Median and inter-quartile band of best-so-far curves (shorter ones hold their end);
+    NaN where no curve is finite yet (no feasible design in any repeat so far: numpy would
+    warn 'All-NaN slice' for those iterations)."""
     n = max(len(h) for h in histories)
     stack = np.array([np.r_[h, np.full(n - len(h), h[-1])] for h in histories], dtype=float)
-    stack = np.where(np.isfinite(stack), stack, np.nan)
-    with np.errstate(all="ignore"):
-        mid, low, high = (np.nanpercentile(stack, q, axis=0) for q in (50, 25, 75))
-    return mid, low, high
+    finite = np.isfinite(stack)
+    band = np.full((3, n), np.nan)
+    some = finite.any(axis=0)
+    if some.any():
+        band[:, some] = np.nanpercentile(np.where(finite, stack, np.nan)[:, some],
+                                         (50, 25, 75), axis=0)
+    return band[0], band[1], band[2]
 
 
 SPREAD = 20.0

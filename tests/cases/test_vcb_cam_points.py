@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camopt.cases.vcb.calibration_report import design_of
+from camopt.cases.vcb.calibration_run import design_of
 from camopt.cases.vcb.cam_points import read_cam_points
 from camopt.cases.vcb.problem import VcbProblem
 from camopt.errors import ConfigError

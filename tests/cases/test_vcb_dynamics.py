@@ -510,7 +510,7 @@ def test_spring_mass_and_rod_dashpot_match_the_independent_ode(ode, terms):
     (0.5 um measured on the case's 400 steps), touch time within 1e-6 s and the closing
     velocity within 1e-4 relative; each term moves the velocity by over 7 %, so the test
     sees them."""
-    from camopt.cases.vcb.calibrate import _loads
+    from camopt.cases.vcb.calibration_model import _loads
     from camopt.units import N_PER_MM
 
     p = VcbProblem(load(CONFIGS / "vcb.toml").case)

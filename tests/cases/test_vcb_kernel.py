@@ -1,6 +1,8 @@
-"""The compiled closing events (camopt/cases/vcb/kernel.py) against the numpy reference
-(closing_state then events_of, CAMOPT_NUMBA=0) to 1e-12 relative, on random designs under the band's
-parameter sets and at the near-balance release; the fallback when numba is absent."""
+"""The compiled closing (camopt/cases/vcb/kernel.py) against the numpy reference
+(closing_state then events_of, CAMOPT_NUMBA=0): the events to 1e-12 relative on random
+designs under the band's parameter sets and at the near-balance release, the node geometry
+within rounding, the least cam torque to 1e-9 of the driving torque; the fallback when
+numba is absent."""
 
 from __future__ import annotations
 
@@ -62,7 +64,7 @@ def test_kernel_matches_numpy_on_random_designs_under_the_band(monkeypatch):
     args = _band_args(p, X)
     sets = len(np.ravel(p.band.cam_kg_m2))
     ref = _reference(monkeypatch, *args, sets=sets)
-    new = dyn.compiled_events(kernel.band_events, *args, sets=sets)
+    new = dyn.compiled_events(kernel, *args, sets=sets)
     assert ref.latched.any() and not ref.latched.all()  # both branches covered
     assert np.isfinite(ref.touch_time).any() and np.isinf(ref.touch_time).any()
     _same(ref, new)
@@ -77,7 +79,7 @@ def test_kernel_matches_numpy_at_the_near_balance_release(ratio, monkeypatch):
     A, kc, link = p.designs(X, None)
     args = (p.model, A, kc, link, p.rod_offset, p.load, p.dynamics, p.config.dynamics_steps)
     ref = _reference(monkeypatch, *args)
-    new = dyn.compiled_events(kernel.band_events, *args)
+    new = dyn.compiled_events(kernel, *args)
     assert ref.release_torque_ratio[0] == pytest.approx(ratio, rel=1e-12)
     assert np.isinf(ref.cam_contact_time[0]) == (ratio < 1)
     _same(ref, new)
@@ -125,6 +127,71 @@ def test_kernel_matches_numpy_with_parts_per_design(monkeypatch):
     k = len(np.ravel(p.band.cam_kg_m2))
     args = (model, A, kc, link, rod_offset, loads, sets, steps)
     ref = _reference(monkeypatch, *args, sets=k, pre=pre)
-    new = dyn.compiled_events(kernel.band_events, *args, sets=k, pre=pre)
+    new = dyn.compiled_events(kernel, *args, sets=k, pre=pre)
     assert np.isfinite(ref.pickup_loss).all() and (ref.pickup_loss > 0).any()
     _same(ref, new)
+
+
+def _random_designs(p: VcbProblem, seed: int) -> np.ndarray:
+    """Random designs (most stall) and the vendor's neighbourhood (most close and latch)."""
+    rng = np.random.default_rng(seed)
+    X = np.vstack([p.lower + rng.random((40, p.n_var)) * (p.upper - p.lower),
+                   p.vendor_x() * (1 + 0.02 * rng.standard_normal((40, p.n_var)))])
+    return np.clip(X, p.lower, p.upper)
+
+
+def test_compiled_geometry_matches_numpy_within_rounding():
+    """The kernel's node geometry (Horner's rule, libm's sin and cos) against
+    ``closing_inputs`` (numpy's matrix product and the hand-written sincos): every quantity
+    within 1e-13 of its row's largest magnitude (rounding: measured 3e-14 at most; a
+    relative test would fail where s1 or phi' pass through zero)."""
+    p = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
+    A, kc, link = p.designs(_random_designs(p, 7), None)
+    steps = p.config.dynamics_steps
+    theta, _ = dyn.graded_grid(p.model.theta_c[-1], steps)
+    ref = dyn.closing_inputs(p.model, A, kc, link, p.rod_offset, p.load, theta)
+    pre = np.tile([p.config.kc1_precompression_mm * 1e-3,
+                   p.config.kc2_precompression_mm * 1e-3], (len(A), 1))
+    loads = np.array([np.full(len(A), float(v)) for v in (
+        p.load.opening_k, p.load.opening_arm, p.load.opening_stretch_open, p.load.wipe_k,
+        p.load.wipe_preload, p.load.free_contact)])
+    new = np.empty((7, len(A), theta.size))
+    _, extension, rate = p.model.graded_springs(steps)
+    kernel.closing_geometry(theta, A, link, np.full(len(A), float(p.rod_offset)), kc, pre,
+                            extension, rate, loads, p.load.gap, p.model.xi, p.model.l2,
+                            p.model.theta_bo, new)
+    for name, a, b in zip(("dphi", "s1", "ds1", "spring", "torque", "resisting",
+                           "resisting_torque"), ref, new):
+        assert np.array_equal(np.isnan(a), np.isnan(b)), name
+        scale = np.nanmax(np.abs(a), axis=1, keepdims=True)
+        assert np.nanmax(np.abs(a - b) / scale) < 1e-13, name
+
+
+def test_compiled_closing_motion_matches_numpy(monkeypatch):
+    """``closing_motion`` through the kernel (events and the least cam torque, the curves
+    on first use) against the numpy path (``CAMOPT_NUMBA=0``): the events to 1e-12 as
+    above, the least cam torque within 1e-9 of the row's mean driving torque (it is
+    eps T_s - T_f less J_cam omega domega/dtheta, a difference of larger terms:
+    measured 2e-10: omega^2 differenced on the fine nodes near the start), the curves those
+    of closing_state."""
+    p = VcbProblem(load(CONFIGS / "vcb_velocity.toml").case)
+    X = _random_designs(p, 11)
+    A, kc, link = p.designs(X, None)
+    args = (p.model, A, kc, link, p.rod_offset, p.load, p.dynamics, p.config.dynamics_steps)
+    new = dyn.closing_motion(*args)
+    with monkeypatch.context() as m:
+        m.setenv("CAMOPT_NUMBA", "0")
+        ref = dyn.closing_motion(*args)
+    events = [f.name for f in fields(dyn.ClosingEvents)]
+    _same(dyn.ClosingEvents(**{f: getattr(ref, f) for f in events}),
+          dyn.ClosingEvents(**{f: getattr(new, f) for f in events}))
+    low_ref, low_new = ref.cam_torque_min, new.cam_torque_min
+    assert np.isfinite(low_ref).any() and np.isinf(low_ref).any()  # reached and never
+    assert np.array_equal(np.isinf(low_ref), np.isinf(low_new))
+    mean_drive = p.model.driving_work(kc) / p.model.theta_c[-1]
+    finite = np.isfinite(low_ref)
+    assert np.all(np.abs(low_new[finite] - low_ref[finite]) <= 1e-9 * mean_drive[finite])
+    # the curves from closing_state either way (here with the compiled free rotation)
+    np.testing.assert_allclose(new.time, ref.time, rtol=1e-12)
+    np.testing.assert_allclose(new.cam_torque, ref.cam_torque, rtol=1e-9,
+                               atol=1e-9 * mean_drive.max())

@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 HEAVY = ("numpy", "scipy", "scipy.stats", "h5py", "pymoo", "matplotlib", "dask",
-         "jinja2", "ezdxf", "camopt.engine.driver", "camopt.cases", "camopt.archive")
+         "jinja2", "ezdxf", "numba", "camopt.engine.driver", "camopt.cases", "camopt.archive")
 
 ROOT = Path(__file__).resolve().parents[2]
 ARCHIVE = str(ROOT / "tests" / "data" / "archives" / "run_main_52e31ad.h5")
@@ -150,6 +150,34 @@ def test_show_and_runs_load_no_solver_library(command: str, current_archive: str
     if command == "show":  # the archive's case and solver only
         assert _loaded(modules, "cases") & CASES == {"fast_switch"}
         assert _loaded(modules, "solvers") & SOLVERS == {"enumeration"}
+
+
+@pytest.fixture(scope="module")
+def vcb_archive(tmp_path_factory: pytest.TempPathFactory) -> str:
+    """A small VCB run this camopt wrote (200 evaluations, one repeat: ~2 s): the case
+    whose evaluation compiles with numba."""
+    path = tmp_path_factory.mktemp("imports_vcb") / "vcb.h5"
+    subprocess.run([sys.executable, "-m", "camopt", "run",
+                    str(ROOT / "configs" / "vcb_velocity.toml"), "--out", str(path),
+                    "--set", "solver.evaluations=200", "--set", "run.repeats=1", "--quiet"],
+                   capture_output=True, text=True, check=True, cwd=ROOT)
+    return str(path)
+
+
+@pytest.mark.parametrize("command", ["show", "runs"])
+def test_show_and_runs_of_a_vcb_archive_load_no_model_numba_nor_scipy(command: str,
+                                                                      vcb_archive: str
+                                                                      ) -> None:
+    """The VCB archive's stored config is validated (its config module is loaded), its
+    closing model, dynamics and compiled kernel are not, nor numba or scipy."""
+    target = vcb_archive if command == "show" else str(Path(vcb_archive).parent)
+    code, modules = loaded_after(command, target)
+    assert code in (0, None)
+    assert "camopt.cases.vcb.config" in modules  # the probe sees the case being read
+    vcb = {m for m in modules if m.startswith("camopt.cases.vcb.")}
+    assert vcb <= {"camopt.cases.vcb.config", "camopt.cases.vcb.paper",
+                   "camopt.cases.vcb.requirements"}, sorted(vcb)
+    assert not {m.split(".")[0] for m in modules} & {"scipy", "numba", "llvmlite"}
 
 
 def test_validate_imports_its_command_module_only_and_not_the_engine_s_loop() -> None:

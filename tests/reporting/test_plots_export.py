@@ -163,6 +163,31 @@ def test_convergence_draws_the_target_and_never_an_empty_axes(tmp_path):
     assert np.isfinite(ax.lines[0].get_ydata()).all()
 
 
+def test_convergence_band_of_iterations_with_no_feasible_design_is_nan_without_a_warning():
+    """Repeats that found no feasible design in their first iterations (objective inf):
+    those iterations' band is NaN, with no numpy 'All-NaN slice' warning (the report of
+    such an archive printed one); where some repeats are finite, the band is those
+    repeats' percentiles (computed here with np.percentile on the finite values only;
+    rtol 1e-12: the same interpolation, another code path)."""
+    import warnings
+
+    inf = np.inf
+    curves = [np.array([inf, inf, 5.0, 3.0]), np.array([inf, 9.0, 4.0]),
+              np.array([inf, inf, inf, 2.0, 1.0])]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mid, low, high = plots._band(curves)
+        fig = plots.convergence({"runs": curves}, "objective_j")
+    close(fig)
+    assert np.isnan([mid[0], low[0], high[0]]).all()
+    held = [np.array([inf, inf, 5, 3, 3]), np.array([inf, 9, 4, 4, 4]),
+            np.array([inf, inf, inf, 2, 1])]  # shorter curves hold their end
+    for i in range(1, 5):
+        finite = [h[i] for h in held if np.isfinite(h[i])]
+        np.testing.assert_allclose([mid[i], low[i], high[i]],
+                                   np.percentile(finite, [50, 25, 75]), rtol=1e-12)
+
+
 def test_convergence_axis_fits_what_the_data_reach():
     """Best-so-far curves from 1e6 down to 1e-5 on a log axis bounded by them (no symlog
     band of decades never reached); a one-pass solver's single point is drawn as a marker

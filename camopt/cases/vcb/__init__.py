@@ -198,7 +198,7 @@ VCB = register_case(CaseSpec(
     adjustments=(Adjustment(
         "closing springs' preload nut", "preload_setting_mm", "preload_setting_range_mm",
         "mm", "the analyser's contact velocity to velocity_setting_m_s"),),
-    calibration="camopt.cases.vcb.calibration_report:run",
+    calibration="camopt.cases.vcb.calibration_run:run",
     variable_names=lambda config: variable_names(config),
 ))
 VCB_IDENTIFY = register_case(CaseSpec(

@@ -64,8 +64,7 @@ class Terms:
         """Least torque the cam passes to the roller over the part of the stroke it
         reaches (N m), (n,)."""
         assert self.motion is not None
-        mo = self.motion
-        return np.min(np.where(np.isfinite(mo.time), mo.cam_torque, np.inf), axis=1)
+        return self.motion.cam_torque_min
 
     @cached_property
     def lift_off_ratio(self) -> Floats:

@@ -10,7 +10,11 @@ The dynamics' parameters (J_cam, m_rod, m_c, the closing crank's release offset,
 friction torque at the cam shaft) from the vendor design's seven ADAMS data (Sec 3.2,
 Table 4): :class:`VcbDynamicsIdentification`, with the leave-one-out validation
 (:func:`leave_one_out`) and the parameter sets equally consistent with the data
-(:func:`consistent_band`) that give every prediction its band.
+(:func:`consistent_band`) that give every prediction its band; the Jacobian's
+identifiability is :mod:`camopt.core.fitting`'s.
+
+``scipy.optimize`` is imported inside :func:`fit` only: the case's Problem is built by
+``validate``, which must not load it.
 """
 
 from __future__ import annotations
@@ -18,13 +22,15 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from numpy.typing import NDArray
 
 from camopt.cases.vcb.dynamics import MotionParameters, opening_motion
 from camopt.cases.vcb.forms import BAND_COLUMNS, FORMS, INERTIAS, ModelForm, get_form
 from camopt.cases.vcb.identify_config import VcbDynamicsIdentifyConfig, VcbIdentifyConfig
 from camopt.cases.vcb.model import VcbModel
+from camopt.core.fitting import Identifiability, central_jacobian
+from camopt.core.fitting import identifiability as core_identifiability
 from camopt.core.problem import Evaluation, Problem, Variable
+from camopt.mechanics import Floats
 from camopt.units import DEG, MM, MS, N_PER_MM
 
 
@@ -48,7 +54,7 @@ class VcbIdentification(Problem):
         self.kc = np.array([[c.kc1_n_per_mm, c.kc2_n_per_mm],
                             [d.kc1_n_per_mm, d.kc2_n_per_mm]]) * N_PER_MM
 
-    def evaluate(self, X: NDArray) -> Evaluation:
+    def evaluate(self, X: Floats) -> Evaluation:
         """Squared normalised misfit of (rod travel, vendor surplus, optimum surplus) to
         the paper's evidence, with each residual and work as extras; no constraints."""
         c, m = self.config, self.model
@@ -113,7 +119,7 @@ PARAMETERS = FORMS[0].parameters
 friction torque N m)."""
 
 
-def motion_parameters(X: NDArray, follower_kg_m2: float) -> MotionParameters:
+def motion_parameters(X: Floats, follower_kg_m2: float) -> MotionParameters:
     """Rows of the shipped form's :data:`PARAMETERS` as MotionParameters."""
     return FORMS[0].motion_parameters(X, follower_kg_m2)
 
@@ -144,7 +150,7 @@ class VcbDynamicsIdentification(Problem):
         self.targets = np.array([getattr(c, d.field) for d in DATA])
         self.one_sided = np.array([d.upper_bound_only for d in DATA])
 
-    def predict(self, X: NDArray) -> NDArray:
+    def predict(self, X: Floats) -> Floats:
         """The seven simulated data of the vendor design for each parameter row of ``X``
         (n, p), (n, 7) in the units of :data:`DATA`."""
         c, m = self.config, self.model
@@ -161,19 +167,19 @@ class VcbDynamicsIdentification(Problem):
             closing.touch_time / MS, closing.closing_velocity_avg,
             closing.closing_time / MS])
 
-    def residuals(self, predictions: NDArray) -> NDArray:
+    def residuals(self, predictions: Floats) -> Floats:
         """Relative residuals (n, 7): prediction / datum - 1; the one-sided datum counts
         only when exceeded; NaN (a design that never gets there) as 10 (1,000 %)."""
         r = predictions / self.targets - 1
         r = np.where(self.one_sided, np.maximum(r, 0.0), r)
         return np.where(np.isfinite(r), r, 10.0)
 
-    def evaluate(self, X: NDArray) -> Evaluation:
+    def evaluate(self, X: Floats) -> Evaluation:
         """Sum of squared relative residuals; predictions and residuals as extras."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         y = self.predict(X)
         r = self.residuals(y)
-        extras: dict[str, NDArray] = {}
+        extras: dict[str, Floats] = {}
         for i, d in enumerate(DATA):
             extras[d.name] = y[:, i]
             extras[f"residual_{d.key}_pct"] = 100 * r[:, i]
@@ -182,7 +188,7 @@ class VcbDynamicsIdentification(Problem):
         extras["n_parameters"] = np.full(len(X), float(len(self.variables)))
         return Evaluation(f=np.sum(r * r, axis=1), g=np.zeros((len(X), 0)), extras=extras)
 
-    def findings(self, x: NDArray) -> dict[str, object]:
+    def findings(self, x: Floats) -> dict[str, object]:
         """Every model form fitted on the same data from the run's best ``x`` (p,), which
         are kept (:func:`fit_forms`), and the identifiability of the run's form at ``x``
         (:func:`identifiability`) and the band of parameter sets over the kept forms
@@ -196,41 +202,43 @@ class VcbDynamicsIdentification(Problem):
                                     **identifiability(self, x).to_json()}}
 
 
-def fit(problem: VcbDynamicsIdentification, start: NDArray, drop: int | None = None
-        ) -> NDArray:
+def fit(problem: VcbDynamicsIdentification, start: Floats, drop: int | None = None
+        ) -> Floats:
     """Least squares (scipy, trust region in log parameters, within the bounds) of the
     data, without datum ``drop`` when given; returns the parameters (p,)."""
-    from scipy.optimize import least_squares  # only here: keeps the case's import light
+    from scipy.optimize import least_squares  # lazy: module docstring
 
     keep = np.array([i != drop for i in range(len(DATA))])
     lower = np.log(np.maximum([v.lower for v in problem.variables], 1e-9))
     upper = np.log([v.upper for v in problem.variables])
 
-    def residuals(q: NDArray) -> NDArray:
-        return problem.residuals(problem.predict(np.exp(q)[None, :]))[0, keep]
+    def residuals(q: Floats) -> Floats:
+        r: Floats = problem.residuals(problem.predict(np.exp(q)[None, :]))[0, keep]
+        return r
 
-    def jacobian(q: NDArray) -> NDArray:
-        return log_jacobian(problem, np.exp(q))[keep]
+    def jacobian(q: Floats) -> Floats:
+        J: Floats = log_jacobian(problem, np.exp(q))[keep]
+        return J
 
     # a start on a zero lower bound (a mass the search drove to 0) starts at the log
     # bound's 1e-9 instead: log(0) is no start
     x0 = np.clip(np.log(np.maximum(start, np.exp(lower))), lower + 1e-9, upper - 1e-9)
-    return np.exp(least_squares(residuals, x0, jac=jacobian, bounds=(lower, upper),
-                                x_scale=1.0).x)
+    x: Floats = np.exp(least_squares(residuals, x0, jac=jacobian, bounds=(lower, upper),
+                                     x_scale=1.0).x)
+    return x
 
 
-def log_jacobian(problem: VcbDynamicsIdentification, x: NDArray, step: float = 1e-6
-                 ) -> NDArray:
+def log_jacobian(problem: VcbDynamicsIdentification, x: Floats, step: float = 1e-6
+                 ) -> Floats:
     """d residual / d log parameter at ``x`` (p,), (7, p), by central differences of
-    ``step`` in every log parameter, all 2 p simulations in one vectorised call."""
-    # a parameter at zero (a lower bound of 0) is taken at 1e-9, the log bounds' floor
-    q = np.log(np.maximum(x, 1e-9))[None, :] + step * np.vstack([np.eye(len(x)),
-                                                                  -np.eye(len(x))])
-    r = problem.residuals(problem.predict(np.exp(q)))
-    return ((r[:len(x)] - r[len(x):]) / (2 * step)).T
+    ``step`` in every log parameter (:func:`camopt.core.fitting.central_jacobian`), all
+    2 p simulations in one vectorised call. A parameter at zero (a lower bound of 0) is
+    taken at 1e-9, the log bounds' floor."""
+    return central_jacobian(lambda Q: problem.residuals(problem.predict(np.exp(Q))),
+                            np.log(np.maximum(x, 1e-9)), step)
 
 
-def leave_one_out(problem: VcbDynamicsIdentification, best: NDArray
+def leave_one_out(problem: VcbDynamicsIdentification, best: Floats
                   ) -> list[dict[str, object]]:
     """Fit without each datum in turn and predict it: one row per datum with its value,
     the prediction of the fit without it and that residual (%), and the largest residual
@@ -247,7 +255,7 @@ def leave_one_out(problem: VcbDynamicsIdentification, best: NDArray
     return rows
 
 
-def data_tolerance(config: VcbDynamicsIdentifyConfig, widened: float) -> NDArray:
+def data_tolerance(config: VcbDynamicsIdentifyConfig, widened: float) -> Floats:
     """How far each simulated datum may lie from the datum itself, (7,) in the data's
     units: the reading error (``velocity_reading_pct`` of a velocity, ``time_reading_ms``
     of a time), widened to ``widened`` (a fraction: the largest residual of the kept
@@ -256,11 +264,12 @@ def data_tolerance(config: VcbDynamicsIdentifyConfig, widened: float) -> NDArray
     targets = np.array([getattr(config, d.field) for d in DATA])
     reading = np.array([config.velocity_reading_pct / 100 * v if d.unit == "m/s"
                         else config.time_reading_ms for d, v in zip(DATA, targets)])
-    return np.maximum(reading, widened * np.abs(targets))
+    tolerance: Floats = np.maximum(reading, widened * np.abs(targets))
+    return tolerance
 
 
-def consistent_band(problem: VcbDynamicsIdentification, best: NDArray, tolerance: NDArray,
-                    samples: int, rng: np.random.Generator) -> NDArray:
+def consistent_band(problem: VcbDynamicsIdentification, best: Floats, tolerance: Floats,
+                    samples: int, rng: np.random.Generator) -> Floats:
     """Parameter sets of ``problem``'s form that predict every ADAMS datum within
     ``tolerance`` (7,) of the datum itself (the one-sided closing time only below its
     bound plus the tolerance), (k, p) with ``best`` (p,) first: from ``samples``
@@ -289,7 +298,7 @@ def consistent_band(problem: VcbDynamicsIdentification, best: NDArray, tolerance
     return np.vstack([best[None, :], members[pick]])
 
 
-def band_rows(form: ModelForm, X: NDArray, config: VcbDynamicsIdentifyConfig) -> NDArray:
+def band_rows(form: ModelForm, X: Floats, config: VcbDynamicsIdentifyConfig) -> Floats:
     """Parameter rows ``X`` (k, p) of ``form`` as ``dynamics_band`` rows (k, 8)
     (:meth:`~camopt.cases.vcb.forms.ModelForm.band_rows`)."""
     return form.band_rows(X, config)
@@ -342,7 +351,7 @@ class FormFit:
     robust draw runs over the kept forms: :func:`fit_forms`)."""
 
     form: ModelForm
-    x: NDArray
+    x: Floats
     misfit: float
     max_residual_pct: float
     residuals_pct: dict[str, float]
@@ -384,49 +393,8 @@ def fit_forms(config: VcbDynamicsIdentifyConfig, start: dict[str, float]
     return tuple(replace(f, kept=f.max_residual_pct <= limit) for f in fits)
 
 
-@dataclass(frozen=True)
-class Identifiability:
-    """What the seven data determine about a form's parameters at its fit, from the
-    Jacobian J of the relative residuals with respect to the log parameters (7, p):
-    its ``singular_values`` (descending) and condition number, the parameters'
-    ``correlations`` (p, p, from (J^T J)^-1) and the ``determined`` combinations: the
-    right singular vectors whose singular value is at least ``DETERMINED`` of the
-    largest, each a product of the parameters' powers (log-linear) with its singular
-    value; the rest (``undetermined``) move the fit by less than that."""
-
-    names: tuple[str, ...]
-    singular_values: NDArray
-    correlations: NDArray
-    determined: tuple[dict[str, float], ...]
-    undetermined: tuple[dict[str, float], ...]
-
-    DETERMINED = 0.01
-
-    def to_json(self) -> dict[str, object]:
-        s = self.singular_values
-        return {"parameters": list(self.names), "singular_values": s.tolist(),
-                "condition": float(s[0] / s[-1]) if s[-1] > 0 else float("inf"),
-                "correlations": {a: {b: float(self.correlations[i, j])
-                                     for j, b in enumerate(self.names)}
-                                 for i, a in enumerate(self.names)},
-                "determined": list(self.determined), "undetermined": list(self.undetermined)}
-
-
-def identifiability(problem: VcbDynamicsIdentification, x: NDArray) -> Identifiability:
-    """:class:`Identifiability` of ``problem``'s form at parameters ``x`` (p,)."""
-    jac = log_jacobian(problem, x)
-    _, s, vt = np.linalg.svd(jac, full_matrices=False)
-    cov = np.linalg.pinv(jac.T @ jac)
-    sd = np.sqrt(np.abs(np.diag(cov)))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        corr = cov / np.outer(sd, sd)
-
-    def combination(i: int) -> dict[str, float]:
-        v = vt[i] * np.sign(vt[i][np.argmax(np.abs(vt[i]))])  # largest exponent positive
-        return {"singular_value": float(s[i]),
-                **{f"exponent_{n}": float(c) for n, c in zip(problem.names, v)}}
-
-    determined = s >= Identifiability.DETERMINED * s[0]
-    return Identifiability(problem.names, s, corr,
-                           tuple(combination(int(i)) for i in np.flatnonzero(determined)),
-                           tuple(combination(int(i)) for i in np.flatnonzero(~determined)))
+def identifiability(problem: VcbDynamicsIdentification, x: Floats) -> Identifiability:
+    """What the seven data determine about ``problem``'s form at parameters ``x`` (p,):
+    :func:`camopt.core.fitting.identifiability` of the relative residuals' Jacobian with
+    respect to the log parameters (:func:`log_jacobian`)."""
+    return core_identifiability(log_jacobian(problem, x), problem.names)

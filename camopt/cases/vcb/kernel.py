@@ -1,32 +1,29 @@
-"""The closing's events compiled: one fused loop per row over the cam-angle nodes (numba).
+"""The closing compiled: one call per evaluation, one fused loop per row (numba).
 
-The same arithmetic as :func:`camopt.cases.vcb.dynamics.closing_state` followed by
-:func:`~camopt.cases.vcb.dynamics.events_of`, operation for operation (the work-energy
-equation before and after the contacts' touch, the touch's interpolation and plastic
-loss, :func:`~camopt.cases.vcb.dynamics.first_zero`'s Hermite scan and bisection, the
-trapezoid times, the average closing velocity over the last third of the contact stroke),
-without the (rows, nodes) temporaries numpy needs for each step: a band member is read
-in one pass over its 401 nodes. The numpy path stays the reference;
-``tests/cases/test_vcb_kernel.py`` compares the two to 1e-12 (relative) on random
-designs and at the near-balance release (torque ratio 0.999 and 1.001).
+:func:`closing_rows` computes what :func:`camopt.cases.vcb.dynamics.closing_state`
+followed by :func:`~camopt.cases.vcb.dynamics.events_of` does, with the same equations:
+the node geometry of each design (:func:`closing_geometry`: the follower law by Horner's
+rule, the four-bar and rod of :meth:`VcbModel.kinematics`, the springs' energies and
+torques, Eqs 6, 3, 23-24), then per row the release torque ratio, the free rotation
+(:func:`free_rotation`, the sinh grid and Simpson sum), the pick-up impact, the
+work-energy equation before and after the contacts' touch with the touch's plastic loss,
+the first zero of the kinetic energy (:func:`_first_zero`, Hermite scan and bisection),
+the trapezoid times, the average closing velocity over the last third of the contact
+stroke and, where asked, the least torque the cam passes on (:func:`_torque_min`).
+No (rows, nodes) temporaries: a row is read in one pass over its nodes. The numpy path
+stays the reference; ``tests/cases/test_vcb_kernel.py`` compares the two (events to
+1e-12 relative on random designs and at the near-balance release, the geometry within
+rounding, the least torque to 1e-9 of the driving torque).
 
-Why numba (``docs/design.md``): the loop is plain float arithmetic over arrays, which
+Why numba (``docs/design.md``): the loops are plain float arithmetic over arrays, which
 numba compiles from this Python source with no build step; ``cache=True`` keeps the
-machine code beside the module, so the ~1-2 s compile is paid once per install, and only
-by a command that evaluates a VCB (:mod:`camopt.cases.vcb.dynamics` imports this module
-inside :func:`~camopt.cases.vcb.dynamics.closing_events`; ``validate`` and ``show`` never
-do). Importing this module raises ImportError where numba is not installed: the caller
-then takes the numpy path.
+machine code beside the module (or in the user's cache folder), so the compile is paid
+once per install, and only by a command that evaluates a VCB
+(:func:`camopt.cases.vcb.motion.compiled` imports this module at the first evaluation;
+``validate`` and ``show`` never do). Importing this module raises ImportError where numba
+is not installed: the caller then takes the numpy path.
 
-Beside it, the free rotation from the release (:func:`free_rotation`, the sinh grid and
-Simpson sum of :func:`camopt.cases.vcb.dynamics.free_rotation`) and the first zero of the
-kinetic energy for any rows (:func:`first_zero_rows`), which the numpy path takes where
-:func:`camopt.cases.vcb.dynamics.compiled` gives this module.
-
-Inputs per design (``nd`` rows, set-major rows ``r = set * nd + design`` read design
-``r % nd``): the geometry of :func:`~camopt.cases.vcb.dynamics.closing_inputs`; per row:
-the resolved parameter columns, the free rotation's speed and time and the resistant
-energy at the gap.
+Rows are set-major: row ``r = set * nd + design`` reads design ``r % nd``.
 """
 
 from __future__ import annotations
@@ -116,10 +113,12 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
                 springs_torque: NDArray, resisting: NDArray, resisting_torque: NDArray,
                 cam: NDArray, follower_kg: NDArray, rod: NDArray, contacts: NDArray,
                 friction: NDArray, eps: NDArray, omega_free: NDArray, t_free: NDArray,
-                resisting_gap: NDArray, out: NDArray) -> None:
-    """The closing's events of every row into ``out`` (9, rows): cam contact time, touch
+                resisting_gap: NDArray, torque_min: bool, out: NDArray) -> None:
+    """The closing's events of every row into ``out`` (10, rows): cam contact time, touch
     time, touch velocity, average closing velocity, closing time, final kinetic energy,
-    touch loss, latched (1/0), reach. Geometry (nd, m) per design, the rest (rows,)."""
+    touch loss, latched (1/0), reach and, where ``torque_min``, the least torque the cam
+    passes on over the nodes it reaches (:func:`_torque_min`; else nan). Geometry (nd, m)
+    per design, the rest (rows,)."""
     nd, m = s1.shape
     rows = len(cam)
     end = theta[m - 1]
@@ -128,6 +127,8 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
     kin = np.empty(m)
     slope = np.empty(m)
     t_b = np.empty(m)
+    t_a = np.empty(m)
+    om_a = np.empty(m)
     for r in range(rows):
         i = r % nd
         moving = rod[r] + contacts[r]
@@ -136,14 +137,11 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
         j0 = c_kg + f_kg * dphi[i, 0] * dphi[i, 0] + moving * ds1[i, 0] * ds1[i, 0]
         omega0 = c_kg * omega_free[r] / j0
         kinetic0 = 0.5 * j0 * omega0 ** 2
-        for j in range(m):
-            jb = c_kg + f_kg * dphi[i, j] * dphi[i, j] + moving * ds1[i, j] * ds1[i, j]
-            ke = kinetic0 + e * (spring[i, 0] - spring[i, j]) - resisting[i, j]
-            ke -= fr * theta[j]
-            ke_b[j] = ke
-            om_b[j] = math.sqrt(max(2 * ke / jb, 0.0))
         k, w = _crossing(s1[i], gap)
         touched = k > 0
+        # the speed and time before the touch are read up to its interval (k): beyond it
+        # the after-touch speed takes over
+        limit = k + 1 if touched else m
         theta_touch = _at(theta, k, w)
         ds1_touch = _at(ds1[i], k, w)
         dphi_touch = _at(dphi[i], k, w)
@@ -159,25 +157,27 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
                                                               v_touch))
             loss = 0.5 * contacts[r] * vt ** 2
         for j in range(m):
-            if touched and j >= k:
-                kin[j] = ke_b[j] - loss
-            else:
-                kin[j] = ke_b[j]
+            ke = kinetic0 + e * (spring[i, 0] - spring[i, j]) - resisting[i, j]
+            ke -= fr * theta[j]
+            ke_b[j] = ke
+            kin[j] = ke - loss if touched and j >= k else ke
             slope[j] = (e * springs_torque[i, j] - fr) - resisting_torque[i, j]
-            # t_b's integrand; its ends below
-            t_b[j] = dtheta_du[j] / om_b[j]
+            if j < limit:  # t_b's integrand; its ends below
+                jb = c_kg + f_kg * dphi[i, j] * dphi[i, j] + moving * ds1[i, j] * ds1[i, j]
+                om_b[j] = math.sqrt(max(2 * ke / jb, 0.0))
+                t_b[j] = dtheta_du[j] / om_b[j]
         stall = _first_zero(theta, kin, slope)
         if not math.isfinite(t_free[r]):
             stall = 0.0
         # time before the touch (dynamics._cumulative_time, then + t_free)
         if dtheta_du[0] == 0:
             t_b[0] = 0.0 if om_b[0] > 0 else t_b[1]
-        if dtheta_du[m - 1] == 0:
+        if limit == m and dtheta_du[m - 1] == 0:
             t_b[m - 1] = 0.0 if om_b[m - 1] > 0 else t_b[m - 2]
         g_prev = t_b[0]
         acc = 0.0
         t_b[0] = t_free[r] + 0.0
-        for j in range(1, m):
+        for j in range(1, limit):
             g = t_b[j]
             acc += 0.5 * (g + g_prev) * du
             g_prev = g
@@ -189,16 +189,19 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
         reached = touched and not (stall <= theta_touch)
         if touched:
             ja_k = c_kg + f_kg * dphi[i, k] * dphi[i, k] + rod[r] * ds1[i, k] * ds1[i, k]
-            om_a_k = math.sqrt(max(2 * (ke_b[k] - loss) / ja_k, 0.0))
-            first_cell = (theta[k] - theta_touch) * 0.5 * (1 / omega_touch + 1 / om_a_k)
+            om_a[k] = math.sqrt(max(2 * (ke_b[k] - loss) / ja_k, 0.0))
+            first_cell = (theta[k] - theta_touch) * 0.5 * (1 / omega_touch + 1 / om_a[k])
             t_k = t_touch + first_cell
+            t_a[k] = t_k
             total = 0.0
-            g_prev = dtheta_du[k] / om_a_k
+            g_prev = dtheta_du[k] / om_a[k]
             for j in range(k + 1, m):
                 ja = c_kg + f_kg * dphi[i, j] * dphi[i, j] + rod[r] * ds1[i, j] * ds1[i, j]
-                g = dtheta_du[j] / math.sqrt(max(2 * (ke_b[j] - loss) / ja, 0.0))
+                om_a[j] = math.sqrt(max(2 * (ke_b[j] - loss) / ja, 0.0))
+                g = dtheta_du[j] / om_a[j]
                 total += 0.5 * (g + g_prev) * du
                 g_prev = g
+                t_a[j] = t_k + total
             t_end = t_k + total
         else:
             t_end = t_b[m - 1]
@@ -213,6 +216,55 @@ def band_events(theta: NDArray, dtheta_du: NDArray, du: float, gap: float,
         out[6, r] = loss
         out[7, r] = 1.0 if latched else 0.0
         out[8, r] = 1.0 if latched else (0.0 if math.isnan(stall) else stall) / end
+        if torque_min:
+            # omega and time per node as curves_of has them, in om_b and t_b
+            start = k if touched else m
+            for j in range(start, m):
+                om_b[j] = om_a[j]
+                t_b[j] = t_a[j]
+            if math.isnan(stall):
+                stalled_at = m
+            else:  # numpy.searchsorted (left): the first node at or beyond the stall
+                stalled_at = 0
+                while stalled_at < m and theta[stalled_at] < stall:
+                    stalled_at += 1
+            if not math.isfinite(t_free[r]):
+                stalled_at = 1
+            stalled_at = max(stalled_at, 1)
+            out[9, r] = _torque_min(theta, om_b, t_b, springs_torque[i], e, fr, c_kg,
+                                    stalled_at)
+        else:
+            out[9, r] = math.nan
+
+
+@njit(cache=True, error_model="numpy")
+def _torque_min(theta: NDArray, omega: NDArray, time: NDArray, springs_torque: NDArray,
+                eps: float, friction: float, cam: float, stalled_at: int) -> float:
+    """The least torque the cam passes to the roller, eps T_s - T_f - J_cam omega
+    domega/dtheta, over the nodes before ``stalled_at`` with a finite time (inf if none;
+    nan if any is nan, as numpy's min): omega domega/dtheta = 1/2 d(omega^2)/dtheta by
+    :func:`numpy.gradient`'s formulas on the uneven nodes (second order inside, one-sided
+    at the ends)."""
+    m = len(theta)
+    low = math.inf
+    for j in range(min(stalled_at, m)):
+        if not math.isfinite(time[j]):
+            continue
+        if j == 0:
+            slope = (omega[1] ** 2 - omega[0] ** 2) / (theta[1] - theta[0])
+        elif j == m - 1:
+            slope = (omega[j] ** 2 - omega[j - 1] ** 2) / (theta[j] - theta[j - 1])
+        else:
+            h1 = theta[j] - theta[j - 1]
+            h2 = theta[j + 1] - theta[j]
+            slope = (-h2 / (h1 * (h1 + h2)) * omega[j - 1] ** 2
+                     + (h2 - h1) / (h1 * h2) * omega[j] ** 2
+                     + h1 / (h2 * (h1 + h2)) * omega[j + 1] ** 2)
+        value = (eps * springs_torque[j] - friction) - cam * (0.5 * slope)
+        if math.isnan(value):
+            return math.nan
+        low = min(low, value)
+    return low
 
 
 @njit(cache=True, error_model="numpy")
@@ -252,17 +304,21 @@ def _net(turn: float, cos0: float, sin0: float, length0: float, l8: float, gx: f
 def free_rotation(start: NDArray, kc1: NDArray, kc2: NDArray, p1: NDArray, p2: NDArray,
                   eps: NDArray, friction: NDArray, inertia: NDArray, u: NDArray,
                   weights: NDArray, l8: float, gx: float, gy: float, base: float,
-                  open_length: float, out: NDArray) -> None:
+                  open_length: float, skip: NDArray, out: NDArray) -> None:
     """:func:`camopt.cases.vcb.dynamics.free_rotation`'s speed at the roller, time and
     whether the energy reaches zero on the way, per row into ``out`` (3, rows): the same
     sinh grid and Simpson sum, one row at a time (rows (rows,) each, the grid ``u`` and
-    Simpson's ``weights`` (steps + 1,))."""
+    Simpson's ``weights`` (steps + 1,)); a row where ``skip`` (the cam does not start)
+    gets no speed and an infinite time."""
     m = len(u)
     steps = m - 1
     turn = np.empty(m)
     kinetic = np.empty(m)
     torque = np.empty(m)
     for r in range(len(start)):
+        if skip[r]:
+            out[0, r], out[1, r], out[2, r] = 0.0, math.inf, 1.0
+            continue
         span = -start[r]
         a0 = base + start[r]
         cos0, sin0 = math.cos(a0), math.sin(a0)
@@ -291,3 +347,148 @@ def free_rotation(start: NDArray, kc1: NDArray, kc2: NDArray, p1: NDArray, p2: N
         out[0, r] = math.sqrt(max(2 * kinetic[m - 1] / inertia[r], 0.0))
         out[1, r] = total / (3 * steps)
         out[2, r] = 1.0 if math.isfinite(_first_zero(turn, kinetic, torque)) else 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDArray,
+                     kc: NDArray, pre: NDArray, extension: NDArray, spring_rate: NDArray,
+                     loads: NDArray, gap: float, xi: float, l2: float, theta_bo: float,
+                     out: NDArray) -> None:
+    """:func:`camopt.cases.vcb.dynamics.closing_inputs` of every design into ``out``
+    (7, nd, m): phi', s1, ds1/dtheta, the closing springs' energy and torque, the
+    resisting springs' energy V_r(s1) and torque Fr ds1/dtheta, on the nodes ``theta``
+    (m,). Per design: the law's coefficients ``A`` (nd, d + 1, by Horner's rule), the
+    linkage ``link`` (nd, 5) and ``rod_offset`` (nd,) (the four-bar of
+    :func:`camopt.mechanics.fourbar.output_motion` on its mirrored branch, the rod of
+    :meth:`VcbModel.kinematics`), spring rates ``kc`` and compressions ``pre`` (nd, 2) and
+    the loads' opening k, arm, stretch, contact k, preload and free-contact force
+    ``loads`` (6, nd) (:class:`~camopt.cases.vcb.model.Loads`); the springs' extension and
+    rate on the nodes (m,) are shared."""
+    nd, d1 = A.shape
+    m = len(theta)
+    for i in range(nd):
+        l1, l3, l4, l5, th1 = link[i, 0], link[i, 1], link[i, 2], link[i, 3], link[i, 4]
+        frame = theta_bo - th1
+        c1, s1f = math.cos(frame), math.sin(frame)
+        k24 = 2 * l2 * l4
+        k12 = 2 * l1 * l2
+        lengths = l3 ** 2 - l1 ** 2 - l4 ** 2 - l2 ** 2
+        beta = rod_offset[i] + theta_bo
+        p, q = l5 * math.cos(beta), l5 * math.sin(beta)
+        k1, k2, p1, p2 = kc[i, 0], kc[i, 1], pre[i, 0], pre[i, 1]
+        ok, arm, x0 = loads[0, i], loads[1, i], loads[2, i]
+        wk, wp, fc = loads[3, i], loads[4, i], loads[5, i]
+        y0 = 0.0
+        for j in range(m):
+            t = theta[j]
+            phi = A[i, d1 - 1]
+            dphi = (d1 - 1) * A[i, d1 - 1]
+            for k in range(d1 - 2, -1, -1):
+                phi = A[i, k] + t * phi
+                if k > 0:
+                    dphi = k * A[i, k] + t * dphi
+            angle = phi + xi
+            c2, s2 = math.cos(angle), math.sin(angle)
+            a = -k24 * c2 + 2 * l1 * l4 * c1
+            b = -k24 * s2 + 2 * l1 * l4 * s1f
+            c = k12 * c1 * c2 + k12 * s1f * s2 + lengths
+            norm = a * a + b * b
+            root = math.sqrt(norm - c * c)
+            inv = 1.0 / norm
+            c4 = (a * c + b * root) * inv  # the branch -1
+            s4 = (b * c - a * root) * inv
+            rate = (-k24 * (s2 * c4 - c2 * s4) - k12 * c1 * s2 + k12 * s1f * c2) / root
+            y = s4 * p - c4 * q
+            if j == 0:
+                y0 = y
+            s1 = y - y0
+            ds1 = (s4 * q + c4 * p) * rate * dphi
+            ext = extension[j]
+            out[0, i, j] = dphi
+            out[1, i, j] = s1
+            out[2, i, j] = ds1
+            out[3, i, j] = 0.5 * (k1 * (p1 - ext) ** 2 + k2 * (p2 - ext) ** 2)
+            out[4, i, j] = (k1 * (p1 - ext) + k2 * (p2 - ext)) * spring_rate[j]
+            stretch = x0 + arm * s1
+            # numpy's maximum and minimum: a NaN (no assembly) stays NaN
+            wipe = (s1 - gap if s1 - gap > 0.0 or math.isnan(s1) else 0.0) + wp
+            closed = gap if s1 > gap else s1
+            out[5, i, j] = (0.5 * ok * (stretch * stretch - x0 * x0)
+                            + 0.5 * wk * (wipe * wipe - wp * wp) - fc * closed)
+            force = s1 * wk + wk * (wp - gap) if s1 >= gap else -fc
+            out[6, i, j] = (force + s1 * (arm * ok * arm) + arm * ok * x0) * ds1
+
+
+@njit(cache=True, error_model="numpy")
+def closing_rows(theta: NDArray, dtheta_du: NDArray, du: float, geometry: NDArray,
+                 kc: NDArray, pre: NDArray, loads: NDArray, gap: float, params: NDArray,
+                 crank: NDArray, u: NDArray, weights: NDArray, torque_min: bool,
+                 out: NDArray) -> None:
+    """The whole closing of every row into ``out`` (12, rows): :func:`band_events`'s ten
+    rows, then the release torque ratio and the pick-up impact's loss. From each design's
+    ``geometry`` (7, nd, m: :func:`closing_geometry`, with its ``kc``, ``pre`` and
+    ``loads`` as there), per row (set-major, design ``r % nd``) with the parameters
+    ``params`` (8, rows: J_cam, J_f, m_rod, m_c, T_f, eps, the free rotation's T_f, the
+    release offset): the release torque ratio eps T_s / T_f at the release (as
+    ``rotation.release_torque_ratio``), the free rotation (:func:`free_rotation` on the
+    sinh grid ``u`` with Simpson's ``weights``; ``crank`` (7,): l8, G's x and y, the crank
+    angle at theta_c = 0, the springs' open length, the dead centre and the crank angle
+    at the roller), the plastic pick-up of the roller at rest (generalised momentum kept)
+    and the resisting springs' energy at the contacts' gap, then the driven closing."""
+    nd = geometry.shape[1]
+    rows = params.shape[1]
+    l8, gx, gy, base, open_length, dead, contact = (crank[0], crank[1], crank[2], crank[3],
+                                                    crank[4], crank[5], crank[6])
+    start = np.empty(rows)
+    row_kc = np.empty((2, rows))
+    row_pre = np.empty((2, rows))
+    resisting_gap = np.empty(rows)
+    for r in range(rows):
+        i = r % nd
+        start[r] = dead + params[7, r] - contact
+        row_kc[0, r], row_kc[1, r] = kc[i, 0], kc[i, 1]
+        row_pre[0, r], row_pre[1, r] = pre[i, 0], pre[i, 1]
+        x0 = loads[2, i]
+        stretch = x0 + loads[1, i] * gap
+        wp = loads[4, i]
+        resisting_gap[r] = (0.5 * loads[0, i] * (stretch * stretch - x0 * x0)
+                            + 0.5 * loads[3, i] * (wp * wp - wp * wp) - loads[5, i] * gap)
+    ratio = np.empty(rows)
+    skip = np.empty(rows, dtype=np.bool_)
+    for r in range(rows):
+        i = r % nd
+        # the springs' torque on the cam at rest at the release (closing_spring_geometry)
+        angle = base + start[r]
+        cos, sin = math.cos(angle), math.sin(angle)
+        qx, qy = gx - l8 * cos, gy - l8 * sin
+        length = math.hypot(qx, qy)
+        ext = length - open_length
+        rate = -(qx * (-l8 * sin) + qy * (l8 * cos)) / length
+        torque = (kc[i, 0] * (pre[i, 0] - ext) + kc[i, 1] * (pre[i, 1] - ext)) * rate
+        driving = params[5, r] * max(torque, 0.0)
+        friction = params[6, r]
+        if friction > 0:
+            ratio[r] = driving / friction
+        else:
+            ratio[r] = math.inf if driving > 0 else 0.0
+        skip[r] = not (params[7, r] > 0 and start[r] < 0 and ratio[r] > 1)
+    rotation = np.empty((3, rows))
+    free_rotation(start, row_kc[0], row_kc[1], row_pre[0], row_pre[1], params[5], params[6],
+                  params[0], u, weights, l8, gx, gy, base, open_length, skip, rotation)
+    omega_free = np.empty(rows)
+    t_free = np.empty(rows)
+    for r in range(rows):
+        i = r % nd
+        stuck = skip[r] or rotation[2, r] > 0 or not math.isfinite(rotation[1, r])
+        omega_free[r] = 0.0 if stuck else rotation[0, r]
+        t_free[r] = math.inf if stuck else rotation[1, r]
+        cam = params[0, r]
+        dphi0, ds1_0 = geometry[0, i, 0], geometry[2, i, 0]
+        j0 = cam + params[1, r] * dphi0 * dphi0 + (params[2, r] + params[3, r]) * ds1_0 * ds1_0
+        omega0 = cam * omega_free[r] / j0
+        out[10, r] = ratio[r]
+        out[11, r] = 0.5 * cam * omega_free[r] ** 2 - 0.5 * j0 * omega0 ** 2
+    band_events(theta, dtheta_du, du, gap, geometry[0], geometry[1], geometry[2], geometry[3],
+                geometry[4], geometry[5], geometry[6], params[0], params[1], params[2],
+                params[3], params[4], params[5], omega_free, t_free, resisting_gap,
+                torque_min, out)

@@ -1,4 +1,7 @@
-"""12 kV VCB closing mechanism, the physics: geometry, kinematics, forces and contact.
+"""12 kV VCB closing mechanism, the physics: geometry, kinematics and forces (the loads at
+the rod: :mod:`camopt.cases.vcb.loads`; the cam-roller contact:
+:mod:`camopt.cases.vcb.contact`; the follower law's zeros and extremes:
+:mod:`camopt.cases.vcb.law`).
 
 Kang, Huang & Yang (2023), Machines 11:150 (``shared/papers/000_*.txt``).
 
@@ -16,15 +19,29 @@ Every array is (population, cam position); nothing loops over individuals.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+import functools
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from camopt.cases.vcb.config import VcbConfig
+from camopt.cases.vcb.contact import Contact, peak_stress, refined_min, row_max
+from camopt.cases.vcb.law import (
+    follower_dwell,
+    phi_max,
+    polynomial_value,
+    rate_zeros,
+)
+from camopt.cases.vcb.loads import Loads
 from camopt.errors import ConfigError
 from camopt.mechanics import cam, fourbar, hertz
 from camopt.units import DEG, GPA, MM, N_PER_MM
+
+__all__ = [
+    "Contact", "ForceBalance", "Kinematics", "Loads", "VcbModel", "follower_dwell",
+    "phi_max", "polynomial_value", "rate_zeros", "refined_min", "row_max", "unassembled",
+]
 
 REFERENCE_A0_TOLERANCE_DEG = 0.05
 """Largest difference (deg) between a reference cam's follower angle at theta_c = 0 (its
@@ -83,73 +100,6 @@ class ForceBalance:
         return self.loads.resistant_force(self.s1)
 
 
-@dataclass(frozen=True)
-class Contact:
-    """Cam-roller contact along the stroke, (n, m): pitch curve and its derivatives (m,
-    Eqs 9, 12), the profile's radius of curvature (m, Eq 15), normal force (N, Eq 19) and
-    the Hertz peak pressure and maximum shear stress (Pa, Eqs 27-31)."""
-
-    xp: NDArray
-    yp: NDArray
-    dxp: NDArray
-    dyp: NDArray
-    curvature: NDArray
-    normal_force: NDArray
-    sigma: NDArray
-    tau: NDArray
-
-
-@dataclass(frozen=True)
-class Loads:
-    """Load model at the rod: resisting springs, free-contact force, efficiency (SI). The
-    springs' rates may be (n, 1) columns, one per design (springs made to a tolerance),
-    the efficiency (n,) (Eq 26's surplus)."""
-
-    opening_k: NDArray | float
-    opening_arm: NDArray | float
-    opening_stretch_open: NDArray | float  # opening-spring stretch in the opened state
-    wipe_k: NDArray | float  # all contact springs together
-    wipe_preload: NDArray | float  # contact-spring compression at touch
-    gap: float
-    free_contact: NDArray | float
-    efficiency: NDArray | float
-
-    def tiled(self, sets: int) -> Loads:
-        """The loads of n designs for ``sets`` parameter sets per design (sets x n rows,
-        set-major, as :meth:`~camopt.cases.vcb.dynamics.MotionParameters.repeat`): the
-        per-design columns repeated; shared values unchanged."""
-        def tile(v: NDArray | float) -> NDArray | float:
-            return np.tile(v, (sets,) + (1,) * (np.ndim(v) - 1)) if np.ndim(v) else v
-        return replace(self, **{f.name: tile(getattr(self, f.name))  # type: ignore[arg-type]
-                                for f in fields(self)})
-
-    def resistant_force(self, s1: NDArray) -> NDArray:
-        """General resistant force Fr (Eq 24) at rod travel s1 (N)."""
-        arm_k = self.opening_arm * self.opening_k  # coefficients first: few full-size ops
-        # contact springs once the contacts touch, the free-contact force before
-        touching = np.multiply(s1, self.wipe_k)
-        touching += self.wipe_k * (self.wipe_preload - self.gap)
-        force = np.where(s1 >= self.gap, touching, -self.free_contact)
-        opening = np.multiply(s1, arm_k * self.opening_arm, out=touching)
-        opening += arm_k * self.opening_stretch_open
-        force += opening
-        return force
-
-    def resistant_energy(self, s1: NDArray) -> NDArray:
-        """Work done against Fr from the opened position to rod travel s1 (J), exactly:
-        Fr depends on s1 alone, so its work is a potential difference (Eqs 23, 24) and
-        needs no sampling. Opening spring 1/2 k ((x0 + r s1)^2 - x0^2) with r = r7/r6;
-        contact springs 1/2 k_w ((s1 - gap + p)^2 - p^2) after touch; the free-contact
-        force -F_fc min(s1, gap) before it."""
-        s1 = np.asarray(s1, dtype=float)
-        x0 = self.opening_stretch_open
-        stretch = x0 + self.opening_arm * s1
-        energy = 0.5 * self.opening_k * (stretch * stretch - x0 * x0)
-        wipe = np.maximum(s1 - self.gap, 0.0) + self.wipe_preload
-        energy = energy + 0.5 * self.wipe_k * (wipe * wipe - self.wipe_preload**2)
-        return energy - self.free_contact * np.minimum(s1, self.gap)
-
-
 class VcbModel:
     """Geometry and loads of the VCB mechanism in SI, vectorised over designs."""
 
@@ -183,6 +133,7 @@ class VcbModel:
         # where the cam meets the roller, QOX + theta0 (Sec 2.2 Step 8)
         self.dead_centre = float(np.arctan2(self.G[1], self.G[0]))
         self.contact_crank_angle = (c.preset_qox_deg + c.theta0_deg) * DEG
+        self._graded: dict[int, tuple[NDArray, NDArray, NDArray]] = {}
 
     # ---- geometry ---------------------------------------------------------------
     def closing_spring_geometry(self, theta_c: NDArray, pre_rotation: float | None = None
@@ -206,6 +157,24 @@ class VcbModel:
         q_open = l8 * np.array([np.cos(c.preset_qox_deg * DEG), np.sin(c.preset_qox_deg * DEG)])
         rate = -(gx * (-l8 * sin) + gy * (l8 * cos)) / length
         return length - np.hypot(*(self.G - q_open)), rate
+
+    def graded_springs(self, steps: int) -> tuple[NDArray, NDArray, NDArray]:
+        """The closing's graded cam-angle grid on ``steps`` intervals
+        (:func:`camopt.cases.vcb.locate.graded_grid`) with the springs' extension and
+        rate there (:meth:`closing_spring_geometry`), (steps + 1,) each; computed once
+        per step count."""
+        if steps not in self._graded:
+            from camopt.cases.vcb.locate import graded_grid  # locate imports no model
+
+            theta = graded_grid(self.theta_c[-1], steps)[0]
+            self._graded[steps] = (theta, *self.closing_spring_geometry(theta))
+        return self._graded[steps]
+
+    @functools.cached_property
+    def release_crank(self) -> NDArray:
+        """:meth:`spring_crank`'s five numbers, then the dead centre's and the roller
+        contact's crank angles (rad): what the compiled free rotation reads, (7,)."""
+        return np.array([*self.spring_crank(), self.dead_centre, self.contact_crank_angle])
 
     def spring_crank(self) -> tuple[float, float, float, float, float]:
         """The closing springs' crank as numbers: l8 (m), G's x and y (m), the crank angle
@@ -411,149 +380,9 @@ class VcbModel:
         return Contact(xp, yp, dxp, dyp, rho, fn, sigma, tau)
     def peak_stress(self, A: NDArray, f: cam.Follower, torque: NDArray,
                     zeros: NDArray | None = None) -> NDArray:
-        """Peak Hertz pressure over the stroke per design (Eqs 15, 19, 27-30), the search's
-        fast path: sigma_max = sqrt(max(Fn (1/rho + 1/rf)) E_e / (2 pi L)), one square
-        root per design instead of per sample; no Hertz contact counts as infinite, and so
-        does a follower that dwells inside the stroke (phi' = 0: Fn unbounded). The
-        sampled extreme is refined by a parabola (:func:`refined_min`), so the value does
-        not depend on the sample count. ``A`` (n, 4) are the cubic's coefficients.
-        (float32 was tried and rejected: cancellation near a dwell cost 5 % in sigma.)"""
-        c = self.c
-        l2, l6, rf = self.l2, self.l6, self.rf
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            # in place where possible (hot path: fewer bytes through the cache)
-            w = np.multiply(f.dphi, -l2)
-            w += l2  # l2 (1 - phi')
-            lc = np.multiply(f.cos_a, l6)
-            v = np.subtract(w, lc)  # w - l6 cos
-            # |dp/dtheta|^2 of the pitch curve (Eq 12), Eq 15's numerator base
-            speed_sq = np.subtract(v, lc, out=lc)
-            speed_sq *= w
-            speed_sq += l6 * l6
-            # Eq 15's denominator, rewritten: speed_sq - phi' w v - l2 l6 phi'' sin
-            den = np.multiply(f.ddphi, f.sin_a)
-            den *= -(l2 * l6)
-            den += speed_sq
-            w *= f.dphi
-            w *= v
-            den -= w
-            # with rho_p = |dp|^3 / den (Eq 15) and rho = rho_p - rf, Fn (1/rho + 1/rf)
-            # (Eqs 19, 28, p . dp = l6 l2 sin phi') = |T| |dp|^4 / (|p . dp| rf gap),
-            # gap = (rho_p - rf) den; Hertz contact needs 1/rho + 1/rf > 0: gap > 0.
-            # Its reciprocal is minimised, so a gap <= 0 anywhere shows as a minimum <= 0
-            gap = np.sqrt(speed_sq, out=v)
-            gap *= speed_sq
-            den *= rf
-            gap -= den
-            r = np.multiply(f.sin_a, f.dphi, out=den)
-            np.abs(r, out=r)
-            r *= gap
-            np.square(speed_sq, out=speed_sq)
-            speed_sq *= np.abs(torque, out=gap)
-            r /= speed_sq
-            low = refined_min(r)
-            # where p . dp = l6 l2 sin(xi + phi) phi' vanishes inside the stroke the common
-            # normal passes through O: the arm of Fn is zero and Fn = T / arm unbounded
-            # whatever the grid; phi' = 0 is found exactly, sin(xi + phi) = 0 by a sign
-            # change between samples (the swing would have to pass pi twice in one step)
-            dwell = np.isfinite(follower_dwell(A, self.theta_c[-1], zeros))
-            dwell |= np.any(f.sin_a[:, 1:] * f.sin_a[:, :-1] <= 0, axis=1)
-            low[dwell] = 0.0
-            top = np.where(low > 0, 1 / (low * ((l6 * l2) * rf)), np.inf)  # NaN too
-        e_eq = hertz.equivalent_modulus(c.cam_modulus_gpa * GPA, c.poisson,
-                                        c.cam_modulus_gpa * GPA, c.poisson)
-        return np.sqrt(top * e_eq / (2 * np.pi * c.contact_length_mm * MM))
-
-
-def refined_min(r: NDArray) -> NDArray:
-    """Row minimum of samples on a uniform grid, refined by the parabola through the
-    smallest sample and its neighbours (error O(h^3) for a smooth interior minimum, so the
-    peak stress does not depend on the sample count); end samples are exact."""
-    low = np.min(r, axis=1)
-    m = r.shape[1]
-    if m < 3:
-        return low
-    rows = np.arange(len(r))
-    j = np.clip(np.argmin(r, axis=1), 1, m - 2)
-    r0, r1, r2 = r[rows, j - 1], r[rows, j], r[rows, j + 1]
-    curv = r0 - 2 * r1 + r2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        vertex = r1 - (r2 - r0) ** 2 / (8 * curv)
-    interior = (curv > 0) & (r1 <= r0) & (r1 <= r2)
-    return np.where(interior & np.isfinite(vertex), np.minimum(low, vertex), low)
-
-
-def rate_zeros(A: NDArray, end: float) -> NDArray:
-    """Zeros in [0, end] of the follower's rate phi' = a1 + 2 a2 t + 3 a3 t^2 (+ 4 a4 t^3
-    + ...; Eq 12), (n, d - 1) in ascending order for coefficient rows ``A`` (n, d + 1),
-    NaN where there is none. The cubic's (d = 3) are exact, from the quadratic formula;
-    a higher degree's are the real eigenvalues of phi''s companion matrices (one stacked
-    ``numpy.linalg.eigvals`` call; a root counts as real within 1e-9 of its size)."""
-    if A.shape[1] > 4:
-        return _polynomial_rate_zeros(A, end)
-    c0, c1, c2 = A[:, 1], 2 * A[:, 2], 3 * A[:, 3]
-    roots = np.empty((len(A), 2))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        disc = np.sqrt(c1 * c1 - 4 * c2 * c0)
-        inv = 0.5 / c2
-        np.multiply(-c1 - disc, inv, out=roots[:, 0])
-        np.multiply(-c1 + disc, inv, out=roots[:, 1])
-        flat = np.abs(c2) <= 1e-12 * (np.abs(c1) + np.abs(c0))  # phi' linear
-        if flat.any():
-            roots[flat] = (-c0[flat] / c1[flat])[:, None]
-    roots[~((roots >= 0) & (roots <= end))] = np.nan
-    roots.sort(axis=1)  # NaN last
-    return roots
-
-
-def _polynomial_rate_zeros(A: NDArray, end: float) -> NDArray:
-    """:func:`rate_zeros` for degree d >= 4: phi' has degree d - 1. Its coefficients are
-    scaled to theta / end (roots in [0, 1]) so the companion matrix is well conditioned;
-    a row whose leading coefficient vanishes (relative 1e-12) is solved at the degree
-    below it by the same route, down to the linear case."""
-    n, d = len(A), A.shape[1] - 1
-    k = np.arange(1, d + 1)
-    c = A[:, 1:] * k * end ** (k - 1)  # phi' in u = theta / end: sum c_j u^j, j = 0..d-1
-    roots = np.full((n, d - 1), np.nan)
-    scale = np.abs(c).max(axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        for deg in range(d - 1, 0, -1):  # degree of phi' actually present
-            lead = np.abs(c[:, deg]) > 1e-12 * scale
-            rows = lead & np.all(np.abs(c[:, deg + 1:]) <= 1e-12 * scale[:, None], axis=1)
-            if not rows.any():
-                continue
-            comp = np.zeros((int(rows.sum()), deg, deg))
-            comp[:, 0, :] = -c[rows, deg - 1::-1] / c[rows, deg:deg + 1]
-            comp[:, np.arange(1, deg), np.arange(deg - 1)] = 1.0
-            z = np.linalg.eigvals(comp) if deg > 1 else comp[:, :, 0]
-            real = np.abs(z.imag) <= 1e-9 * np.maximum(1.0, np.abs(z))
-            u = np.where(real & (z.real >= 0) & (z.real <= 1), z.real, np.nan)
-            roots[rows, :deg] = u * end
-    roots.sort(axis=1)  # NaN last
-    return roots
-
-
-def follower_dwell(A: NDArray, end: float, zeros: NDArray | None = None) -> NDArray:
-    """First cam angle in [0, end] where phi' vanishes (rad), NaN where it does not."""
-    return (rate_zeros(A, end) if zeros is None else zeros)[:, 0]
-
-
-def phi_max(A: NDArray, end: float, zeros: NDArray | None = None) -> NDArray:
-    """Largest follower swing over 0 <= theta_c <= end (rad), exactly: the law's value at
-    the ends and at the zeros of phi' (from :func:`rate_zeros`, computed if not given)."""
-    zeros = rate_zeros(A, end) if zeros is None else zeros
-    t = np.empty((len(A), 2 + zeros.shape[1]))
-    t[:, 0], t[:, 1], t[:, 2:] = 0.0, end, zeros
-    return np.nanmax(polynomial_value(A, t), axis=1)
-
-
-def polynomial_value(A: NDArray, t: NDArray) -> NDArray:
-    """The follower law's value phi(t) (rad) for coefficient rows ``A`` (n, d + 1) at
-    cam angles ``t`` (n, j) or (j,) rad, by Horner's rule."""
-    values = np.broadcast_to(A[:, -1:], np.broadcast_shapes((len(A), 1), np.shape(t)))
-    for k in range(A.shape[1] - 2, -1, -1):
-        values = A[:, k:k + 1] + t * values
-    return values
+        """Peak Hertz pressure over the stroke per design, the search's fast path
+        (:func:`camopt.cases.vcb.contact.peak_stress`)."""
+        return peak_stress(self, A, f, torque, zeros)
 
 
 def unassembled(cos4: NDArray, rate: NDArray) -> NDArray:
@@ -566,9 +395,3 @@ def unassembled(cos4: NDArray, rate: NDArray) -> NDArray:
         frac = np.isnan(cos4[rows]).mean(axis=1)
         g[rows] = np.where(frac > 0, frac, -1.0)
     return g
-
-
-def row_max(a: NDArray) -> NDArray:
-    """Row maximum where NaN (no valid Hertz contact) counts as infinite."""
-    top = np.max(a, axis=1)  # NaN propagates through max
-    return np.where(np.isnan(top), np.inf, top)

@@ -1,6 +1,8 @@
 """``camopt calibrate`` for the VCB case: the request read into curves and designs, the
-calibration run (:mod:`camopt.cases.vcb.calibrate`) and its report (JSON, text lines and
-the case fragment ``--out`` writes).
+calibration run (:mod:`camopt.cases.vcb.calibrate`) and the case's parts of its report
+(:class:`~camopt.core.calibration.Calibrated`: what its curves read and its designs are
+predicted to do, and the case fragment ``--out`` writes);
+:mod:`camopt.reporting.calibration_report` makes the report of it.
 
 Per-curve settings (``--set KEY=VALUE`` after a ``--curve``) name the curve's design where
 it is not the case's reference design: ``kc1_n_per_mm``, ``kc2_n_per_mm`` (the closing
@@ -20,17 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from camopt.cases.vcb.calibrate import (
-    KEEP_RATIO,
-    RMS_RATIO_LIMIT,
-    STRUCTURE_Z_LIMIT,
-    CurveCase,
-    Design,
-    FormFit,
-    Verdict,
-    calibrate,
-    verdict,
-)
+from camopt.cases.vcb.calibrate import CurveCase, FormFit, calibrate
+from camopt.cases.vcb.calibration_model import Design
+from camopt.cases.vcb.calibration_verdict import verdict
 from camopt.cases.vcb.cam_points import read_cam_points
 from camopt.cases.vcb.config import VcbConfig
 from camopt.cases.vcb.curves import (
@@ -43,22 +37,14 @@ from camopt.cases.vcb.curves import (
 from camopt.cases.vcb.forms import BAND_COLUMNS, CURVE_FORM_NAMES, CURVE_FORMS, get_form
 from camopt.cases.vcb.model import VcbModel
 from camopt.config.models import CaseConfig, toml_comment, toml_string
-from camopt.core.calibration import CalibrationRequest, FittedCurve
+from camopt.core.calibration import CalibrationRequest, FittedCurve, ModelFit, Verdict
+from camopt.core.fitting import INTERVALS, KEEP_RULE
 from camopt.errors import ConfigError
 from camopt.units import DEG, MM, MS, N_PER_MM
 
 DESIGN_KEYS = ("kc1_n_per_mm", "kc2_n_per_mm", "a1", "a2", "a3", "cam_points", "label")
 CURVE_KEYS = (*DESIGN_KEYS, "latch_delay_ms")
 REFERENCE_LABEL = "reference"
-INTERVALS = ("profile likelihood, 95 % (chi2(1) / 2 = 1.92 times the reduced chi-square "
-             "rise of the robust cost)")
-LINEARISED = ("linearised, 95 % (+-1.96 standard deviations of (J^T J)^-1 s^2 in the fitted "
-              "coordinates): a form not kept is not profiled")
-KEEP_RULE = (f"kept: RMS misfit at most {KEEP_RATIO:g} x the best form's or the curves' "
-             "noise, whichever is larger")
-EXPLAINS_RULE = (f"explains: kept, residual RMS at most {RMS_RATIO_LIMIT:g} x the noise "
-                 f"and Durbin-Watson not below 2 by more than {STRUCTURE_Z_LIMIT:g} "
-                 "standard errors")
 
 
 def _settings(items: Sequence[str], keys: Sequence[str], where: str
@@ -122,7 +108,7 @@ def design_of(config: VcbConfig, model: VcbModel, settings: dict[str, str], wher
     return Design(label, a, kc * N_PER_MM)
 
 
-def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport:
+def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibration:
     """Read the curves, calibrate every requested form, predict the designs."""
     assert isinstance(config, VcbConfig)
     if not request.curves:
@@ -157,7 +143,7 @@ def run(config: CaseConfig, request: CalibrationRequest) -> VcbCalibrationReport
         unique.setdefault(d.label, d)
     forms = [get_form(f) for f in dict.fromkeys(request.forms)] or list(CURVE_FORMS)
     fits = calibrate(config, curves, forms, list(unique.values()), points)
-    return VcbCalibrationReport(fits, used, config)
+    return VcbCalibration(fits, used, config)
 
 
 def stroke(model: VcbModel, design: Design) -> float:
@@ -178,126 +164,85 @@ def _quantities(q: AnalyserQuantities) -> dict[str, Any]:
 
 
 @dataclass(frozen=True)
-class VcbCalibrationReport:
-    """The fits of every form (:class:`~camopt.core.calibration.CalibrationReport`) and
-    the case they calibrate."""
+class VcbCalibration:
+    """The fits of every form (:class:`~camopt.core.calibration.Calibrated`) and the case
+    they calibrate: velocity calculation points, the config and the curves' own notes."""
 
     fits: tuple[FormFit, ...]
     points: VelocityPoints
     config: VcbConfig
     notes: tuple[str, ...] = ()
+    unit: tuple[str, float] = ("mm", MM)
 
-    @property
     def verdict(self) -> Verdict:
-        """Whether a form explains the curves (:func:`~camopt.cases.vcb.calibrate.
-        verdict`), with the curves' own warnings (``notes``) among its warnings."""
+        """Whether a form explains the curves
+        (:func:`~camopt.cases.vcb.calibration_verdict.verdict`), with the curves' own
+        warnings (``notes``) among its warnings."""
         v = verdict(self.fits, self.config.contact_gap_mm * MM)
         return Verdict(v.explained, v.forms, v.headline, (*self.notes, *v.warnings))
 
-    def to_json(self) -> dict[str, Any]:
-        forms = []
-        for f in self.fits:
-            names = [p.name for p in f.parameters]
-            t = f.residuals
-            delay = _delay_ms(f)
-            forms.append({
-                "form": f.form, "description": f.description, "rms_mm": f.rms / MM,
-                "kept": f.kept, "kept_note": f.kept_note, "explains": f.explains,
-                "noise_mm": None if t is None else t.noise / MM,
-                "rms_ratio": None if t is None else t.rms_ratio,
-                "durbin_watson": None if t is None else t.durbin_watson,
-                "structure_z": None if t is None else t.structure_z,
-                "intervals": INTERVALS if f.intervals == "profile" else LINEARISED,
-                "parameters": [{"name": p.name, "unit": p.unit, "value": p.value,
-                                "low": p.low, "high": p.high, "identified": p.identified,
-                                "at_bound": p.at_bound}
-                               for p in f.parameters],
-                "correlation": {"names": names, "matrix": np.round(f.correlation, 4).tolist()},
-                "curves": [{"file": c.source, "design": c.design,
-                            "latch_delay_ms": c.latch_delay / MS, "rms_mm": c.rms / MM,
-                            "residual_max_mm": float(np.max(np.abs(c.fitted - c.measured)))
-                            / MM, "samples": len(c.time),
-                            "measured": _quantities(c.measured_quantities),
-                            "fitted": _quantities(c.fitted_quantities)} for c in f.curves],
-                "predictions": [{"design": p.design,
-                                 "closing_velocity_m_s": {"value": p.closing_velocity,
-                                                          "low": p.closing_velocity_low,
-                                                          "high": p.closing_velocity_high},
-                                 "touch_time_from_release_ms": {
-                                     "value": p.touch_time / MS, "low": p.touch_time_low / MS,
-                                     "high": p.touch_time_high / MS},
-                                 "closing_time_ms": None if delay is None else {
-                                     "value": delay + p.touch_time / MS,
-                                     "low": delay + p.touch_time_low / MS,
-                                     "high": delay + p.touch_time_high / MS}}
-                                for p in f.predictions],
-            })
-        v = self.verdict
-        return {"verdict": "explained" if v.explained else "not explained",
-                "verdict_line": v.headline, "explained_by": list(v.forms),
-                "warnings": list(v.warnings),
-                "velocity_points_mm": [self.points.low / MM, self.points.high / MM],
-                "keep_rule": KEEP_RULE, "explains_rule": EXPLAINS_RULE,
-                "kept_forms": [f.form for f in self.fits if f.kept], "forms": forms}
+    def head(self) -> tuple[dict[str, Any], str]:
+        """The contact velocity's calculation points (mm of travel)."""
+        return ({"velocity_points_mm": [self.points.low / MM, self.points.high / MM]},
+                f"contact velocity between {self.points.low / MM:.3g} and "
+                f"{self.points.high / MM:.3g} mm of travel")
 
-    def lines(self) -> list[str]:
-        v = self.verdict
-        out = [v.headline] + [f"warning: {w}" for w in v.warnings] + [
-            "", f"contact velocity between {self.points.low / MM:.3g} and "
-            f"{self.points.high / MM:.3g} mm of travel; intervals: {INTERVALS}", "",
-            f"{'model form':<32}{'RMS mm':>10}{'x noise':>9}{'D-W':>7}  kept  explains",
-        ]
-        for f in self.fits:
-            t = f.residuals
-            ratio = "" if t is None else f"{f.rms / t.noise:>9.2f}{t.durbin_watson:>7.2f}"
-            out.append(f"{f.form:<32}{f.rms / MM:>10.4f}{ratio}  {'yes ' if f.kept else 'no  '}"
-                       f"  {'yes' if f.explains else 'no'}")
-        out += [f"({KEEP_RULE}; {EXPLAINS_RULE})"]
-        for f in self.fits:
-            out += ["", f"form {f.form}: {f.description}",
-                    f"  RMS misfit {f.rms / MM:.4f} mm over {len(f.curves)} curve(s); "
-                    f"{'kept' if f.kept else (f.kept_note or 'NOT kept')}"
-                    + ("" if f.intervals == "profile" else f"; intervals {LINEARISED}"),
-                    f"  {'parameter':<22}{'value':>12}{'low':>12}{'high':>12}  identified"]
-            for p in f.parameters:
-                out.append(f"  {p.name:<22}{p.value:>12.5g}{p.low:>12.5g}{p.high:>12.5g}  "
-                           f"{_identified(p.identified, f.kept)}"
-                           + ("  AT SEARCH BOUND" if p.at_bound else ""))
-            names = [p.name for p in f.parameters]
-            k = len(names)
-            pairs = sorted(((abs(f.correlation[i, j]), names[i], names[j], f.correlation[i, j])
-                            for i in range(k) for j in range(i + 1, k)), reverse=True)[:3]
-            out.append("  strongest correlations: " + "; ".join(
-                f"{a} / {b} {c:+.3f}" for _, a, b, c in pairs))
-            for c in f.curves:
-                out.append(f"  curve {c.source} ({c.design}): RMS {c.rms / MM:.4f} mm, largest "
-                           f"residual {np.max(np.abs(c.fitted - c.measured)) / MM:.4f} mm, "
-                           f"latch delay {c.latch_delay / MS:.3f} ms")
-                out += _side_by_side(c.measured_quantities, c.fitted_quantities)
-            delay = _delay_ms(f)
-            zero = 0.0 if delay is None else delay
-            which = ("touch from the release" if delay is None else
-                     f"closing time: command to touch, latch delay {delay:.3f} ms")
-            out.append(f"  {'prediction':<22}{'v_close m/s':>12}{'low':>8}{'high':>8}"
-                       f"{'closing ms' if delay is not None else 't_touch ms':>12}{'low':>8}"
-                       f"{'high':>8}  ({which})")
-            for d in f.predictions:
-                out.append(f"  {d.design:<22}{d.closing_velocity:>12.4f}"
-                           f"{d.closing_velocity_low:>8.4f}{d.closing_velocity_high:>8.4f}"
-                           f"{zero + d.touch_time / MS:>12.3f}"
-                           f"{zero + d.touch_time_low / MS:>8.3f}"
-                           f"{zero + d.touch_time_high / MS:>8.3f}")
-        return out + ["", v.headline]
+    def details(self, fit: ModelFit) -> tuple[dict[str, Any], list[str]]:
+        """A form's curves (the analyser's quantities measured and fitted) and predictions
+        (closing velocity, touch time, closing time from the command)."""
+        assert isinstance(fit, FormFit)
+        f = fit
+        delay = _delay_ms(f)
+        data = {
+            "curves": [{"file": c.source, "design": c.design,
+                        "latch_delay_ms": c.latch_delay / MS, "rms_mm": c.rms / MM,
+                        "residual_max_mm": float(np.max(np.abs(c.fitted - c.measured)))
+                        / MM, "samples": len(c.time),
+                        "measured": _quantities(c.measured_quantities),
+                        "fitted": _quantities(c.fitted_quantities)} for c in f.curves],
+            "predictions": [{"design": p.design,
+                             "closing_velocity_m_s": {"value": p.closing_velocity,
+                                                      "low": p.closing_velocity_low,
+                                                      "high": p.closing_velocity_high},
+                             "touch_time_from_release_ms": {
+                                 "value": p.touch_time / MS, "low": p.touch_time_low / MS,
+                                 "high": p.touch_time_high / MS},
+                             "closing_time_ms": None if delay is None else {
+                                 "value": delay + p.touch_time / MS,
+                                 "low": delay + p.touch_time_low / MS,
+                                 "high": delay + p.touch_time_high / MS}}
+                            for p in f.predictions]}
+        out = []
+        for c in f.curves:
+            out.append(f"  curve {c.source} ({c.design}): RMS {c.rms / MM:.4f} mm, largest "
+                       f"residual {np.max(np.abs(c.fitted - c.measured)) / MM:.4f} mm, "
+                       f"latch delay {c.latch_delay / MS:.3f} ms")
+            out += _side_by_side(c.measured_quantities, c.fitted_quantities)
+        zero = 0.0 if delay is None else delay
+        which = ("touch from the release" if delay is None else
+                 f"closing time: command to touch, latch delay {delay:.3f} ms")
+        out.append(f"  {'prediction':<22}{'v_close m/s':>12}{'low':>8}{'high':>8}"
+                   f"{'closing ms' if delay is not None else 't_touch ms':>12}{'low':>8}"
+                   f"{'high':>8}  ({which})")
+        for d in f.predictions:
+            out.append(f"  {d.design:<22}{d.closing_velocity:>12.4f}"
+                       f"{d.closing_velocity_low:>8.4f}{d.closing_velocity_high:>8.4f}"
+                       f"{zero + d.touch_time / MS:>12.3f}"
+                       f"{zero + d.touch_time_low / MS:>8.3f}"
+                       f"{zero + d.touch_time_high / MS:>8.3f}")
+        return data, out
 
     def curves(self) -> tuple[FittedCurve, ...]:
+        """Every form's fit of every curve."""
         return tuple(FittedCurve(f.form, c.source, c.design, c.time, c.measured, c.fitted)
                      for f in self.fits for c in f.curves)
 
     def fragment(self, extends: str) -> str:
+        """TOML text extending the case with the kept form of least misfit's values."""
         kept = [f for f in self.fits if f.kept] or list(self.fits)
         best = min(kept, key=lambda f: f.rms)
         form = get_form(best.form)
-        v = self.verdict
+        v = self.verdict()
         first = ([] if v.explained else [
             "# NOT EXPLAINED: no model form fits these curves to their noise; the values "
             "below are the best form's all the same (written with --allow-unexplained)",
@@ -344,6 +289,8 @@ class VcbCalibrationReport:
         return "\n".join(lines) + "\n"
 
 
+
+
 def _delay_ms(fit: FormFit) -> float | None:
     """The latch delay (ms) of a fit's predictions: the curves' (fitted, shared, or
     measured), None where measured delays differ between curves."""
@@ -364,12 +311,6 @@ def _band_rows(best: FormFit, kept: Sequence[FormFit], config: VcbConfig
         pick = np.unique(np.r_[0, np.argmin(band, axis=0), np.argmax(band, axis=0)])
         rows += get_form(fit.form).band_rows(band[pick], config).tolist()
     return rows[:64]
-
-
-def _identified(identified: bool, kept: bool) -> str:
-    if not kept:
-        return "- (form not kept)"
-    return "yes" if identified else "NO (not to +-5 %)"
 
 
 def _side_by_side(m: AnalyserQuantities, s: AnalyserQuantities) -> list[str]:
