@@ -175,8 +175,10 @@ def test_show_and_runs_of_a_vcb_archive_load_no_model_numba_nor_scipy(command: s
     assert code in (0, None)
     assert "camopt.cases.vcb.config" in modules  # the probe sees the case being read
     vcb = {m for m in modules if m.startswith("camopt.cases.vcb.")}
-    assert vcb <= {"camopt.cases.vcb.config", "camopt.cases.vcb.paper",
-                   "camopt.cases.vcb.requirements"}, sorted(vcb)
+    # the case's config models (identify_config: the identifications' [case], registered
+    # with the package), its paper values and requirements: data, no model
+    assert vcb <= {"camopt.cases.vcb.config", "camopt.cases.vcb.identify_config",
+                   "camopt.cases.vcb.paper", "camopt.cases.vcb.requirements"}, sorted(vcb)
     assert not {m.split(".")[0] for m in modules} & {"scipy", "numba", "llvmlite"}
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, fields, replace
-from typing import TypeVar
+from typing import TypeVar, cast
 
 import numpy as np
 
@@ -131,7 +131,7 @@ def rows_of(value: _Rows, rows: Ints, total: int) -> _Rows:
     ``total`` rows: every array whose first axis has ``total`` rows is indexed, the rest
     (one value for every row) kept."""
     if isinstance(value, np.ndarray):
-        return value[rows] if value.ndim and len(value) == total else value  # type: ignore[return-value]
+        return cast(_Rows, value[rows]) if value.ndim and len(value) == total else value
     return replace(value, **{f.name: rows_of(getattr(value, f.name), rows, total)  # type: ignore[type-var]
                              for f in fields(value)  # type: ignore[arg-type]
                              if isinstance(getattr(value, f.name), np.ndarray)})
