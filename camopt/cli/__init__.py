@@ -5,6 +5,7 @@ The command modules are imported when the application's commands are first asked
 
 from __future__ import annotations
 
+import gc
 import os
 import sys
 import warnings
@@ -30,6 +31,8 @@ def main() -> None:
     if unknown:
         print(unknown, file=sys.stderr)
         sys.exit(2)
+    if not starts_only(sys.argv[1:]):
+        gc.enable()  # off from camopt.__main__: a command that computes collects cycles
     load_commands(sys.argv[1:])
     try:
         try:
@@ -60,6 +63,19 @@ def main() -> None:
     except Exception as exc:
         print(internal_error(exc), file=sys.stderr)
         sys.exit(2)
+
+
+STARTS_ONLY = frozenset({"validate", "show", "runs", "compare", "init", "solvers"})
+"""Commands that read a file or two and print (at most ``show`` of an older archive
+estimates a yield on 300 draws, ``compare`` tests two runs): short-lived, they run with
+the cyclic garbage collector as ``camopt.__main__`` left it (off); every other command,
+which evaluates or draws figures for as long as it takes, turns it on first."""
+
+
+def starts_only(args: list[str]) -> bool:
+    """Whether the command line ``args`` is help, the version or a :data:`STARTS_ONLY`
+    command (no command first: ``--help``, ``--version``, no arguments)."""
+    return not args or args[0].startswith("-") or args[0] in STARTS_ONLY
 
 
 SYNONYMS = {"verify": "validate", "check": "validate", "list": "runs", "optimise": "run",
