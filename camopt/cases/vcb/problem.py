@@ -19,7 +19,7 @@ from camopt.cases.vcb.dynamics import (
     closing_events,
     closing_motion,
 )
-from camopt.cases.vcb.forms import form_of
+from camopt.cases.vcb.forms import form_of, link_mass_rows
 from camopt.cases.vcb.model import (
     Loads,
     VcbModel,
@@ -239,6 +239,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         # case's efficiency
         band = np.array([tuple(r) + ((r[5], c.efficiency) if len(r) == 6 else ())
                          for r in c.dynamics_band], dtype=float).reshape(-1, 8)
+        band = np.vstack([band, link_mass_rows(band, c)])  # the links' own masses
         self.band = _sets(band, c) if len(band) else None
         self.forms = self._forms(band)
         self.search_dynamics = (c.closing_velocity_m_s is not None or c.require_latch
