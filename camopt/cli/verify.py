@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import enum
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Annotated, Any
@@ -77,7 +78,8 @@ def verify(
         sys.stdout.write(json.dumps(doc, indent=2) + "\n")
         return
     def difference(q: Any) -> str:
-        return "-" if not q.camopt else f"{q.relative_difference:+.2%}"
+        finite = math.isfinite(q.relative_difference)
+        return f"{q.relative_difference:+.2%}" if q.camopt and finite else "-"
 
     rows = []
     for q in result.quantities:

@@ -47,6 +47,9 @@ inertia on the contact; halving it moves the judged quantities by < 0.03 %
 BACK_TIME = 2e-3
 """How long (s) the cam may turn back (thrown back by an elastic pick-up) before the
 simulation calls it stalled and stops."""
+PRESSED_TIME = 2e-4
+"""How long (s) the cam may turn back while the roller presses on it (an impact's few
+periods of ~70 us) before it counts as stalled: the linkage driving the cam back."""
 BACK_SPEED = 0.5
 """Cam speed (rad/s) below -BACK_SPEED counts as turning back (its friction reversed)."""
 BACK_ANGLE = 1e-3
@@ -427,7 +430,9 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
                                     loadVectorUserFunction=cam_load))
 
     rows: list[list[float]] = []
-    back_since = [math.inf]  # when the cam began turning back (inf: it turns forward)
+    moved = [False]  # whether the cam has turned forward (faster than BACK_SPEED)
+    back_since = [math.inf, math.inf]  # when the cam began turning back, and doing so
+    # against the roller (inf: it turns forward)
 
     def record(mbs_: Any, t: float) -> bool:
         q = [mbs.GetNodeOutput(n, exu.OutputVariableType.Coordinates) for n in
@@ -443,11 +448,15 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
                      v[4][1], fn, torque, kinetic])
         psi, omega, now = q[0][2], v[0][2], mbs.systemData.GetTime()
         back_since[0] = min(back_since[0], now) if omega < 0 else math.inf
-        # stalled: turning back once the contacts have touched (the old rule: nothing
-        # throws the cam back then), back past the release, or turning back for longer
-        # than the pick-up's bounce lasts
-        stalled = ((omega < 0 and q[4][1] >= mech.gap) or psi < mech.release_angle - BACK_ANGLE
-                   or now - back_since[0] > BACK_TIME)
+        back_since[1] = min(back_since[1], now) if omega < 0 and fn > 0 else math.inf
+        # stalled: turning back before it ever turned forward (it does not release) or
+        # once the contacts have touched (nothing throws the cam back then), back past
+        # the release, turning back while the roller presses on it
+        # for longer than an impact lasts, or at all for longer than a bounce lasts
+        moved[0] = moved[0] or omega > BACK_SPEED
+        stalled = ((omega < 0 and (q[4][1] >= mech.gap or not moved[0]))
+                   or psi < mech.release_angle - BACK_ANGLE
+                   or now - back_since[1] > PRESSED_TIME or now - back_since[0] > BACK_TIME)
         return not (psi >= mech.cam_end or stalled)
 
     mbs.SetPreStepUserFunction(record)

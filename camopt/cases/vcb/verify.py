@@ -55,9 +55,12 @@ class Quantity:
 
     @property
     def within(self) -> bool | None:
-        """Whether the difference is inside the limit (None without one)."""
+        """Whether the difference is inside the limit (None without one); where neither
+        model has the quantity (nan: the contacts never meet in either) they agree."""
         if self.limit is None:
             return None
+        if not (math.isfinite(self.camopt) or math.isfinite(self.multibody)):
+            return True
         return bool(abs(self.relative_difference) <= self.limit)
 
     def as_dict(self) -> dict[str, Any]:
@@ -205,14 +208,20 @@ def camopt_side(problem: Any, x: NDArray, band_set: BandSet | None = None
     window = (mo.theta_c >= LEAST_FROM * mo.theta_c[-1])[None, :] & np.isfinite(mo.time)
     gap = float(problem.load.gap)
     rod = mo.rod[0][np.isfinite(mo.time[0])]
-    return {"touch_time": float(mo.touch_time[0]), "touch_velocity": float(
-        mo.touch_velocity[0]), "contact_velocity_avg": float(mo.closing_velocity_avg[0]),
-        "end_time": float(mo.closing_time[0]), "latch_energy": float(mo.final_kinetic[0]),
-        "least_roller_torque": float(np.min(np.where(window, mo.cam_torque, np.inf))),
-        # rigid links and plastic contacts: the rod ends where the cam puts it, the
-        # contacts stay at the gap
-        "wipe_at_end": float(rod[-1] - gap), "rod_over_travel": float(rod.max() - rod[-1]),
-        "bounce_time": 0.0, "rebound": 0.0}
+    if not len(rod):  # the cam never releases: no closing
+        rod = np.array([math.nan])
+    touched = bool(np.isfinite(mo.touch_time[0]))  # else no touch: no touch velocity
+    return {"touch_time": float(mo.touch_time[0]),
+            "touch_velocity": float(mo.touch_velocity[0]) if touched else math.nan,
+            "contact_velocity_avg": float(mo.closing_velocity_avg[0]),
+            "end_time": float(mo.closing_time[0]),
+            "latch_energy": float(mo.final_kinetic[0]),
+            "least_roller_torque": float(np.min(np.where(window, mo.cam_torque, np.inf))),
+            # rigid links and plastic contacts: the rod ends where the cam puts it, the
+            # contacts stay at the gap
+            "wipe_at_end": float(rod[-1] - gap),
+            "rod_over_travel": float(rod.max() - rod[-1]),
+            "bounce_time": 0.0, "rebound": 0.0}
 
 
 def _quantities(ours: dict[str, float], ev: Any, latch_delay_ms: float | None
