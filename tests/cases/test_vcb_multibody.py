@@ -17,6 +17,7 @@ from camopt.cases.vcb.verify import (
     TIME_LIMIT,
     VELOCITY_LIMIT,
     BandSet,
+    Quantity,
     _quantities,
     band_sets,
     camopt_side,
@@ -158,3 +159,22 @@ def test_closing_time_is_command_to_touch_with_the_latch_delay():
     assert closing.relative_difference == pytest.approx(1 / 55)
     assert with_delay["release_to_touch"].relative_difference == pytest.approx(1 / 25)
     assert "closing_time" not in {q.name for q in _quantities(ours, ev, None)}
+
+
+def test_neither_closing_agrees_in_kind():
+    """A quantity neither model has (nan: the contacts never meet) is within its limit;
+    one model's value against the other's nan is not."""
+    assert Quantity("touch_velocity", "m/s", math.nan, math.nan, 0.03).within is True
+    assert Quantity("touch_velocity", "m/s", 1.0, math.nan, 0.03).within is False
+    assert Quantity("touch_velocity", "m/s", math.nan, 1.0, 0.03).within is False
+
+
+@needs_engine
+def test_a_cam_that_does_not_release_stops_the_simulation(vendor):
+    """Friction above the springs' torque at the release (4 x the vendor's, whose release
+    torque margin is 1.03): the cam turns back at once, the simulation stops (no Newton
+    failure) with no touch."""
+    _, _, mech = vendor
+    stuck = replace(mech, release_friction=4 * mech.release_friction)
+    ev, trace = multibody.run(stuck, 4e-5)
+    assert trace.time[-1] < 1e-3 and math.isnan(ev.touch_time)
