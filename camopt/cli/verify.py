@@ -77,6 +77,7 @@ def verify(
     if format is Format.json:
         sys.stdout.write(json.dumps(doc, indent=2) + "\n")
         return
+
     def difference(q: Any) -> str:
         finite = math.isfinite(q.relative_difference)
         return f"{q.relative_difference:+.2%}" if q.camopt and finite else "-"
