@@ -16,6 +16,7 @@ from camopt.cases.vcb.dynamics import (
     closing_motion,
     first_zero,
 )
+from camopt.cases.vcb.forms import link_mass_rows
 from camopt.cases.vcb.identify import (
     DATA,
     PARAMETERS,
@@ -345,7 +346,8 @@ def test_velocity_design_passes_every_requirement_in_every_set():
     assert m["closing_velocity_avg_m_s"] <= m["closing_velocity_high_m_s"] <= 1.1 + 1e-6
     assert m["tau_max_mpa"] < 1194 and 23 <= m["phi_max_deg"] <= 26
     assert abs(m["rod_travel_mm"] - 18.0) <= 0.2 + 1e-6
-    assert m["latched"] == 1 and m["band_sets_not_latched"] == 0 and m["band_sets"] == 10
+    # the identified set, 9 of dynamics_band, each form's link-mass set
+    assert m["latched"] == 1 and m["band_sets_not_latched"] == 0 and m["band_sets"] == 12
     low, high = m["latch_kinetic_energy_low_j"], m["latch_kinetic_energy_high_j"]
     assert 1.0 - 1e-6 <= low <= high <= 5.0 + 1e-6  # at the limits within 1e-6 J
     assert m["release_torque_margin_low"] >= 1.2 - 1e-6
@@ -354,7 +356,8 @@ def test_velocity_design_passes_every_requirement_in_every_set():
 
 def test_band_is_the_extremes_over_the_parameter_sets():
     """closing_velocity_low/high_m_s and latched of a design are the min, max and all over
-    the identified set and every set of dynamics_band, each simulated on its own (the band
+    the identified set, every set of dynamics_band and each form's link-mass set, each
+    simulated on its own (the band
     reuses one kinematics per design for all sets; a set's efficiency is the case's in a
     run of its own, its free rotation's friction the same as the driven closing's);
     where the contacts never meet in some set the band's velocities are undefined (NaN:
@@ -365,7 +368,9 @@ def test_band_is_the_extremes_over_the_parameter_sets():
     X = np.vstack([p.vendor_x(), p.lower + rng.random((6, p.n_var)) * (p.upper - p.lower)])
     ev = p.describe(X)
     v, latched, closed, touched = [], [], [], []
-    for row in [None, *p.config.dynamics_band]:
+    links = link_mass_rows(np.array(p.config.dynamics_band), p.config)
+    assert len(links) == 2  # each form's fit with the links' own masses
+    for row in [None, *p.config.dynamics_band, *links]:
         sets = () if row is None else (
             "case.dynamics_band=[]", f"case.cam_inertia_kg_m2={row[0]}",
             f"case.follower_inertia_kg_m2={row[1]}", f"case.rod_mass_kg={row[2]}",

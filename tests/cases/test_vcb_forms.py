@@ -10,7 +10,7 @@ import pytest
 
 from camopt.cases.vcb import VcbProblem
 from camopt.cases.vcb.dynamics import closing_motion
-from camopt.cases.vcb.forms import FORMS, get_form
+from camopt.cases.vcb.forms import FORMS, form_of, get_form, link_mass_rows
 from camopt.cases.vcb.requirements import requirements
 from camopt.errors import ConfigError
 from tests.conftest import VELOCITY_PAPER
@@ -98,3 +98,39 @@ def test_every_dynamic_requirement_is_judged_with_its_limit(problem):
     low = ev.extras["release_torque_margin_low"][0]
     assert 1.0 < low < 1.3 and not reqs["release_torque_margin_low"].passes(low)
     assert replace(reqs["band_sets_not_latched"]).passes(ev.extras["band_sets_not_latched"][0])
+
+
+def test_link_masses_are_each_forms_fit_with_heavier_links(problem):
+    """The band's link-mass sets: each kept form's fit (the identified parameters for
+    theirs) with the follower's inertia raised by m/2 l2^2 + J_f and the rod's mass by
+    m/2 (l4/l5)^2, nothing else changed (to rounding); none without a band or masses;
+    heavier links close slower under the same set (the band's slow end)."""
+    c = problem.config
+    band = np.array(c.dynamics_band, dtype=float)
+    rows = link_mass_rows(band, c)
+    firsts = [0] + [i + 1 for i in range(len(band))
+                    if form_of(band[i]) != form_of(band[0])][:1]
+    assert [form_of(r) for r in rows] == ["efficiency_coulomb", "coulomb"] and len(firsts) == 2
+    identified = [c.cam_inertia_kg_m2, c.follower_inertia_kg_m2, c.rod_mass_kg,
+                  c.contacts_mass_kg, c.release_offset_deg, c.cam_friction_nm,
+                  c.cam_friction_nm, c.efficiency]
+    fits = np.array([identified, band[firsts[1] - 1]])
+    m, jf = c.band_coupler_mass_kg, c.band_follower_inertia_kg_m2
+    assert m > 0 and jf > 0
+    added = np.zeros(8)
+    added[1] = m / 2 * (c.l2_mm * 1e-3) ** 2 + jf
+    added[2] = m / 2 * (c.l4_mm / c.l5_mm) ** 2
+    np.testing.assert_allclose(rows, fits + added, rtol=1e-12)
+    assert len(link_mass_rows(band[:0], c)) == 0
+    light = c.model_copy(update={"band_coupler_mass_kg": 0.0,
+                                 "band_follower_inertia_kg_m2": 0.0})
+    assert len(link_mass_rows(band, light)) == 0
+    # under the identified set: the heavier links touch later and slower
+    A, kc, link = problem.designs(problem.vendor_x())
+    form = get_form("efficiency_coulomb")
+    vectors = np.array([[r[0], r[2], r[3], r[4], r[5]] for r in (identified, rows[0])])
+    ev = [form.closing(problem.model, A, kc, link, problem.rod_offset, problem.load,
+                       v[None, :], jfol, c.dynamics_steps)
+          for v, jfol in zip(vectors, (identified[1], rows[0][1]))]
+    assert ev[1].touch_velocity[0] < ev[0].touch_velocity[0]
+    assert ev[1].touch_time[0] > ev[0].touch_time[0]

@@ -43,7 +43,8 @@ def test_the_parts_are_case_fields_and_the_forms_variants(problem):
             "cam_profile_error_mm"} <= set(problem.case_fields())
     # configs/vcb.toml's band: 2 sets of the shipped form, 7 of Coulomb-only friction
     assert problem.variants() == ("efficiency_coulomb", "coulomb")
-    assert [f.count for f in problem.forms] == [2, 6]  # coulomb's fit is its nominal
+    # coulomb's fit is its nominal; each form has its link-mass set
+    assert [f.count for f in problem.forms] == [3, 7]
 
 
 def test_nominal_parts_change_nothing(problem, X):
@@ -100,8 +101,8 @@ def test_each_form_is_judged_under_its_own_sets(problem, X):
     closes = np.isfinite(every.extras["closing_velocity_low_m_s"])
     np.testing.assert_allclose(every.extras["closing_velocity_low_m_s"][closes], low[closes])
     np.testing.assert_allclose(every.extras["closing_velocity_high_m_s"][closes], high[closes])
-    assert list(forms[0].extras["band_sets"]) == [3.0] * n  # identified + 2
-    assert list(forms[1].extras["band_sets"]) == [7.0] * n  # coulomb's fit + 6
+    assert list(forms[0].extras["band_sets"]) == [4.0] * n  # identified + 2 + link masses
+    assert list(forms[1].extras["band_sets"]) == [8.0] * n  # coulomb's fit + 6 + links
 
 
 def test_robust_vcb_draws_over_its_forms_and_screens_per_form():

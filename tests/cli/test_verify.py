@@ -48,9 +48,12 @@ def test_another_kind_is_refused(fast_run):
 @pytest.mark.slow  # a multibody simulation: ~4 s of CPU, more on a loaded machine
 def test_reference_design_in_json(vcb_run):
     """The vendor's design: both numbers, their ratio and the verdict, stdout pure JSON."""
-    r = invoke("verify", vcb_run, "--design", "reference", "--format", "json")
+    r = invoke("verify", vcb_run, "--design", "reference", "--format", "json", "--sets",
+               "identified")
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)
+    assert [(s["form"], s["set"]) for s in doc["sets"]] == [("efficiency_coulomb", 0)]
+    assert doc["sets"][0]["quantities"] == doc["quantities"]
     rows = {q["name"]: q for q in doc["quantities"]}
     touch = rows["release_to_touch"]
     assert touch["ratio"] == pytest.approx(touch["multibody"] / touch["camopt"], rel=1e-12)

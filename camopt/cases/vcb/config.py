@@ -89,7 +89,7 @@ VCB_ROLES: dict[str, FieldRole] = {
     **roles_of("identified", """rod_arm_offset_deg opening_arm_ratio free_contact_force_n
         alpha efficiency cam_inertia_kg_m2 follower_inertia_kg_m2 rod_mass_kg
         contacts_mass_kg release_offset_deg cam_friction_nm latch_delay_ms spring_mass_kg
-        rod_damping_n_s_per_m dynamics_band"""),
+        rod_damping_n_s_per_m dynamics_band band_coupler_mass_kg band_follower_inertia_kg_m2"""),
     **roles_of("requirement", """rod_travel_mm rod_travel_tolerance_mm closing_velocity_m_s
         require_latch pressure_angle_max_deg forbid_lift_off latch_energy_min_j
         latch_energy_max_j release_torque_margin_min lift_off_fraction_min
@@ -239,6 +239,16 @@ class VcbMechanism(CaseConfig):
         "ADAMS data within their reading error widened by the kept forms' residuals: every "
         "closing velocity, time and latch energy is reported as the band over them "
         "(configs/vcb_identify_dynamics.toml, its band.sets)")
+    band_coupler_mass_kg: float = Field(
+        0.2, ge=0, le=50.0, description="the coupler DL's own mass (kg) the band adds to "
+        "each model form's fit as one more parameter set (the identified model's coupler "
+        "is massless): half at each joint, on the follower and the output link "
+        "(camopt/cases/vcb/forms.py; assumed: a steel bar 125 x 20 x 10 mm, "
+        "docs/assumptions.md); 0: no such set")
+    band_follower_inertia_kg_m2: float = Field(
+        5e-4, ge=0, le=10.0, description="the follower BD's own inertia about B with its "
+        "roller (kg m^2) the same set adds (assumed: a steel lever 70 x 20 x 12 mm and "
+        "its roller, docs/assumptions.md); 0: none")
     dynamics_steps: int = Field(
         400, ge=50, le=100_000, description="graded cam-angle intervals of the work-energy "
         "integration (independent of positions; a sixteenth of them, at least 16, for the "
@@ -387,7 +397,8 @@ class VcbCamStep(VcbMechanism):
         0.0, ge=0, le=10, description="the smallest step the fitter sets the nut by (mm; "
         "a nut locked on one of six flats of an M20 x 2.5 guide rod: 0.42; shims: their "
         "thickness); each breaker's travel is the nearest multiple, so its set velocity "
-        "misses the setting by up to half a step's worth; 0: continuous")
+        "misses the setting by up to half a step's worth; 0: continuous (assumed; "
+        "docs/assumptions.md)")
     kc1_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),
                                         description="Eq 38 widened, docs/assumptions.md")
     kc2_bounds_n_per_mm: Bounds = Field(Bounds(lower=4, upper=10),

@@ -51,7 +51,7 @@ from camopt.cases.vcb.identify_config import VcbDynamicsIdentifyConfig
 from camopt.cases.vcb.model import Loads, VcbModel
 from camopt.core.problem import Variable
 from camopt.errors import ConfigError
-from camopt.units import DEG
+from camopt.units import DEG, MM
 
 INERTIAS = ("cam_inertia_kg_m2", "rod_mass_kg", "contacts_mass_kg", "release_offset_deg")
 """The parameters every form fits (units in the names)."""
@@ -244,3 +244,34 @@ def form_of(row: NDArray) -> str:
     if efficiency == 1.0:
         return "driven_coulomb" if driven else "coulomb"
     return "efficiency_driven_coulomb" if driven else "efficiency_coulomb"
+
+
+def link_mass_rows(band: NDArray, config: VcbConfig) -> NDArray:
+    """The band's link-mass sets, (f, 8) ``dynamics_band`` rows: each model form's fit
+    (the identified parameters for theirs, else the form's first row of ``band``) with the
+    links' own masses the identified model leaves out, ``band_coupler_mass_kg`` and
+    ``band_follower_inertia_kg_m2``. The coupler DL is lumped as two point masses at its
+    joints: half at D on the follower (``follower_inertia_kg_m2`` + m/2 l2^2), half at L
+    on the output link, which turns l4/l5 times as fast at L as at the arm's end M that
+    lifts the rod (``rod_mass_kg`` + m/2 (l4/l5)^2, the config's l4, l5); the follower's
+    own inertia adds to ``follower_inertia_kg_m2``. Nothing is refitted: the set is the
+    fit with heavier links, the band's slow end (docs/assumptions.md, "VCB: link masses";
+    the multibody model with the coupler as a bar moves the vendor's closing as this
+    lumping does, docs/verify.md). None (0 rows) without a band (the identified
+    parameters alone) or without link masses."""
+    c = config
+    m, jf = c.band_coupler_mass_kg, c.band_follower_inertia_kg_m2
+    band = np.asarray(band, dtype=float).reshape(-1, len(BAND_COLUMNS))
+    if not len(band) or not (m or jf):
+        return np.empty((0, len(BAND_COLUMNS)))
+    identified = np.array([c.cam_inertia_kg_m2, c.follower_inertia_kg_m2, c.rod_mass_kg,
+                           c.contacts_mass_kg, c.release_offset_deg, c.cam_friction_nm,
+                           c.cam_friction_nm, c.efficiency])
+    firsts: dict[str, NDArray] = {}
+    for row in (identified, *band):
+        firsts.setdefault(form_of(row), row)
+    rows = np.array(list(firsts.values()))
+    l2, l4, l5 = c.l2_mm * MM, c.l4_mm * MM, c.l5_mm * MM
+    rows[:, 1] += m / 2 * l2**2 + jf
+    rows[:, 2] += m / 2 * (l4 / l5) ** 2
+    return rows

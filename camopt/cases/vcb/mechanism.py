@@ -11,11 +11,15 @@ an archive needs no problem."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from camopt.mechanics import Floats
 from camopt.units import DEG, MM
+
+if TYPE_CHECKING:  # the parameters' container only, not the dynamics
+    from camopt.cases.vcb.dynamics import MotionParameters
 
 
 @dataclass(frozen=True)
@@ -125,11 +129,14 @@ class Mechanism:
         return height(theta) - height(0.0)
 
 
-def mechanism_of(problem: object, x: Floats) -> Mechanism:
+def mechanism_of(problem: object, x: Floats, params: MotionParameters | None = None,
+                 pre: Floats | None = None) -> Mechanism:
     """The mechanism of design ``x`` (SI variables) of a VCB run's problem: its decoded
     cam law, springs and linkage, the config's fixed geometry and loads, the identified
     motion parameters (the release moved with a design's latch) and, for a breaker set at
-    the factory, the set springs' compressions."""
+    the factory, the set springs' compressions; or one parameter set ``params``
+    (MotionParameters, its release already the design's) with the closing springs'
+    compressions ``pre`` (2,) m (None: the case's or the factory setting's)."""
     from camopt.cases.vcb.problem import VcbProblem
 
     if not isinstance(problem, VcbProblem):
@@ -139,11 +146,14 @@ def mechanism_of(problem: object, x: Floats) -> Mechanism:
     A, kc, link = problem.designs(x)
     A = problem.profiled(A, None)
     parts, _ = problem.as_set(x, None)
-    pre = (c.kc1_precompression_mm * MM, c.kc2_precompression_mm * MM)
-    if parts is not None and parts.pre is not None:
-        pre = (float(parts.pre[0, 0]), float(parts.pre[0, 1]))
-    params = replace(problem.dynamics,
-                     release_offset_rad=np.ravel(problem.release_offset(x))[0])
+    compression = (c.kc1_precompression_mm * MM, c.kc2_precompression_mm * MM)
+    if pre is not None:
+        compression = (float(pre[0]), float(pre[1]))
+    elif parts is not None and parts.pre is not None:
+        compression = (float(parts.pre[0, 0]), float(parts.pre[0, 1]))
+    if params is None:
+        params = replace(problem.dynamics,
+                         release_offset_rad=np.ravel(problem.release_offset(x))[0])
     cols = params.columns(1, c.efficiency)
     loads = problem.load
     release = float(m.dead_centre + cols.release_offset_rad[0, 0] - m.contact_crank_angle)
@@ -155,7 +165,7 @@ def mechanism_of(problem: object, x: Floats) -> Mechanism:
         l5=float(link[0, 3]), theta1=float(link[0, 4]), rod_offset=float(problem.rod_offset),
         spring_g=(float(m.G[0]), float(m.G[1])), crank_l8=c.crank_l8_mm * MM,
         crank_angle0=float(m.contact_crank_angle), theta0=c.theta0_deg * DEG,
-        spring_rates=(float(kc[0, 0]), float(kc[0, 1])), precompression=pre,
+        spring_rates=(float(kc[0, 0]), float(kc[0, 1])), precompression=compression,
         release_angle=release, efficiency=float(cols.efficiency[0, 0]),
         cam_inertia=float(cols.cam_kg_m2[0, 0]),
         follower_inertia=float(cols.follower_kg_m2[0, 0]),

@@ -44,6 +44,17 @@ STEP = 1e-5
 numerical damping): 7 steps per period (~70 us) of the stiffest oscillation, the cam's
 inertia on the contact; halving it moves the judged quantities by < 0.03 %
 (docs/verify.md)."""
+BACK_TIME = 2e-3
+"""How long (s) the cam may turn back (thrown back by an elastic pick-up) before the
+simulation calls it stalled and stops."""
+PRESSED_TIME = 2e-4
+"""How long (s) the cam may turn back while the roller presses on it (an impact's few
+periods of ~70 us) before it counts as stalled: the linkage driving the cam back."""
+BACK_SPEED = 0.5
+"""Cam speed (rad/s) below -BACK_SPEED counts as turning back (its friction reversed)."""
+BACK_ANGLE = 1e-3
+"""How far (rad) behind its release angle the cam may fall before it counts as stalled
+(the release itself jitters by the solver's tolerance)."""
 LEAST_FROM = 0.1
 """The least cam-roller torque is looked for from this fraction of the cam's travel on,
 after the pick-up's ringing (in both models)."""
@@ -95,7 +106,13 @@ class Events:
     ``end_time`` the cam at the end of its travel, ``latch_energy`` the kinetic energy
     then (nan: it stopped first); ``least_roller_torque`` the least torque the cam passes to
     the roller (N m, the normal force's moment about O) from :data:`LEAST_FROM` of the
-    cam's travel to its end (0: the roller lifts off)."""
+    cam's travel to its end (0: the roller lifts off). After the touch (to the end of
+    travel): ``wipe_at_end`` the contact springs' compression beyond their preload when the
+    cam reaches its end (rod travel less contact travel, m); ``rod_over_travel`` how far
+    the rod's travel after the touch exceeds its travel at the end (m, the linkage's
+    overshoot on the contact springs); ``bounce_time`` the time the moving contacts spend
+    off the fixed ones after the first touch (s) and ``rebound`` their greatest reopening
+    (m); ``arrivals`` how many times they arrive at the gap."""
 
     cam_contact_time: float
     touch_time: float
@@ -104,6 +121,11 @@ class Events:
     end_time: float
     latch_energy: float
     least_roller_torque: float
+    wipe_at_end: float = math.nan
+    rod_over_travel: float = math.nan
+    bounce_time: float = math.nan
+    rebound: float = math.nan
+    arrivals: int = 0
 
 
 def _crossing(t: NDArray, y: NDArray, level: float) -> tuple[float, int]:
@@ -146,7 +168,20 @@ def events_of(mech: Mechanism, tr: Trace) -> Events:
     if j > 0:
         window[j:] = False
     least_torque = float(tr.roller_torque[window].min()) if window.any() else math.nan
-    return Events(t_cam, t_touch, v_touch, v_avg, t_end, latch, least_torque)
+    if k <= 0:
+        return Events(t_cam, t_touch, v_touch, v_avg, t_end, latch, least_torque)
+    after = slice(k, j if j > 0 else len(tr.time))  # from the touch to the end of travel
+    last = (j if j > 0 else len(tr.time)) - 1
+    wipe = float(tr.rod[last] - tr.contact[last])
+    over = float(tr.rod[after].max() - tr.rod[last])
+    apart = tr.contact[after] < mech.gap
+    dt = np.diff(tr.time[after], append=tr.time[last])
+    bounce = float(dt[apart].sum())
+    rebound = float(max(0.0, mech.gap - tr.contact[after].min()))
+    at = tr.contact >= mech.gap
+    arrivals = int(np.sum(at[1:] & ~at[:-1]))
+    return Events(t_cam, t_touch, v_touch, v_avg, t_end, latch, least_torque, wipe, over,
+                  bounce, rebound, arrivals)
 
 
 class _CamContact:
@@ -196,11 +231,12 @@ def _rot(angle: float) -> NDArray:
 
 
 def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
-             stiffness: float = CONTACT_STIFFNESS, end_time: float = 0.2) -> Trace:
+             stiffness: float = CONTACT_STIFFNESS, end_time: float = 0.2,
+             contact_restitution: float = 0.0) -> Trace:
     """Simulate the closing from the release (the cam at rest at ``release_angle``, the
     linkage at rest against its stop) until the cam reaches the end of its travel, turns
-    back, or ``end_time`` (s) passes; ``restitution`` of the cam-roller pick-up (0:
-    plastic)."""
+    back, or ``end_time`` (s) passes; ``restitution`` of the cam-roller pick-up and
+    ``contact_restitution`` of the moving contacts on the fixed ones (0: plastic)."""
     if exu is None:
         raise ImportError("exudyn")
     sc = exu.SystemContainer()
@@ -275,7 +311,8 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
     rod_y = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=rod_node, coordinate=1))
     con_y = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=con_node, coordinate=1))
 
-    pickup_zeta = damping_ratio(restitution)  # the cam on the roller; the rest plastic
+    pickup_zeta = damping_ratio(restitution)  # the cam on the roller
+    touch_zeta = damping_ratio(contact_restitution)  # the contacts; the rest plastic
     k = stiffness
     m_linkage = mech.rod_mass + mech.contacts_mass
 
@@ -321,7 +358,7 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
 
     # the fixed contacts at the gap; the free-contact force (vacuum) closes the contacts
     def fixed_force(mbs_: Any, t: float, item: int, c: float, v: float, *_: Any) -> float:
-        return unilateral(c - mech.gap, v, mech.contacts_mass) - mech.free_contact
+        return unilateral(c - mech.gap, v, mech.contacts_mass, touch_zeta) - mech.free_contact
 
     mbs.AddObject(ii.ObjectConnectorCoordinateSpringDamper(
         markerNumbers=[ground_coord, con_y], springForceUserFunction=fixed_force))
@@ -377,10 +414,13 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
     def cam_load(mbs_: Any, t: float, load: Any) -> list[float]:
         _, _, torque = roller_contact()
         psi = mbs.GetNodeOutput(cam_node, exu.OutputVariableType.Coordinates)[2]
-        # Coulomb friction against the forward rotation the cam keeps throughout (the
-        # simulation stops should it turn back)
+        # Coulomb friction against the forward rotation of a closing; a cam an elastic
+        # pick-up throws back (faster than BACK_SPEED: not the rest at the release,
+        # where flipping it would chatter) is braked the other way; the simulation
+        # stops should it keep turning back
+        omega = mbs.GetNodeOutput(cam_node, exu.OutputVariableType.Coordinates_t)[2]
         friction = mech.release_friction if psi < 0 else mech.friction
-        return [0.0, 0.0, -torque - friction]
+        return [0.0, 0.0, -torque - (-friction if omega < -BACK_SPEED else friction)]
 
     mbs.AddLoad(ii.LoadForceVector(markerNumber=marker_d, loadVector=[0.0, 0.0, 0.0],
                                    loadVectorUserFunction=roller_load))
@@ -390,6 +430,9 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
                                     loadVectorUserFunction=cam_load))
 
     rows: list[list[float]] = []
+    moved = [False]  # whether the cam has turned forward (faster than BACK_SPEED)
+    back_since = [math.inf, math.inf]  # when the cam began turning back, and doing so
+    # against the roller (inf: it turns forward)
 
     def record(mbs_: Any, t: float) -> bool:
         q = [mbs.GetNodeOutput(n, exu.OutputVariableType.Coordinates) for n in
@@ -403,8 +446,17 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
                          + mech.contacts_mass * v[4][1] ** 2)
         rows.append([mbs.systemData.GetTime(), q[0][2], v[0][2], q[3][1], v[3][1], q[4][1],
                      v[4][1], fn, torque, kinetic])
-        psi, omega = q[0][2], v[0][2]
-        stalled = omega < 0
+        psi, omega, now = q[0][2], v[0][2], mbs.systemData.GetTime()
+        back_since[0] = min(back_since[0], now) if omega < 0 else math.inf
+        back_since[1] = min(back_since[1], now) if omega < 0 and fn > 0 else math.inf
+        # stalled: turning back before it ever turned forward (it does not release) or
+        # once the contacts have touched (nothing throws the cam back then), back past
+        # the release, turning back while the roller presses on it
+        # for longer than an impact lasts, or at all for longer than a bounce lasts
+        moved[0] = moved[0] or omega > BACK_SPEED
+        stalled = ((omega < 0 and (q[4][1] >= mech.gap or not moved[0]))
+                   or psi < mech.release_angle - BACK_ANGLE
+                   or now - back_since[1] > PRESSED_TIME or now - back_since[0] > BACK_TIME)
         return not (psi >= mech.cam_end or stalled)
 
     mbs.SetPreStepUserFunction(record)
@@ -432,7 +484,9 @@ def simulate(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
 
 
 def run(mech: Mechanism, step: float = STEP, restitution: float = 0.0,
-        stiffness: float = CONTACT_STIFFNESS) -> tuple[Events, Trace]:
+        stiffness: float = CONTACT_STIFFNESS, contact_restitution: float = 0.0,
+        ) -> tuple[Events, Trace]:
     """The simulated closing of ``mech`` and its events."""
-    trace = simulate(mech, step, restitution, stiffness)
+    trace = simulate(mech, step, restitution, stiffness,
+                     contact_restitution=contact_restitution)
     return events_of(mech, trace), trace

@@ -14,6 +14,7 @@ from camopt.cases.vcb.band_sets import band_rows, form_sets, identified, joined,
 from camopt.cases.vcb.config import CamDesign, VcbConfig
 from camopt.cases.vcb.constraints import CONSTRAINTS, Terms
 from camopt.cases.vcb.dynamics import ClosingMotion, closing_events, closing_motion
+from camopt.cases.vcb.forms import link_mass_rows
 from camopt.cases.vcb.metrics import motion_metrics, setting_metrics, shape_metrics
 from camopt.cases.vcb.model import Loads, VcbModel, phi_max, rate_zeros
 from camopt.cases.vcb.parts import (
@@ -89,6 +90,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         self.constraint_names = tuple(con.name for con in self.constraints)
         self.dynamics = identified(c)
         band = band_rows(c)
+        band = np.vstack([band, link_mass_rows(band, c)])  # the links' own masses
         self.band = parameter_sets(band, c) if len(band) else None
         self.forms = form_sets(c, band, self.dynamics)
         self.search_dynamics = (c.closing_velocity_m_s is not None or c.require_latch
