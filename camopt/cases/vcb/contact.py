@@ -4,17 +4,26 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.cases.vcb.config import VcbConfig
 from camopt.cases.vcb.law import follower_dwell
 from camopt.mechanics import cam, hertz
 from camopt.units import GPA, MM
 
-if TYPE_CHECKING:
-    from camopt.cases.vcb.model import VcbModel
+
+class CamGeometry(Protocol):
+    """What the contact stress reads of a :class:`~camopt.cases.vcb.model.VcbModel` (a
+    Protocol, so that this module need not import the model that imports it)."""
+
+    c: VcbConfig
+    l2: float
+    l6: float
+    rf: float
+    theta_c: NDArray
 
 
 @dataclass(frozen=True)
@@ -33,7 +42,7 @@ class Contact:
     tau: NDArray
 
 
-def peak_stress(model: VcbModel, A: NDArray, f: cam.Follower, torque: NDArray,
+def peak_stress(model: CamGeometry, A: NDArray, f: cam.Follower, torque: NDArray,
                 zeros: NDArray | None = None) -> NDArray:
     """Peak Hertz pressure over the stroke per design (Eqs 15, 19, 27-30), the search's
     fast path: sigma_max = sqrt(max(Fn (1/rho + 1/rf)) E_e / (2 pi L)), one square
