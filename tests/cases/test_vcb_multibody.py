@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from camopt.cases import build_problem
-from camopt.cases.vcb import multibody
+from camopt.cases.vcb import multibody, multibody_events
 from camopt.cases.vcb.mechanism import mechanism_of
 from camopt.cases.vcb.verify import (
     TIME_LIMIT,
@@ -152,7 +152,7 @@ def test_closing_time_is_command_to_touch_with_the_latch_delay():
             "end_time": 0.04, "latch_energy": 0.1, "least_roller_torque": 1.0,
             "wipe_at_end": 0.007, "rod_over_travel": 0.0, "bounce_time": 0.0,
             "rebound": 0.0}
-    ev = multibody.Events(0.01, 0.026, 1.7, 1.6, 0.04, 0.1, 1.0, 0.007, 0.0, 0.0, 0.0, 1)
+    ev = multibody_events.Events(0.01, 0.026, 1.7, 1.6, 0.04, 0.1, 1.0, 0.007, 0.0, 0.0, 0.0, 1)
     with_delay = {q.name: q for q in _quantities(ours, ev, 30.0)}
     closing = with_delay["closing_time"]
     assert (closing.camopt, closing.multibody, closing.limit) == pytest.approx((55.0, 56.0, 0.02))

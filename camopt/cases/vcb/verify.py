@@ -196,7 +196,7 @@ def camopt_side(problem: Any, x: NDArray, band_set: BandSet | None = None
     parameters; a breaker set at the factory as set), the quantities the check compares
     (SI)."""
     from camopt.cases.vcb.dynamics import closing_motion
-    from camopt.cases.vcb.multibody import LEAST_FROM
+    from camopt.cases.vcb.multibody_events import LEAST_FROM
 
     if band_set is None:
         parts, _ = problem.as_set(x[None, :], None)
