@@ -233,8 +233,10 @@ def test_the_nut_turns_by_whole_steps(config, X):
     """With a resolution, every set's travel is a whole number of steps (the nearest to
     the exact setting), and the set velocity moves off the setting by at most what half a
     step does: here under 1 % at 0.5 mm, while the exact setting is within 1e-3 m/s."""
-    stepped = build_problem(config.model_copy(update={"preload_setting_resolution_mm": 0.5}))
-    exact = build_problem(config)
+    wide = {"preload_setting_range_mm": 30.0}  # room for random designs' settings
+    stepped = build_problem(config.model_copy(update={**wide,
+                                                      "preload_setting_resolution_mm": 0.5}))
+    exact = build_problem(config.model_copy(update=wide))
     x = X[:48]
     parts = stepped.parts(len(x), {})
     _, fine = exact.as_set(x, parts)
@@ -247,6 +249,6 @@ def test_the_nut_turns_by_whole_steps(config, X):
     assert np.any(np.abs(coarse.needed[both] - fine.needed[both]) > 1e-4)  # rounding happened
     ev = stepped.describe(x)
     ok = ev.g[:, stepped.constraint_names.index("preload_setting")] <= 0
-    assert ok.sum() >= 3  # random designs: most need more than the 10 mm the nut has
+    assert ok.sum() >= 5
     off = np.abs(ev.extras["closing_velocity_avg_m_s"][ok] / x[ok, -1] - 1)
     assert off.max() < 0.01 and off.max() > 1e-4
