@@ -38,9 +38,9 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
     "cam_dphi_3t2": ("camopt/mechanics/cam.py", "dphi = a @ (k * shifted)",
                      "dphi = a @ (k * powers)"),
     # the quintic's rate zeros (companion matrix) and the band members' closing time
-    "vcb_companion_sign": ("camopt/cases/vcb/model.py", "comp[:, 0, :] = -c[rows",
+    "vcb_companion_sign": ("camopt/cases/vcb/law.py", "comp[:, 0, :] = -c[rows",
                            "comp[:, 0, :] = c[rows"),
-    "vcb_event_closing_time": ("camopt/cases/vcb/dynamics.py",
+    "vcb_event_closing_time": ("camopt/cases/vcb/closing.py",
                                "s.t_k + np.cumsum(s.cells, axis=1)[:, -1]", "s.t_k"),
     # issue #37: a stalled identification prediction is no perfect fit; the sign of the
     # lift-off constraint; issue #31: a zero of the kinetic energy between nodes
@@ -50,7 +50,7 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
     "vcb_lift_off_sign": ("camopt/cases/vcb/constraints.py",
                           "q.config.lift_off_fraction_min - q.lift_off_ratio",
                           "q.lift_off_ratio - q.config.lift_off_fraction_min"),
-    "vcb_first_zero_nodes_only": ("camopt/cases/vcb/dynamics.py",
+    "vcb_first_zero_nodes_only": ("camopt/cases/vcb/locate.py",
                                   "- 4 / 27 * h * (np.abs(d0) + np.abs(d1)) <= 0)",
                                   "<= 0)"),
     # the design's closing latch moves every band set (set-major order, issue #21)
@@ -128,8 +128,8 @@ MUTANTS: dict[str, tuple[str, str, str]] = {
     "de_best1_base": ("camopt/solvers/de_gr.py", "return best + factor *",
                       "return pop + factor *"),
     "de_parents_stale": ("camopt/solvers/de_gr.py",
-                         "X, ev, self.ev = X[:n], ev.take(slice(0, n)), ev.take(slice(n, 2 * n))",
-                         "X, ev = X[:n], ev.take(slice(0, n))"),
+                         "self.ev = Evaluation.concat([self.ev, ev.take(slice(n, None))])"
+                         ".take(index)", "index = index"),
     "de_best1_self": ("camopt/solvers/de_gr.py", "idx = np.where(idx == np.arange(n)[:, None], "
                       "idx[:, -1:], idx)[:, :2]", "idx = idx[:, :2]"),
     # PSO inertia (Eq 40)
@@ -242,6 +242,10 @@ MIRROR = {
     "camopt/cases/vcb/identify.py": ["tests/cases/test_vcb_identify.py"],
     "camopt/cases/vcb/constraints.py": ["tests/cases/test_vcb_constraints.py"],
     "camopt/cases/vcb/dynamics.py": ["tests/cases/test_vcb_dynamics.py"],
+    "camopt/cases/vcb/closing.py": ["tests/cases/test_vcb_dynamics.py",
+                                    "tests/cases/test_vcb_kernel.py"],
+    "camopt/cases/vcb/locate.py": ["tests/cases/test_vcb_dynamics.py"],
+    "camopt/cases/vcb/law.py": ["tests/cases/test_vcb_law.py"],
     "camopt/engine/sweep.py": ["tests/engine/test_sweep.py"],
     "camopt/engine/driver.py": ["tests/engine/test_driver.py"],
     "camopt/core/record.py": ["tests/core/test_record.py"],

@@ -484,12 +484,14 @@ def test_closing_time_near_balance_matches_an_ode(ratio):
     assert times[800] == pytest.approx(times[400], rel=1e-4)
 
 
-def test_first_zero_finds_a_zero_between_positive_nodes():
+@pytest.mark.parametrize("numba", ["1", "0"], ids=["compiled", "numpy"])
+def test_first_zero_finds_a_zero_between_positive_nodes(monkeypatch, numba):
     """An energy positive at every node that dips below zero between two (the phantom
     creep of issue #31): the first zero is found inside the interval, exactly for a
     quadratic (the Hermite interpolant reproduces it), whatever the node spacing; an
     energy that stays positive has none; a start at rest with a positive slope is not
-    one."""
+    one. Both paths: the compiled kernel and the numpy reference (CAMOPT_NUMBA=0)."""
+    monkeypatch.setenv("CAMOPT_NUMBA", numba)
     def e(x):
         return (x - 0.5) ** 2 - 0.001
 
