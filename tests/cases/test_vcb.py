@@ -273,3 +273,17 @@ def test_a_concave_flank_is_no_undercut():
     convex = radius[radius > -rf]
     reported = p.describe(x[None, :]).extras["curvature_min_mm"][0]
     assert reported == pytest.approx(convex.min(), rel=1e-12) and reported > rf
+
+
+def test_run_in_class_is_standard_springs_with_controlled_friction():
+    """Class ``run_in`` (docs/tolerance.md, "Tolerance classes"): every spring as the
+    standard class, the friction and the loss 1 - eps as ``controlled``'s run-in; ranked
+    after ``graded`` (same cost, declared first) and before ``controlled``."""
+    from camopt.cases.vcb import TOLERANCE_CLASSES, TOLERANCES, VCB
+
+    run_in = TOLERANCE_CLASSES["run_in"].tolerances
+    controlled = TOLERANCE_CLASSES["controlled"].tolerances
+    changed = {k for k in TOLERANCES if run_in[k] != TOLERANCES[k]}
+    assert changed == {"case.cam_friction_nm", "case.efficiency"}
+    assert all(run_in[k] == controlled[k] for k in changed)
+    assert VCB.class_names() == ("standard", "graded", "run_in", "controlled", "matched")

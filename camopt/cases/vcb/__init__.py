@@ -84,6 +84,14 @@ TOLERANCE_CLASSES = {
         {**TOLERANCES, "kc1_n_per_mm": "±5%", "kc2_n_per_mm": "±5%"},
         source="closing springs graded by force at a test length (sorted after coiling), "
         "±5 % on rate; the rest as the standard class", relative_cost=1.3),
+    # ungraded springs, the breaker run in with a specified grease before its timing test
+    # (docs/tolerance.md, "Adjustments at assembly and the end of life"): where the nut
+    # sets each breaker, the friction as built, not the springs, is what limits the yield
+    "run_in": ToleranceClass(
+        {**TOLERANCES, "case.cam_friction_nm": "±10%", "case.efficiency": "±0.015"},
+        source="ungraded springs as the standard class; a specified grease and a run-in "
+        "before the factory timing test (friction ±10 %, the loss 1 - eps ±10 %), as "
+        "class controlled without grading any spring", relative_cost=1.3),
     # the breaker as built and timed at the factory (docs/tolerance.md, "VCB: what the
     # friction tolerance leaves"): every spring graded, a specified grease and a run-in
     # before the timing test, so friction varies as the grease and the fit do, not with
