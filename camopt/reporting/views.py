@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from camopt.core.documents import CheckDoc
 from camopt.core.record import ExpectedYield
 from camopt.core.requirements import (
     GRADE_STYLES,
@@ -127,7 +128,7 @@ class Verdict:
         return words
 
     @property
-    def requirements(self) -> list[Json]:
+    def requirements(self) -> list[CheckDoc]:
         """Each check's JSON form (:meth:`Check.as_dict`)."""
         return [c.as_dict() for c in self.checks]
 
