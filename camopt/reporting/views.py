@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from camopt.core.documents import CheckDoc
+from camopt.core.documents import CheckDoc, ParetoSummary
 from camopt.core.record import ExpectedYield
 from camopt.core.requirements import (
     GRADE_STYLES,
@@ -307,7 +307,7 @@ class ShowView:
     table: Sequence[Mapping[str, Any]]
     reference: ReferenceVerdict | None = None
     pareto: Sequence[Mapping[str, Any]] | None = None
-    pareto_summary: Mapping[str, Any] | None = None
+    pareto_summary: ParetoSummary | None = None
     robust: RobustDoc | None = None
     robust_yield: RobustYield | None = None
     findings: Mapping[str, Any] = field(default_factory=dict)
