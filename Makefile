@@ -26,7 +26,7 @@ test: install
 
 lint: typecheck
 	$(BIN)/ruff check camopt tests bench scripts/mutants.py scripts/vcb_release_margin.py \
-		scripts/vcb_yield_limit.py
+		scripts/vcb_yield_limit.py scripts/archive_identity.py
 
 # types and units as a gate: mypy's settings are in pyproject.toml ([tool.mypy])
 typecheck: install

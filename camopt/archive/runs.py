@@ -20,7 +20,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import h5py
 import numpy as np
@@ -33,6 +33,9 @@ from camopt.core.runview import BestView, RunView
 from camopt.core.stats import succeeded
 from camopt.errors import ArchiveError, CamoptError
 from camopt.mechanics import Floats
+
+if TYPE_CHECKING:  # annotations only: no config models at import
+    from camopt.config.raw import RawDoc
 
 SCHEMA_VERSION = 2
 READABLE_SCHEMAS = (1, 2)
@@ -246,7 +249,7 @@ class _Layout:
 
     names: tuple[str, ...]
     constraints: tuple[str, ...]
-    config: dict[str, Any]
+    config: RawDoc
     to_display: Floats
     to_si: Floats
 
@@ -274,7 +277,7 @@ def _success(attrs: Any, fun: float, feasible: bool, target: float | None) -> bo
     return bool(succeeded([fun], [feasible], target)[0])
 
 
-def _json_dict(text: object) -> dict[str, Any]:
+def _json_dict(text: object) -> RawDoc:
     """An optional JSON object attribute ({} when absent: older archives)."""
     if text is None:
         return {}
@@ -356,7 +359,7 @@ the release-to-latch time ``closing_time_ms`` (with ``_low``/``_high`` and a ref
 prefix); ``closing_time_ms`` now means command to touch."""
 
 
-def renamed_metrics(metrics: dict[str, Any]) -> dict[str, Any]:
+def renamed_metrics(metrics: RawDoc) -> RawDoc:
     """An older archive's metrics under today's names (:data:`OLD_NAMES`), told apart by
     holding the old name without the new one; today's archives unchanged."""
     for old, new in OLD_NAMES.items():

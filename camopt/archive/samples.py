@@ -18,6 +18,7 @@ import h5py
 import numpy as np
 
 from camopt.archive.files import atomic_write, claim, open_archive, versions
+from camopt.core.documents import ToleranceDoc
 from camopt.errors import ArchiveError
 from camopt.mechanics import Bools, Floats
 
@@ -54,7 +55,7 @@ class ToleranceSamples:
     ``columns`` (n,), the normalised constraints ``g`` (n, m) named ``constraint_names``
     and ``feasible`` (n,)."""
 
-    summary: dict[str, Any]
+    summary: ToleranceDoc
     columns: dict[str, Floats]
     g: Floats
     constraint_names: tuple[str, ...]

@@ -32,7 +32,7 @@ import os
 import time
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import h5py
 import numpy as np
@@ -44,6 +44,9 @@ from camopt.config.sweep_spec import SweepSpec
 from camopt.core.record import Repeat, seed_id
 from camopt.core.stats import sweep_summary
 from camopt.errors import ArchiveError
+
+if TYPE_CHECKING:  # annotations only: no config models at import
+    from camopt.config.raw import RawDoc
 
 SCHEMA_VERSION = 2
 SNAPSHOT_SECONDS = 30.0
@@ -208,16 +211,41 @@ def read_journal(path: Path, spec: SweepSpec) -> list[Repeat]:
     return cells
 
 
-def cell_row(r: Repeat) -> dict[str, Any]:
+class CellDoc(TypedDict):
+    """A sweep cell as its journal line stores it (the stored names: ``seed`` is the
+    repeat's index, ``objective`` its ``fun``; ``x`` SI; ``history`` per iteration)."""
+
+    point: int
+    seed: int
+    objective: float
+    feasible: bool
+    success: bool
+    nfev: int
+    nit: int
+    wall_s: float
+    converged_nit: int
+    nfev_to_target: int
+    x: list[float]
+    history: dict[str, list[float]]
+
+
+def _plain(value: Any) -> Any:
+    """A numpy scalar as the Python one (JSON)."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def cell_row(r: Repeat) -> CellDoc:
     """A cell as its journal line stores it (plain JSON values, the stored names)."""
-    row: dict[str, Any] = {name: getattr(r, attr) for name, attr in _ATTRS.items()}
-    row = {k: v.item() if isinstance(v, np.generic) else v for k, v in row.items()}
-    row["x"] = np.asarray(r.x, dtype=float).tolist()
-    row["history"] = {k: np.asarray(v).tolist() for k, v in r.history.items()}
-    return row
+    return {"point": _plain(r.point), "seed": _plain(r.index), "objective": _plain(r.fun),
+            "feasible": _plain(r.feasible), "success": _plain(r.success),
+            "nfev": _plain(r.nfev), "nit": _plain(r.nit), "wall_s": _plain(r.wall_s),
+            "converged_nit": _plain(r.converged_nit),
+            "nfev_to_target": _plain(r.nfev_to_target),
+            "x": np.asarray(r.x, dtype=float).tolist(),
+            "history": {k: np.asarray(v).tolist() for k, v in r.history.items()}}
 
 
-def _cell(a: dict[str, Any], spec: SweepSpec, where: str) -> Repeat:
+def _cell(a: RawDoc, spec: SweepSpec, where: str) -> Repeat:
     """A stored cell (journal line or /cells row) as the Repeat it was; its spawn key and
     seed identifier follow from the seed index (child k of SeedSequence(run.seed))."""
     expected = sorted(_FIELDS)

@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import json
-from typing import Any
+from collections.abc import Mapping, Sequence
 
 import h5py
 import numpy as np
 
+from camopt.core.documents import Cell, Row
+
 STR = h5py.string_dtype()
 
 
-def write_table(group: h5py.Group, rows: list[dict[str, Any]]) -> None:
+def write_table(group: h5py.Group, rows: Sequence[Mapping[str, Cell]]) -> None:
     """Rows as one dataset per column: booleans as bool, whole numbers as int64, other
     numbers as float64, lists and strings as JSON text per row."""
     columns: list[str] = []
@@ -33,7 +35,7 @@ def write_table(group: h5py.Group, rows: list[dict[str, Any]]) -> None:
             group[col].attrs["json"] = True
 
 
-def read_table(group: h5py.Group) -> list[dict[str, Any]]:
+def read_table(group: h5py.Group) -> list[Row]:
     """Rows written by :func:`write_table`."""
     columns = json.loads(group.attrs["columns"])
     data = {}

@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -16,6 +16,9 @@ from camopt.cli.app import Format, app, errors
 from camopt.cli.console import escape, out
 from camopt.cli.layout import print_table
 from camopt.errors import CamoptError
+
+if TYPE_CHECKING:  # annotations only: archives are read lazily
+    from camopt.archive.listing import ArchiveRow
 
 
 @app.command(name="runs")
@@ -40,9 +43,9 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
                 view = archive.load_run(row["path"])
                 judged = verdict(view)
                 y = judged_yield(view)
-                row.update(verdict=judged.verdict or "-", verdict_grade=judged.grade,
-                           expected_yield=None if y is None else y.value,
-                           yield_target=judged.yield_target)
+                row.update({"verdict": judged.verdict or "-", "verdict_grade": judged.grade,
+                            "expected_yield": None if y is None else y.value,
+                            "yield_target": judged.yield_target})
             except CamoptError:
                 pass
     if format is Format.json:
@@ -64,7 +67,7 @@ def list_runs(folder: Annotated[Path, typer.Argument(help="folder of archives")]
                 numeric=[False, False, False, True, True, False], styles=styles)
 
 
-def yield_cell(row: dict[str, Any]) -> str:
+def yield_cell(row: ArchiveRow) -> str:
     """``96.3 %``, ``1.3 % < 95 %`` below the yield target, ``-`` without an estimate."""
     value, target = row.get("expected_yield"), row.get("yield_target")
     if value is None:

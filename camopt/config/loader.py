@@ -21,6 +21,7 @@ from camopt.config.models import (
     RunSection,
     SolverOptions,
 )
+from camopt.config.raw import RawDoc
 from camopt.errors import ConfigError, did_you_mean
 
 if sys.version_info >= (3, 11):
@@ -45,8 +46,8 @@ class Base:
     ``extends``) and its data with its own bases merged in (``merged``)."""
 
     path: str
-    own: dict[str, Any] = field(repr=False)
-    merged: dict[str, Any] = field(repr=False)
+    own: RawDoc = field(repr=False)
+    merged: RawDoc = field(repr=False)
 
 
 @dataclass(frozen=True)
@@ -59,13 +60,13 @@ class LoadedConfig:
     case: CaseConfig
     solver: SolverOptions
     run: RunSection
-    data: dict[str, Any] = field(repr=False)
+    data: RawDoc = field(repr=False)
     robust: RobustSection | None = None
     """``[robust]`` when the case file has one: the search optimises for yield."""
     bases: tuple[Base, ...] = field(default=(), repr=False)
     """The files this one ``extends``, nearest first (empty without ``extends``)."""
 
-    def effective(self) -> dict[str, Any]:
+    def effective(self) -> RawDoc:
         """The parsed values after overrides, as plain TOML-able data."""
         return {
             "case": self.case.model_dump(mode="json"),
@@ -118,7 +119,7 @@ def parse_value(raw: str) -> Any:
         return raw
 
 
-def apply_override(data: dict[str, Any], key: str, value: Any) -> None:
+def apply_override(data: RawDoc, key: str, value: Any) -> None:
     """Set ``section.key`` in parsed case-file data."""
     parts = key.split(".")
     node = data
@@ -174,7 +175,7 @@ def read_regular_file(path: str | Path, key: str, limit: int, what: str,
     return raw
 
 
-def _read(path: Path) -> tuple[str, dict[str, Any]]:
+def _read(path: Path) -> tuple[str, RawDoc]:
     """A case file's text and parsed TOML (:func:`read_regular_file`, at most
     MAX_FILE_BYTES)."""
     source = str(path)
@@ -197,7 +198,7 @@ def _read(path: Path) -> tuple[str, dict[str, Any]]:
 
 def _validate(
     model: type[BaseModel], data: Any, section: str, source: str, overridden: set[str],
-    context: dict[str, Any] | None = None, origin: str = "--set",
+    context: RawDoc | None = None, origin: str = "--set",
 ) -> Any:
     try:
         return model.model_validate(data, context=context)
@@ -250,7 +251,7 @@ def _select(
                       f"{did_you_mean(value, known)}; known: {names}")
 
 
-def _merge(base: dict[str, Any], child: dict[str, Any]) -> dict[str, Any]:
+def _merge(base: RawDoc, child: RawDoc) -> RawDoc:
     """[case], [run] and [robust] merge key by key; so does a child's [solver] that names
     no solver (``population = 100`` alone changes the base solver's population). A child's
     [solver] with a ``name`` replaces the base's whole, even for the same solver: a child
@@ -273,7 +274,7 @@ def _shown(path: Path) -> str:
     return path.as_posix() if relative.startswith("..") else relative
 
 
-def _own(text: str) -> dict[str, Any]:
+def _own(text: str) -> RawDoc:
     """The keys a case file's text sets itself (its ``extends`` left out)."""
     data = tomllib.loads(text)
     data.pop(EXTENDS, None)
@@ -281,7 +282,7 @@ def _own(text: str) -> dict[str, Any]:
 
 
 def _read_extended(path: Path, seen: tuple[Path, ...] = ()
-                   ) -> tuple[str, dict[str, Any], tuple[Base, ...]]:
+                   ) -> tuple[str, RawDoc, tuple[Base, ...]]:
     """Read a case file and, through ``extends = "other.toml"``, the files it builds on
     (a chain of at most MAX_EXTENDS_DEPTH files, without loops): its text, the merged data
     and the bases, nearest first."""
@@ -343,7 +344,7 @@ def load_config(
 
 
 def validate_data(
-    data: dict[str, Any],
+    data: RawDoc,
     solvers: Mapping[str, type[SolverOptions]],
     cases: Mapping[str, type[CaseConfig]],
     source: str = "<data>",

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from camopt.config.loader import apply_override, parse_value
+from camopt.config.raw import RawDoc
 from camopt.errors import ConfigError
 
 # ---- specification ------------------------------------------------------------------
@@ -91,7 +92,7 @@ def parse_grid(items: Iterable[str]) -> list[tuple[str, list[Any]]]:
 class SweepSpec:
     """What a sweep runs: the base config, the grid, the seed range."""
 
-    data: dict[str, Any]
+    data: RawDoc
     source: str
     text: str
     grid: list[tuple[str, list[Any]]]
@@ -102,13 +103,13 @@ class SweepSpec:
         """The root seed every cell's generator derives from (``run.seed``)."""
         return int(self.data["run"]["seed"])
 
-    def points(self) -> list[dict[str, Any]]:
+    def points(self) -> list[RawDoc]:
         """Every grid point as ``{key: value}`` (one empty point without a grid)."""
         keys = [k for k, _ in self.grid]
         return [dict(zip(keys, combo))
                 for combo in itertools.product(*(v for _, v in self.grid))] or [{}]
 
-    def point_data(self, point: dict[str, Any]) -> dict[str, Any]:
+    def point_data(self, point: RawDoc) -> RawDoc:
         """The base case-file data with a grid point's values set."""
         data = copy.deepcopy(self.data)
         for key, value in point.items():
@@ -146,7 +147,7 @@ class SweepSpec:
 class CellSpec:
     """One cell: a grid point's config data and one seed index."""
 
-    data: dict[str, Any]
+    data: RawDoc
     source: str
     entropy: int
     seed: int

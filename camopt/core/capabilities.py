@@ -10,10 +10,11 @@ work, never a silent fallback in the middle of a run (nevergrad's class qualifie
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any, Protocol, runtime_checkable
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from camopt.core.documents import RobustCheck
 from camopt.core.problem import Evaluation
 from camopt.mechanics import Bools, Floats, Ints
 
@@ -131,7 +132,7 @@ class Stochastic(Protocol):
         ...
 
     def final_check(self, best: Floats, seen: Sequence[Floats], seed: int,
-                    progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
+                    progress: Callable[[int, int], None] | None = None) -> RobustCheck:
         """The run's check of its best design and of the best of the repeats' ``seen``
         nominal designs, for the archive's ``robust_check`` (plain JSON data); ``progress``
         is told the rows done and in all as the check's chunks finish."""

@@ -8,10 +8,9 @@ pymoo is imported where used (the hypervolume; pymoo is slow to import)."""
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
+from camopt.core.documents import FrontsCompared, ParetoSummary, Row
 from camopt.core.runview import RunView
 from camopt.mechanics import Floats
 
@@ -27,7 +26,7 @@ def objectives(run: RunView) -> tuple[tuple[str, ...], Floats]:
     return names, np.array([-1.0 if n in maximise else 1.0 for n in names])
 
 
-def rows(run: RunView) -> list[dict[str, Any]] | None:
+def rows(run: RunView) -> list[Row] | None:
     """The Pareto set as rows of the objectives' metrics and ``feasible`` (None for a
     single-objective run)."""
     names, _ = objectives(run)
@@ -37,7 +36,7 @@ def rows(run: RunView) -> list[dict[str, Any]] | None:
             for row in run.table]
 
 
-def summary(run: RunView) -> dict[str, Any] | None:
+def summary(run: RunView) -> ParetoSummary | None:
     """What a Pareto run found, for the summary ``show`` and ``report`` lead with (None
     for a single-objective run): the objectives with their senses, the feasible front's
     size and extent (least and greatest of each objective), its knee, and what the
@@ -50,12 +49,13 @@ def summary(run: RunView) -> dict[str, Any] | None:
     if len(names) < 2:
         return None
     f = front(run)
-    doc: dict[str, Any] = {
+    doc: ParetoSummary = {
         "objectives": [{"name": n, "sense": "min" if s > 0 else "max"}
                        for n, s in zip(names, sign)],
         "front_size": int(len(f)), "designs": len(run.table)}
     if not len(f):
-        doc.update(extent=None, knee=None, headline="no feasible design on the front")
+        doc["extent"], doc["knee"] = None, None
+        doc["headline"] = "no feasible design on the front"
         return doc
     doc["extent"] = {n: [float(lo), float(hi)] for n, lo, hi in
                      zip(names, f.min(axis=0), f.max(axis=0))}
@@ -83,11 +83,11 @@ def summary(run: RunView) -> dict[str, Any] | None:
 def front(run: RunView) -> Floats:
     """The feasible Pareto designs' objectives, (n, n_obj), in their own units."""
     names, _ = objectives(run)
-    values = [[float(r[n]) for n in names] for r in rows(run) or [] if r["feasible"]]
+    values = [[r[n] for n in names] for r in rows(run) or [] if r["feasible"]]
     return np.array(values, dtype=float).reshape(-1, len(names))
 
 
-def compare_fronts(runs: list[RunView]) -> dict[str, Any] | None:
+def compare_fronts(runs: list[RunView]) -> FrontsCompared | None:
     """Hypervolume of each run's feasible front with one reference point for all (None
     unless every run is multi-objective on the same objectives and senses).
 

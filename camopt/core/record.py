@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, TypedDict
 import numpy as np
 from numpy.typing import NDArray
 
+from camopt.core.documents import AdjustmentUse, RobustCheck, Row
 from camopt.mechanics import Floats
 
 if TYPE_CHECKING:  # annotations only: the record stays pure data (numpy only)
@@ -39,7 +40,7 @@ class ExpectedYield(TypedDict, total=False):
     seed: int
     vary: list[str]
     requirements: list[RequirementYield]
-    adjustments: list[dict[str, Any]]
+    adjustments: list[AdjustmentUse]
     command: str
     reason: str
     estimated: str
@@ -104,7 +105,7 @@ class Repeat:
     g: NDArray[np.float64] = field(default_factory=_empty)
     """(n_constr,) normalised constraint values of ``x``, feasible where <= 0."""
     notes: tuple[str, ...] = ()
-    table: list[dict[str, Any]] = field(default_factory=list)
+    table: list[Row] = field(default_factory=list)
     """The solver's rows (every start, every coil count, the Pareto set)."""
     nominal_x: NDArray[np.float64] | None = None
     """Robust runs: the best design seen whose nominal evaluation is feasible."""
@@ -141,7 +142,7 @@ class RunRecord:
     interrupted: bool = False
     """True when Ctrl-C (or SIGTERM) or a failure stopped the run: ``repeats`` holds the
     finished ones."""
-    robust_check: dict[str, Any] | None = None
+    robust_check: RobustCheck | None = None
     """Robust runs: the final check of the best design (``robust``) and of the best design
     seen whose nominal evaluation is feasible (``nominal``), :func:`camopt.engine.robust.check`."""
     failure: str | None = None

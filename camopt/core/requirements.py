@@ -49,6 +49,7 @@ from typing import Any
 
 import numpy as np
 
+from camopt.core.documents import CheckDoc, RequirementSpread
 from camopt.mechanics import Bools, Floats
 
 RESOLUTION_DIGITS = 6
@@ -239,7 +240,7 @@ class Check:
         return (self.margin / r.band if r.band and self.margin is not None
                 and math.isfinite(self.margin) else None)
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> CheckDoc:
         """The JSON form: name, limit, value, margin, pass, at_limit, margin_share
         (:attr:`margin_share`), unit, source, quantity."""
         r = self.requirement
@@ -354,11 +355,11 @@ def grade(verdict: str | None, at_limit: bool, expected: float | None,
 
 
 def yields(requirements: Sequence[Requirement], samples: Mapping[str, Floats],
-           ) -> list[dict[str, Any]]:
+           ) -> list[RequirementSpread]:
     """Per requirement, its finite limits (``lower``/``upper``, None when unbounded), the
     share of ``samples`` (``{quantity: (n,)}``) that passes and the margin's percentiles;
     requirements whose quantity is not sampled are left out."""
-    out = []
+    out: list[RequirementSpread] = []
     for r in requirements:
         if r.quantity not in samples:
             continue

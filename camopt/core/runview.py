@@ -4,13 +4,17 @@ figures read. Pure data (numpy only); :mod:`camopt.archive` builds it from HDF5.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from camopt.core.documents import RobustCheck, Row
 from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
 from camopt.core.record import ExpectedYield, Repeat, RunRecord
 from camopt.mechanics import Floats
+
+if TYPE_CHECKING:  # annotations only: no config models at import
+    from camopt.config.raw import RawDoc
 
 
 @dataclass(frozen=True)
@@ -37,16 +41,16 @@ class RunView:
 
     path: str
     kind: str
-    case: dict[str, Any]
-    solver: dict[str, Any]
-    run: dict[str, Any]
+    case: RawDoc
+    solver: RawDoc
+    run: RawDoc
     objective_name: str
     variables: tuple[str, ...]
     constraints: tuple[str, ...]
     best: BestView
     repeats: list[Repeat]
     """Every repeat stored, in index order (``x`` in SI, as the run had it)."""
-    table: list[dict[str, Any]]
+    table: list[Row]
     analysis: dict[str, Floats] = field(repr=False, default_factory=dict)
     config_toml: str = ""
     created: str = ""
@@ -60,9 +64,9 @@ class RunView:
     """The config as run as TOML (overrides applied; empty for schema-1 archives)."""
     versions: dict[str, str] = field(default_factory=dict)
     """Library versions the run was made with (``numpy_version``, ...)."""
-    robust: dict[str, Any] = field(default_factory=dict)
+    robust: RawDoc = field(default_factory=dict)
     """The ``[robust]`` table as run (empty: a nominal run)."""
-    robust_check: dict[str, Any] = field(default_factory=dict)
+    robust_check: RobustCheck = field(default_factory=lambda: RobustCheck())
     """Robust runs: the final check of the best design (``robust``) and of the best
     nominally feasible design seen (``nominal``) on fresh draws (docs/tolerance.md)."""
     findings: dict[str, Any] = field(default_factory=dict)

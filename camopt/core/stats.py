@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from camopt.core.documents import FormYield, RunStatisticsDoc
 from camopt.mechanics import Bools, Floats, Ints
 
 if TYPE_CHECKING:
@@ -86,8 +87,11 @@ class RunStatistics:
     successes: int
     success_rate: float
 
-    def as_dict(self) -> dict[str, Any]:
-        return asdict(self)
+    def as_dict(self) -> RunStatisticsDoc:
+        """The JSON document, in the fields' order."""
+        return {"runs": self.runs, "best": self.best, "median": self.median,
+                "worst": self.worst, "feasible_fraction": self.feasible_fraction,
+                "successes": self.successes, "success_rate": self.success_rate}
 
 
 def run_statistics(objectives: Sequence[float], feasible: Sequence[bool],
@@ -276,10 +280,10 @@ def sweep_summary(spec: SweepSpec, results: Iterable[Repeat]) -> list[dict[str, 
 
 
 def per_variant(passed: Bools, variant: Ints, names: Sequence[str],
-                confidence: float) -> list[dict[str, Any]]:
+                confidence: float) -> list[FormYield]:
     """The yield of the draws of each model variant, with its Clopper-Pearson interval:
     ``passed`` (S,) bool, ``variant`` (S,) each draw's index into ``names``."""
-    out = []
+    out: list[FormYield] = []
     for v, name in enumerate(names):
         mine = variant == v
         count = int(mine.sum())

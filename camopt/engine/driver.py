@@ -18,6 +18,7 @@ import numpy as np
 from camopt.config import LoadedConfig
 from camopt.core import batch
 from camopt.core.capabilities import Stochastic
+from camopt.core.documents import RobustCheck
 from camopt.core.perf import fork_pool, kill_pool
 from camopt.core.problem import Problem, deb_best
 from camopt.core.record import Repeat, RunRecord, nfev_to_target, seed_id
@@ -269,7 +270,7 @@ def execute(config: LoadedConfig, seed: int | None = None, repeats: int | None =
 
 
 def _robust_check(problem: Problem, records: list[Repeat], best: Repeat, seed: int,
-                  progress: batch.RowsDone | None = None) -> dict[str, Any] | None:
+                  progress: batch.RowsDone | None = None) -> RobustCheck | None:
     """Stochastic (robust) runs: the problem's final check of the best design and of the
     best nominally feasible design the repeats saw (``progress`` told the rows done);
     None otherwise."""

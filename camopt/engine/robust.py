@@ -66,7 +66,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, cast
+from typing import cast
 
 import numpy as np
 
@@ -80,6 +80,7 @@ from camopt.core.capabilities import (
     Stochastic,
     capability_name,
 )
+from camopt.core.documents import DesignCheck, RobustCheck, with_quantile
 from camopt.core.problem import FEASIBILITY_TOL, Evaluation, ObjectiveFloor, Problem, deb_best
 from camopt.core.variation import (
     Distribution,
@@ -481,7 +482,7 @@ class RobustProblem(Problem, Stochastic):
         return np.isfinite(np.asarray(ev.extras[YIELD], dtype=float))
 
     def final_check(self, best: Floats, seen: Sequence[Floats], seed: int,
-                    progress: RowsDone | None = None) -> dict[str, Any]:
+                    progress: RowsDone | None = None) -> RobustCheck:
         """The best design and the best nominally feasible design ``seen`` (lowest nominal
         objective over the repeats) checked on the same fresh draws (:func:`check`)."""
         designs = [best]
@@ -489,7 +490,7 @@ class RobustProblem(Problem, Stochastic):
             f = self.base.evaluate(np.array(seen)).f
             designs.append(seen[int(np.argmin(f))])
         checked = check(self, designs, seed, progress)
-        result: dict[str, Any] = {"robust": checked[0]}
+        result: RobustCheck = {"robust": checked[0]}
         if len(checked) > 1:
             result["nominal"] = {**checked[1], "x": self.base.to_display(designs[1])}
         return result
@@ -573,7 +574,7 @@ def repeat_seed(child: np.random.SeedSequence, stage: int = 0) -> np.random.Seed
 
 
 def check(problem: RobustProblem, designs: Sequence[Floats], seed: int,
-          progress: RowsDone | None = None) -> list[dict[str, Any]]:
+          progress: RowsDone | None = None) -> list[DesignCheck]:
     """The final check: designs (SI) evaluated at ``check_samples`` fresh draws, the same
     draws for every design. Per design: nominal objective, mean and quantile objective,
     yield with its Clopper-Pearson interval, and per constraint its nominal value and its value at
@@ -590,22 +591,23 @@ def check(problem: RobustProblem, designs: Sequence[Floats], seed: int,
     at_target = np.partition(s.g, k, axis=1)[:, k, :]
     mean = statistic(s.f, "mean", spec.quantile)
     quant = statistic(s.f, "quantile", spec.quantile)
-    out = []
+    out: list[DesignCheck] = []
     for i in range(len(X)):
         passed = int(s.feasible[i].sum())
         rate = stats.success_rate(passed, spec.check_samples, spec.confidence)
-        out.append({
+        doc: DesignCheck = {
             "samples": spec.check_samples, "yield": rate["rate"], "yield_low": rate["ci_low"],
             "yield_high": rate["ci_high"], "confidence": spec.confidence,
             # the case's objective, also when the search minimised the margin
             "case_objective": problem.base.objective_name,
             "objective_nominal": float(nominal.f[i]), "objective_mean": float(mean[i]),
-            f"objective_q{round(spec.quantile * 100):02d}": float(quant[i]),
             "nominal_feasible": bool(nominal.feasible[i]),
             "margins": {c: {"nominal": float(nominal.g[i, j]), "at_target": float(at_target[i, j])}
                         for j, c in enumerate(problem.base.constraint_names)},
-            **({"per_form": stats.per_variant(s.feasible[i], s.variant, problem.plan.variants,
-                                        spec.confidence)} if problem.plan.variants else {}),
-        })
+        }
+        if problem.plan.variants:
+            doc["per_form"] = stats.per_variant(s.feasible[i], s.variant, problem.plan.variants,
+                                                spec.confidence)
+        out.append(with_quantile(doc, spec.quantile, float(quant[i])))
     return out
 

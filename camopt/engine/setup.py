@@ -14,6 +14,7 @@ import numpy as np
 
 from camopt.cases import build_problem, case_configs, get_case
 from camopt.config import LoadedConfig, load_config, validate_data
+from camopt.config.raw import RawDoc
 from camopt.core.perf import pin_blas_threads
 from camopt.core.problem import Problem
 from camopt.errors import ConfigError, SolverError
@@ -31,7 +32,7 @@ def load(path: str | Path, overrides: Sequence[str] = ()) -> LoadedConfig:
     return load_config(path, solver_options(), case_configs(), overrides)
 
 
-def validate(data: dict[str, Any], source: str = "<data>", grid: Sequence[str] = ()
+def validate(data: RawDoc, source: str = "<data>", grid: Sequence[str] = ()
              ) -> LoadedConfig:
     """Validate parsed case-file data (a sweep cell's) against the registries; an error in
     one of the ``grid``'s keys is blamed on ``--grid``."""

@@ -23,13 +23,21 @@ import math
 import shlex
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
 
 from camopt.cases import build_problem, get_case, run_requirements
 from camopt.core.batch import RowsDone
+from camopt.core.documents import (
+    AdjustmentUse,
+    Percentiles,
+    RequirementSpread,
+    Sensitivity,
+    Swing,
+    ToleranceDoc,
+)
 from camopt.core.problem import FEASIBILITY_TOL, Evaluation, Problem
 from camopt.core.record import ExpectedYield
 from camopt.core.runview import RunView
@@ -71,7 +79,8 @@ class Tolerance:
     samples: Evaluation  # n rows
     objective_name: str
     constraint_names: tuple[str, ...]
-    summary: dict[str, Any] = field(default_factory=dict)
+    summary: ToleranceDoc = field(default_factory=lambda: cast(ToleranceDoc, {}))
+    """The ``tolerance --format json`` document (:func:`summarise`; set by :func:`analyse`)."""
     outside: NDArray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     """(n,) samples with an input outside its physical range (counted as failed)."""
     run: RunView | None = None
@@ -208,28 +217,28 @@ def evaluate_inputs(run: RunView, problem: Problem, varies: Sequence[Vary], valu
     return mark(ev, bad), bad
 
 
-def summarise(t: Tolerance) -> dict[str, Any]:
+def summarise(t: Tolerance) -> ToleranceDoc:
     """The ``tolerance --format json`` document."""
     nominal = {k: float(v[0]) for k, v in t.metric_columns(t.nominal).items()}
     columns = t.metric_columns(t.samples)
     swings = t.metric_columns(t.swings)
-    metrics, sensitivity, tornado = {}, {}, {}
+    metrics: dict[str, Percentiles] = {}
+    sensitivity: dict[str, list[Sensitivity]] = {}
+    tornado: dict[str, list[Swing]] = {}
     rhos = spearman_columns(t.inputs, columns)
     for name, values in columns.items():
         with np.errstate(invalid="ignore"):
             finite = values[~np.isnan(values)]
             p = np.percentile(finite, [5, 50, 95]) if finite.size else [np.nan] * 3
         metrics[name] = {"p05": float(p[0]), "p50": float(p[1]), "p95": float(p[2])}
-        rows: list[dict[str, Any]] = []  # one JSON row per varied input
-        for j, v in enumerate(t.varies):
-            rows.append({"input": v.name, "spearman": rhos[name][j],
-                         "low": float(swings[name][2 * j]),
-                         "high": float(swings[name][2 * j + 1])})
-        rows.sort(key=lambda r: -abs(r["spearman"]) if r["spearman"] is not None else 1.0)
-        sensitivity[name] = [{"input": r["input"], "spearman": r["spearman"]} for r in rows]
-        tornado[name] = [{"input": r["input"], "low": r["low"], "high": r["high"]}
-                         for r in rows]
+        rho = rhos[name]  # the inputs by |rho|, strongest first (stable: unknown ones last)
+        order = sorted(range(len(t.varies)),
+                       key=lambda j: -abs(r) if (r := rho[j]) is not None else 1.0)
+        sensitivity[name] = [{"input": t.varies[j].name, "spearman": rho[j]} for j in order]
+        tornado[name] = [{"input": t.varies[j].name, "low": float(swings[name][2 * j]),
+                          "high": float(swings[name][2 * j + 1])} for j in order]
     yields = requirement_yields(t, columns)
+    low, high = _interval(int(np.count_nonzero(t.samples.feasible)), len(t.inputs))
     return {
         "run": t.run_path, "samples": int(len(t.inputs)), "seed": t.seed,
         "distribution": t.distribution.value,
@@ -237,7 +246,7 @@ def summarise(t: Tolerance) -> dict[str, Any]:
                   "unit": "%" if v.relative else "own", "half_width": v.half_width(x)}
                  for v, x in zip(t.varies, t.nominal_inputs)],
         "yield": float(np.mean(t.samples.feasible)),
-        **_interval(int(np.count_nonzero(t.samples.feasible)), len(t.inputs)),
+        "yield_low": low, "yield_high": high, "yield_confidence": YIELD_CONFIDENCE,
         "forms": list(t.variants),
         "per_form": per_variant(t.samples.feasible, t.variant, t.variants, YIELD_CONFIDENCE),
         "tolerance_class": t.tolerance_class,
@@ -258,7 +267,7 @@ ADJUSTMENT_BINS = 10
 """Equal bins of an adjustment's reach in its histogram (``adjustment_use``)."""
 
 
-def adjustment_use(t: Tolerance, columns: dict[str, NDArray]) -> list[dict[str, Any]]:
+def adjustment_use(t: Tolerance, columns: dict[str, NDArray]) -> list[AdjustmentUse]:
     """Each adjustment the case declares and the samples report (its metric): the travel
     the draws needed, at the 5th, 50th and 95th percentiles of the draws within reach, a
     histogram of those over the reach (``ADJUSTMENT_BINS`` equal bins), and the share of
@@ -267,7 +276,7 @@ def adjustment_use(t: Tolerance, columns: dict[str, NDArray]) -> list[dict[str, 
         return []
     from camopt.cases.registry import get_case
 
-    out = []
+    out: list[AdjustmentUse] = []
     for adj in get_case(t.run.kind).adjustments:
         if adj.metric not in columns or adj.reach not in t.run.case:
             continue
@@ -285,22 +294,21 @@ def adjustment_use(t: Tolerance, columns: dict[str, NDArray]) -> list[dict[str, 
     return out
 
 
-def _interval(passed: int, samples: int) -> dict[str, float]:
+def _interval(passed: int, samples: int) -> tuple[float, float]:
     """The yield's 95 % interval (Clopper-Pearson, :func:`camopt.core.stats.share_interval`:
     the interval every yield camopt states comes with)."""
     low, high = share_interval(passed, samples, YIELD_CONFIDENCE)
-    return {"yield_low": float(low), "yield_high": float(high),
-            "yield_confidence": YIELD_CONFIDENCE}
+    return float(low), float(high)
 
 
-def _limiting(yields: list[dict[str, Any]], columns: dict[str, NDArray]) -> str | None:
+def _limiting(yields: list[RequirementSpread], columns: dict[str, NDArray]) -> str | None:
     """The quantity of the requirement with the least yield (first declared on a tie)
     among those the samples report as a metric: the tornado's default."""
     rows = [r for r in yields if r["quantity"] in columns]
     return min(rows, key=lambda r: r["yield"])["quantity"] if rows else None
 
 
-def requirement_yields(t: Tolerance, columns: dict[str, NDArray]) -> list[dict[str, Any]]:
+def requirement_yields(t: Tolerance, columns: dict[str, NDArray]) -> list[RequirementSpread]:
     """Yield per requirement of the case (:mod:`camopt.core.requirements`) over the samples,
     with its margin's 5th and 50th percentiles and whether the nominal design passes;
     requirements whose quantity the samples do not report are left out."""

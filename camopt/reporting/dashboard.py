@@ -21,9 +21,12 @@ import sys
 from dataclasses import asdict, dataclass, field
 from html import escape
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from camopt.errors import CamoptError
+
+if TYPE_CHECKING:  # annotations only: archives are read lazily
+    from camopt.archive.listing import ArchiveRow
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -101,7 +104,7 @@ def expected_yield(view: Any) -> float | None:
     return _finite(None if judged is None else judged.value)
 
 
-def run_row(path: Path, listed: dict[str, Any]) -> DashboardRow:
+def run_row(path: Path, listed: ArchiveRow) -> DashboardRow:
     """A run archive's row (``listed``: its :func:`camopt.archive.listing.describe` row)."""
     from camopt import archive
     from camopt.reporting.report import verdict

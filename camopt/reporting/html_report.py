@@ -13,16 +13,129 @@ import platform
 from collections.abc import Mapping
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 from camopt import archive
 from camopt.archive.sweeps import load_sweep
+from camopt.core.documents import ParetoSummary, Row, RunStatisticsDoc, ToleranceDoc
+from camopt.core.record import Repeat
 from camopt.core.runview import RunView
 from camopt.reporting import report
-from camopt.reporting.views import RobustYield, Verdict
+from camopt.reporting.views import (
+    RankedPoint,
+    ReferenceVerdict,
+    RobustSummary,
+    RobustYield,
+    SummaryRow,
+    Verdict,
+)
+
+if TYPE_CHECKING:  # annotations only: matplotlib is imported where a figure is drawn
+    from matplotlib.figure import Figure
 
 LIBRARIES = ("camopt", "numpy", "scipy", "h5py", "matplotlib", "pymoo", "pydantic", "Jinja2",
              "ezdxf")
+
+
+class FigureDoc(TypedDict):
+    """A figure on the page: its name, its title (one line) and its SVG data URI."""
+
+    name: str
+    title: str
+    uri: str
+
+
+class VerdictContext(TypedDict):
+    """The verdict a page leads with (:func:`verdict_context`)."""
+
+    verdict: str | None
+    verdict_sentence: str
+    verdict_class: str
+    at_limit: list[str]
+    robust_yield: str
+    robust_met: bool | None
+    expected_yield: str
+    next_step: str
+    verdict_columns: tuple[str, ...]
+    verdict_rows: list[tuple[list[str], str]]
+
+
+class RunContext(VerdictContext):
+    """What ``report.html.j2`` shows of a run archive (:func:`run_context`)."""
+
+    reference: ReferenceVerdict | None
+    pareto: ParetoSummary | None
+    pareto_rows: list[list[str]]
+    pareto_columns: tuple[str, ...]
+    kind: str
+    title: str
+    path: str
+    case_kind: str
+    case_summary: str
+    paper_source: str
+    solver: str
+    created: str
+    seed: int | None
+    seed_entropy: str
+    repeats_planned: int | None
+    interrupted: bool
+    status: str
+    feasible: bool
+    active: list[str]
+    violated: list[str]
+    objective_name: str
+    reference_label: str
+    rows: tuple[SummaryRow, ...]
+    robust: RobustSummary | None
+    statistics: RunStatisticsDoc
+    target: float | None
+    repeats: list[Repeat]
+    table: list[Row]
+    table_rows: int
+    table_columns: list[str]
+    notes: list[tuple[int, str]]
+    figures: list[FigureDoc]
+    config_toml: str
+    versions: dict[str, str]
+    environment: dict[str, str]
+
+
+class SweepContext(VerdictContext):
+    """What ``report.html.j2`` shows of a sweep archive (:func:`sweep_context`)."""
+
+    reference: None
+    kind: str
+    title: str
+    path: str
+    source: str
+    grid: list[tuple[str, list[Any]]]
+    seeds: list[int]
+    cells: int
+    ranking: tuple[RankedPoint, ...]
+    figures: list[FigureDoc]
+    config_toml: str
+    environment: dict[str, str]
+
+
+class ToleranceContext(TypedDict):
+    """What ``tolerance.html.j2`` shows of a tolerance archive."""
+
+    title: str
+    s: ToleranceDoc
+    created: str
+    figures: list[FigureDoc]
+
+
+class CalibrationContext(TypedDict):
+    """What ``calibration.html.j2`` shows of a calibration archive (``s``: the
+    ``calibrate --format json`` document, whose entries the case extends)."""
+
+    title: str
+    s: dict[str, Any]
+    created: str
+    case_kind: str
+    config_toml: str
+    figures: list[FigureDoc]
 
 
 def number(value: Any) -> str:
@@ -41,12 +154,13 @@ def svg_uri(fig: Any) -> str:
     return "data:image/svg+xml;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
 
 
-def _figures(figures: dict[str, Any]) -> list[dict[str, str]]:
-    out = []
+def _figures(figures: Mapping[str, Figure]) -> list[FigureDoc]:
+    out: list[FigureDoc] = []
     for name, fig in figures.items():
         title = fig.axes[0].get_title() if fig.axes else name
-        if not title and fig._suptitle is not None:  # stacked axes: the figure's title
-            title = fig._suptitle.get_text()
+        suptitle = getattr(fig, "_suptitle", None)  # get_suptitle() is matplotlib >= 3.8
+        if not title and suptitle is not None:  # stacked axes: the figure's title
+            title = suptitle.get_text()
         title = " ".join(title.split())  # a wrapped title is one line of text here
         out.append({"name": name, "title": title or name, "uri": svg_uri(fig)})
     return out
@@ -62,7 +176,7 @@ def _environment() -> dict[str, str]:
     return found
 
 
-def run_context(view: RunView) -> dict[str, Any]:
+def run_context(view: RunView) -> RunContext:
     """What the template shows of a run archive."""
     from camopt.cases import get_case
     from camopt.reporting import plots
@@ -98,7 +212,7 @@ def run_context(view: RunView) -> dict[str, Any]:
 
 def verdict_context(judged: Verdict, robust: RobustYield | None = None,
                     expected: Mapping[str, Any] | None = None, next_step: str = ""
-                    ) -> dict[str, Any]:
+                    ) -> VerdictContext:
     """The verdict the page leads with: a robust run's yield against its target, the
     sentence, pass/fail, the expected yield, the table's cells with each row's class
     (``bad``: fails, ``at-limit``: passes at its limit, else '') and the next step
@@ -117,7 +231,7 @@ def verdict_context(judged: Verdict, robust: RobustYield | None = None,
             "verdict_rows": list(zip(report.verdict_rows(judged.checks), classes))}
 
 
-def sweep_context(path: Path) -> dict[str, Any]:
+def sweep_context(path: Path) -> SweepContext:
     """What the template shows of a sweep archive (read through ``load_sweep`` only)."""
     from camopt.reporting import plots
 
@@ -146,6 +260,7 @@ def render(path: Path) -> str:
         return env.get_template("tolerance.html.j2").render(**tolerance_context(path))
     if kind == "calibration":
         return env.get_template("calibration.html.j2").render(**calibration_context(path))
+    context: SweepContext | RunContext
     if kind == "sweep":
         context = sweep_context(path)
     else:
@@ -153,7 +268,7 @@ def render(path: Path) -> str:
     return env.get_template("report.html.j2").render(**context)
 
 
-def tolerance_context(path: Path) -> dict[str, Any]:
+def tolerance_context(path: Path) -> ToleranceContext:
     """What the page shows of a tolerance archive: its summary (``s``, as ``tolerance
     --format json`` printed it) and its figures drawn from the stored samples."""
     from camopt.archive.samples import load_samples
@@ -164,7 +279,7 @@ def tolerance_context(path: Path) -> dict[str, Any]:
             "created": samples.created, "figures": _figures(figures(samples))}
 
 
-def calibration_context(path: Path) -> dict[str, Any]:
+def calibration_context(path: Path) -> CalibrationContext:
     """What the page shows of a calibration archive: its summary (``s``, as ``calibrate
     --format json`` printed it: per form the RMS misfit, kept, parameters with intervals,
     each curve's analyser quantities measured and fitted, the predictions) and the fits'

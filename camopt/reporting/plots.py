@@ -179,11 +179,12 @@ def pareto_front(run: RunView) -> Figure:
     marks: list[tuple[str, list[Any], dict[str, Any]]] = [
         (label, [ref.get(n) for n in (a, b)],
          {"marker": "*", "s": 160, "color": PAPER_STYLE["color"]})] if label else []
-    doc = pareto.summary(run) or {}
-    if doc.get("knee") is None:
+    doc = pareto.summary(run)
+    knee = doc.get("knee") if doc else None
+    if knee is None:
         notes.append("knee: none (no feasible design on the front)")
     else:
-        marks.append(("knee", [doc["knee"].get(n) for n in (a, b)],
+        marks.append(("knee", [knee.get(n) for n in (a, b)],
                       {"marker": "D", "s": 60, "facecolors": "none", "edgecolors": "black"}))
     marks.append((f"headline (best {run.objective_name})",
                   [run.best.metrics.get(n, run.best.objective if n == run.objective_name

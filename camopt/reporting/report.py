@@ -18,7 +18,9 @@ from typing import Any
 import numpy as np
 
 from camopt.cases import run_requirements
+from camopt.config.raw import RawDoc
 from camopt.core import pareto, stats
+from camopt.core.documents import DesignCheck
 from camopt.core.record import ExpectedYield
 from camopt.core.requirements import (
     DEFAULT_YIELD_TARGET,
@@ -207,12 +209,17 @@ def spreads(run: RunView) -> dict[str, Spread]:
             for r in estimate.get("requirements", [])}
 
 
+def _checked(run: RunView) -> DesignCheck:
+    """A robust run's final check of its optimum ({} for a nominal run)."""
+    return (run.robust_check or {}).get("robust") or {}
+
+
 def robust_yield(run: RunView) -> RobustYield | None:
     """A robust run's answer: the final check's yield of the robust optimum with its
     interval, samples and the target (``value``, ``low``, ``high``, ``samples``,
     ``target``, ``meets_target``: the interval's low end at or above the target); None for
     a nominal run."""
-    checked = (run.robust_check or {}).get("robust")
+    checked = _checked(run)
     if not checked:
         return None
     target = run.robust.get("yield_target")
@@ -363,7 +370,7 @@ def judged_yield(run: RunView) -> stats.YieldInterval | None:
     """The yield a run's verdict is graded on: a robust run's final check on fresh draws,
     else the stored expected yield (or the one :func:`expected` made at show time; never
     a new one, as :func:`spreads`); None when there is none."""
-    checked = (run.robust_check or {}).get("robust") or {}
+    checked = _checked(run)
     if checked.get("yield") is not None:
         return stats.YieldInterval.of(checked)
     return stats.YieldInterval.of(run.expected_yield or _ESTIMATED.get(run.path) or {})
@@ -464,7 +471,7 @@ def summary(run: RunView) -> Summary:
     ref = reference(run)
     best = run.best
     prefixes = tuple(REFERENCE_PREFIXES)
-    checked = (run.robust_check or {}).get("robust") or {}
+    checked = _checked(run)
     case_objective = checked.get("case_objective", run.objective_name)
     rows = [SummaryRow("objective", run.objective_name, best.objective,
                        ref.get("objective", ref.get(run.objective_name)))]
@@ -501,7 +508,7 @@ def status(run: RunView) -> str:
     return f"INFEASIBLE: {why}"
 
 
-def _flatten(prefix: str, value: Any, out: dict[str, Any]) -> None:
+def _flatten(prefix: str, value: Any, out: RawDoc) -> None:
     if isinstance(value, dict):
         for k, v in value.items():
             _flatten(f"{prefix}.{k}" if prefix else k, v, out)
@@ -557,7 +564,7 @@ def compare(runs: list[RunView], equivalence: float | None = None) -> Comparison
                                   f"{first!r}: runs of different kinds are not comparable")
     flat = []
     for run in runs:
-        cfg: dict[str, Any] = {}
+        cfg: RawDoc = {}
         _flatten("", {"case": run.case, "solver": run.solver, "run": run.run}, cfg)
         flat.append(cfg)
     keys = sorted(set().union(*flat))

@@ -12,6 +12,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from camopt.archive.samples import ToleranceSamples
+from camopt.core.documents import ToleranceDoc
 from camopt.core.plotting import PAPER_STYLE, figure, new_figure, readable
 from camopt.core.requirements import Requirement
 from camopt.engine.tolerance import Tolerance
@@ -47,7 +48,7 @@ def samples_of(t: Tolerance | ToleranceSamples) -> ToleranceSamples:
                             tuple(t.constraint_names), t.samples.feasible, t.run_path)
 
 
-def limits_of(summary: dict) -> dict[str, Requirement]:
+def limits_of(summary: ToleranceDoc) -> dict[str, Requirement]:
     """The requirements with a numeric limit in an analysis' summary, by the quantity
     they bound (summaries written before the limits were stored give none)."""
     found = {}
@@ -140,7 +141,8 @@ def tornado(t: Tolerance | ToleranceSamples, metric: str) -> Figure:
                          readable(metric), "input at -X / +X")
     for y, r in enumerate(rows):
         for end, color, sign in (("low", "tab:blue", "-"), ("high", "tab:orange", "+")):
-            ax.barh(y, r[end] - base, left=base, color=color, alpha=0.85,
+            at = r["low"] if end == "low" else r["high"]
+            ax.barh(y, at - base, left=base, color=color, alpha=0.85,
                     label=f"input at {sign}X" if y == 0 else None, gid=f"{end}-{y}")
     ax.set_yticks(range(len(rows)), [_tolerance_label(r["input"], tolerances)
                                      for r in rows])

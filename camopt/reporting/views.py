@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from camopt.core.documents import CheckDoc, FrontsCompared, ParetoSummary, RobustCheck, Row
 from camopt.core.record import ExpectedYield
 from camopt.core.requirements import (
     GRADE_STYLES,
@@ -127,7 +128,7 @@ class Verdict:
         return words
 
     @property
-    def requirements(self) -> list[Json]:
+    def requirements(self) -> list[CheckDoc]:
         """Each check's JSON form (:meth:`Check.as_dict`)."""
         return [c.as_dict() for c in self.checks]
 
@@ -282,7 +283,7 @@ class RobustDoc:
     """A robust run's ``[robust]`` settings as run and its stored final check."""
 
     settings: Mapping[str, Any]
-    check: Mapping[str, Any]
+    check: RobustCheck
 
     def to_json(self) -> Json:
         return json_doc({"settings": dict(self.settings), "check": dict(self.check)})
@@ -303,10 +304,10 @@ class ShowView:
     solver: Mapping[str, Any]
     best: BestView
     repeats: tuple[RepeatRow, ...]
-    table: Sequence[Mapping[str, Any]]
+    table: Sequence[Row]
     reference: ReferenceVerdict | None = None
-    pareto: Sequence[Mapping[str, Any]] | None = None
-    pareto_summary: Mapping[str, Any] | None = None
+    pareto: Sequence[Row] | None = None
+    pareto_summary: ParetoSummary | None = None
     robust: RobustDoc | None = None
     robust_yield: RobustYield | None = None
     findings: Mapping[str, Any] = field(default_factory=dict)
@@ -412,7 +413,7 @@ class Comparison:
     statistics: tuple[RunStatistics, ...]
     labels: tuple[str, ...]
     tests: tuple[Significance, ...]
-    hypervolume: Mapping[str, Any] | None = None
+    hypervolume: FrontsCompared | None = None
 
     def to_json(self) -> Json:
         """The ``compare --format json`` document."""

@@ -6,16 +6,20 @@ import enum
 import time
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from camopt.config.models import SolverOptions
 from camopt.core import batch
 from camopt.core.capabilities import capability_name
+from camopt.core.documents import Row
 from camopt.core.problem import Evaluation, Problem, deb_best
 from camopt.errors import SolverError
 from camopt.mechanics import Bools, Floats
+
+if TYPE_CHECKING:  # annotations only: no config models at import
+    from camopt.config.raw import RawDoc
 
 
 class StopReason(str, enum.Enum):
@@ -61,7 +65,7 @@ class Solver(ABC):
     requires: ClassVar[tuple[type, ...]] = ()
     summary: ClassVar[str] = ""
     integers: ClassVar[bool] = True  # whether the solver handles integer variables
-    test_options: ClassVar[dict[str, Any]] = {}
+    test_options: ClassVar[RawDoc] = {}
     """The solver's own small budget: options under which it solves the contract tests'
     4-variable sphere (tests/solvers/test_contract.py) in a few seconds."""
     jobs: int = 1
@@ -120,7 +124,7 @@ class Solver(ABC):
         """The iteration budget, if the solver knows it (for progress bars)."""
         return None
 
-    def table(self) -> list[dict[str, Any]]:
+    def table(self) -> list[Row]:
         """Rows of a table the solver produces for the archive (empty for most)."""
         return []
 
@@ -174,14 +178,14 @@ def best_index(ev: Evaluation) -> int:
     return deb_best(ev.f, ev.violation)
 
 
-def design_rows(problem: Problem, X: Floats) -> list[dict[str, Any]]:
+def design_rows(problem: Problem, X: Floats) -> list[Row]:
     """One table row per candidate: variables in display units, the case's descriptive
     metrics (:meth:`Problem.describe`), objective, feasibility, active and violated
     constraints. Tables are not a hot path."""
     ev = batch.describe(problem, X)
     rows = []
     for i, x in enumerate(X):
-        row: dict[str, Any] = dict(problem.to_display(x))
+        row: Row = dict(problem.to_display(x))
         row.update({k: float(v[i]) for k, v in ev.extras.items() if k not in row})
         row[problem.objective_name] = float(ev.f[i])
         row["feasible"] = bool(ev.feasible[i])

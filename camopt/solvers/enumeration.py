@@ -7,12 +7,13 @@ case's full model in one call and tabulates each with its active constraints.
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 
 from camopt.config.models import SolverOptions
 from camopt.core.capabilities import HasFamily
+from camopt.core.documents import Row
 from camopt.core.problem import Evaluation, Problem
 from camopt.mechanics import Floats
 from camopt.solvers.base import Solver, StopReason, best_index, design_rows
@@ -61,7 +62,7 @@ class Enumeration(Solver):
     def stop_reason(self) -> StopReason | None:
         return StopReason.EXHAUSTED if self.X is not None else None
 
-    def table(self) -> list[dict[str, Any]]:
+    def table(self) -> list[Row]:
         """One row per family member with its active constraints."""
         assert self.X is not None and self.ev is not None
         return design_rows(self.problem, self.X)

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 from pydantic import Field
 
 from camopt.config.models import SolverOptions
+from camopt.core.documents import Row
 from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
 from camopt.mechanics import Floats
@@ -64,7 +65,7 @@ class Evaluate(Solver):
     def stop_reason(self) -> StopReason | None:
         return StopReason.EXHAUSTED if self.ev is not None else None
 
-    def table(self) -> list[dict[str, Any]]:
+    def table(self) -> list[Row]:
         """One row per given design, labelled."""
         assert self.ev is not None
         labels = list(self.options.labels) + [f"design {i}" for i in range(len(self.X))]

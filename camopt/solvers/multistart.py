@@ -28,11 +28,12 @@ before it left). Without a limit reached the meter changes nothing.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, TypedDict
+from typing import Any, TypedDict, cast
 
 import numpy as np
 
 from camopt.config.models import SolverOptions
+from camopt.core.documents import Row
 from camopt.core.perf import fork_pool, kill_pool
 from camopt.core.problem import Evaluation, Problem
 from camopt.mechanics import Bools, Floats
@@ -259,18 +260,18 @@ class MultiStart(Solver):
                 ids[i] = len(centres) - 1
         return ids
 
-    def table(self) -> list[dict[str, Any]]:
+    def table(self) -> list[Row]:
         assert self.ev is not None
         ids = self.clusters()
         conv = self.converged()
         rows = []
         for i, (x, r) in enumerate(zip(self.X, self.results)):
-            row: dict[str, Any] = {"start": i, "cluster": int(ids[i])}
+            row: Row = {"start": i, "cluster": int(ids[i])}
             row.update({f"start_{k}": v for k, v in
                         self.problem.to_display(self.starts[i]).items()})
             row.update(self.problem.to_display(x))
             row[self.problem.objective_name] = float(self.ev.f[i])
-            row.update(r)
+            row.update(cast(Row, r))  # scalars: StopReason is a str
             row["converged"] = bool(conv[i])
             row["feasible"] = bool(self.ev.feasible[i] and conv[i])
             rows.append(row)

@@ -37,6 +37,7 @@ from pydantic import Field, model_validator
 
 from camopt.config.models import MAX_ITERATIONS, MAX_POPULATION, SolverOptions
 from camopt.core.capabilities import Repairable
+from camopt.core.documents import Row
 from camopt.core.problem import Evaluation, Problem
 from camopt.errors import SolverError
 from camopt.mechanics import Floats
@@ -248,7 +249,7 @@ class NSGA2(Solver):
         F = np.asarray(opt.get("F"), dtype=float) * self.sign
         return X[np.lexsort(F.T[::-1])]
 
-    def table(self) -> list[dict[str, Any]]:
+    def table(self) -> list[Row]:
         """One row per Pareto design: variables, metrics, objective, feasibility."""
         if self.algorithm is None or self.algorithm.opt is None:
             return []

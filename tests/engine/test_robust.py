@@ -132,6 +132,11 @@ def test_run_is_reproducible_and_checked():
     assert [d for d, _ in heard] == sorted(d for d, _ in heard)
     check = a.robust_check["robust"]
     assert check["samples"] == 200 and 0 <= check["yield_low"] <= check["yield"] <= 1
+    # the stored keys and their order (scripts read the archive's JSON): the quantile's
+    # key names the config's quantile (0.9 by default)
+    assert list(check) == ["samples", "yield", "yield_low", "yield_high", "confidence",
+                           "case_objective", "objective_nominal", "objective_mean",
+                           "objective_q90", "nominal_feasible", "margins"]
     assert a.problem.constraint_names[-1] == "yield" and len(a.best.g) == a.problem.n_constr
 
 

@@ -7,7 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from camopt.cases.vcb.dynamics import ClosingEvents
+from camopt.cases.vcb.dynamics import ClosingEvents, ClosingMotion, closing_events
+from camopt.cases.vcb.loads import Loads
+from camopt.cases.vcb.model import VcbModel
+from camopt.cases.vcb.motion import MotionParameters
 from camopt.mechanics import Bools, Floats, Ints
 from camopt.units import MS
 
@@ -82,3 +85,21 @@ def band_ends(name: str) -> tuple[str, str]:
     unit = BANDED[name][1]
     return name.replace(unit, "_low" + unit), name.replace(unit, "_high" + unit)
 
+
+
+def band_motion(m: VcbModel, nominal: ClosingMotion, A: Floats, kc: Floats, link: Floats,
+                rod_offset: float, loads: Loads, sets: MotionParameters, k: int, steps: int,
+                pre: Floats | None = None, member_pre: Floats | None = None) -> MotionBand:
+    """The band of n designs (follower law ``A``, spring rates ``kc``, linkage ``link``,
+    n rows each; ``loads`` per design): their closing under ``k`` parameter sets each
+    (``sets``: k x n rows, set-major) beside the ``nominal`` closing, one vectorised
+    call. ``pre`` (n, 2) m the closing springs' compressions as made, or ``member_pre``
+    (k x n, 2) each set's own (a breaker set at the factory under that set)."""
+    if member_pre is not None:
+        events = closing_events(m, np.tile(A, (k, 1)), np.tile(kc, (k, 1)),
+                                np.tile(link, (k, 1)), rod_offset, loads.tiled(k), sets,
+                                steps, pre=member_pre)
+    else:
+        events = closing_events(m, A, kc, link, rod_offset, loads, sets, steps, sets=k,
+                                pre=pre)
+    return MotionBand.of(nominal, events, k)

@@ -18,7 +18,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 
@@ -154,7 +154,19 @@ def stroke(model: VcbModel, design: Design) -> float:
     return float(kin.s1[0, -1])
 
 
-def _quantities(q: AnalyserQuantities) -> dict[str, Any]:
+class QuantitiesDoc(TypedDict):
+    """The analyser's quantities of one curve (measured or fitted), engineers' units."""
+
+    closing_time_ms: float | None
+    contact_velocity_m_s: float | None
+    total_travel_mm: float | None
+    contact_wipe_mm: float | None
+    over_travel_mm: float | None
+    rebound_mm: float | None
+    notes: list[str]
+
+
+def _quantities(q: AnalyserQuantities) -> QuantitiesDoc:
     def mm(v: float | None) -> float | None:
         return None if v is None else v / MM
     return {"closing_time_ms": None if q.closing_time is None else q.closing_time / MS,

@@ -1,7 +1,9 @@
 """The metrics a VCB judgement reports beside its objective and constraints (display
 units: mm, deg, MPa, ms): the factory setting's nut travel, the closing's values under
 the identified parameters with their band over every parameter set, and, for tables and
-reports, the cam's shape (pressure angle, curvature, normal force, output range)."""
+reports, the cam's shape (pressure angle, curvature, normal force, output range); one
+design's metrics as the archive stores them, and its analysis curves along the stroke
+and against time."""
 
 from __future__ import annotations
 
@@ -10,10 +12,11 @@ import numpy as np
 from camopt.cases.vcb.band import BANDED, band_ends
 from camopt.cases.vcb.constraints import Terms
 from camopt.cases.vcb.dynamics import ClosingMotion
-from camopt.cases.vcb.model import follower_dwell, row_max
+from camopt.cases.vcb.model import Loads, VcbModel, follower_dwell, row_max
 from camopt.cases.vcb.setting import Setting
-from camopt.mechanics import Floats
-from camopt.units import DEG, MM, MPA
+from camopt.core.problem import Evaluation
+from camopt.mechanics import Floats, cam
+from camopt.units import DEG, MM, MPA, TO_MS
 
 
 def setting_metrics(setting: Setting) -> dict[str, Floats]:
@@ -88,4 +91,62 @@ def shape_metrics(q: Terms, A: Floats, torque: Floats, zeros: Floats
         "follower_dwell_deg": dwell,
         "eq39_sum_n": eq39, "eq39_mean_n": eq39 / c.positions,
         "output_start_deg": ends[:, 0], "output_end_deg": ends[:, 1],
+    }
+
+
+def design_metrics(ev: Evaluation) -> dict[str, object]:
+    """One design's metrics from its described evaluation (one row): every extra as a
+    float, the output's start and end as its range (least, greatest), and feasibility
+    (1.0 or 0.0)."""
+    out: dict[str, object] = {k: float(v[0]) for k, v in ev.extras.items()}
+    ends = [float(ev.extras[k][0]) for k in ("output_start_deg", "output_end_deg")]
+    del out["output_start_deg"], out["output_end_deg"]
+    out["output_range_deg"] = [min(ends), max(ends)]
+    out["feasible"] = float(ev.feasible[0])
+    return out
+
+
+def stroke_curves(m: VcbModel, A: Floats, kc: Floats, link: Floats, rod_offset: float,
+                  load: Loads, pre: Floats | None) -> dict[str, Floats]:
+    """Analysis curves of one design (law ``A``, spring rates ``kc``, linkage ``link``,
+    one row each; closing-spring compressions ``pre`` where set) along the closing stroke,
+    display units: the cam's pitch curve and profile, the follower and pressure angles,
+    curvature, normal force and contact stresses, the output angle and rod travel, the
+    output and resisting forces (Eq 39's terms) and the driving and resisting works."""
+    kin = m.kinematics(A, link, rod_offset)
+    torque = m.closing_torque(kc, pre=pre)
+    bal = m.balance(kin, kc, torque, load, pre)
+    con = m.contact(kin.follower, torque)
+    xc, yc = cam.profile(con.xp, con.yp, con.dxp, con.dyp, m.rf)
+    return {
+        "cam_angle_deg": m.theta_c / DEG,
+        "pitch_x_mm": con.xp[0] / MM, "pitch_y_mm": con.yp[0] / MM,
+        "profile_x_mm": xc[0] / MM, "profile_y_mm": yc[0] / MM,
+        "follower_angle_deg": kin.follower.phi[0] / DEG,
+        "pressure_angle_deg": cam.pressure_angle(m.l2, m.l6, kin.follower)[0] / DEG,
+        "curvature_mm": con.curvature[0] / MM,
+        "normal_force_n": con.normal_force[0],
+        "sigma_max_mpa": con.sigma[0] / MPA, "tau_max_mpa": con.tau[0] / MPA,
+        "output_angle_deg": m.output_angle(kin)[0] / DEG,
+        "rod_travel_mm": kin.s1[0] / MM,
+        "fo_n": np.r_[np.nan, m.output_force(bal)[0]], "fr_n": np.r_[np.nan, bal.fr[0]],
+        # works along the stroke as exact potential differences
+        "driving_work_j": m.closing_energy(kc, m.spring_ext, pre)[0, 0]
+        - m.closing_energy(kc, m.spring_ext, pre)[0],
+        "resistant_work_j": load.resistant_energy(kin.s1[0]),
+    }
+
+
+def motion_curves(mo: ClosingMotion) -> dict[str, Floats]:
+    """The closing of one design (the first row of ``mo``) against time, display units,
+    where its time is defined."""
+    shown = np.isfinite(mo.time[0])
+    return {
+        "time_ms": mo.time[0, shown] * TO_MS,
+        "dyn_cam_angle_deg": mo.theta_c[shown] / DEG,
+        "dyn_rod_travel_mm": mo.rod[0, shown] / MM,
+        "dyn_rod_velocity_m_s": mo.rod_velocity[0, shown],
+        "dyn_contact_travel_mm": mo.contact[0, shown] / MM,
+        "dyn_contact_velocity_m_s": mo.contact_velocity[0, shown],
+        "dyn_cam_torque_nm": mo.cam_torque[0, shown],
     }

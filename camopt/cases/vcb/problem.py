@@ -9,13 +9,20 @@ from dataclasses import replace
 import numpy as np
 
 from camopt.cases.vcb import life
-from camopt.cases.vcb.band import MotionBand
+from camopt.cases.vcb.band import MotionBand, band_motion
 from camopt.cases.vcb.band_sets import band_rows, form_sets, identified, joined, parameter_sets
 from camopt.cases.vcb.config import CamDesign, VcbConfig
 from camopt.cases.vcb.constraints import CONSTRAINTS, Terms
-from camopt.cases.vcb.dynamics import ClosingMotion, closing_events, closing_motion
+from camopt.cases.vcb.dynamics import ClosingMotion, closing_motion
 from camopt.cases.vcb.forms import link_mass_rows
-from camopt.cases.vcb.metrics import motion_metrics, setting_metrics, shape_metrics
+from camopt.cases.vcb.metrics import (
+    design_metrics,
+    motion_curves,
+    motion_metrics,
+    setting_metrics,
+    shape_metrics,
+    stroke_curves,
+)
 from camopt.cases.vcb.model import Loads, VcbModel, phi_max, rate_zeros
 from camopt.cases.vcb.parts import (
     LINK_FIELDS,
@@ -27,13 +34,13 @@ from camopt.cases.vcb.parts import (
     parts_of,
     profiled,
 )
-from camopt.cases.vcb.setting import Setting, nut_setting, rows_of
-from camopt.cases.vcb.verdict import worst_of
+from camopt.cases.vcb.setting import Setting, set_at_factory
+from camopt.cases.vcb.verdict import over_life, worst_of
 from camopt.core.capabilities import HasVariants, VariesCase
 from camopt.core.problem import Evaluation, ObjectiveFloor, Problem, Variable
 from camopt.errors import ConfigError
-from camopt.mechanics import Floats, Ints, cam, hertz
-from camopt.units import DEG, MM, MPA, N_PER_MM, TO_MS, TO_N_PER_MM
+from camopt.mechanics import Floats, Ints, hertz
+from camopt.units import DEG, MM, MPA, N_PER_MM, TO_N_PER_MM
 
 
 class VcbProblem(Problem, VariesCase, HasVariants):
@@ -233,30 +240,19 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         and needed travel); without a setting ``(parts, None)``."""
         if self.setting_column is None:
             return parts, None
-        c, m = self.config, self.model
+        c = self.config
         X = np.atleast_2d(np.asarray(X, dtype=float))
         n = len(X)
         parts = Parts() if parts is None else parts
-        base = parts.pre if parts.pre is not None else case_pre(c, n)
         A, kc, link = self.designs(X, parts.link)
-        A = self.profiled(A, parts)
         every = self.forms[form or 0]
         k = every.count + 1  # the fit, then the band's other sets of the form
         params = as_made(joined(every, c.efficiency), k, n, self._moved(X, n), parts,
                          c.efficiency)
-        A_rows, kc_rows, link_rows = (np.tile(a, (k, 1)) for a in (A, kc, link))
-        loads = self.loads(parts).tiled(k)
-
-        def velocity_of(pre: Floats, rows: Ints) -> Floats:
-            total = k * n
-            return closing_events(
-                m, rows_of(A_rows, rows, total), rows_of(kc_rows, rows, total),
-                rows_of(link_rows, rows, total), self.rod_offset, rows_of(loads, rows, total),
-                rows_of(params, rows, total), c.dynamics_steps, pre=pre).closing_velocity_avg
-
-        pre, setting = nut_setting(velocity_of, np.tile(base, (k, 1)),
-                                   np.tile(X[:, self.setting_column], k), k,
-                                   c.preload_setting_range_mm, c.preload_setting_resolution_mm)
+        pre, setting = set_at_factory(
+            self.model, c, self.profiled(A, parts), kc, link, self.rod_offset,
+            self.loads(parts), params, parts.pre if parts.pre is not None else case_pre(c, n),
+            X[:, self.setting_column], k)
         return replace(parts, pre=pre), setting
 
     def release_offset(self, X: Floats) -> Floats | float:
@@ -288,16 +284,9 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         # a design's latch moved from the identified offset moves every set's with it: the
         # sets keep their spread (what the ADAMS data leave open) about the design's
         sets = as_made(members, k, n, self._moved(X, n), parts, self.config.efficiency)
-        if member_pre is not None:  # each set's breaker set with its own nut travel
-            events = closing_events(self.model, np.tile(A, (k, 1)), np.tile(kc, (k, 1)),
-                                    np.tile(link, (k, 1)), self.rod_offset,
-                                    self.loads(parts).tiled(k), sets,
-                                    self.config.dynamics_steps, pre=member_pre)
-        else:
-            events = closing_events(self.model, A, kc, link, self.rod_offset,
-                                    self.loads(parts), sets, self.config.dynamics_steps,
-                                    sets=k, pre=None if parts is None else parts.pre)
-        return MotionBand.of(nominal, events, k)
+        return band_motion(self.model, nominal, A, kc, link, self.rod_offset,
+                           self.loads(parts), sets, k, self.config.dynamics_steps,
+                           pre=None if parts is None else parts.pre, member_pre=member_pre)
 
     def _evaluate(self, X: Floats, detail: bool, parts: Parts | None = None,
                   form: int | None = None) -> Evaluation:
@@ -309,11 +298,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
             return start
         aged_parts, aged_setting = life.aged(self.config, len(start.f), parts, setting)
         end = self._judge(X, detail, aged_parts, aged_setting, form)
-        if "preload_setting" in self.constraint_names:  # the nut is set once, as built
-            column = self.constraint_names.index("preload_setting")
-            end = replace(end, g=end.g.copy())
-            end.g[:, column] = start.g[:, column]
-        return worst_of([start, end], self.config.penalty, life_end=end)
+        return over_life(start, end, self.constraint_names, self.config.penalty)
 
     @property
     def ages(self) -> bool:
@@ -378,13 +363,7 @@ class VcbProblem(Problem, VariesCase, HasVariants):
 
     # ---- single-design output ----------------------------------------------------
     def _metrics_of(self, x: Floats) -> dict[str, object]:
-        ev = self.describe(x[None, :])
-        out: dict[str, object] = {k: float(v[0]) for k, v in ev.extras.items()}
-        ends = [float(ev.extras[k][0]) for k in ("output_start_deg", "output_end_deg")]
-        del out["output_start_deg"], out["output_end_deg"]
-        out["output_range_deg"] = [min(ends), max(ends)]
-        out["feasible"] = float(ev.feasible[0])
-        return out
+        return design_metrics(self.describe(x[None, :]))
 
     def metrics(self, x: Floats) -> dict[str, object]:
         """Headline metrics of the design and, prefixed ``initial_``, of the vendor's."""
@@ -395,48 +374,14 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         return out
 
     def curves(self, x: Floats) -> dict[str, Floats]:
-        """Analysis curves of one design along the closing stroke (display units)."""
-        m = self.model
+        """Analysis curves of one design along the closing stroke and against time
+        (display units; :func:`stroke_curves`, :func:`motion_curves`), the breaker as set
+        at the factory where the run sets it."""
         A, kc, link = self.designs(x)
-        parts, _ = self.as_set(x, None)  # the breaker as set at the factory, if it is
+        parts, _ = self.as_set(x, None)
         pre = None if parts is None else parts.pre
-        kin = m.kinematics(A, link, self.rod_offset)
-        torque = m.closing_torque(kc, pre=pre)
-        bal = m.balance(kin, kc, torque, self.load, pre)
-        con = m.contact(kin.follower, torque)
-        xc, yc = cam.profile(con.xp, con.yp, con.dxp, con.dyp, m.rf)
-        return {
-            "cam_angle_deg": m.theta_c / DEG,
-            "pitch_x_mm": con.xp[0] / MM, "pitch_y_mm": con.yp[0] / MM,
-            "profile_x_mm": xc[0] / MM, "profile_y_mm": yc[0] / MM,
-            "follower_angle_deg": kin.follower.phi[0] / DEG,
-            "pressure_angle_deg": cam.pressure_angle(m.l2, m.l6, kin.follower)[0] / DEG,
-            "curvature_mm": con.curvature[0] / MM,
-            "normal_force_n": con.normal_force[0],
-            "sigma_max_mpa": con.sigma[0] / MPA, "tau_max_mpa": con.tau[0] / MPA,
-            "output_angle_deg": m.output_angle(kin)[0] / DEG,
-            "rod_travel_mm": kin.s1[0] / MM,
-            "fo_n": np.r_[np.nan, m.output_force(bal)[0]], "fr_n": np.r_[np.nan, bal.fr[0]],
-            # works along the stroke as exact potential differences
-            "driving_work_j": m.closing_energy(kc, m.spring_ext, pre)[0, 0]
-            - m.closing_energy(kc, m.spring_ext, pre)[0],
-            "resistant_work_j": self.load.resistant_energy(kin.s1[0]),
-            **self._motion_curves(x, parts),
-        }
-
-    def _motion_curves(self, x: Floats, parts: Parts | None = None) -> dict[str, Floats]:
-        """Closing dynamics of one design (its ``parts``) against time (display units)."""
-        mo = self.motion(x, parts=parts)
-        shown = np.isfinite(mo.time[0])
-        return {
-            "time_ms": mo.time[0, shown] * TO_MS,
-            "dyn_cam_angle_deg": mo.theta_c[shown] / DEG,
-            "dyn_rod_travel_mm": mo.rod[0, shown] / MM,
-            "dyn_rod_velocity_m_s": mo.rod_velocity[0, shown],
-            "dyn_contact_travel_mm": mo.contact[0, shown] / MM,
-            "dyn_contact_velocity_m_s": mo.contact_velocity[0, shown],
-            "dyn_cam_torque_nm": mo.cam_torque[0, shown],
-        }
+        return {**stroke_curves(self.model, A, kc, link, self.rod_offset, self.load, pre),
+                **motion_curves(self.motion(x, parts=parts))}
 
     def analysis(self, x: Floats) -> dict[str, Floats]:
         """Curves of the design and of the vendor's initial design (``initial_`` prefix)."""

@@ -18,6 +18,11 @@ from typing import TypeVar, cast
 
 import numpy as np
 
+from camopt.cases.vcb.config import VcbConfig
+from camopt.cases.vcb.dynamics import closing_events
+from camopt.cases.vcb.loads import Loads
+from camopt.cases.vcb.model import VcbModel
+from camopt.cases.vcb.motion import MotionParameters
 from camopt.mechanics import Floats, Ints
 from camopt.units import MM
 
@@ -135,3 +140,29 @@ def rows_of(value: _Rows, rows: Ints, total: int) -> _Rows:
     return replace(value, **{f.name: rows_of(getattr(value, f.name), rows, total)  # type: ignore[type-var]
                              for f in fields(value)  # type: ignore[arg-type]
                              if isinstance(getattr(value, f.name), np.ndarray)})
+
+
+def set_at_factory(m: VcbModel, c: VcbConfig, A: Floats, kc: Floats, link: Floats,
+                   rod_offset: float, loads: Loads, params: MotionParameters, base: Floats,
+                   velocity: Floats, sets: int) -> tuple[Floats, Setting]:
+    """n breakers (follower law ``A``, spring rates ``kc``, linkage ``link``, n rows each;
+    ``loads`` per breaker) set by the preload nut under ``sets`` parameter sets each
+    (``params``: sets x n rows, set-major, the fit first): ``base`` (n, 2) the closing
+    springs' compressions as made, ``velocity`` (n,) the velocity each breaker is set to.
+    The analyser's reading is the closing's average velocity
+    (:func:`~camopt.cases.vcb.dynamics.closing_events`, one vectorised call over the rows
+    a trial needs); the travel within ``preload_setting_range_mm`` at
+    ``preload_setting_resolution_mm`` (:func:`nut_setting`, whose result this is)."""
+    n = len(A)
+    A_rows, kc_rows, link_rows = (np.tile(a, (sets, 1)) for a in (A, kc, link))
+    loads = loads.tiled(sets)
+
+    def velocity_of(pre: Floats, rows: Ints) -> Floats:
+        total = sets * n
+        return closing_events(
+            m, rows_of(A_rows, rows, total), rows_of(kc_rows, rows, total),
+            rows_of(link_rows, rows, total), rod_offset, rows_of(loads, rows, total),
+            rows_of(params, rows, total), c.dynamics_steps, pre=pre).closing_velocity_avg
+
+    return nut_setting(velocity_of, np.tile(base, (sets, 1)), np.tile(velocity, sets), sets,
+                       c.preload_setting_range_mm, c.preload_setting_resolution_mm)

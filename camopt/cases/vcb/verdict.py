@@ -8,6 +8,7 @@ the worst, the nut the longest travel any judgement needs."""
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 from enum import Enum
 
 import numpy as np
@@ -109,3 +110,16 @@ def worst_of(each: list[Evaluation], penalty: float, sum_counts: bool = False,
         extras.update({f"life_end_{k}": life_end.extras[k] for k in LIFE_END_METRICS
                        if k in life_end.extras})
     return Evaluation(f=f, g=g, extras=extras)
+
+
+def over_life(start: Evaluation, end: Evaluation, constraint_names: tuple[str, ...],
+              penalty: float) -> Evaluation:
+    """The verdict on breakers judged as built (``start``) and at the end of their life
+    (``end``, :mod:`.life`): :func:`worst_of` both, the end's metrics reported too; the
+    preload nut's reach (``preload_setting``) judged as built alone, since the nut is set
+    once, at the factory."""
+    if "preload_setting" in constraint_names:
+        column = constraint_names.index("preload_setting")
+        end = replace(end, g=end.g.copy())
+        end.g[:, column] = start.g[:, column]
+    return worst_of([start, end], penalty, life_end=end)

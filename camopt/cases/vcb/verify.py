@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,6 +30,52 @@ command to touch) the check accepts (2 %)."""
 VELOCITY_LIMIT = 0.03
 """Largest relative difference of the touch and the analyser's contact velocity (3 %)."""
 INSTALL = "pip install 'camopt[multibody]'"
+
+
+class QuantityDoc(TypedDict):
+    """A compared quantity in ``verify --format json``: both models' values, their ratio
+    and relative difference, the limit and whether the difference is within it."""
+
+    name: str
+    unit: str
+    camopt: float
+    multibody: float
+    ratio: float
+    relative_difference: float
+    limit: float | None
+    within: bool | None
+
+
+class SetDoc(TypedDict):
+    form: str
+    set: int
+    parameters: dict[str, float]
+    quantities: list[QuantityDoc]
+    agree: bool
+"""The comparison under one parameter set (``set``: its index in its form)."""
+
+
+class EngineSettings(TypedDict):
+    """The multibody engine and the settings it ran with."""
+
+    name: str
+    version: str
+    step_s: float
+    contact_stiffness_n_per_m: float
+    restitution: float
+    contact_restitution: float
+    coupler_kg: float
+
+
+class VerificationDoc(TypedDict):
+    """``verify --format json``: the design, the engine, the identified set's quantities,
+    every set's comparison and whether all agree."""
+
+    design: str
+    engine: EngineSettings
+    quantities: list[QuantityDoc]
+    sets: list[SetDoc]
+    agree: bool
 
 
 @dataclass(frozen=True)
@@ -63,7 +109,7 @@ class Quantity:
             return True
         return bool(abs(self.relative_difference) <= self.limit)
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> QuantityDoc:
         return {"name": self.name, "unit": self.unit, "camopt": self.camopt,
                 "multibody": self.multibody, "ratio": self.ratio,
                 "relative_difference": self.relative_difference, "limit": self.limit,
@@ -85,7 +131,7 @@ class SetCheck:
     def agree(self) -> bool:
         return all(q.within is not False for q in self.quantities)
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> SetDoc:
         return {"form": self.form, "set": self.index, "parameters": self.parameters,
                 "quantities": [q.as_dict() for q in self.quantities], "agree": self.agree}
 
@@ -97,7 +143,7 @@ class Verification:
 
     design: str
     sets: tuple[SetCheck, ...]
-    engine: dict[str, Any]
+    engine: EngineSettings
 
     @property
     def quantities(self) -> tuple[Quantity, ...]:
@@ -108,7 +154,7 @@ class Verification:
     def agree(self) -> bool:
         return all(s.agree for s in self.sets)
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> VerificationDoc:
         return {"design": self.design, "engine": self.engine,
                 "quantities": [q.as_dict() for q in self.quantities],
                 "sets": [s.as_dict() for s in self.sets], "agree": self.agree}
@@ -283,7 +329,7 @@ def verify(run: Any, problem: Any, design: str = "best", step: float | None = No
                                _quantities(ours, ev, problem.config.latch_delay_ms)))
     import exudyn
 
-    engine = {"name": "exudyn", "version": exudyn.__version__, "step_s": step,
+    engine: EngineSettings = {"name": "exudyn", "version": exudyn.__version__, "step_s": step,
               "contact_stiffness_n_per_m": multibody.CONTACT_STIFFNESS,
               "restitution": restitution, "contact_restitution": contact_restitution,
               "coupler_kg": coupler_kg}
