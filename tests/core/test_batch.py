@@ -108,3 +108,12 @@ def test_variants_are_chunked_apart_and_give_one_call_s_rows():
     assert [len(np.unique(v)) for v in seen] == [1] * 4  # 12 rows of 0: 8 + 4; 11 of 1: 8 + 3
     assert [len(v) for v in seen] == [8, 4, 8, 3]
     assert heard[-1] == (23, 23) and [d for d, _ in heard] == sorted(d for d, _ in heard)
+
+
+def test_vcb_chunks_rows_as_its_batch_rows_says():
+    """The VCB's chunks are its own 512 rows (robust draws cost less per row than at the
+    default 256), every other case's the default."""
+    vcb = build_problem(load(CONFIGS / "vcb_velocity.toml").case)
+    assert batch.chunk_rows(vcb) == 512
+    assert batch.chunk_rows(build_problem(load(CONFIGS / "fast_switch.toml").case)) == \
+        batch.CHUNK_ROWS
