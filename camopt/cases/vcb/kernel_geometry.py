@@ -12,7 +12,32 @@ import math
 from numba import njit
 from numpy.typing import NDArray
 
-__all__ = ["closing_geometry"]
+from camopt.mechanics import trig
+
+__all__ = ["closing_geometry", "sincos"]
+
+_COS, _SIN = trig._COS, trig._SIN  # the tables of camopt.mechanics.trig (constants here)
+_STEP, _LIMIT = trig._STEP, trig._LIMIT
+_INVERSE = 1 / trig._STEP
+_SIZE = len(trig._COS)
+
+
+@njit(cache=True, error_model="numpy")
+def sincos(angle: float) -> tuple[float, float]:
+    """cos and sin of ``angle`` as :func:`camopt.mechanics.trig.sincos` computes them
+    (the nearest table angle k h, a three-term series of the remainder, one rotation;
+    within 1e-15 of libm), libm's beyond its table (|angle| >= ~25 rad, NaN, inf): a
+    tenth of libm's cos and sin together, the largest share of a node's geometry."""
+    if not abs(angle) < _LIMIT:
+        return math.cos(angle), math.sin(angle)
+    k = round(angle * _INVERSE)
+    d = angle - k * _STEP
+    i = k % _SIZE  # negative k from the end, as stored
+    cb, sb = _COS[i], _SIN[i]
+    d2 = d * d
+    cd = (d2 * (1 / 24) - 0.5) * d2 + 1.0
+    sd = d - d2 * d * (1 / 6)
+    return cb * cd - sb * sd, sb * cd + cb * sd
 
 
 @njit(cache=True, error_model="numpy")
@@ -53,8 +78,7 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
                 phi = A[i, k] + t * phi
                 if k > 0:
                     dphi = k * A[i, k] + t * dphi
-            angle = phi + xi
-            c2, s2 = math.cos(angle), math.sin(angle)
+            c2, s2 = sincos(phi + xi)
             a = -k24 * c2 + 2 * l1 * l4 * c1
             b = -k24 * s2 + 2 * l1 * l4 * s1f
             c = k12 * c1 * c2 + k12 * s1f * s2 + lengths
