@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
@@ -57,6 +58,8 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
     rate on the nodes (m,) are shared."""
     nd, d1 = A.shape
     m = len(theta)
+    phi = np.empty(m)
+    dphi = np.empty(m)
     for i in range(nd):
         l1, l3, l4, l5, th1 = link[i, 0], link[i, 1], link[i, 2], link[i, 3], link[i, 4]
         frame = theta_bo - th1
@@ -69,16 +72,21 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
         k1, k2, p1, p2 = kc[i, 0], kc[i, 1], pre[i, 0], pre[i, 1]
         ok, arm, x0 = loads[0, i], loads[1, i], loads[2, i]
         wk, wp, fc = loads[3, i], loads[4, i], loads[5, i]
+        # the law in passes over the nodes (the innermost loops run over nodes, so the
+        # compiler can vectorise them), by Horner's rule as before
+        phi[:] = A[i, d1 - 1]
+        dphi[:] = (d1 - 1) * A[i, d1 - 1]
+        for k in range(d1 - 2, -1, -1):
+            a_k = A[i, k]
+            for j in range(m):
+                phi[j] = a_k + theta[j] * phi[j]
+            if k > 0:
+                ka_k = k * a_k
+                for j in range(m):
+                    dphi[j] = ka_k + theta[j] * dphi[j]
         y0 = 0.0
         for j in range(m):
-            t = theta[j]
-            phi = A[i, d1 - 1]
-            dphi = (d1 - 1) * A[i, d1 - 1]
-            for k in range(d1 - 2, -1, -1):
-                phi = A[i, k] + t * phi
-                if k > 0:
-                    dphi = k * A[i, k] + t * dphi
-            c2, s2 = sincos(phi + xi)
+            c2, s2 = sincos(phi[j] + xi)
             a = -k24 * c2 + 2 * l1 * l4 * c1
             b = -k24 * s2 + 2 * l1 * l4 * s1f
             c = k12 * c1 * c2 + k12 * s1f * s2 + lengths
@@ -92,9 +100,9 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
             if j == 0:
                 y0 = y
             s1 = y - y0
-            ds1 = (s4 * q + c4 * p) * rate * dphi
+            ds1 = (s4 * q + c4 * p) * rate * dphi[j]
             ext = extension[j]
-            out[0, i, j] = dphi
+            out[0, i, j] = dphi[j]
             out[1, i, j] = s1
             out[2, i, j] = ds1
             out[3, i, j] = 0.5 * (k1 * (p1 - ext) ** 2 + k2 * (p2 - ext) ** 2)
