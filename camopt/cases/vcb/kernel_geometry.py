@@ -60,6 +60,8 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
     m = len(theta)
     phi = np.empty(m)
     dphi = np.empty(m)
+    cos2 = np.empty(m)
+    sin2 = np.empty(m)
     for i in range(nd):
         l1, l3, l4, l5, th1 = link[i, 0], link[i, 1], link[i, 2], link[i, 3], link[i, 4]
         frame = theta_bo - th1
@@ -84,9 +86,14 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
                 ka_k = k * a_k
                 for j in range(m):
                     dphi[j] = ka_k + theta[j] * dphi[j]
-        y0 = 0.0
         for j in range(m):
-            c2, s2 = sincos(phi[j] + xi)
+            cos2[j], sin2[j] = sincos(phi[j] + xi)
+        # the rod's height at the first node, then every node in one branch-free pass
+        y0 = 0.0
+        for j in range(min(m, 1)):
+            y0 = _rod(cos2[j], sin2[j], k24, k12, l1, l4, c1, s1f, lengths, p, q)
+        for j in range(m):
+            c2, s2 = cos2[j], sin2[j]
             a = -k24 * c2 + 2 * l1 * l4 * c1
             b = -k24 * s2 + 2 * l1 * l4 * s1f
             c = k12 * c1 * c2 + k12 * s1f * s2 + lengths
@@ -96,10 +103,7 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
             c4 = (a * c + b * root) * inv  # the branch -1
             s4 = (b * c - a * root) * inv
             rate = (-k24 * (s2 * c4 - c2 * s4) - k12 * c1 * s2 + k12 * s1f * c2) / root
-            y = s4 * p - c4 * q
-            if j == 0:
-                y0 = y
-            s1 = y - y0
+            s1 = (s4 * p - c4 * q) - y0
             ds1 = (s4 * q + c4 * p) * rate * dphi[j]
             ext = extension[j]
             out[0, i, j] = dphi[j]
@@ -115,3 +119,16 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
                             + 0.5 * wk * (wipe * wipe - wp * wp) - fc * closed)
             force = s1 * wk + wk * (wp - gap) if s1 >= gap else -fc
             out[6, i, j] = (force + s1 * (arm * ok * arm) + arm * ok * x0) * ds1
+
+
+@njit(cache=True, error_model="numpy")
+def _rod(c2: float, s2: float, k24: float, k12: float, l1: float, l4: float, c1: float,
+         s1f: float, lengths: float, p: float, q: float) -> float:
+    """The rod's height y_m at one node (the four-bar of :func:`closing_geometry`)."""
+    a = -k24 * c2 + 2 * l1 * l4 * c1
+    b = -k24 * s2 + 2 * l1 * l4 * s1f
+    c = k12 * c1 * c2 + k12 * s1f * s2 + lengths
+    norm = a * a + b * b
+    root = math.sqrt(norm - c * c)
+    inv = 1.0 / norm
+    return (b * c - a * root) * inv * p - (a * c + b * root) * inv * q
