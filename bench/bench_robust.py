@@ -13,13 +13,16 @@ centring's cost (``centre_generations``) by the same run without it.
 ``python -m bench.bench_robust [CONFIG ...] [--generations N]``: only those robust
 configs (e.g. ``vcb_velocity_robust``), and every run at N generations (a reduced budget
 while developing; the ratio is then for N generations); ``--ratio-only``: the robust
-repeat and the nominal one alone.
+repeat and the nominal one alone; ``--times N``: the robust and the nominal repeat N
+times each, one after the other in turn, and their medians (a nominal repeat of ~3 s
+moved by 30 % between runs on the shared host; the ratio of medians is steadier).
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import statistics
 import time
 from pathlib import Path
 
@@ -52,6 +55,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--ratio-only", action="store_true",
                         help="only the robust repeat and the nominal one (no runs without "
                         "[robust], centring or racing)")
+    parser.add_argument("--times", type=int, default=1,
+                        help="the robust and the nominal repeat this many times each, in "
+                        "turn: their medians")
     args = parser.parse_args(argv)
     tune_allocator()
     for robust_name, nominal_name in PAIRS:
@@ -73,9 +79,18 @@ def main(argv: list[str] | None = None) -> None:
             budget = f"{gens} generations"
         _warm(cfg)
         _warm(nominal)
-        robust_s, draws = _cpu(cfg)
+        robust_times, shipped_times = [], []
+        for _ in range(max(args.times, 1)):  # in turn: a change of load falls on both
+            robust_s, draws = _cpu(cfg)
+            robust_times.append(robust_s)
+            shipped_times.append(_cpu(load(CONFIGS / f"{nominal_name}.toml", same_gens))[0])
+        robust_s = statistics.median(robust_times)
+        shipped_s = statistics.median(shipped_times)
         unraced = dataclasses.replace(cfg, robust=cfg.robust.model_copy(update={"race": 0}))
-        shipped_s, _ = _cpu(load(CONFIGS / f"{nominal_name}.toml", same_gens))
+        if len(robust_times) > 1:
+            print(f"{robust_name}: {len(robust_times)} times each, robust "
+                  f"{', '.join(f'{t:.1f}' for t in robust_times)} s, {nominal_name}.toml "
+                  f"{', '.join(f'{t:.1f}' for t in shipped_times)} s: medians", flush=True)
         if args.ratio_only:
             print(f"{robust_name}: robust {robust_s:.1f} s CPU; {nominal_name}.toml at "
                   f"{budget} {shipped_s:.1f} s: {robust_s / shipped_s:.1f}x (goal <= 10x)",

@@ -18,6 +18,7 @@ a search's own population (tens to hundreds of rows) is already one chunk.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
+from typing import cast
 
 import numpy as np
 
@@ -79,12 +80,38 @@ def describe_variants(problem: Problem, X: Floats, fields: Mapping[str, Floats],
     """``problem.describe_variants`` (capability
     :class:`~camopt.core.capabilities.HasVariants`) of designs ``X`` (n, n_var) with
     ``fields`` and each row's ``variant`` (n,), in chunks: the same Evaluation as one call
-    (``detail``: as the capability's)."""
+    (``detail``: as the capability's). The rows of each variant are chunked apart (a
+    chunk holds one variant: one call of the case's per-variant evaluation, not one per
+    variant it happens to hold; robust draws alternate variants row by row)."""
     def call(Xc: Floats, f: Mapping[str, Floats]) -> Evaluation:
         return problem.describe_variants(  # type: ignore[attr-defined]
             Xc, {k: v for k, v in f.items() if k != VARIANT}, f[VARIANT], detail=detail)
-    return _chunked(call, X, {**fields, VARIANT: np.asarray(variant)},
-                    size or chunk_rows(problem), progress)
+    kinds = np.unique(variant)
+    size = size or chunk_rows(problem)
+    if len(kinds) < 2:
+        return _chunked(call, X, {**fields, VARIANT: np.asarray(variant)}, size, progress)
+    order = np.argsort(variant, kind="stable")
+    starts = np.searchsorted(np.asarray(variant)[order], kinds)
+    ends = np.r_[starts[1:], len(order)]
+    pieces = []
+    for a, b in zip(starts, ends, strict=True):
+        rows = order[a:b]
+        group = {k: np.asarray(v)[rows] for k, v in fields.items()}
+        group[VARIANT] = cast(Floats, np.asarray(variant)[rows])  # ints, as one call's
+        pieces.append(_chunked(call, np.asarray(X)[rows], group, size,
+                               _offset(progress, int(a), len(X))))
+    return Evaluation.concat(pieces).take(np.argsort(order, kind="stable"))
+
+
+def _offset(progress: RowsDone | None, done: int, n: int) -> RowsDone | None:
+    """``progress`` told of a group's rows after ``done`` rows of n (None stays None)."""
+    if progress is None:
+        return None
+    told = progress
+
+    def after(rows: int, _: int) -> None:
+        told(done + rows, n)
+    return after
 
 
 def _chunked(fn: Callable[[Floats, Mapping[str, Floats]], Evaluation], X: Floats,

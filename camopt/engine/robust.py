@@ -332,6 +332,8 @@ class RobustProblem(Problem, Stochastic):
         objective (m,) first: checked again at the end of the repeat (:meth:`select`)."""
         self.notes: tuple[str, ...] = ()
         """What the last :meth:`select` did beyond choosing (the yield centring)."""
+        self._last: tuple[Floats, tuple[Evaluation, Floats, Bools]] | None = None
+        """The designs of the last evaluation and their :meth:`_nominal`."""
 
     def reseed(self, seed: np.random.SeedSequence) -> None:
         """Start a repeat: its own draws, nothing carried over from another repeat."""
@@ -339,6 +341,7 @@ class RobustProblem(Problem, Stochastic):
         self.unit = None
         self.nominal_best = None
         self.finalists = (np.empty((0, self.n_var)), np.empty(0))
+        self._last = None
 
     def new_generation(self) -> None:
         """Draw the generation's perturbations (S, k), shared by every candidate."""
@@ -363,24 +366,9 @@ class RobustProblem(Problem, Stochastic):
         """As :meth:`evaluate` with the draws ``unit`` (S, k) given (any S), ``k`` the
         0-based order statistic that decides the yield column."""
         spec = self.plan.spec
-        nominal = self.base.evaluate(X)
+        nominal, nom_worst, screened_in = self._nominal(X)
         self._remember(X, nominal)
         nom_g = np.where(np.isnan(nominal.g), np.inf, nominal.g)
-        nom_worst = _worst(nom_g, nominal.f)
-        screened_in = nominal.feasible.copy()
-        if spec.screen and self.plan.variants and not screened_in.all():
-            # draws are judged one variant each: a design that meets every constraint in
-            # some variant has a yield above 0, and is sampled; the others rank by the
-            # variant they come nearest in. A nominally feasible design is sampled anyway,
-            # and its columns come from its draws: only the others are judged per variant
-            m, out = len(self.plan.variants), np.flatnonzero(~screened_in)
-            n = len(out)
-            each = apply(self.base, np.repeat(X[out], m, axis=0), (), np.empty((n * m, 0)),
-                         size=spec.chunk_rows, variant=np.tile(np.arange(m), n))
-            each_g = np.where(np.isnan(each.g), np.inf, each.g)
-            nom_worst[out] = np.minimum(nom_worst[out],
-                                        _worst(each_g, each.f).reshape(n, m).min(axis=1))
-            screened_in[out] = each.feasible.reshape(n, m).any(axis=1)
         # an unsampled candidate ranks behind every sampled one: without the offset a
         # nominal design just outside a limit (violation 1e-3) beats a nominally feasible
         # one whose draws fail (violation ~1), and the search never leaves the limit
@@ -399,6 +387,55 @@ class RobustProblem(Problem, Stochastic):
         if spec.objective == "margin":
             f = g[:, -1].copy()
         return Evaluation(f, g, {**nominal.extras, YIELD: estimate})
+
+    def _nominal(self, X: Floats) -> tuple[Evaluation, Floats, Bools]:
+        """The nominal evaluation of designs ``X`` (n, n_var), their worst constraint
+        (n,; with ``screen`` and model variants the least over the variants for a design
+        refused at nominal) and whether they are sampled (n,). A design of the previous
+        call (a DE parent evaluated again on new draws) takes its rows from there: the
+        nominal evaluation reads no draw, so they are the same numbers."""
+        last = self._last
+        if last is None or not len(X):
+            done = self._nominal_of(X)
+        else:
+            old_x, old = last
+            both = np.vstack([old_x, X])
+            _, inverse = np.unique(both, axis=0, return_inverse=True)
+            inverse = np.ravel(inverse)
+            where = np.full(len(both), -1)
+            where[inverse[:len(old_x)]] = np.arange(len(old_x))
+            found = where[inverse[len(old_x):]]
+            new = np.flatnonzero(found < 0)
+            pieces = [old, self._nominal_of(X[new])] if new.size else [old]
+            index = found.copy()
+            index[new] = len(old_x) + np.arange(len(new))
+            done = (Evaluation.concat([p[0] for p in pieces]).take(index),
+                    np.concatenate([p[1] for p in pieces])[index],
+                    np.concatenate([p[2] for p in pieces])[index])
+        self._last = (X.copy(), done)
+        return done
+
+    def _nominal_of(self, X: Floats) -> tuple[Evaluation, Floats, Bools]:
+        """:meth:`_nominal` computed."""
+        spec = self.plan.spec
+        nominal = self.base.evaluate(X)
+        nom_g = np.where(np.isnan(nominal.g), np.inf, nominal.g)
+        nom_worst = _worst(nom_g, nominal.f)
+        screened_in = nominal.feasible.copy()
+        if spec.screen and self.plan.variants and not screened_in.all():
+            # draws are judged one variant each: a design that meets every constraint in
+            # some variant has a yield above 0, and is sampled; the others rank by the
+            # variant they come nearest in. A nominally feasible design is sampled anyway,
+            # and its columns come from its draws: only the others are judged per variant
+            m, out = len(self.plan.variants), np.flatnonzero(~screened_in)
+            n = len(out)
+            each = apply(self.base, np.repeat(X[out], m, axis=0), (), np.empty((n * m, 0)),
+                         size=spec.chunk_rows, variant=np.tile(np.arange(m), n))
+            each_g = np.where(np.isnan(each.g), np.inf, each.g)
+            nom_worst[out] = np.minimum(nom_worst[out],
+                                        _worst(each_g, each.f).reshape(n, m).min(axis=1))
+            screened_in[out] = each.feasible.reshape(n, m).any(axis=1)
+        return nominal, nom_worst, screened_in
 
     def _keep_finalists(self, X: Floats, ev: Evaluation) -> None:
         """Keep the ``finalists`` distinct designs with the lowest objective among those

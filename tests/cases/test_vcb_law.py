@@ -43,6 +43,28 @@ def test_quintic_rate_zeros_and_largest_swing_against_dense_sampling():
     np.testing.assert_allclose(exact, dense, atol=1e-9)
 
 
+@pytest.mark.parametrize("degree", [3, 5])
+def test_rows_sharing_the_rate_are_solved_once_with_the_same_zeros(degree, monkeypatch):
+    """Runs of rows that differ in a0 alone (a robust design's draws) are solved once a
+    run, with each row's zeros those of the row alone (rtol 1e-15: the same arithmetic
+    on the same numbers); a NaN row is a run of its own."""
+    from camopt.cases.vcb import law
+
+    rng = np.random.default_rng(4)
+    designs = rng.uniform(-0.5, 0.5, (5, degree + 1)) * np.r_[1, 1, 1, 1, 0.06, 0.012][
+        :degree + 1]
+    A = np.repeat(designs, [3, 1, 4, 2, 2], axis=0)
+    A[:, 0] += rng.uniform(-0.01, 0.01, len(A))  # the profile error moves a0 alone
+    A[8, 1] = np.nan
+    alone = np.vstack([rate_zeros(row[None, :], END) for row in A])
+    solved: list[int] = []
+    real = law._rate_zeros
+    monkeypatch.setattr(law, "_rate_zeros", lambda a, end: (solved.append(len(a)),
+                                                             real(a, end))[1])
+    np.testing.assert_allclose(rate_zeros(A, END), alone, rtol=1e-15, atol=0)
+    assert solved == [6]  # runs of 3, 1, 4, the NaN row and its twin apart, 2
+
+
 def test_higher_terms_at_zero_give_the_cubic():
     """A quintic design whose a4 = a5 = 0 evaluates exactly as the cubic one."""
     cubic = VcbProblem(load(VELOCITY_PAPER).case)

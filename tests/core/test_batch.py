@@ -86,3 +86,34 @@ def test_progress_is_told_each_chunk_and_changes_nothing():
     heard.clear()
     batch.describe(problem, X[:3], size=16, progress=lambda d, n: heard.append((d, n)))
     assert heard == [(3, 3)]  # one chunk: told once, at the end
+
+
+def test_variants_are_chunked_apart_and_give_one_call_s_rows():
+    """Rows of mixed model variants (robust draws alternate them row by row) are chunked
+    per variant: each call of the case's describe_variants holds one variant, the calls
+    are as few as the chunk size allows per variant, the progress ends at every row, and
+    the rows are the one call's, in the caller's order, bit for bit (a row's evaluation
+    is its own, whatever rows share its call)."""
+    problem = build_problem(load(CONFIGS / "vcb_velocity_robust.toml").case)
+    X = problem.sample(np.random.default_rng(np.random.SeedSequence(10)), 23)
+    variant = np.arange(23) % 2
+    whole = problem.describe_variants(X, {}, variant, detail=False)
+    seen: list[np.ndarray] = []
+    real = problem.describe_variants
+    problem.describe_variants = lambda Xc, f, v, detail: (seen.append(v), real(Xc, f, v, detail))[1]
+    heard: list[tuple[int, int]] = []
+    ev = batch.describe_variants(problem, X, {}, variant, size=8, detail=False,
+                                 progress=lambda d, n: heard.append((d, n)))
+    _same(ev, whole)
+    assert [len(np.unique(v)) for v in seen] == [1] * 4  # 12 rows of 0: 8 + 4; 11 of 1: 8 + 3
+    assert [len(v) for v in seen] == [8, 4, 8, 3]
+    assert heard[-1] == (23, 23) and [d for d, _ in heard] == sorted(d for d, _ in heard)
+
+
+def test_vcb_chunks_rows_as_its_batch_rows_says():
+    """The VCB's chunks are its own 512 rows (robust draws cost less per row than at the
+    default 256), every other case's the default."""
+    vcb = build_problem(load(CONFIGS / "vcb_velocity.toml").case)
+    assert batch.chunk_rows(vcb) == 512
+    assert batch.chunk_rows(build_problem(load(CONFIGS / "fast_switch.toml").case)) == \
+        batch.CHUNK_ROWS

@@ -424,6 +424,45 @@ def test_the_per_variant_screen_in_a_mixed_batch():
     assert np.isnan(ev.extras["yield"][[0, 2]]).all()
 
 
+def test_designs_evaluated_again_reuse_their_nominal_rows():
+    """A design of the previous evaluation (a DE parent evaluated again on a new
+    generation's draws) is not evaluated at nominal again, nor screened per variant: only
+    the new designs are, and every column is what a problem without the previous call
+    gives (rtol 0: the nominal evaluation reads no draw)."""
+    from camopt.core.variation import Vary
+
+    base = _TwoForms.build()
+    asked: list[int] = []
+    real = base.describe_variants
+
+    def counted(X, fields, variant, detail=True):
+        asked.append(len(X))
+        return real(X, fields, variant, detail)
+    base.describe_variants = counted
+    spec = RobustSection(samples=8, check_samples=100, search_yield=0.5)
+    plan = robust.Plan(spec, (Vary("x", 1.0, True),), ((0.0, True, math.inf),), {},
+                       robust.variants_of(base))
+
+    def fresh():
+        p = robust.RobustProblem(base, plan)
+        p.reseed(np.random.SeedSequence(3))
+        p.new_generation()
+        return p
+    first, again = np.array([[1.1], [0.7], [1.3]]), np.array([[0.9], [1.3], [0.7], [1.2]])
+    problem = fresh()
+    problem.evaluate(first)
+    asked.clear()
+    ev = problem.evaluate(again)
+    nominal = [n for n in asked if n in (2, 4)]  # the draws' calls hold 8 rows a design
+    # 0.9 and 1.2 at nominal, then both (refused at nominal) screened in a, then in b
+    assert nominal == [2, 2, 2]
+    reference = fresh().evaluate(again)
+    np.testing.assert_array_equal(ev.f, reference.f)
+    np.testing.assert_array_equal(ev.g, reference.g)
+    for k in ev.extras:
+        np.testing.assert_array_equal(ev.extras[k], reference.extras[k])
+
+
 def test_a_finalist_that_fails_new_draws_leaves():
     """A design kept as a finalist for passing one generation's draws leaves when it is
     evaluated again (a DE parent) and fails; one that passes again stays with its new

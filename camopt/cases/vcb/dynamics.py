@@ -200,7 +200,7 @@ _LAST: dict[tuple[object, ...], NDArray] = {}
 """The last geometry :func:`_geometry` computed, by its inputs, until it is read."""
 KEPT_BYTES = 32 * 2**20
 """The largest geometry kept for the next call (a population of ~1,400 designs on 401
-nodes; the search's row chunks are 256)."""
+nodes; a robust search's row chunks are 512)."""
 
 
 def _geometry(kernel: ModuleType, model: VcbModel, steps: int, A: NDArray, link: NDArray,

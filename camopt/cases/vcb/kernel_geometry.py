@@ -9,10 +9,36 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-__all__ = ["closing_geometry"]
+from camopt.mechanics import trig
+
+__all__ = ["closing_geometry", "sincos"]
+
+_COS, _SIN = trig._COS, trig._SIN  # the tables of camopt.mechanics.trig (constants here)
+_STEP, _LIMIT = trig._STEP, trig._LIMIT
+_INVERSE = 1 / trig._STEP
+_SIZE = len(trig._COS)
+
+
+@njit(cache=True, error_model="numpy")
+def sincos(angle: float) -> tuple[float, float]:
+    """cos and sin of ``angle`` as :func:`camopt.mechanics.trig.sincos` computes them
+    (the nearest table angle k h, a three-term series of the remainder, one rotation;
+    within 1e-15 of libm), libm's beyond its table (|angle| >= ~25 rad, NaN, inf): a
+    tenth of libm's cos and sin together, the largest share of a node's geometry."""
+    if not abs(angle) < _LIMIT:
+        return math.cos(angle), math.sin(angle)
+    k = round(angle * _INVERSE)
+    d = angle - k * _STEP
+    i = k % _SIZE  # negative k from the end, as stored
+    cb, sb = _COS[i], _SIN[i]
+    d2 = d * d
+    cd = (d2 * (1 / 24) - 0.5) * d2 + 1.0
+    sd = d - d2 * d * (1 / 6)
+    return cb * cd - sb * sd, sb * cd + cb * sd
 
 
 @njit(cache=True, error_model="numpy")
@@ -32,6 +58,10 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
     rate on the nodes (m,) are shared."""
     nd, d1 = A.shape
     m = len(theta)
+    phi = np.empty(m)
+    dphi = np.empty(m)
+    cos2 = np.empty(m)
+    sin2 = np.empty(m)
     for i in range(nd):
         l1, l3, l4, l5, th1 = link[i, 0], link[i, 1], link[i, 2], link[i, 3], link[i, 4]
         frame = theta_bo - th1
@@ -44,17 +74,26 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
         k1, k2, p1, p2 = kc[i, 0], kc[i, 1], pre[i, 0], pre[i, 1]
         ok, arm, x0 = loads[0, i], loads[1, i], loads[2, i]
         wk, wp, fc = loads[3, i], loads[4, i], loads[5, i]
-        y0 = 0.0
+        # the law in passes over the nodes (the innermost loops run over nodes, so the
+        # compiler can vectorise them), by Horner's rule as before
+        phi[:] = A[i, d1 - 1]
+        dphi[:] = (d1 - 1) * A[i, d1 - 1]
+        for k in range(d1 - 2, -1, -1):
+            a_k = A[i, k]
+            for j in range(m):
+                phi[j] = a_k + theta[j] * phi[j]
+            if k > 0:
+                ka_k = k * a_k
+                for j in range(m):
+                    dphi[j] = ka_k + theta[j] * dphi[j]
         for j in range(m):
-            t = theta[j]
-            phi = A[i, d1 - 1]
-            dphi = (d1 - 1) * A[i, d1 - 1]
-            for k in range(d1 - 2, -1, -1):
-                phi = A[i, k] + t * phi
-                if k > 0:
-                    dphi = k * A[i, k] + t * dphi
-            angle = phi + xi
-            c2, s2 = math.cos(angle), math.sin(angle)
+            cos2[j], sin2[j] = sincos(phi[j] + xi)
+        # the rod's height at the first node, then every node in one branch-free pass
+        y0 = 0.0
+        for j in range(min(m, 1)):
+            y0 = _rod(cos2[j], sin2[j], k24, k12, l1, l4, c1, s1f, lengths, p, q)
+        for j in range(m):
+            c2, s2 = cos2[j], sin2[j]
             a = -k24 * c2 + 2 * l1 * l4 * c1
             b = -k24 * s2 + 2 * l1 * l4 * s1f
             c = k12 * c1 * c2 + k12 * s1f * s2 + lengths
@@ -64,13 +103,10 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
             c4 = (a * c + b * root) * inv  # the branch -1
             s4 = (b * c - a * root) * inv
             rate = (-k24 * (s2 * c4 - c2 * s4) - k12 * c1 * s2 + k12 * s1f * c2) / root
-            y = s4 * p - c4 * q
-            if j == 0:
-                y0 = y
-            s1 = y - y0
-            ds1 = (s4 * q + c4 * p) * rate * dphi
+            s1 = (s4 * p - c4 * q) - y0
+            ds1 = (s4 * q + c4 * p) * rate * dphi[j]
             ext = extension[j]
-            out[0, i, j] = dphi
+            out[0, i, j] = dphi[j]
             out[1, i, j] = s1
             out[2, i, j] = ds1
             out[3, i, j] = 0.5 * (k1 * (p1 - ext) ** 2 + k2 * (p2 - ext) ** 2)
@@ -83,3 +119,16 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
                             + 0.5 * wk * (wipe * wipe - wp * wp) - fc * closed)
             force = s1 * wk + wk * (wp - gap) if s1 >= gap else -fc
             out[6, i, j] = (force + s1 * (arm * ok * arm) + arm * ok * x0) * ds1
+
+
+@njit(cache=True, error_model="numpy")
+def _rod(c2: float, s2: float, k24: float, k12: float, l1: float, l4: float, c1: float,
+         s1f: float, lengths: float, p: float, q: float) -> float:
+    """The rod's height y_m at one node (the four-bar of :func:`closing_geometry`)."""
+    a = -k24 * c2 + 2 * l1 * l4 * c1
+    b = -k24 * s2 + 2 * l1 * l4 * s1f
+    c = k12 * c1 * c2 + k12 * s1f * s2 + lengths
+    norm = a * a + b * b
+    root = math.sqrt(norm - c * c)
+    inv = 1.0 / norm
+    return (b * c - a * root) * inv * p - (a * c + b * root) * inv * q

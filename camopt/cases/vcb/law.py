@@ -12,7 +12,20 @@ def rate_zeros(A: NDArray, end: float) -> NDArray:
     + ...; Eq 12), (n, d - 1) in ascending order for coefficient rows ``A`` (n, d + 1),
     NaN where there is none. The cubic's (d = 3) are exact, from the quadratic formula;
     a higher degree's are the real eigenvalues of phi''s companion matrices (one stacked
-    ``numpy.linalg.eigvals`` call; a root counts as real within 1e-9 of its size)."""
+    ``numpy.linalg.eigvals`` call; a root counts as real within 1e-9 of its size).
+    Consecutive rows with the same a1, a2, ... (a robust search's draws of one design
+    differ in a0 alone: the cam profile's error) are solved once: the zeros read no a0."""
+    n = len(A)
+    if n > 1:
+        same = np.all(A[1:, 1:] == A[:-1, 1:], axis=1)
+        if same.any():
+            first = np.flatnonzero(np.r_[True, ~same])
+            return np.repeat(_rate_zeros(A[first], end), np.diff(np.r_[first, n]), axis=0)
+    return _rate_zeros(A, end)
+
+
+def _rate_zeros(A: NDArray, end: float) -> NDArray:
+    """:func:`rate_zeros` of every row."""
     if A.shape[1] > 4:
         return _polynomial_rate_zeros(A, end)
     c0, c1, c2 = A[:, 1], 2 * A[:, 2], 3 * A[:, 3]
