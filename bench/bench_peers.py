@@ -187,9 +187,13 @@ def warm_up(problem: Problem) -> None:
     """Evaluate four designs of the case's own Problem (a robust run's base), untimed.
     Without it camopt, the first solver timed, was charged the VCB kernels' loading: 0.5 s
     to its first sampled candidate at seed 0 of the reduced robust VCB, against 0.17-0.29 s
-    at seeds 1-3."""
+    at seeds 1-3; a robust repeat's selection (its yield's interval) imported
+    scipy.special on camopt's clock, ~0.8 s more at seed 0 of the robust fast switch."""
     base = getattr(problem, "base", problem)
-    base.evaluate(base.sample(np.random.default_rng(0), 4))
+    X = base.sample(np.random.default_rng(0), 4)
+    base.evaluate(X)
+    if base is not problem:  # a robust repeat's selection: scipy.special on first use
+        score_fresh(problem, X[0])
 
 
 @dataclass(frozen=True)
