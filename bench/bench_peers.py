@@ -6,7 +6,8 @@ nevergrad's NGOpt, each at its documented settings and from camopt's start (:cla
 issue #48). Each solver minimises camopt's own Problem (``evaluate`` over a whole
 population per call) for each objective, seeds interleaved in one process. A robust row
 judges each solver's chosen design on fresh draws (:func:`score_fresh`); ``--peers
-'scipy DE,pymoo DE'`` runs those peers alone.
+'scipy DE,pymoo DE'`` runs those peers alone; ``--set key=value`` changes camopt's config
+(and so the budget) for a trial.
 
 Constraints: pymoo takes the case's ``g`` as inequality constraints; scipy and pycma get a
 scalar that ranks feasible designs by the objective and infeasible ones after every
@@ -29,7 +30,8 @@ on first use) would otherwise fall on whichever solver runs first, camopt at see
 Quality is by Deb's rules (less violation, then lower objective): where no solver finds a
 feasible design the least violation decides. Budgets are reduced (``OBJECTIVES``) so a
 5-seed run ends in ~10 minutes; ``--full`` runs the shipped budgets.
-Run ``python -m bench.bench_peers [--full] [seeds] [objective ...]``.
+Run ``python -m bench.bench_peers [--full] [--peers names] [--set key=value ...] [seeds]
+[objective ...]``.
 """
 
 from __future__ import annotations
@@ -187,9 +189,13 @@ def warm_up(problem: Problem) -> None:
     """Evaluate four designs of the case's own Problem (a robust run's base), untimed.
     Without it camopt, the first solver timed, was charged the VCB kernels' loading: 0.5 s
     to its first sampled candidate at seed 0 of the reduced robust VCB, against 0.17-0.29 s
-    at seeds 1-3."""
+    at seeds 1-3; a robust repeat's selection (its yield's interval) imported
+    scipy.special on camopt's clock, ~0.8 s more at seed 0 of the robust fast switch."""
     base = getattr(problem, "base", problem)
-    base.evaluate(base.sample(np.random.default_rng(0), 4))
+    X = base.sample(np.random.default_rng(0), 4)
+    base.evaluate(X)
+    if base is not problem:  # a robust repeat's selection: scipy.special on first use
+        score_fresh(problem, X[0])
 
 
 @dataclass(frozen=True)
@@ -353,13 +359,15 @@ PEER_KEY = 0x50454552  # "PEER": the spawn-key word of a peer's robust draws
 
 
 def compare(objective: str, seeds: int, full: bool = False,
-            only: list[str] | None = None) -> None:
+            only: list[str] | None = None, extra: tuple[str, ...] = ()) -> None:
     """One objective: camopt and every installed peer (``only``: those named), seeds
-    interleaved; print the table."""
+    interleaved; print the table. ``extra``: overrides of the config after the row's own
+    (``--set solver.generations=250``), shown in the table's title."""
     from camopt.core.capabilities import Stochastic
 
     path, reduced = OBJECTIVES[objective]
-    cfg = load(CONFIGS / path, ["run.repeats=1", *([] if full else reduced)])
+    settings = [*([] if full else reduced), *extra]
+    cfg = load(CONFIGS / path, ["run.repeats=1", *settings])
     problem, solver_cls = prepare(cfg)
     warm_up(problem)
     robust = isinstance(problem, Stochastic)
@@ -400,7 +408,8 @@ def compare(objective: str, seeds: int, full: bool = False,
     quality = peers[best_peer] if best_peer else (np.inf, np.inf)
     polish = " + polish" if getattr(cfg.solver, "polish", None) else ""
     judged = "chosen design on fresh draws, " if robust else ""
-    print(f"{objective} ({cfg.solver.name}{polish}; {' '.join(reduced) if not full else 'full'}"
+    shown = " ".join(["full", *extra] if full else settings)
+    print(f"{objective} ({cfg.solver.name}{polish}; {shown}"
           f"; {seeds} seeds, budget = camopt's evaluations, median "
           f"{statistics.median(t.nfev for t in traces['camopt']):.0f}; {judged}"
           f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}):")
@@ -445,9 +454,14 @@ def main(argv: list[str] | None = None) -> None:
         i = args.index("--peers")
         only = args[i + 1].split(",")
         del args[i:i + 2]
+    extra: list[str] = []
+    while "--set" in args:  # --set solver.generations=250: the config changed so
+        i = args.index("--set")
+        extra.append(args[i + 1])
+        del args[i:i + 2]
     seeds = int(args.pop(0)) if args and args[0].isdigit() else SEEDS
     for objective in args or list(OBJECTIVES):
-        compare(objective, seeds, full, only)
+        compare(objective, seeds, full, only, tuple(extra))
 
 
 if __name__ == "__main__":
