@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from camopt.cases.vcb.kernel_geometry import closing_geometry, sincos  # re-exported
+from camopt.cases.vcb.kernel_geometry import closing_geometry  # re-exported
 
 __all__ = ["band_events", "closing_geometry", "closing_rows", "first_zero_rows",
            "free_rotation"]
@@ -290,16 +290,14 @@ def _net(turn: float, cos0: float, sin0: float, length0: float, l8: float, gx: f
     angle a0, its cosine and sine ``cos0``, ``sin0``), as
     :meth:`VcbModel.closing_spring_travel` and ``dynamics.free_rotation`` compute them,
     the angles a0 + turn / 2 and a0 + turn by the addition theorems from one sine and
-    cosine of turn / 2 (one table :func:`sincos` a node, not eight libm calls; lengths
-    by their squares' root, not libm's ``hypot``: within an ulp, at a fraction of its
-    cost)."""
-    ch, sh = sincos(0.5 * turn)
+    cosine of turn / 2 (two trigonometric calls a node, not eight)."""
+    sh = math.sin(0.5 * turn)
+    ch = math.cos(0.5 * turn)
     sin_mid = sin0 * ch + cos0 * sh
     cos_mid = cos0 * ch - sin0 * sh
     sin_a = sin_mid * ch + cos_mid * sh
     cos_a = cos_mid * ch - sin_mid * sh
-    qx, qy = gx - l8 * cos_a, gy - l8 * sin_a
-    length = math.sqrt(qx * qx + qy * qy)
+    length = math.hypot(gx - l8 * cos_a, gy - l8 * sin_a)
     squares = 4 * l8 * sh * (gx * sin_mid - gy * cos_mid)
     gained = squares / (length + length0)
     rate = l8 * (gx * sin_a - gy * cos_a) / length
@@ -329,9 +327,8 @@ def free_rotation(start: NDArray, kc1: NDArray, kc2: NDArray, p1: NDArray, p2: N
             continue
         span = -start[r]
         a0 = base + start[r]
-        cos0, sin0 = sincos(a0)
-        qx, qy = gx - l8 * cos0, gy - l8 * sin0
-        length0 = math.sqrt(qx * qx + qy * qy)
+        cos0, sin0 = math.cos(a0), math.sin(a0)
+        length0 = math.hypot(gx - l8 * cos0, gy - l8 * sin0)
         ext0 = length0 - open_length
         f1, f2 = p1[r] - ext0, p2[r] - ext0
         args = (cos0, sin0, length0, l8, gx, gy, kc1[r], kc2[r], f1, f2, eps[r],
@@ -398,9 +395,9 @@ def closing_rows(theta: NDArray, dtheta_du: NDArray, du: float, geometry: NDArra
         i = r % nd
         # the springs' torque on the cam at rest at the release (closing_spring_geometry)
         angle = base + start[r]
-        cos, sin = sincos(angle)
+        cos, sin = math.cos(angle), math.sin(angle)
         qx, qy = gx - l8 * cos, gy - l8 * sin
-        length = math.sqrt(qx * qx + qy * qy)
+        length = math.hypot(qx, qy)
         ext = length - open_length
         rate = -(qx * (-l8 * sin) + qy * (l8 * cos)) / length
         torque = (kc[i, 0] * (pre[i, 0] - ext) + kc[i, 1] * (pre[i, 1] - ext)) * rate
