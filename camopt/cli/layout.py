@@ -309,8 +309,8 @@ def print_repeats(doc: ShowView, rows: int | None) -> None:
     for col in ("repeat", *columns, "wall_s"):
         table.add_column(col, justify="right", no_wrap=True)
     for r in shown:
-        table.add_row(cell(r["spawn_key"][-1]), *(cell(r[c]) for c in columns),
-                      f"{r['wall_s']:.2f}")
+        table.add_row(cell(r["spawn_key"][-1]), cell(r["objective"]), cell(r["feasible"]),
+                      cell(r["nfev"]), cell(r["converged_nit"]), f"{r['wall_s']:.2f}")
     out.print(table)
 
 
