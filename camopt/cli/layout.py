@@ -90,7 +90,7 @@ def print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]
         out.print(f"  {pairs}", highlight=False)  # wraps at spaces, never inside a word
 
 
-def print_rows(title: str, rows: list[dict[str, Any]], columns: list[str],
+def print_rows(title: str, rows: Sequence[Mapping[str, object]], columns: list[str],
                limit: int | None) -> None:
     """The given columns (those present) through the word-safe layout
     (:func:`camopt.cli.layout.print_table`); every column is in the JSON."""
@@ -314,7 +314,7 @@ def print_repeats(doc: ShowView, rows: int | None) -> None:
     out.print(table)
 
 
-def print_fitted(title: str, rows: list[dict[str, Any]], columns: list[str],
+def print_fitted(title: str, rows: Sequence[Mapping[str, object]], columns: list[str],
                  limit: int | None) -> None:
     """A table of as many of ``columns`` as fit the console without wrapping a number
     (the rest are in ``--format json``); the first ``limit`` rows."""

@@ -376,7 +376,7 @@ def judged_yield(run: RunView) -> stats.YieldInterval | None:
     return stats.YieldInterval.of(run.expected_yield or _ESTIMATED.get(run.path) or {})
 
 
-def verdict(run: RunView, values: dict[str, Any] | None = None) -> Verdict:
+def verdict(run: RunView, values: Mapping[str, object] | None = None) -> Verdict:
     """Requirements evaluated on the best design (or on ``values``, the reference's),
     with the verdict ("pass"/"fail", None: not judged) and its sentence; the best
     design's passing requirements are judged at their limit against the spread of the
