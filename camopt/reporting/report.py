@@ -20,7 +20,7 @@ import numpy as np
 from camopt.cases import run_requirements
 from camopt.config.raw import RawDoc
 from camopt.core import pareto, stats
-from camopt.core.documents import DesignCheck
+from camopt.core.documents import DesignCheck, ParetoSummary
 from camopt.core.record import ExpectedYield
 from camopt.core.requirements import (
     DEFAULT_YIELD_TARGET,
@@ -449,7 +449,7 @@ def _pass_cell(c: Check) -> str:
 PARETO_COLUMNS = ("objective", "sense", "least", "greatest", "knee")
 
 
-def pareto_rows(doc: Mapping[str, Any]) -> list[list[str]]:
+def pareto_rows(doc: ParetoSummary) -> list[list[str]]:
     """The Pareto summary's table (:data:`PARETO_COLUMNS`): each objective's extent over
     the feasible front and its value at the knee (``doc``: ``pareto.summary``'s)."""
     rows = []
