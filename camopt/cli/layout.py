@@ -21,6 +21,7 @@ from rich.table import Table
 from camopt.cli.console import escape, fmt, out, plain, visible
 
 if TYPE_CHECKING:
+    from camopt.core.documents import FrontsCompared, ParetoSummary
     from camopt.core.runview import RunView
     from camopt.reporting.views import (
         Comparison,
@@ -90,7 +91,7 @@ def print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]
         out.print(f"  {pairs}", highlight=False)  # wraps at spaces, never inside a word
 
 
-def print_rows(title: str, rows: list[dict[str, Any]], columns: list[str],
+def print_rows(title: str, rows: Sequence[Mapping[str, object]], columns: list[str],
                limit: int | None) -> None:
     """The given columns (those present) through the word-safe layout
     (:func:`camopt.cli.layout.print_table`); every column is in the JSON."""
@@ -230,7 +231,7 @@ def print_verdict(judged: Verdict, title: str = "best design", *,
         out.print(f"{escape(reference.label)}: {words}: {escape(said)}", highlight=False)
 
 
-def print_pareto(doc: Mapping[str, Any]) -> None:
+def print_pareto(doc: ParetoSummary) -> None:
     """A Pareto run's front: objectives, extent and knee, and what the headline is."""
     from camopt.reporting import report
 
@@ -244,7 +245,7 @@ def print_pareto(doc: Mapping[str, Any]) -> None:
     out.print(f"headline design below: {escape(doc['headline'])}", highlight=False)
 
 
-def pareto_title(doc: Mapping[str, Any]) -> str:
+def pareto_title(doc: ParetoSummary) -> str:
     """``Pareto front: 12 feasible of 40 designs``, or what an empty front means beside
     the headline design's verdict."""
     if not doc["designs"]:
@@ -309,12 +310,12 @@ def print_repeats(doc: ShowView, rows: int | None) -> None:
     for col in ("repeat", *columns, "wall_s"):
         table.add_column(col, justify="right", no_wrap=True)
     for r in shown:
-        table.add_row(cell(r["spawn_key"][-1]), *(cell(r[c]) for c in columns),
-                      f"{r['wall_s']:.2f}")
+        table.add_row(cell(r["spawn_key"][-1]), cell(r["objective"]), cell(r["feasible"]),
+                      cell(r["nfev"]), cell(r["converged_nit"]), f"{r['wall_s']:.2f}")
     out.print(table)
 
 
-def print_fitted(title: str, rows: list[dict[str, Any]], columns: list[str],
+def print_fitted(title: str, rows: Sequence[Mapping[str, object]], columns: list[str],
                  limit: int | None) -> None:
     """A table of as many of ``columns`` as fit the console without wrapping a number
     (the rest are in ``--format json``); the first ``limit`` rows."""
@@ -418,7 +419,7 @@ def compare_rows(doc: Comparison) -> list[list[str]]:
     return rows
 
 
-def print_hypervolume(hv: Mapping[str, Any], names: Sequence[str]) -> None:
+def print_hypervolume(hv: FrontsCompared, names: Sequence[str]) -> None:
     ref = ", ".join(f"{n} {fmt(v)}" for n, v in zip(hv["objectives"], hv["reference_point"] or []))
     out.print(f"hypervolume of the feasible fronts (normalised by their union; reference "
               f"point {ref or '-'}; larger is better):")

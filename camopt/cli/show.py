@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from camopt.archive.calibrations import CalibrationView
 
 
-def calibration_doc(view: CalibrationView) -> dict[str, Any]:
+def calibration_doc(view: CalibrationView) -> dict[str, object]:
     """``show --format json`` of a calibration archive: ``calibrate --format json``'s
     document with the archive's kind, path, case kind and time."""
     return {"archive_kind": "calibration", "path": view.path, "case_kind": view.case_kind,

@@ -3,6 +3,7 @@ figures read. Pure data (numpy only); :mod:`camopt.archive` builds it from HDF5.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -87,7 +88,7 @@ class RunView:
         return [np.asarray(r.history[key]) for r in self.repeats if key in r.history]
 
 
-def design_values(run: RunView, values: dict[str, Any] | None = None) -> dict[str, Any]:
+def design_values(run: RunView, values: Mapping[str, object] | None = None) -> dict[str, Any]:
     """A design's quantities by name for requirements: the best design's metrics,
     variables, objective and feasibility, or the reference design's ``values``."""
     if values is not None:

@@ -10,7 +10,6 @@ which explain the curves, and how the intervals were found.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -30,7 +29,7 @@ class CalibrationReportView:
         """Whether a form explains the curves (the case's verdict)."""
         return self.calibrated.verdict()
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, object]:
         """Plain data: the verdict, the case's entries, the rules and every form's fit (its
         parameters with intervals, residual test and the case's entries)."""
         unit, size = self.calibrated.unit

@@ -158,7 +158,7 @@ def export_files(run: RunView, out_dir: Path, stem: str, fmt: str) -> dict[Path,
     analysis = run.analysis
     files: dict[Path, bytes] = {}
     if fmt == "json":
-        doc = report.show(run).to_json()
+        doc: dict[str, object] = dict(report.show(run).to_json())  # the show document
         doc["analysis"] = {k: report.jsonable(np.asarray(v).tolist()) for k, v in analysis.items()}
         files[out_dir / f"{stem}.json"] = json.dumps(doc, indent=2).encode()
     else:

@@ -131,7 +131,7 @@ class CalibrationContext(TypedDict):
     ``calibrate --format json`` document, whose entries the case extends)."""
 
     title: str
-    s: dict[str, Any]
+    s: Mapping[str, object]
     created: str
     case_kind: str
     config_toml: str

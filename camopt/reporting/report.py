@@ -20,7 +20,7 @@ import numpy as np
 from camopt.cases import run_requirements
 from camopt.config.raw import RawDoc
 from camopt.core import pareto, stats
-from camopt.core.documents import DesignCheck
+from camopt.core.documents import DesignCheck, ParetoSummary
 from camopt.core.record import ExpectedYield
 from camopt.core.requirements import (
     DEFAULT_YIELD_TARGET,
@@ -376,7 +376,7 @@ def judged_yield(run: RunView) -> stats.YieldInterval | None:
     return stats.YieldInterval.of(run.expected_yield or _ESTIMATED.get(run.path) or {})
 
 
-def verdict(run: RunView, values: dict[str, Any] | None = None) -> Verdict:
+def verdict(run: RunView, values: Mapping[str, object] | None = None) -> Verdict:
     """Requirements evaluated on the best design (or on ``values``, the reference's),
     with the verdict ("pass"/"fail", None: not judged) and its sentence; the best
     design's passing requirements are judged at their limit against the spread of the
@@ -449,7 +449,7 @@ def _pass_cell(c: Check) -> str:
 PARETO_COLUMNS = ("objective", "sense", "least", "greatest", "knee")
 
 
-def pareto_rows(doc: Mapping[str, Any]) -> list[list[str]]:
+def pareto_rows(doc: ParetoSummary) -> list[list[str]]:
     """The Pareto summary's table (:data:`PARETO_COLUMNS`): each objective's extent over
     the feasible front and its value at the knee (``doc``: ``pareto.summary``'s)."""
     rows = []

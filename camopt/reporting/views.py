@@ -9,6 +9,10 @@ which tables print as ``inf`` and ``n/a``. Documents a view carries from elsewhe
 archive's stored expected yield and robust check, a case's findings, the Pareto summary
 of :mod:`camopt.core.pareto`, the statistics tests of :mod:`camopt.core.stats`) stay
 mappings under their own keys.
+
+Each ``to_json()`` returns a ``TypedDict`` naming the document's keys (below, after
+:func:`json_doc`); its types are the values as written, after :func:`jsonable`, so a
+float that may be unbounded or undefined is declared ``| None``.
 """
 
 from __future__ import annotations
@@ -16,11 +20,18 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import Any, TypedDict, TypeVar, cast
 
 import numpy as np
 
-from camopt.core.documents import CheckDoc, FrontsCompared, ParetoSummary, RobustCheck, Row
+from camopt.core.documents import (
+    CheckDoc,
+    FrontsCompared,
+    ParetoSummary,
+    RobustCheck,
+    Row,
+    RunStatisticsDoc,
+)
 from camopt.core.record import ExpectedYield
 from camopt.core.requirements import (
     GRADE_STYLES,
@@ -32,7 +43,7 @@ from camopt.core.requirements import (
 from camopt.core.runview import BestView
 from camopt.core.stats import ObjectivesTest, RunStatistics, YieldInterval
 
-Json = dict[str, Any]
+Doc = TypeVar("Doc", bound=Mapping[str, object])
 
 
 def jsonable(value: Any) -> Any:
@@ -51,9 +62,220 @@ def jsonable(value: Any) -> Any:
     return value
 
 
-def json_doc(doc: Mapping[str, Any]) -> Json:
-    """A JSON object: :func:`jsonable` of each of ``doc``'s values."""
-    return {k: jsonable(v) for k, v in doc.items()}
+def json_doc(doc: Doc) -> Doc:
+    """A JSON object: :func:`jsonable` of each of ``doc``'s values, under the document's
+    own type (whose fields declare the values as written)."""
+    return cast(Doc, {k: jsonable(v) for k, v in doc.items()})
+
+
+# -- the views' JSON documents ----------------------------------------------------------
+
+class VerdictJson(TypedDict):
+    """A verdict: each requirement's check, the verdict, its grade, sentence and headline,
+    and the yield target that grades it."""
+
+    requirements: list[CheckDoc]
+    verdict: str | None
+    verdict_grade: str | None
+    sentence: str
+    headline: str
+    yield_target: float | None
+
+
+class ReferenceJson(TypedDict):
+    """A reference design: its label and values under the optimum's names."""
+
+    label: str
+    values: dict[str, object]
+
+
+class ReferenceVerdictJson(TypedDict):
+    """``show``'s ``reference``: the reference design with its own verdict."""
+
+    label: str
+    values: dict[str, object]
+    verdict: str | None
+    verdict_sentence: str
+    requirements: list[CheckDoc]
+
+
+class RepeatJson(TypedDict):
+    """One repeat (``show``'s ``repeats``); ``objective`` None when unbounded."""
+
+    seed: int
+    objective: float | None
+    feasible: bool
+    nfev: int
+    wall_s: float
+    converged_nit: int | None
+    spawn_key: list[int]
+    notes: list[str]
+
+
+class RobustYieldJson(TypedDict):
+    """A robust run's yield with its interval and target (``show``'s ``robust_yield``)."""
+
+    value: float | None
+    low: float | None
+    high: float | None
+    samples: int | None
+    target: float | None
+    meets_target: bool | None
+
+
+class RobustRowJson(TypedDict):
+    """A quantity of the robust check, one value per design compared."""
+
+    name: str
+    values: list[object]
+
+
+class RobustSummaryJson(TypedDict):
+    """A robust run's final check, design beside design."""
+
+    labels: list[str]
+    samples: int | None
+    yield_target: float | None
+    rows: list[RobustRowJson]
+
+
+class SummaryRowJson(TypedDict):
+    """A row of the run summary: the optimum's and the reference design's values."""
+
+    section: str
+    name: str
+    optimum: object
+    reference: object
+
+
+class SummaryJson(TypedDict):
+    """The run summary, row by row."""
+
+    reference_label: str
+    rows: list[SummaryRowJson]
+
+
+class RobustDocJson(TypedDict):
+    """``show``'s ``robust``: the ``[robust]`` settings as run and the stored check."""
+
+    settings: dict[str, object]
+    check: RobustCheck
+
+
+class BestJson(TypedDict):
+    """``show``'s ``best``: the best design (its repeat not repeated)."""
+
+    objective: float | None
+    feasible: bool
+    x: dict[str, float]
+    metrics: dict[str, object]
+    active: list[str]
+    violated: list[str]
+
+
+class _ShowJson(TypedDict):
+    verdict: str | None
+    verdict_sentence: str
+    requirements: list[CheckDoc]
+    at_limit: list[str]
+    expected_yield: ExpectedYield
+    next: str
+    case: dict[str, object]
+    solver: dict[str, object]
+    best: BestJson
+    repeats: list[RepeatJson]
+    table: list[Row]
+
+
+class ShowJson(_ShowJson, total=False):
+    """The ``show --format json`` document of a run. A reference design, a Pareto run's
+    rows and summary, a robust run's settings, check and yield where the run has them;
+    then the grade, the headline and the yield target (set after those, so optional to
+    the type though always written); then a case's findings under their own names,
+    which a ``TypedDict`` cannot name."""
+
+    reference: ReferenceVerdictJson
+    pareto: list[Row]
+    pareto_summary: ParetoSummary | None
+    robust: RobustDocJson
+    robust_yield: RobustYieldJson | None
+    verdict_grade: str | None
+    verdict_headline: str
+    yield_target: float | None
+
+
+class SignificanceJson(TypedDict):
+    """Two sets of final objectives compared (:class:`camopt.core.stats.ObjectivesTest`'s
+    fields between the labels and the success rates)."""
+
+    a: str
+    b: str
+    p_value: float
+    p_a_better: float
+    rank_biserial: float
+    median_a: float | None
+    median_b: float | None
+    n_a: int
+    n_b: int
+    effect: float | None
+    threshold: float | None
+    decidable: bool
+    success_a: dict[str, float]
+    success_b: dict[str, float]
+    success_p_value: float
+    verdict: str
+
+
+class SameObjectiveJson(TypedDict):
+    """Two runs reaching one objective with designs differing in ``differ``."""
+
+    runs: list[int]
+    objective: float | None
+    differ: list[str]
+
+
+class _ComparisonJson(TypedDict):
+    runs: list[str]
+    objective_name: str
+    verdict: list[str | None]
+    verdict_sentence: list[str]
+    requirements: list[list[CheckDoc]]
+    config_differences: dict[str, list[object]]
+    objective: list[float | None]
+    feasible: list[bool]
+    x: dict[str, list[object]]
+    metrics: dict[str, list[object]]
+    same_objective_different_designs: list[SameObjectiveJson]
+    statistics: list[RunStatisticsDoc]
+    labels: list[str]
+    tests: list[SignificanceJson]
+
+
+class ComparisonJson(_ComparisonJson, total=False):
+    """The ``compare --format json`` document: per run (lists in the runs' order) the
+    verdicts, objectives, variables and metrics; the fronts' ``hypervolume`` where the
+    runs have fronts; then the grades, headlines and yield targets (set after it, so
+    optional to the type though always written)."""
+
+    hypervolume: FrontsCompared
+    verdict_grade: list[str | None]
+    verdict_headline: list[str]
+    yield_target: list[float | None]
+
+
+class SweepJson(TypedDict):
+    """A sweep archive's document: its verdict, case file, grid, seeds and ranking. A
+    ranked point is a table row (``rank``, ``label``, the columns of
+    :func:`camopt.core.stats.sweep_summary`, which include the grid's own keys, and
+    ``vs_best``), so it stays a mapping of column names."""
+
+    verdict: str | None
+    verdict_sentence: str
+    requirements: list[CheckDoc]
+    sweep: str
+    grid: object
+    seeds: list[int]
+    ranking: list[dict[str, object]]
 
 
 @dataclass(frozen=True)
@@ -137,10 +359,10 @@ class Verdict:
         """Names of the passing requirements at their limit."""
         return [c.requirement.name for c in self.checks if c.at_limit]
 
-    def to_json(self) -> Json:
-        return json_doc({"requirements": self.requirements, "verdict": self.verdict,
-                         "verdict_grade": self.grade, "sentence": self.sentence,
-                         "headline": self.headline, "yield_target": self.yield_target})
+    def to_json(self) -> VerdictJson:
+        return json_doc(VerdictJson(
+            requirements=self.requirements, verdict=self.verdict, verdict_grade=self.grade,
+            sentence=self.sentence, headline=self.headline, yield_target=self.yield_target))
 
 
 @dataclass(frozen=True)
@@ -158,8 +380,8 @@ class Reference:
     def get(self, name: str, default: Any = None) -> Any:
         return self.values.get(name, default)
 
-    def to_json(self) -> Json:
-        return json_doc({"label": self.label, "values": dict(self.values)})
+    def to_json(self) -> ReferenceJson:
+        return json_doc(ReferenceJson(label=self.label, values=dict(self.values)))
 
 
 @dataclass(frozen=True)
@@ -181,10 +403,10 @@ class ReferenceVerdict:
     def verdict_sentence(self) -> str:
         return self.judged.sentence
 
-    def to_json(self) -> Json:
-        return json_doc({"label": self.label, "values": dict(self.reference.values),
-                         "verdict": self.verdict, "verdict_sentence": self.verdict_sentence,
-                         "requirements": self.judged.requirements})
+    def to_json(self) -> ReferenceVerdictJson:
+        return json_doc(ReferenceVerdictJson(
+            label=self.label, values=dict(self.reference.values), verdict=self.verdict,
+            verdict_sentence=self.verdict_sentence, requirements=self.judged.requirements))
 
 
 @dataclass(frozen=True)
@@ -201,11 +423,11 @@ class RepeatRow:
     spawn_key: tuple[int, ...]
     notes: tuple[str, ...]
 
-    def to_json(self) -> Json:
-        return json_doc({"seed": self.seed, "objective": self.objective,
-                         "feasible": self.feasible, "nfev": self.nfev,
-                         "wall_s": self.wall_s, "converged_nit": self.converged_nit,
-                         "spawn_key": list(self.spawn_key), "notes": list(self.notes)})
+    def to_json(self) -> RepeatJson:
+        return json_doc(RepeatJson(
+            seed=self.seed, objective=self.objective, feasible=self.feasible, nfev=self.nfev,
+            wall_s=self.wall_s, converged_nit=self.converged_nit,
+            spawn_key=list(self.spawn_key), notes=list(self.notes)))
 
 
 @dataclass(frozen=True)
@@ -222,8 +444,10 @@ class RobustYield:
     target: float | None
     meets_target: bool | None
 
-    def to_json(self) -> Json:
-        return json_doc(asdict(self))
+    def to_json(self) -> RobustYieldJson:
+        return json_doc(RobustYieldJson(
+            value=self.value, low=self.low, high=self.high, samples=self.samples,
+            target=self.target, meets_target=self.meets_target))
 
 
 @dataclass(frozen=True)
@@ -233,8 +457,8 @@ class RobustRow:
     name: str
     values: tuple[Any, ...]
 
-    def to_json(self) -> Json:
-        return json_doc({"name": self.name, "values": list(self.values)})
+    def to_json(self) -> RobustRowJson:
+        return json_doc(RobustRowJson(name=self.name, values=list(self.values)))
 
 
 @dataclass(frozen=True)
@@ -247,9 +471,10 @@ class RobustSummary:
     yield_target: float | None
     rows: tuple[RobustRow, ...]
 
-    def to_json(self) -> Json:
-        return json_doc({"labels": list(self.labels), "samples": self.samples,
-                         "yield_target": self.yield_target, "rows": list(self.rows)})
+    def to_json(self) -> RobustSummaryJson:
+        return json_doc(RobustSummaryJson(
+            labels=list(self.labels), samples=self.samples, yield_target=self.yield_target,
+            rows=[r.to_json() for r in self.rows]))
 
 
 @dataclass(frozen=True)
@@ -263,8 +488,9 @@ class SummaryRow:
     optimum: Any
     reference: Any
 
-    def to_json(self) -> Json:
-        return json_doc(asdict(self))
+    def to_json(self) -> SummaryRowJson:
+        return json_doc(SummaryRowJson(section=self.section, name=self.name,
+                                       optimum=self.optimum, reference=self.reference))
 
 
 @dataclass(frozen=True)
@@ -274,8 +500,9 @@ class Summary:
     reference_label: str
     rows: tuple[SummaryRow, ...]
 
-    def to_json(self) -> Json:
-        return json_doc({"reference_label": self.reference_label, "rows": list(self.rows)})
+    def to_json(self) -> SummaryJson:
+        return json_doc(SummaryJson(reference_label=self.reference_label,
+                                    rows=[r.to_json() for r in self.rows]))
 
 
 @dataclass(frozen=True)
@@ -285,8 +512,8 @@ class RobustDoc:
     settings: Mapping[str, Any]
     check: RobustCheck
 
-    def to_json(self) -> Json:
-        return json_doc({"settings": dict(self.settings), "check": dict(self.check)})
+    def to_json(self) -> RobustDocJson:
+        return json_doc(RobustDocJson(settings=dict(self.settings), check=self.check))
 
 
 @dataclass(frozen=True)
@@ -312,31 +539,36 @@ class ShowView:
     robust_yield: RobustYield | None = None
     findings: Mapping[str, Any] = field(default_factory=dict)
 
-    def to_json(self) -> Json:
+    def to_json(self) -> ShowJson:
         """The ``show --format json`` document (keys in their documented order)."""
-        best = {k: v for k, v in asdict(self.best).items() if k != "repeat"}
-        doc: Json = {"verdict": self.verdict.verdict,
-                     "verdict_sentence": self.verdict.sentence,
-                     "requirements": self.verdict.requirements,
-                     "at_limit": self.verdict.at_limit,
-                     "expected_yield": self.expected_yield, "next": self.next,
-                     "case": self.case, "solver": self.solver, "best": best,
-                     "repeats": list(self.repeats), "table": self.table}
+        b = asdict(self.best)
+        best = BestJson(objective=b["objective"], feasible=b["feasible"], x=b["x"],
+                        metrics=b["metrics"], active=b["active"], violated=b["violated"])
+        doc = ShowJson(verdict=self.verdict.verdict, verdict_sentence=self.verdict.sentence,
+                       requirements=self.verdict.requirements,
+                       at_limit=self.verdict.at_limit, expected_yield=self.expected_yield,
+                       next=self.next, case=dict(self.case), solver=dict(self.solver),
+                       best=best, repeats=[r.to_json() for r in self.repeats],
+                       table=list(self.table))
         if self.reference is not None:
-            doc["reference"] = self.reference
+            doc["reference"] = self.reference.to_json()
         if self.pareto is not None:
-            doc["pareto"] = self.pareto
+            doc["pareto"] = list(self.pareto)
             doc["pareto_summary"] = self.pareto_summary
         if self.robust is not None:
-            doc["robust"] = self.robust
-            doc["robust_yield"] = self.robust_yield
+            doc["robust"] = self.robust.to_json()
+            doc["robust_yield"] = (None if self.robust_yield is None
+                                   else self.robust_yield.to_json())
         # the grade (green pass, amber pass at nominal, red fail) and the headline with the
         # yield beside a pass: after the older keys, whose order scripts rely on
-        doc.update(verdict_grade=self.verdict.grade, verdict_headline=self.verdict.headline,
-                   yield_target=self.verdict.yield_target)
-        # a case's findings under their own names, never over the contract's keys
-        doc.update({k: v for k, v in self.findings.items() if k not in doc})
-        return json_doc(doc)
+        doc["verdict_grade"] = self.verdict.grade
+        doc["verdict_headline"] = self.verdict.headline
+        doc["yield_target"] = self.verdict.yield_target
+        # a case's findings under their own names, never over the contract's keys; the
+        # type cannot name them, so they are set through a plain dict view of the document
+        out: dict[str, object] = dict(doc)
+        out.update({k: v for k, v in self.findings.items() if k not in out})
+        return json_doc(cast(ShowJson, out))
 
 
 @dataclass(frozen=True)
@@ -372,11 +604,15 @@ class Significance:
     def threshold(self) -> float | None:
         return self.test.threshold
 
-    def to_json(self) -> Json:
-        return json_doc({"a": self.a, "b": self.b, **self.test.as_dict(),
-                         "decidable": self.decidable, "success_a": self.success_a,
-                         "success_b": self.success_b,
-                         "success_p_value": self.success_p_value, "verdict": self.verdict})
+    def to_json(self) -> SignificanceJson:
+        t = self.test
+        return json_doc(SignificanceJson(
+            a=self.a, b=self.b, p_value=t.p_value, p_a_better=t.p_a_better,
+            rank_biserial=t.rank_biserial, median_a=t.median_a, median_b=t.median_b,
+            n_a=t.n_a, n_b=t.n_b, effect=t.effect, threshold=t.threshold,
+            decidable=self.decidable, success_a=dict(self.success_a),
+            success_b=dict(self.success_b), success_p_value=self.success_p_value,
+            verdict=self.verdict))
 
 
 @dataclass(frozen=True)
@@ -388,9 +624,9 @@ class SameObjective:
     objective: float
     differ: tuple[str, ...]
 
-    def to_json(self) -> Json:
-        return json_doc({"runs": list(self.runs), "objective": self.objective,
-                         "differ": list(self.differ)})
+    def to_json(self) -> SameObjectiveJson:
+        return json_doc(SameObjectiveJson(runs=list(self.runs), objective=self.objective,
+                                          differ=list(self.differ)))
 
 
 @dataclass(frozen=True)
@@ -415,24 +651,25 @@ class Comparison:
     tests: tuple[Significance, ...]
     hypervolume: FrontsCompared | None = None
 
-    def to_json(self) -> Json:
+    def to_json(self) -> ComparisonJson:
         """The ``compare --format json`` document."""
-        doc: Json = {
-            "runs": list(self.runs), "objective_name": self.objective_name,
-            "verdict": [v.verdict for v in self.verdicts],
-            "verdict_sentence": [v.sentence for v in self.verdicts],
-            "requirements": [v.requirements for v in self.verdicts],
-            "config_differences": self.config_differences,
-            "objective": list(self.objective), "feasible": list(self.feasible),
-            "x": self.x, "metrics": self.metrics,
-            "same_objective_different_designs": list(self.same_objective_different_designs),
-            "statistics": [s.as_dict() for s in self.statistics],
-            "labels": list(self.labels), "tests": list(self.tests)}
+        doc = ComparisonJson(
+            runs=list(self.runs), objective_name=self.objective_name,
+            verdict=[v.verdict for v in self.verdicts],
+            verdict_sentence=[v.sentence for v in self.verdicts],
+            requirements=[v.requirements for v in self.verdicts],
+            config_differences=dict(self.config_differences),
+            objective=list(self.objective), feasible=list(self.feasible),
+            x=dict(self.x), metrics=dict(self.metrics),
+            same_objective_different_designs=[
+                s.to_json() for s in self.same_objective_different_designs],
+            statistics=[s.as_dict() for s in self.statistics],
+            labels=list(self.labels), tests=[t.to_json() for t in self.tests])
         if self.hypervolume:
             doc["hypervolume"] = self.hypervolume
-        doc.update(verdict_grade=[v.grade for v in self.verdicts],  # after the older keys
-                   verdict_headline=[v.headline for v in self.verdicts],
-                   yield_target=[v.yield_target for v in self.verdicts])
+        doc["verdict_grade"] = [v.grade for v in self.verdicts]  # after the older keys
+        doc["verdict_headline"] = [v.headline for v in self.verdicts]
+        doc["yield_target"] = [v.yield_target for v in self.verdicts]
         return json_doc(doc)
 
 
@@ -447,10 +684,11 @@ class RankedPoint:
     row: Mapping[str, Any]
     vs_best: Significance | None = None
 
-    def to_json(self) -> Json:
-        doc: Json = {"rank": self.rank, "label": self.label, **self.row}
+    def to_json(self) -> dict[str, object]:
+        """The point's row with its rank and label first (columns are the sweep's own)."""
+        doc: dict[str, object] = {"rank": self.rank, "label": self.label, **self.row}
         if self.vs_best is not None:
-            doc["vs_best"] = self.vs_best
+            doc["vs_best"] = self.vs_best.to_json()
         return json_doc(doc)
 
 
@@ -466,11 +704,10 @@ class SweepRanking:
     seeds: tuple[int, ...]
     ranking: tuple[RankedPoint, ...]
 
-    def to_json(self) -> Json:
+    def to_json(self) -> SweepJson:
         """The document ``show --format json`` and ``compare --format json`` write for a
         sweep archive."""
-        return json_doc({"verdict": self.verdict.verdict,
-                         "verdict_sentence": self.verdict.sentence,
-                         "requirements": self.verdict.requirements, "sweep": self.sweep,
-                         "grid": self.grid, "seeds": list(self.seeds),
-                         "ranking": list(self.ranking)})
+        return json_doc(SweepJson(
+            verdict=self.verdict.verdict, verdict_sentence=self.verdict.sentence,
+            requirements=self.verdict.requirements, sweep=self.sweep, grid=self.grid,
+            seeds=list(self.seeds), ranking=[p.to_json() for p in self.ranking]))

@@ -29,3 +29,52 @@ def test_the_yield_words_say_below_by_the_lower_end():
     assert v.yield_words == "expected yield 97.0 % [94.0, 99.0] (target 95 %, below it)"
     v = Verdict((), "pass", "", YieldInterval(0.97, 0.95, 0.99), 0.95)
     assert v.yield_words == "expected yield 97.0 % [95.0, 99.0] (target 95 %)"
+
+
+# -- the typed documents name the keys written ----------------------------------------
+
+RUN = "tests/data/archives/run_main_52e31ad.h5"
+
+
+def _declared(doc_type: type) -> tuple[frozenset[str], frozenset[str]]:
+    return doc_type.__required_keys__, doc_type.__optional_keys__  # type: ignore[attr-defined]
+
+
+def _check_keys(doc: dict, doc_type: type, extra: frozenset[str] = frozenset()) -> None:
+    """Every required key written, nothing written the type does not declare (``extra``:
+    keys a type cannot name, a case's findings)."""
+    required, optional = _declared(doc_type)
+    assert required <= doc.keys(), required - doc.keys()
+    assert doc.keys() - required - optional == extra
+
+
+def test_each_views_document_type_names_the_keys_its_to_json_writes(monkeypatch):
+    from pathlib import Path
+
+    from camopt import archive
+    from camopt.reporting import report, views
+
+    monkeypatch.chdir(Path(__file__).resolve().parents[2])
+    run = archive.load_run(RUN)
+    show = report.show(run)
+    doc = show.to_json()
+    required, optional = _declared(views.ShowJson)
+    _check_keys(dict(doc), views.ShowJson, frozenset(show.findings) - required - optional)
+    # the grade, headline and target are optional to the type only: always written
+    assert {"verdict_grade", "verdict_headline", "yield_target"} <= doc.keys()
+    _check_keys(dict(doc["best"]), views.BestJson)
+    for rep in doc["repeats"]:
+        _check_keys(dict(rep), views.RepeatJson)
+    _check_keys(dict(show.verdict.to_json()), views.VerdictJson)
+    if show.reference is not None:
+        _check_keys(dict(show.reference.to_json()), views.ReferenceVerdictJson)
+    summary = report.summary(run).to_json()
+    _check_keys(dict(summary), views.SummaryJson)
+    for row in summary["rows"]:
+        _check_keys(dict(row), views.SummaryRowJson)
+    comparison = report.compare([run, run]).to_json()
+    _check_keys(dict(comparison), views.ComparisonJson)
+    assert {"verdict_grade", "verdict_headline", "yield_target"} <= comparison.keys()
+    assert comparison["tests"], "the golden run has repeats: one significance test"
+    for t in comparison["tests"]:
+        _check_keys(dict(t), views.SignificanceJson)
