@@ -94,14 +94,7 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
             y0 = _rod(cos2[j], sin2[j], k24, k12, l1, l4, c1, s1f, lengths, p, q)
         for j in range(m):
             c2, s2 = cos2[j], sin2[j]
-            a = -k24 * c2 + 2 * l1 * l4 * c1
-            b = -k24 * s2 + 2 * l1 * l4 * s1f
-            c = k12 * c1 * c2 + k12 * s1f * s2 + lengths
-            norm = a * a + b * b
-            root = math.sqrt(norm - c * c)
-            inv = 1.0 / norm
-            c4 = (a * c + b * root) * inv  # the branch -1
-            s4 = (b * c - a * root) * inv
+            c4, s4, root = _four_bar(c2, s2, k24, k12, l1, l4, c1, s1f, lengths)
             rate = (-k24 * (s2 * c4 - c2 * s4) - k12 * c1 * s2 + k12 * s1f * c2) / root
             s1 = (s4 * p - c4 * q) - y0
             ds1 = (s4 * q + c4 * p) * rate * dphi[j]
@@ -125,10 +118,21 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
 def _rod(c2: float, s2: float, k24: float, k12: float, l1: float, l4: float, c1: float,
          s1f: float, lengths: float, p: float, q: float) -> float:
     """The rod's height y_m at one node (the four-bar of :func:`closing_geometry`)."""
+    c4, s4, _ = _four_bar(c2, s2, k24, k12, l1, l4, c1, s1f, lengths)
+    return s4 * p - c4 * q
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _four_bar(c2: float, s2: float, k24: float, k12: float, l1: float, l4: float,
+              c1: float, s1f: float, lengths: float) -> tuple[float, float, float]:
+    """cos and sin of the output angle theta4 on the branch -1 and the root
+    sqrt(A^2 + B^2 - C^2) of A cos4 + B sin4 = C (Eq 3 in the frame turned to BO), for
+    the follower's cos2, sin2 (inlined where it is called: the node loop stays one
+    branch-free pass the compiler vectorises)."""
     a = -k24 * c2 + 2 * l1 * l4 * c1
     b = -k24 * s2 + 2 * l1 * l4 * s1f
     c = k12 * c1 * c2 + k12 * s1f * s2 + lengths
     norm = a * a + b * b
     root = math.sqrt(norm - c * c)
     inv = 1.0 / norm
-    return (b * c - a * root) * inv * p - (a * c + b * root) * inv * q
+    return (a * c + b * root) * inv, (b * c - a * root) * inv, root
