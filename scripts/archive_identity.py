@@ -76,7 +76,10 @@ def run(checkout: Path, out: Path) -> int:
         print(f"error: no budget for {', '.join(missing)} (add them to BUDGETS)",
               file=sys.stderr)
         return 2
-    env = {**os.environ, "PYTHONPATH": str(checkout.resolve())}
+    # run from the checkout: ``python -m`` puts the working directory first on sys.path,
+    # ahead of PYTHONPATH, so from another checkout it would import that one's camopt
+    checkout, out = checkout.resolve(), out.resolve()
+    env = {**os.environ, "PYTHONPATH": str(checkout)}
     failed = 0
     for config in configs:
         sets = [a for s in BUDGETS[config.stem] for a in ("--set", s)]
@@ -84,7 +87,8 @@ def run(checkout: Path, out: Path) -> int:
                str(out / f"{config.stem}.h5"), "--force", "--quiet",
                "--repeats", str(REPEATS), *sets]
         start = time.perf_counter()
-        done = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
+        done = subprocess.run(cmd, env=env, cwd=checkout, capture_output=True, text=True,
+                              check=False)
         took = time.perf_counter() - start
         print(f"{config.stem:28s} rc={done.returncode} {took:6.1f} s", flush=True)
         if done.returncode not in (0, 1):   # 1: ran, target not met
