@@ -465,7 +465,7 @@ def describe_file(path: Path) -> str | None:
 def _kind_of(handle: BinaryIO) -> str:
     """'a camopt sweep archive', 'an HDF5 file' or 'a file' for an open regular file."""
     try:
-        with h5py.File(handle, "r") as f:
+        with h5py.File(handle, "r", locking=False) as f:
             kind = f"a camopt {f.attrs.get('archive_kind', 'run')} archive" if (
                 "camopt_version" in f.attrs) else "an HDF5 file"
     except Exception:  # anything h5py cannot open is simply 'a file'
@@ -486,7 +486,11 @@ def open_archive(path: str | Path) -> h5py.File:
     if not stat.S_ISREG(info.st_mode):
         raise ArchiveError(f"{path}: file: not a regular file")
     try:
-        f = h5py.File(path, "r")
+        # No HDF5 file lock: an archive is never changed in place (atomic_write replaces
+        # it whole), and its writer keeps the exclusive flock of its temporary file on the
+        # published file until it closes it, so HDF5's shared lock would fail for that
+        # moment and a reader polling a running sweep would read "not HDF5".
+        f = h5py.File(path, "r", locking=False)
     except OSError:
         raise ArchiveError(f"{path}: file: not a camopt archive (not HDF5)") from None
     try:

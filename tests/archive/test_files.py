@@ -285,3 +285,22 @@ def test_archives_get_the_permissions_of_any_new_file(tmp_path, umask):
         os.umask(old)
     assert os.stat(path).st_mode & 0o777 == 0o666 & ~umask
     assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_an_archive_reads_while_its_writer_still_holds_the_lock(tmp_path, monkeypatch):
+    """A reader polling a running sweep opens each snapshot the moment it is published,
+    while its writer still holds the temporary file's flock on it: the open must not read
+    "not HDF5" (HDF5's own shared lock failed there; a flaky sweep test showed it)."""
+    path = tmp_path / "a.h5"
+    seen = []
+    publish = files._publish
+
+    def publish_then_read(tmp, target, replace):
+        publish(tmp, target, replace)
+        with files.open_archive(target) as f:  # the writer's lock is held until after this
+            seen.append(str(f.attrs["archive_kind"]))
+
+    monkeypatch.setattr(files, "_publish", publish_then_read)
+    files.atomic_write(path, lambda f: f.attrs.update(
+        {"schema_version": 1, "camopt_version": "test", "archive_kind": "sweep"}))
+    assert seen == ["sweep"]
