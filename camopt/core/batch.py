@@ -82,14 +82,19 @@ def describe_variants(problem: Problem, X: Floats, fields: Mapping[str, Floats],
     ``fields`` and each row's ``variant`` (n,), in chunks: the same Evaluation as one call
     (``detail``: as the capability's). The rows of each variant are chunked apart (a
     chunk holds one variant: one call of the case's per-variant evaluation, not one per
-    variant it happens to hold; robust draws alternate variants row by row)."""
+    variant it happens to hold; robust draws alternate variants row by row), unless the
+    problem's ``mixed_variants`` says one call judges rows of every variant (then chunks
+    of ``size`` rows per variant)."""
     def call(Xc: Floats, f: Mapping[str, Floats]) -> Evaluation:
         return problem.describe_variants(  # type: ignore[attr-defined]
             Xc, {k: v for k, v in f.items() if k != VARIANT}, f[VARIANT], detail=detail)
     kinds = np.unique(variant)
     size = size or chunk_rows(problem)
-    if len(kinds) < 2:
-        return _chunked(call, X, {**fields, VARIANT: np.asarray(variant)}, size, progress)
+    if len(kinds) < 2 or getattr(problem, "mixed_variants", False):
+        # a case that judges every variant's rows in one call (``mixed_variants``) takes
+        # chunks of as many rows per variant as one variant's chunk
+        return _chunked(call, X, {**fields, VARIANT: np.asarray(variant)},
+                        size * len(kinds), progress)
     order = np.argsort(variant, kind="stable")
     starts = np.searchsorted(np.asarray(variant)[order], kinds)
     ends = np.r_[starts[1:], len(order)]

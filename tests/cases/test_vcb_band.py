@@ -51,3 +51,39 @@ def test_band_ends_put_low_and_high_before_the_unit():
     assert band_ends("touch_time_ms") == ("touch_time_low_ms", "touch_time_high_ms")
     assert band_ends("touch_velocity_m_s") == ("touch_velocity_low_m_s",
                                                "touch_velocity_high_m_s")
+
+
+def test_merged_motion_and_band_put_each_group_s_rows_back():
+    """Two groups' closings and bands merged into five rows: every per-design field, the
+    curves (on first read; the grid once) and the set counts in row order, exactly (a
+    copy, no arithmetic)."""
+    from camopt.cases.vcb.band import merged_band, merged_motion
+    from camopt.cases.vcb.motion import ClosingCurves, ClosingEvents, ClosingMotion
+
+    groups = [np.array([0, 3]), np.array([1, 2, 4])]
+    grid = np.linspace(0.0, 1.0, 4)
+
+    def motion(values):
+        v = np.asarray(values, dtype=float)
+        curves = ClosingCurves(theta_c=grid, **{
+            f: v[:, None] + grid for f in ("time", "omega", "rod", "rod_velocity",
+                                            "contact", "contact_velocity", "cam_torque")})
+        events = {f: v.copy() for f in ClosingEvents.__dataclass_fields__}
+        events["latched"] = v > 2
+        return ClosingMotion(cam_torque_min=-v, curves=lambda: curves, **events)
+
+    motions = [motion([0.0, 3.0]), motion([1.0, 2.0, 4.0])]
+    got = merged_motion(motions, groups, 5)
+    np.testing.assert_array_equal(got.touch_velocity, [0.0, 1.0, 2.0, 3.0, 4.0])
+    np.testing.assert_array_equal(got.cam_torque_min, [-0.0, -1.0, -2.0, -3.0, -4.0])
+    np.testing.assert_array_equal(got.latched, [False, False, False, True, True])
+    np.testing.assert_array_equal(got.theta_c, grid)
+    np.testing.assert_array_equal(got.rod, np.arange(5.0)[:, None] + grid)
+    bands = [MotionBand.of(motions[0]), MotionBand.of(motions[1])]
+    bands[1] = MotionBand(**{**bands[1].__dict__, "sets": 8})
+    band = merged_band(bands, groups, 5)
+    np.testing.assert_array_equal(band.sets, [1, 8, 8, 1, 8])
+    np.testing.assert_array_equal(band.velocity_low, [0.0, 1.0, 2.0, 3.0, 4.0])
+    np.testing.assert_array_equal(band.not_latched, [1, 1, 1, 0, 0])
+    for field in band.low:
+        np.testing.assert_array_equal(band.high[field], [0.0, 1.0, 2.0, 3.0, 4.0])

@@ -174,3 +174,36 @@ def test_draws_without_the_descriptive_metrics_keep_the_verdict(problem, X):
     np.testing.assert_array_equal(lean.g, full.g)
     np.testing.assert_array_equal(lean.f, full.f)
     assert "curvature_min_mm" in full.extras and "curvature_min_mm" not in lean.extras
+
+
+def test_rows_of_both_forms_in_one_call_are_each_form_s_own(problem):
+    """Robust draws mix the forms row by row; one call judges them all (the statics and
+    the verdict once, each form's closing in one call of its own): every row as the call
+    of its form alone, parts per row, with and without the descriptive metrics. rtol
+    1e-12: the same arithmetic row by row, only the rows sharing a call differ."""
+    rng = np.random.default_rng(11)
+    n = 9
+    X = problem.sample(rng, n)
+    X[:, problem.names.index("release_offset_deg")] = np.deg2rad(18.5)
+    c = problem.config
+    fields = {"cam_friction_nm": c.cam_friction_nm * rng.uniform(0.8, 1.2, n),
+              "efficiency": c.efficiency + rng.uniform(-0.03, 0.03, n)}
+    variant = rng.integers(0, 2, n)
+    assert len(np.unique(variant)) == 2
+    for detail in (False, True):
+        mixed = problem.describe_variants(X, fields, variant, detail=detail)
+        for v in range(2):
+            rows = np.flatnonzero(variant == v)
+            alone = problem.describe_variants(
+                X[rows], {k: a[rows] for k, a in fields.items()}, variant[rows],
+                detail=detail)
+            got = mixed.take(rows)
+            np.testing.assert_allclose(np.nan_to_num(got.f, posinf=1e300),
+                                       np.nan_to_num(alone.f, posinf=1e300), rtol=1e-12)
+            np.testing.assert_allclose(np.nan_to_num(got.g, posinf=1e300),
+                                       np.nan_to_num(alone.g, posinf=1e300), rtol=1e-12)
+            assert got.extras.keys() == alone.extras.keys()
+            for k, a in alone.extras.items():
+                np.testing.assert_allclose(got.extras[k], a, rtol=1e-12, err_msg=k)
+        # each row counts its own form's sets: identified + 2 + link masses, coulomb's 8
+        assert list(mixed.extras["band_sets"]) == [4.0 if v == 0 else 8.0 for v in variant]

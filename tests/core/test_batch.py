@@ -95,6 +95,7 @@ def test_variants_are_chunked_apart_and_give_one_call_s_rows():
     the rows are the one call's, in the caller's order, bit for bit (a row's evaluation
     is its own, whatever rows share its call)."""
     problem = build_problem(load(CONFIGS / "vcb_velocity_robust.toml").case)
+    problem.mixed_variants = False  # a case that judges one variant a call
     X = problem.sample(np.random.default_rng(np.random.SeedSequence(10)), 23)
     variant = np.arange(23) % 2
     whole = problem.describe_variants(X, {}, variant, detail=False)
@@ -108,6 +109,27 @@ def test_variants_are_chunked_apart_and_give_one_call_s_rows():
     assert [len(np.unique(v)) for v in seen] == [1] * 4  # 12 rows of 0: 8 + 4; 11 of 1: 8 + 3
     assert [len(v) for v in seen] == [8, 4, 8, 3]
     assert heard[-1] == (23, 23) and [d for d, _ in heard] == sorted(d for d, _ in heard)
+
+
+def test_mixed_variants_are_chunked_together():
+    """A case whose one call judges rows of every variant (the VCB: ``mixed_variants``)
+    gets chunks of both, ``size`` rows per variant, in the caller's order, and the rows
+    are the one call's, bit for bit (a row's evaluation is its own)."""
+    problem = build_problem(load(CONFIGS / "vcb_velocity_robust.toml").case)
+    assert problem.mixed_variants
+    X = problem.sample(np.random.default_rng(np.random.SeedSequence(10)), 23)
+    variant = np.arange(23) % 2
+    whole = problem.describe_variants(X, {}, variant, detail=False)
+    seen: list[np.ndarray] = []
+    real = problem.describe_variants
+    problem.describe_variants = lambda Xc, f, v, detail: (seen.append(v), real(Xc, f, v, detail))[1]
+    heard: list[tuple[int, int]] = []
+    ev = batch.describe_variants(problem, X, {}, variant, size=8, detail=False,
+                                 progress=lambda d, n: heard.append((d, n)))
+    _same(ev, whole)
+    assert [len(v) for v in seen] == [16, 7]  # 8 rows a variant a call
+    np.testing.assert_array_equal(np.concatenate(seen), variant)
+    assert heard == [(16, 23), (23, 23)]
 
 
 def test_vcb_chunks_rows_as_its_batch_rows_says():

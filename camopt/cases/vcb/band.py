@@ -3,14 +3,15 @@ the parameter sets of ``dynamics_band`` (every kept model form)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from camopt.cases.vcb.dynamics import ClosingEvents, ClosingMotion, closing_events
 from camopt.cases.vcb.loads import Loads
 from camopt.cases.vcb.model import VcbModel
-from camopt.cases.vcb.motion import MotionParameters
+from camopt.cases.vcb.motion import ClosingCurves, MotionParameters
 from camopt.mechanics import Bools, Floats, Ints
 from camopt.units import MS
 
@@ -22,7 +23,8 @@ class MotionBand:
     closing velocity (m/s; 0 under a set with which the contacts never meet), latched under
     every set, least and greatest kinetic energy at the latch (J), least reach (fraction
     of the stroke), least release torque ratio (eps T_s / T_f at the release), the number
-    of parameter sets (``sets``, the identified one included) and of those under which
+    of parameter sets (``sets``, the identified one included; one for all, or (n,) where
+    the designs were judged under different model forms) and of those under which
     the cam does not release and latch (``not_latched``), and the least and greatest of
     every :data:`BANDED` motion quantity (SI)."""
 
@@ -33,7 +35,7 @@ class MotionBand:
     kinetic_high: Floats
     reach_low: Floats
     release_ratio_low: Floats
-    sets: int
+    sets: int | Ints
     not_latched: Ints
     low: dict[str, Floats]
     high: dict[str, Floats]
@@ -103,3 +105,39 @@ def band_motion(m: VcbModel, nominal: ClosingMotion, A: Floats, kc: Floats, link
         events = closing_events(m, A, kc, link, rod_offset, loads, sets, steps, sets=k,
                                 pre=pre)
     return MotionBand.of(nominal, events, k)
+
+
+def _scattered(pieces: Sequence[np.ndarray], groups: Sequence[Ints], n: int) -> np.ndarray:
+    """One array of n rows from ``pieces``, piece i's rows going to rows ``groups[i]``."""
+    first = np.asarray(pieces[0])
+    out = np.empty((n, *first.shape[1:]), dtype=first.dtype)
+    for rows, piece in zip(groups, pieces, strict=True):
+        out[rows] = piece
+    return out
+
+
+def merged_motion(motions: Sequence[ClosingMotion], groups: Sequence[Ints], n: int
+                  ) -> ClosingMotion:
+    """The closing of n designs from ``motions`` of row groups ``groups`` (their row
+    indices): every per-design field put back in row order, the curves on first use."""
+    def curves() -> ClosingCurves:
+        each = [m.curves() for m in motions]
+        return ClosingCurves(theta_c=each[0].theta_c, **{
+            f.name: _scattered([getattr(c, f.name) for c in each], groups, n)
+            for f in fields(ClosingCurves) if f.name != "theta_c"})
+    return ClosingMotion(curves=curves, **{
+        f.name: _scattered([getattr(m, f.name) for m in motions], groups, n)
+        for f in fields(ClosingMotion) if f.name != "curves"})
+
+
+def merged_band(bands: Sequence[MotionBand], groups: Sequence[Ints], n: int) -> MotionBand:
+    """The band of n designs from ``bands`` of row groups ``groups`` (their row indices):
+    each design's extremes and counts as its group's, ``sets`` per design (n,)."""
+    def put(pieces: list[np.ndarray]) -> np.ndarray:
+        return _scattered(pieces, groups, n)
+    return MotionBand(
+        **{f.name: put([getattr(b, f.name) for b in bands]) for f in fields(MotionBand)
+           if f.name not in ("sets", "low", "high")},
+        sets=put([np.full(len(b.latched), b.sets) for b in bands]),
+        low={k: put([b.low[k] for b in bands]) for k in bands[0].low},
+        high={k: put([b.high[k] for b in bands]) for k in bands[0].high})

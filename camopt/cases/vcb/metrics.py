@@ -53,7 +53,7 @@ def motion_metrics(motion: ClosingMotion, q: Terms, latch_delay_ms: float | None
         "latch_kinetic_energy_j": motion.final_kinetic,
         "latch_kinetic_energy_low_j": spread.kinetic_low,
         "latch_kinetic_energy_high_j": spread.kinetic_high,
-        "band_sets": np.full(len(spread.latched), float(spread.sets)),
+        "band_sets": np.full(len(spread.latched), spread.sets, dtype=float),
         "band_sets_not_latched": spread.not_latched.astype(float),
         "cam_torque_min_nm": q.cam_torque_min,
         "lift_off_torque_ratio": q.lift_off_ratio,

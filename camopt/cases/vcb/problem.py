@@ -9,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 
 from camopt.cases.vcb import life
-from camopt.cases.vcb.band import MotionBand, band_motion
+from camopt.cases.vcb.band import MotionBand, band_motion, merged_band, merged_motion
 from camopt.cases.vcb.band_sets import band_rows, form_sets, identified, joined, parameter_sets
 from camopt.cases.vcb.config import CamDesign, VcbConfig
 from camopt.cases.vcb.constraints import CONSTRAINTS, Terms
@@ -48,7 +48,11 @@ class VcbProblem(Problem, VariesCase, HasVariants):
 
     batch_rows = 512
     """Rows per call of a chunked evaluation (:mod:`camopt.core.batch`): robust draws
-    cost 8 % less per row at 512 than at 256, one model form a call (docs/design.md)."""
+    cost 8 % less per row at 512 than at 256 (docs/design.md); per model form where the
+    rows mix forms."""
+    mixed_variants = True
+    """:meth:`describe_variants` judges rows of every model form in one call (the statics
+    and the verdict once, the closing per form): chunked together, not per form."""
 
     def __init__(self, config: VcbConfig) -> None:
         self.config = c = config
@@ -187,6 +191,12 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         X = np.atleast_2d(np.asarray(X, dtype=float))
         parts = self.parts(len(X), fields)
         variant = np.asarray(variant, dtype=int)
+        kinds = np.unique(variant)
+        if (len(kinds) > 1 and kinds[0] >= 0 and self.setting_column is None
+                and not self.ages):
+            # one call over every form's rows: only the closing differs by form (no
+            # factory setting, no end of life to judge per form)
+            return self._judge(X, detail, parts, None, variant)
         order, pieces = [], []
         for v in np.unique(variant):
             rows = np.flatnonzero(variant == v)
@@ -310,9 +320,11 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         return life.ages(self.config, self.search_dynamics)
 
     def _judge(self, X: Floats, detail: bool, parts: Parts | None, setting: Setting | None,
-               form: int | None) -> Evaluation:
+               form: int | Ints | None) -> Evaluation:
         """Objective, constraints and metrics of n breakers with their ``parts`` (set at
-        the factory by ``setting``, where the run sets them) under form ``form``'s sets."""
+        the factory by ``setting``, where the run sets them) under form ``form``'s sets,
+        or each row under its own form (``form`` (n,) ints; no setting): the statics and
+        the verdict once over every row, the closing per form (:meth:`_form_motions`)."""
         c, m = self.config, self.model
         A, kc, link = self.designs(X, None if parts is None else parts.link)
         A = self.profiled(A, parts)
@@ -323,16 +335,19 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         end = m.theta_c[-1]
         zeros = rate_zeros(A, end)  # where phi' = 0: dwell, and phi_max's candidates
         sigma_max = m.peak_stress(A, kin.follower, torque, zeros)
-        motion = (self.motion(X, parts=parts, form=form) if (detail or self.search_dynamics)
-                  else None)
+        motion = band = None
+        if detail or self.search_dynamics:
+            if isinstance(form, np.ndarray):
+                motion, band = self._form_motions(X, parts, form)
+            else:
+                motion = self.motion(X, parts=parts, form=form)
+                band = self.motion_band(X, motion, parts=parts, form=form,
+                                        member_pre=None if setting is None
+                                        else setting.member_pre)
         q = Terms(config=c, model=m, kin=kin, bal=bal, link=link,
                   phi_top=phi_max(A, end, zeros) / DEG,  # exact, not the sampled maximum
                   tau_max=hertz.max_shear_stress(sigma_max),  # Eq 31
-                  motion=motion,
-                  band=self.motion_band(X, motion, parts=parts, form=form,
-                                        member_pre=None if setting is None
-                                        else setting.member_pre)
-                  if motion is not None else None,
+                  motion=motion, band=band,
                   setting=None if setting is None else setting.longest,
                   setting_velocity=None if setting is None else X[:, self.setting_column])
         G = np.column_stack([con.g(q) for con in self.constraints])
@@ -354,6 +369,21 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         if detail:
             extras.update(shape_metrics(q, A, torque, zeros))
         return Evaluation(f=f, g=G, extras=extras)
+
+    def _form_motions(self, X: Floats, parts: Parts | None, form: Ints
+                      ) -> tuple[ClosingMotion, MotionBand]:
+        """The nominal closing and its band of each row of ``X`` under its own model form
+        ``form`` (n,): each form's rows in one call of :meth:`motion` and of
+        :meth:`motion_band` (the numbers of a call per form), put back in row order."""
+        groups, motions, bands = [], [], []
+        for f in np.unique(form):
+            rows = np.flatnonzero(form == f)
+            part = None if parts is None else parts.take(rows)
+            motion = self.motion(X[rows], parts=part, form=int(f))
+            groups.append(rows)
+            motions.append(motion)
+            bands.append(self.motion_band(X[rows], motion, parts=part, form=int(f)))
+        return merged_motion(motions, groups, len(X)), merged_band(bands, groups, len(X))
 
     def _worst_form(self, X: Floats, detail: bool, parts: Parts | None) -> Evaluation:
         """The case's own verdict on a breaker set at the factory, over every kept model
