@@ -88,14 +88,12 @@ def test_progress_is_told_each_chunk_and_changes_nothing():
     assert heard == [(3, 3)]  # one chunk: told once, at the end
 
 
-def test_variants_are_chunked_apart_and_give_one_call_s_rows():
-    """Rows of mixed model variants (robust draws alternate them row by row) are chunked
-    per variant: each call of the case's describe_variants holds one variant, the calls
-    are as few as the chunk size allows per variant, the progress ends at every row, and
-    the rows are the one call's, in the caller's order, bit for bit (a row's evaluation
-    is its own, whatever rows share its call)."""
+def _chunked_calls(mixed: bool) -> tuple[list[np.ndarray], list[tuple[int, int]]]:
+    """23 robust VCB rows of alternating variants through ``batch.describe_variants`` in
+    chunks of 8 (the case judging mixed variants in one call or not): checked equal, bit
+    for bit, to one call of the case; each call's variants and the progress heard."""
     problem = build_problem(load(CONFIGS / "vcb_velocity_robust.toml").case)
-    problem.mixed_variants = False  # a case that judges one variant a call
+    problem.mixed_variants = mixed
     X = problem.sample(np.random.default_rng(np.random.SeedSequence(10)), 23)
     variant = np.arange(23) % 2
     whole = problem.describe_variants(X, {}, variant, detail=False)
@@ -106,6 +104,16 @@ def test_variants_are_chunked_apart_and_give_one_call_s_rows():
     ev = batch.describe_variants(problem, X, {}, variant, size=8, detail=False,
                                  progress=lambda d, n: heard.append((d, n)))
     _same(ev, whole)
+    return seen, heard
+
+
+def test_variants_are_chunked_apart_and_give_one_call_s_rows():
+    """Rows of mixed model variants (robust draws alternate them row by row) are chunked
+    per variant: each call of the case's describe_variants holds one variant, the calls
+    are as few as the chunk size allows per variant, the progress ends at every row, and
+    the rows are the one call's, in the caller's order, bit for bit (a row's evaluation
+    is its own, whatever rows share its call)."""
+    seen, heard = _chunked_calls(mixed=False)  # a case that judges one variant a call
     assert [len(np.unique(v)) for v in seen] == [1] * 4  # 12 rows of 0: 8 + 4; 11 of 1: 8 + 3
     assert [len(v) for v in seen] == [8, 4, 8, 3]
     assert heard[-1] == (23, 23) and [d for d, _ in heard] == sorted(d for d, _ in heard)
@@ -115,20 +123,10 @@ def test_mixed_variants_are_chunked_together():
     """A case whose one call judges rows of every variant (the VCB: ``mixed_variants``)
     gets chunks of both, ``size`` rows per variant, in the caller's order, and the rows
     are the one call's, bit for bit (a row's evaluation is its own)."""
-    problem = build_problem(load(CONFIGS / "vcb_velocity_robust.toml").case)
-    assert problem.mixed_variants
-    X = problem.sample(np.random.default_rng(np.random.SeedSequence(10)), 23)
-    variant = np.arange(23) % 2
-    whole = problem.describe_variants(X, {}, variant, detail=False)
-    seen: list[np.ndarray] = []
-    real = problem.describe_variants
-    problem.describe_variants = lambda Xc, f, v, detail: (seen.append(v), real(Xc, f, v, detail))[1]
-    heard: list[tuple[int, int]] = []
-    ev = batch.describe_variants(problem, X, {}, variant, size=8, detail=False,
-                                 progress=lambda d, n: heard.append((d, n)))
-    _same(ev, whole)
+    assert build_problem(load(CONFIGS / "vcb_velocity_robust.toml").case).mixed_variants
+    seen, heard = _chunked_calls(mixed=True)
     assert [len(v) for v in seen] == [16, 7]  # 8 rows a variant a call
-    np.testing.assert_array_equal(np.concatenate(seen), variant)
+    np.testing.assert_array_equal(np.concatenate(seen), np.arange(23) % 2)
     assert heard == [(16, 23), (23, 23)]
 
 
