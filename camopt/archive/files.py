@@ -34,7 +34,6 @@ import os
 import platform
 import re
 import secrets
-import signal
 import socket
 import stat
 import tempfile
@@ -110,9 +109,6 @@ def _probe(folder: Path, where: str) -> None:
     os.unlink(probe)
 
 
-_INTERRUPTS = {signal.SIGINT, signal.SIGTERM}
-
-
 def _lock_path(path: Path) -> Path:
     return _folder(path) / f".{path.name}.lock"
 
@@ -182,24 +178,17 @@ def claim(path: Path, force: bool = False) -> Iterator[Claim]:
         yield Claim(path, force)
         return
     check_writable(path, force)
-    # Ctrl-C and SIGTERM held back from creating the lock file until the block that
-    # removes it is entered: one arriving in between left the lock file behind
-    held_back = signal.pthread_sigmask(signal.SIG_BLOCK, _INTERRUPTS)
     try:
         fd = _try_lock(path)
     except ArchiveError:
-        signal.pthread_sigmask(signal.SIG_SETMASK, held_back)
         raise
     except OSError as exc:
-        signal.pthread_sigmask(signal.SIG_SETMASK, held_back)
         raise ArchiveError(f"{path}: --out: cannot create its lock file "
                            f"({exc.strerror})") from None
     if fd is None:
-        signal.pthread_sigmask(signal.SIG_SETMASK, held_back)
         raise ArchiveError(f"{path}: --out: another camopt is writing this archive "
                            f"({_holder(path)})")
     try:
-        signal.pthread_sigmask(signal.SIG_SETMASK, held_back)  # a held signal lands here
         started = datetime.now(timezone.utc).isoformat(timespec="seconds")
         try:  # who holds it, for the error a second writer gets (best effort: disk full);
             # written over a dead holder's line before truncating, so never read empty

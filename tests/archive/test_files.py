@@ -304,25 +304,3 @@ def test_an_archive_reads_while_its_writer_still_holds_the_lock(tmp_path, monkey
     files.atomic_write(path, lambda f: f.attrs.update(
         {"schema_version": 1, "camopt_version": "test", "archive_kind": "sweep"}))
     assert seen == ["sweep"]
-
-
-def test_an_interrupt_while_the_lock_is_taken_leaves_no_lock_file(tmp_path, monkeypatch):
-    """SIGTERM arriving just after the lock file is made (the SIGTERM test's rare leftover
-    ``.a.h5.lock``) is held back until the block that removes the lock file runs."""
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt
-    previous = signal.signal(signal.SIGTERM, interrupt)
-    take = files._try_lock
-
-    def take_then_signal(path):
-        fd = take(path)
-        os.kill(os.getpid(), signal.SIGTERM)  # lands between the lock and the cleanup
-        return fd
-
-    monkeypatch.setattr(files, "_try_lock", take_then_signal)
-    try:
-        with pytest.raises(KeyboardInterrupt), files.claim(tmp_path / "a.h5"):
-            pass
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-    assert leftovers(tmp_path) == []
