@@ -58,6 +58,7 @@ _TMP = re.compile(r"\.(?P<target>.+)\.camopt-[0-9a-f]{8}\.tmp")
 HOLDER_WAIT_S = 2.0
 """How long a second writer waits for a just-started holder to write who it is."""
 _held: dict[Path, int] = {}  # archives this process holds locked -> lock file descriptor
+_opening: dict[str, int] = {}  # lock files this process made -> descriptor (-1: not yet known)
 
 
 def default_path(name: str, out_dir: str | Path = "runs") -> Path:
@@ -100,7 +101,17 @@ def check_writable(path: Path, force: bool, key: str = "--out") -> None:
 
 
 def _probe(folder: Path, where: str) -> None:
-    try:  # a real probe: os.access says yes to root even where writing fails
+    """A real probe (``os.access`` says yes to root even where writing fails): a file
+    without a name (``O_TMPFILE``), so a signal can leave nothing behind; where the file
+    system cannot make one, a named file removed at once."""
+    try:
+        os.close(os.open(folder, os.O_TMPFILE | os.O_WRONLY | os.O_CLOEXEC, 0o600))
+        return
+    except OSError as exc:
+        if exc.errno not in (errno.EOPNOTSUPP, errno.EISDIR, errno.EINVAL):
+            raise ArchiveError(f"{where}: folder {folder} is not writable "
+                               f"({exc.strerror})") from None
+    try:
         fd, probe = tempfile.mkstemp(dir=folder, prefix=".camopt-probe-")
     except OSError as exc:
         raise ArchiveError(f"{where}: folder {folder} is not writable "
@@ -114,18 +125,29 @@ def _lock_path(path: Path) -> Path:
 
 
 def _try_lock(path: Path) -> int | None:
-    """Lock ``path``'s lock file; its descriptor, or None when another process holds it."""
+    """Lock ``path``'s lock file; its descriptor, or None when another process holds it.
+
+    The descriptor is noted in :data:`_opening` the moment ``os.open`` returns it, before
+    anything a signal could interrupt, so :func:`_release` (in :func:`claim`'s ``finally``)
+    removes the lock file this process made whenever Ctrl-C or SIGTERM lands: while it is
+    being made, locked, or handed back (a return value is lost to an exception raised on
+    the way out of a call; the note is not)."""
     lock = _lock_path(path)
+    key = str(lock)
     while True:
+        _opening[key] = -1  # a file may exist before its descriptor is known
         fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC | os.O_NOFOLLOW
                      | os.O_NONBLOCK, 0o644)
+        _opening[key] = fd
         if not stat.S_ISREG(os.fstat(fd).st_mode):  # a FIFO or device planted there
+            del _opening[key]
             os.close(fd)
             raise ArchiveError(f"{path}: --out: its lock file {lock} is not a regular "
                                "file; remove it")
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
+            del _opening[key]  # another writer's: never removed by this one
             os.close(fd)
             return None
         try:  # the file may have been unlinked by its last holder after we opened it
@@ -134,13 +156,31 @@ def _try_lock(path: Path) -> int | None:
             same = False
         if same:
             return fd
+        del _opening[key]
         os.close(fd)
 
 
-def _unlock(path: Path, fd: int) -> None:
-    with contextlib.suppress(OSError):
-        os.unlink(_lock_path(path))  # unlink before unlocking: see _try_lock's inode check
-    os.close(fd)
+def _release(path: Path) -> None:
+    """Remove ``path``'s lock file if this process made or holds it, and close it. Unlinked
+    before unlocking: see :func:`_try_lock`'s inode check. A lock file whose descriptor a
+    signal lost (``-1``) is removed only if nobody holds it."""
+    lock = _lock_path(path)
+    fd = _opening.pop(str(lock), None)
+    if fd is None:
+        return
+    if fd < 0:
+        try:
+            fd = os.open(lock, os.O_RDONLY | os.O_CLOEXEC | os.O_NOFOLLOW | os.O_NONBLOCK)
+        except OSError:
+            return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # already held: kept; else taken
+        if os.stat(lock, follow_symlinks=False).st_ino == os.fstat(fd).st_ino:
+            os.unlink(lock)
+    except OSError:  # held by another writer, or gone
+        pass
+    finally:
+        os.close(fd)
 
 
 def _holder(path: Path) -> str:
@@ -178,17 +218,17 @@ def claim(path: Path, force: bool = False) -> Iterator[Claim]:
         yield Claim(path, force)
         return
     check_writable(path, force)
-    try:
-        fd = _try_lock(path)
-    except ArchiveError:
-        raise
-    except OSError as exc:
-        raise ArchiveError(f"{path}: --out: cannot create its lock file "
-                           f"({exc.strerror})") from None
-    if fd is None:
-        raise ArchiveError(f"{path}: --out: another camopt is writing this archive "
-                           f"({_holder(path)})")
-    try:
+    try:  # from before the lock file exists: whatever interrupts, _release cleans up
+        try:
+            fd = _try_lock(path)
+        except ArchiveError:
+            raise
+        except OSError as exc:
+            raise ArchiveError(f"{path}: --out: cannot create its lock file "
+                               f"({exc.strerror})") from None
+        if fd is None:
+            raise ArchiveError(f"{path}: --out: another camopt is writing this archive "
+                               f"({_holder(path)})")
         started = datetime.now(timezone.utc).isoformat(timespec="seconds")
         try:  # who holds it, for the error a second writer gets (best effort: disk full);
             # written over a dead holder's line before truncating, so never read empty
@@ -202,7 +242,7 @@ def claim(path: Path, force: bool = False) -> Iterator[Claim]:
         yield Claim(path, force, remove_stale(_folder(path)))
     finally:
         _held.pop(key, None)
-        _unlock(path, fd)
+        _release(path)
 
 
 def remove_stale(folder: Path) -> list[Path]:

@@ -151,6 +151,65 @@ def test_sigterm_removes_everything_half_done(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def _interrupt_after(monkeypatch, module, name, when=lambda *a: True):
+    """``module.name`` does its work, then Ctrl-C lands on the way out (its return value
+    lost, as a signal handled right after a call loses it); once."""
+    real = getattr(module, name)
+    fired = []
+
+    def interrupted(*args, **kwargs):
+        result = real(*args, **kwargs)
+        if not fired and when(*args):
+            fired.append(name)
+            raise KeyboardInterrupt
+        return result
+
+    monkeypatch.setattr(module, name, interrupted)
+
+
+def _is_lock(path, *args):
+    return str(path).endswith(".lock")
+
+
+@pytest.mark.parametrize("module, name, when", [
+    (os, "open", _is_lock),  # the lock file made, its descriptor lost
+    (fcntl, "flock", lambda *a: True),  # locked, not yet handed back
+    (files, "_try_lock", lambda *a: True),  # handed back, not yet stored
+    (os, "pwrite", lambda *a: True),  # the holder's line written
+], ids=["open", "flock", "return", "holder"])
+def test_an_interrupt_while_locking_leaves_no_lock_file(tmp_path, monkeypatch, module, name,
+                                                        when):
+    """SIGTERM sent the moment the lock file appears (the test above) once left
+    ``.a.h5.lock`` behind: each point of the window, interrupted in turn."""
+    _interrupt_after(monkeypatch, module, name, when)
+    with pytest.raises(KeyboardInterrupt), archive.claim(tmp_path / "a.h5"):
+        pass
+    monkeypatch.undo()
+    assert list(tmp_path.iterdir()) == []
+    assert files._opening == {} and files._held == {}
+    with archive.claim(tmp_path / "a.h5"):  # and the archive can be claimed again
+        pass
+
+
+def test_an_interrupt_while_failing_to_lock_leaves_the_holders_lock_file(tmp_path,
+                                                                         monkeypatch):
+    """A second writer interrupted as it gives up on a taken lock never removes it."""
+    lock = tmp_path / ".a.h5.lock"
+    lock.write_bytes(b"pid 1 on elsewhere since 2026-11-28T00:00:00+00:00\n")
+    holder = os.open(lock, os.O_RDONLY)  # another writer's lock
+    try:
+        fcntl.flock(holder, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        _interrupt_after(monkeypatch, os, "close")
+        with pytest.raises(KeyboardInterrupt):
+            files._try_lock(tmp_path / "a.h5")
+        monkeypatch.undo()
+        files._release(tmp_path / "a.h5")  # what claim's cleanup would do
+        assert lock.read_bytes().startswith(b"pid 1 on elsewhere")
+        assert files._opening == {}
+    finally:
+        os.close(holder)
+
+
 def _dead_temporary(target):
     """A temporary file as a camopt SIGKILLed while writing ``target`` leaves it: camopt's
     name, its lock released with the dead process."""
