@@ -44,19 +44,29 @@ class Follower:
     def polynomial(cls, a: Floats, theta_c: Floats, xi: float) -> Follower:
         """Polynomial motion phi = sum_k a_k theta_c^k, with phi' and phi'' (Eqs 6, 12,
         15: the paper's cubic when ``a`` is (n, 4); (n, d + 1) for degree d) on a 1-D grid
-        ``theta_c``, as one matrix product per derivative."""
-        t = np.ravel(theta_c)
-        k = np.arange(a.shape[1], dtype=float)[:, None]
-        powers = t[None, :] ** k  # (d + 1, m); t^0 = 1 also at t = 0
-        angle = a @ powers
-        angle += xi  # after the product: a row's value must not depend on the batch
-        shifted = np.vstack([np.zeros_like(t), powers[:-1]])  # t^(k - 1)
-        dphi = a @ (k * shifted)
-        ddphi = a @ (k * (k - 1) * np.vstack([np.zeros_like(t), shifted[:-1]]))
+        ``theta_c`` (:func:`polynomial_law`), with the cos and sin of xi + phi."""
+        t, angle, dphi, ddphi = polynomial_law(a, theta_c, xi)
         # |xi + phi| <= |xi| + sum |a_k| max |t|^k: spares sincos its range check
+        powers = t[None, :] ** np.arange(a.shape[1], dtype=float)[:, None]
         bound = float(np.max(np.abs(a) @ np.abs(powers).max(axis=1))) + abs(xi)
         cos_a, sin_a = sincos(angle, bound if np.isfinite(bound) else None)
         return cls(t[None, :], xi, angle, dphi, ddphi, cos_a, sin_a)
+
+
+def polynomial_law(a: Floats, theta_c: Floats, xi: float
+                   ) -> tuple[Floats, Floats, Floats, Floats]:
+    """The grid ``theta_c`` flattened (m,) and xi + phi, phi' and phi'' (n, m) of the
+    polynomial phi = sum_k a_k theta_c^k (Eqs 6, 12, 15), ``a`` (n, d + 1), as one matrix
+    product per derivative."""
+    t = np.ravel(theta_c)
+    k = np.arange(a.shape[1], dtype=float)[:, None]
+    powers = t[None, :] ** k  # (d + 1, m); t^0 = 1 also at t = 0
+    angle = a @ powers
+    angle += xi  # after the product: a row's value must not depend on the batch
+    shifted = np.vstack([np.zeros_like(t), powers[:-1]])  # t^(k - 1)
+    dphi = a @ (k * shifted)
+    ddphi = a @ (k * (k - 1) * np.vstack([np.zeros_like(t), shifted[:-1]]))
+    return t, angle, dphi, ddphi
 
 
 def pitch_curve(l2: float, l6: float, f: Follower) -> tuple[Floats, Floats, Floats, Floats]:

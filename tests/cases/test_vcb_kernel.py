@@ -167,6 +167,46 @@ def test_compiled_geometry_matches_numpy_within_rounding():
         assert np.nanmax(np.abs(a - b) / scale) < 1e-13, name
 
 
+@pytest.mark.parametrize("shared", [True, False], ids=["shared-link", "drawn-links"])
+def test_compiled_statics_match_numpy_within_rounding(shared):
+    """The statics on the case's nodes compiled (``VcbModel.kinematics`` and
+    ``contact.contact_ratio`` with the kernel, the robust draws' path) against their numpy
+    path: the same operations in the same order, so equal on this machine (measured);
+    held within 1e-14 of each row's largest magnitude, as another CPU's compiler may
+    round differently. Links shared by every design (a nominal population) and drawn per
+    row (tolerance draws, with a rod offset per row)."""
+    from camopt.cases.vcb import contact
+
+    p = VcbProblem(load(CONFIGS / "vcb_velocity_robust.toml").case)
+    m = p.model
+    A, kc, link = p.designs(_random_designs(p, 17), None)
+    offset: float | np.ndarray = p.rod_offset
+    if not shared:
+        rng = np.random.default_rng(5)
+        link = link * (1 + 2e-3 * rng.standard_normal(link.shape))
+        offset = p.rod_offset + 1e-3 * rng.standard_normal((len(A), 1))
+    new = m.kinematics(A, link, offset, kernel=kernel)
+    ref = m._numpy_kinematics(A, link, offset, m.theta_c)
+    pairs = [(name, getattr(ref, name), getattr(new, name))
+             for name in ("cos4", "sin4", "s1", "ds1")]
+    pairs += [(name, getattr(ref.follower, name), getattr(new.follower, name))
+              for name in ("cos_a", "sin_a", "angle", "dphi", "ddphi")]
+    torque = m.closing_torque(kc)
+    with np.errstate(all="ignore"):
+        pairs.append(("contact ratio",
+                      contact._numpy_contact_ratio(ref.follower, torque, m.l2, m.l6, m.rf),
+                      contact.contact_ratio(new.follower, torque, m.l2, m.l6, m.rf, kernel)))
+    for name, a, b in pairs:
+        assert np.array_equal(np.isnan(a), np.isnan(b)), name
+        assert np.isfinite(a).any(), name  # designs that assemble are compared
+        scale = np.nanmax(np.abs(a), axis=1, keepdims=True)
+        assert np.nanmax(np.abs(a - b) / np.where(scale > 0, scale, 1)) <= 1e-14, name
+    with np.errstate(all="ignore"):  # and the peak stress the verdict reads
+        np.testing.assert_allclose(
+            m.peak_stress(A, new.follower, torque, kernel=kernel),
+            m.peak_stress(A, ref.follower, torque), rtol=1e-12)
+
+
 def test_compiled_sincos_is_the_numpy_one():
     """The geometry's compiled sincos is camopt.mechanics.trig's (the same operations in
     the same order; compared within 1e-16 absolute, half an ulp near 1, since a compiler

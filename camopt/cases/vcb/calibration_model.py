@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from types import ModuleType
 
 import numpy as np
 
@@ -77,12 +78,14 @@ class KinematicsMemo(VcbModel):
         self._memo: dict[tuple[bytes, ...], Kinematics] = {}
 
     def kinematics(self, A: Floats, link: Floats, rod_offset: Floats | float,
-                   theta_c: Floats | None = None) -> Kinematics:
+                   theta_c: Floats | None = None, kernel: ModuleType | None = None
+                   ) -> Kinematics:
         key = tuple(np.asarray(v, dtype=float).tobytes() + bytes(str(np.shape(v)), "ascii")
                     for v in (A, link, rod_offset, () if theta_c is None else theta_c))
+        key += (b"numpy" if kernel is None else b"compiled",)  # one path's numbers each
         kin = self._memo.get(key)
         if kin is None:
-            kin = super().kinematics(A, link, rod_offset, theta_c)
+            kin = super().kinematics(A, link, rod_offset, theta_c, kernel)
             for a in (kin.cos4, kin.sin4, kin.s1, kin.ds1, kin.follower.dphi):
                 a.setflags(write=False)
             if len(self._memo) >= self.SIZE:

@@ -35,10 +35,14 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from camopt.cases.vcb.kernel_geometry import closing_geometry  # re-exported
+from camopt.cases.vcb.kernel_geometry import (  # re-exported
+    closing_geometry,
+    contact_ratio,
+    node_kinematics,
+)
 
 __all__ = ["band_events", "closing_geometry", "closing_rows", "first_zero_rows",
-           "free_rotation"]
+           "free_rotation", "contact_ratio", "node_kinematics"]
 
 HERMITE_POINTS = 16  # as camopt.cases.vcb.dynamics.HERMITE_POINTS
 BISECTIONS = 30  # as camopt.cases.vcb.dynamics.BISECTIONS

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from camopt.mechanics import trig
 
-__all__ = ["closing_geometry", "sincos"]
+__all__ = ["closing_geometry", "contact_ratio", "node_kinematics", "sincos"]
 
 _COS, _SIN = trig._COS, trig._SIN  # the tables of camopt.mechanics.trig (constants here)
 _STEP, _LIMIT = trig._STEP, trig._LIMIT
@@ -136,3 +136,66 @@ def _four_bar(c2: float, s2: float, k24: float, k12: float, l1: float, l4: float
     root = math.sqrt(norm - c * c)
     inv = 1.0 / norm
     return (a * c + b * root) * inv, (b * c - a * root) * inv, root
+
+
+@njit(cache=True, error_model="numpy")
+def node_kinematics(angle: NDArray, dphi: NDArray, link: NDArray, rod_offset: NDArray,
+                    l2: float, theta_bo: float, out: NDArray) -> None:
+    """The follower's cos and sin and the four-bar and rod of
+    :meth:`camopt.cases.vcb.model.VcbModel.kinematics` (Eqs 6, 3) on a grid, into ``out``
+    (6, n, m): cos(xi + phi), sin(xi + phi), cos4, sin4 (the mirrored frame), the rod's
+    travel s1 from the first node (m) and ds1/dtheta_c (m/rad). ``angle`` = xi + phi and
+    ``dphi`` (n, m); ``link`` (n, 5) or (1, 5) shared, ``rod_offset`` (n,) or (1,) rad.
+    The numpy path's operations in its order (:func:`camopt.mechanics.fourbar.
+    output_motion` on the branch -1, :func:`camopt.mechanics.trig.sincos`), in one pass
+    per row instead of ~30 full-size temporaries: the statics on a case's nodes for a
+    chunk of tolerance draws were a tenth of the robust VCB's search."""
+    n, m = angle.shape
+    for i in range(n):
+        r = 0 if link.shape[0] == 1 else i
+        l1, l3, l4, l5, th1 = link[r, 0], link[r, 1], link[r, 2], link[r, 3], link[r, 4]
+        frame = theta_bo - th1
+        c1, s1f = math.cos(frame), math.sin(frame)
+        k24 = 2 * l2 * l4
+        k12 = 2 * l1 * l2
+        lengths = l3 ** 2 - l1 ** 2 - l4 ** 2 - l2 ** 2
+        beta = rod_offset[0 if rod_offset.shape[0] == 1 else i] + theta_bo
+        p, q = l5 * math.cos(beta), l5 * math.sin(beta)
+        for j in range(m):
+            c2, s2 = sincos(angle[i, j])
+            out[0, i, j] = c2
+            out[1, i, j] = s2
+        y0 = 0.0
+        for j in range(m):
+            c2, s2 = out[0, i, j], out[1, i, j]
+            c4, s4, root = _four_bar(c2, s2, k24, k12, l1, l4, c1, s1f, lengths)
+            rate = (-k24 * (s2 * c4 - c2 * s4) - k12 * c1 * s2 + k12 * s1f * c2) / root
+            y = s4 * p - c4 * q
+            if j == 0:
+                y0 = y
+            out[2, i, j] = c4
+            out[3, i, j] = s4
+            out[4, i, j] = y - y0
+            out[5, i, j] = (s4 * q + c4 * p) * rate * dphi[i, j]
+
+
+@njit(cache=True, error_model="numpy")
+def contact_ratio(dphi: NDArray, ddphi: NDArray, cos_a: NDArray, sin_a: NDArray,
+                  torque: NDArray, l2: float, l6: float, rf: float, out: NDArray) -> None:
+    """The reciprocal ``r`` of Fn (1/rho + 1/rf) on every node, (n, m) into ``out``, that
+    :func:`camopt.cases.vcb.contact.peak_stress` minimises (Eqs 15, 19, 27-30): its numpy
+    operations in their order, one pass instead of a dozen full-size arrays."""
+    n, m = dphi.shape
+    for i in range(n):
+        for j in range(m):
+            d1, ca, sa = dphi[i, j], cos_a[i, j], sin_a[i, j]
+            w = d1 * -l2 + l2
+            lc = ca * l6
+            v = w - lc
+            speed_sq = (v - lc) * w + l6 * l6
+            den = ddphi[i, j] * sa * -(l2 * l6) + speed_sq
+            den -= w * d1 * v
+            gap = math.sqrt(speed_sq) * speed_sq - den * rf
+            r = abs(sa * d1) * gap
+            out[i, j] = r / (speed_sq * speed_sq * abs(torque[i, j]))
+

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+from types import ModuleType
 
 import numpy as np
 from numpy.typing import NDArray
@@ -234,7 +235,8 @@ class VcbModel:
 
     # ---- kinematics and forces ----------------------------------------------------
     def kinematics(self, A: NDArray, link: NDArray, rod_offset: NDArray | float,
-                   theta_c: NDArray | None = None) -> Kinematics:
+                   theta_c: NDArray | None = None, kernel: ModuleType | None = None
+                   ) -> Kinematics:
         """Follower, linkage and rod motion, (n, m) arrays; ``A`` (n, 4), ``link`` (n, 5),
         on the case's grid of Ns + 1 cam angles or on ``theta_c`` (m,) starting at 0.
 
@@ -242,9 +244,28 @@ class VcbModel:
         four-bar is solved in the frame turned by angle(BO) and mirrored (y -> -y),
         where theta2 is xi + phi itself: no trigonometry, rotation or sign change is
         spent on the grid, and mirroring swaps the assembly branch. ``cos4``/``sin4``
-        are in that frame (:meth:`output_angle` turns them back).
+        are in that frame (:meth:`output_angle` turns them back). With ``kernel``
+        (:func:`camopt.cases.vcb.motion.compiled`, which loads numba: an evaluation's
+        path, not a config check's) in one compiled pass per row, the numpy path's
+        operations in its order.
         """
         grid = self.theta_c if theta_c is None else theta_c
+        if kernel is None:
+            return self._numpy_kinematics(A, link, rod_offset, grid)
+        t, angle, dphi, ddphi = cam.polynomial_law(A, grid, self.xi)
+        link = np.asarray(link, dtype=float)
+        # shared linkage (step 1): one row the compiled pass reads for every design
+        link = link[:1] if np.all(link == link[0]) else link
+        offset = np.asarray(rod_offset, dtype=float).reshape(-1)
+        out = np.empty((6, *angle.shape))
+        kernel.node_kinematics(angle, dphi, link, offset, float(self.l2),
+                               float(self.theta_bo), out)
+        f = cam.Follower(t[None, :], self.xi, angle, dphi, ddphi, out[0], out[1])
+        return Kinematics(f, out[2], out[3], out[4], out[5])
+
+    def _numpy_kinematics(self, A: NDArray, link: NDArray, rod_offset: NDArray | float,
+                          grid: NDArray) -> Kinematics:
+        """:meth:`kinematics` in numpy: the reference, and the path without numba."""
         f = cam.Follower.polynomial(A, grid, self.xi)
         # shared linkage (step 1): scalars broadcast fastest; else one column per design
         parts: list[float] | list[NDArray] = (
@@ -379,10 +400,12 @@ class VcbModel:
         _, sigma, tau = hertz.line_contact(fn, rho, self.rf, c.contact_length_mm * MM, e_eq)
         return Contact(xp, yp, dxp, dyp, rho, fn, sigma, tau)
     def peak_stress(self, A: NDArray, f: cam.Follower, torque: NDArray,
-                    zeros: NDArray | None = None) -> NDArray:
+                    zeros: NDArray | None = None, kernel: ModuleType | None = None
+                    ) -> NDArray:
         """Peak Hertz pressure over the stroke per design, the search's fast path
-        (:func:`camopt.cases.vcb.contact.peak_stress`)."""
-        return peak_stress(self, A, f, torque, zeros)
+        (:func:`camopt.cases.vcb.contact.peak_stress`; ``kernel`` as in
+        :meth:`kinematics`)."""
+        return peak_stress(self, A, f, torque, zeros, kernel)
 
 
 def unassembled(cos4: NDArray, rate: NDArray) -> NDArray:

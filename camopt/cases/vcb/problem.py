@@ -24,6 +24,7 @@ from camopt.cases.vcb.metrics import (
     stroke_curves,
 )
 from camopt.cases.vcb.model import Loads, VcbModel, phi_max, rate_zeros
+from camopt.cases.vcb.motion import compiled
 from camopt.cases.vcb.parts import (
     LINK_FIELDS,
     PART_FIELDS,
@@ -329,12 +330,13 @@ class VcbProblem(Problem, VariesCase, HasVariants):
         A, kc, link = self.designs(X, None if parts is None else parts.link)
         A = self.profiled(A, parts)
         pre = None if parts is None else parts.pre
-        kin = m.kinematics(A, link, self.rod_offset)
+        kernel = compiled()  # the statics on the nodes in compiled passes, where numba is
+        kin = m.kinematics(A, link, self.rod_offset, kernel=kernel)
         torque = m.closing_torque(kc, pre=pre)
         bal = m.balance(kin, kc, torque, self.loads(parts), pre)
         end = m.theta_c[-1]
         zeros = rate_zeros(A, end)  # where phi' = 0: dwell, and phi_max's candidates
-        sigma_max = m.peak_stress(A, kin.follower, torque, zeros)
+        sigma_max = m.peak_stress(A, kin.follower, torque, zeros, kernel)
         motion = band = None
         if detail or self.search_dynamics:
             if isinstance(form, np.ndarray):
