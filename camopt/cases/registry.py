@@ -270,32 +270,56 @@ class CaseSpec:
         return getattr(importlib.import_module(module), name)(run, step)
 
 
-class _ProblemClass:
-    """:attr:`CaseSpec.problem`: stored as given (a class or ``"module:Class"``), read as
-    the class, imported on the first read and kept."""
+class _Imported:
+    """A :class:`CaseSpec` field stored as given (a class or ``"module:Class"``), read as
+    the class, imported on the first read and kept: :attr:`CaseSpec.problem`, and
+    :attr:`CaseSpec.config` (a config read first when a config of that kind is loaded,
+    so a case's package can register kinds whose configs a run of another kind never
+    imports). A config imported late is checked then, as :func:`register_case` checks
+    one given as a class."""
 
-    def __get__(self, spec: CaseSpec | None, owner: Any = None) -> type[Problem]:
+    def __init__(self, field: str) -> None:
+        self.field, self.slot = field, f"_{field}"
+
+    def __get__(self, spec: CaseSpec | None, owner: Any = None) -> Any:
         if spec is None:  # the dataclass sees no default (and the class no attribute)
-            raise AttributeError("problem")
-        problem = spec.__dict__["_problem"]
-        if isinstance(problem, str):
-            module, _, name = problem.partition(":")
-            problem = getattr(importlib.import_module(module), name)
-            spec.__dict__["_problem"] = problem
-        return problem
+            raise AttributeError(self.field)
+        value = spec.__dict__[self.slot]
+        if isinstance(value, str):
+            module, _, name = value.partition(":")
+            value = getattr(importlib.import_module(module), name)
+            if self.field == "config":
+                _check_kind(spec.kind, value)
+            spec.__dict__[self.slot] = value
+        return value
 
-    def __set__(self, spec: CaseSpec, problem: type[Problem] | str) -> None:
-        spec.__dict__["_problem"] = problem
+    def __set__(self, spec: CaseSpec, value: Any) -> None:
+        spec.__dict__[self.slot] = value
 
 
-CaseSpec.problem = _ProblemClass()  # type: ignore[assignment]  # after @dataclass: no default
+# after @dataclass: no default
+CaseSpec.problem = _Imported("problem")  # type: ignore[assignment]
+CaseSpec.config = _Imported("config")  # type: ignore[assignment]
 
 
 def problem_at(ref: str) -> type[Problem]:
     """A case's Problem class named ``"module:Class"``, for :class:`CaseSpec`'s ``problem``:
     imported when the spec's ``problem`` is first read (its package need not import the
     model to register the case)."""
-    return ref  # type: ignore[return-value]  # read through _ProblemClass as the class
+    return ref  # type: ignore[return-value]  # read through _Imported as the class
+
+
+def config_at(ref: str) -> type[CaseConfig]:
+    """A case's config model named ``"module:Class"``, for :class:`CaseSpec`'s ``config``:
+    imported when the spec's ``config`` is first read (a config of that kind loaded, the
+    kinds listed)."""
+    return ref  # type: ignore[return-value]  # read through _Imported as the class
+
+
+def _check_kind(kind: str, config: type[CaseConfig]) -> None:
+    if config.model_fields["kind"].default != kind:
+        raise ConfigError("camopt", "case", f"case '{kind}': its config model's kind "
+                          f"default is {config.model_fields['kind'].default!r}")
 
 
 _REGISTRY: dict[str, CaseSpec] = {}
@@ -307,9 +331,8 @@ def register_case(spec: CaseSpec) -> CaseSpec:
     existing = _REGISTRY.get(spec.kind)
     if existing is not None and existing is not spec:
         raise ConfigError("camopt", "case", f"case kind '{spec.kind}' is registered twice")
-    if spec.config.model_fields["kind"].default != spec.kind:
-        raise ConfigError("camopt", "case", f"case '{spec.kind}': its config model's kind "
-                          f"default is {spec.config.model_fields['kind'].default!r}")
+    if not isinstance(spec.__dict__["_config"], str):  # else checked when imported
+        _check_kind(spec.kind, spec.config)
     _REGISTRY[spec.kind] = spec
     return spec
 

@@ -74,6 +74,22 @@ def test_a_kind_registered_twice_raises_and_unknown_kinds_list_the_known():
         get_case("escapement")
 
 
+def test_a_config_named_by_reference_is_imported_and_checked_when_first_read():
+    """``config_at("module:Class")``: registered without importing it, imported on the
+    first read of ``spec.config``, and checked then as a class given at registration is
+    (its kind's default must be the spec's kind)."""
+    from camopt.cases.registry import config_at
+
+    spec = CaseSpec(kind="sphere_lazy", config=config_at("tests.conftest:SphereConfig"),
+                    problem=SphereProblem, default_solver="de_gr")
+    assert isinstance(spec.__dict__["_config"], str)  # nothing imported yet
+    with pytest.raises(ConfigError, match="case 'sphere_lazy': its config model's kind"):
+        _ = spec.config
+    named = CaseSpec(kind="sphere", config=config_at("tests.conftest:SphereConfig"),
+                     problem=SphereProblem, default_solver="de_gr")
+    assert named.config is SphereConfig
+
+
 def test_a_test_only_case_runs_through_the_cli(tmp_path):
     """The sphere case (registered in conftest with register_case, no monkeypatching)
     validates, gets a template, and runs through `camopt run` like a built-in case."""

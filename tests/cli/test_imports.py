@@ -185,16 +185,18 @@ def test_show_and_runs_of_a_vcb_archive_load_no_model_numba_nor_scipy(command: s
 def test_validate_imports_its_command_module_only_and_not_the_engine_s_loop() -> None:
     """``camopt validate`` imports ``camopt.cli.catalog`` (init, validate, solvers), not the
     other command modules; ``camopt.engine.setup``, not the driver's loop; not the VCB
-    identification kinds; and not threadpoolctl (BLAS was told one thread before numpy
-    loaded); nor the reference cam's points and curve readers, which its case file does
-    not name, nor pkgutil, which only listing a registry needs: issue #36."""
+    identification kinds nor their configs (``config_at``); and not threadpoolctl (BLAS
+    was told one thread before numpy loaded); nor the reference cam's points and curve
+    readers, which its case file does not name, nor pkgutil, which only listing a
+    registry needs: issue #36."""
     code, modules = loaded_after("validate", "configs/vcb_velocity.toml")
     assert code in (0, None)
     commands = _loaded(modules, "cli") - {"app", "console"}
     assert commands == {"catalog"}, commands
     assert "camopt.engine.setup" in modules
     assert not modules & {"camopt.engine.driver", "camopt.engine.robust",
-                          "camopt.cases.vcb.identify", "threadpoolctl", "click",
+                          "camopt.cases.vcb.identify", "camopt.cases.vcb.identify_config",
+                          "threadpoolctl", "click",
                           "camopt.cases.vcb.cam_points", "camopt.cases.vcb.curves", "pkgutil"}
 
 

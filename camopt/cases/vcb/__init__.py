@@ -6,7 +6,7 @@ The specs name their problems as ``"module:Class"`` (imported when a problem is 
 :func:`camopt.cases.registry.problem_at`), and ``VcbProblem``, ``VcbIdentification`` and
 ``VcbDynamicsIdentification`` are imported from here on first use (PEP 562): ``camopt init
 vcb`` or ``show`` of a VCB archive do not import the model and its dynamics, nor a
-``vcb`` case the identifications (start-up time)."""
+``vcb`` case the identifications, nor their configs (start-up time)."""
 
 from __future__ import annotations
 
@@ -20,11 +20,11 @@ from camopt.cases.registry import (
     ProfileCircle,
     ProfileCurve,
     ToleranceClass,
+    config_at,
     problem_at,
     register_case,
 )
 from camopt.cases.vcb.config import CamDesign, VcbConfig
-from camopt.cases.vcb.identify_config import VcbDynamicsIdentifyConfig, VcbIdentifyConfig
 from camopt.cases.vcb.paper import PAPER
 from camopt.cases.vcb.requirements import requirements
 from camopt.config.models import CaseConfig
@@ -36,6 +36,7 @@ if TYPE_CHECKING:  # imported on first use: __getattr__ below
         VcbDynamicsIdentification as VcbDynamicsIdentification,
     )
     from camopt.cases.vcb.identify import VcbIdentification as VcbIdentification
+    from camopt.cases.vcb.identify_config import VcbDynamicsIdentifyConfig
     from camopt.cases.vcb.problem import VcbProblem as VcbProblem
 
 SOURCE = "Kang, Huang & Yang (2023), Machines 11:150"
@@ -210,7 +211,7 @@ VCB = register_case(CaseSpec(
     variable_names=lambda config: variable_names(config),
 ))
 VCB_IDENTIFY = register_case(CaseSpec(
-    kind="vcb_identify", config=VcbIdentifyConfig,
+    kind="vcb_identify", config=config_at("camopt.cases.vcb.identify_config:VcbIdentifyConfig"),
     problem=problem_at("camopt.cases.vcb.identify:VcbIdentification"),
     default_solver="de_gr",
     summary="fits the VCB parameters the paper omits to the numbers it reports",
@@ -219,7 +220,8 @@ VCB_IDENTIFY = register_case(CaseSpec(
                                    "free_contact_force_n"),
 ))
 VCB_IDENTIFY_DYNAMICS = register_case(CaseSpec(
-    kind="vcb_identify_dynamics", config=VcbDynamicsIdentifyConfig,
+    kind="vcb_identify_dynamics",
+    config=config_at("camopt.cases.vcb.identify_config:VcbDynamicsIdentifyConfig"),
     problem=problem_at("camopt.cases.vcb.identify:VcbDynamicsIdentification"),
     default_solver="de_gr",
     summary="fits the VCB dynamics' parameters to the vendor design's seven ADAMS data",

@@ -34,7 +34,7 @@ speed, so the work-energy integration would become a time-stepped ODE
 from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
-from typing import Literal, get_args
+from typing import TYPE_CHECKING, Literal, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -47,11 +47,13 @@ from camopt.cases.vcb.dynamics import (
     closing_events,
     closing_motion,
 )
-from camopt.cases.vcb.identify_config import VcbDynamicsIdentifyConfig
 from camopt.cases.vcb.model import Loads, VcbModel
 from camopt.core.problem import Variable
 from camopt.errors import ConfigError
 from camopt.units import DEG, MM
+
+if TYPE_CHECKING:  # a vcb run never imports the identification's config
+    from camopt.cases.vcb.identify_config import VcbDynamicsIdentifyConfig
 
 INERTIAS = ("cam_inertia_kg_m2", "rod_mass_kg", "contacts_mass_kg", "release_offset_deg")
 """The parameters every form fits (units in the names)."""
