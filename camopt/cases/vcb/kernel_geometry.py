@@ -63,14 +63,8 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
     cos2 = np.empty(m)
     sin2 = np.empty(m)
     for i in range(nd):
-        l1, l3, l4, l5, th1 = link[i, 0], link[i, 1], link[i, 2], link[i, 3], link[i, 4]
-        frame = theta_bo - th1
-        c1, s1f = math.cos(frame), math.sin(frame)
-        k24 = 2 * l2 * l4
-        k12 = 2 * l1 * l2
-        lengths = l3 ** 2 - l1 ** 2 - l4 ** 2 - l2 ** 2
-        beta = rod_offset[i] + theta_bo
-        p, q = l5 * math.cos(beta), l5 * math.sin(beta)
+        l1, l4, c1, s1f, k24, k12, lengths, p, q = _linkage(link[i], rod_offset[i], l2,
+                                                            theta_bo)
         k1, k2, p1, p2 = kc[i, 0], kc[i, 1], pre[i, 0], pre[i, 1]
         ok, arm, x0 = loads[0, i], loads[1, i], loads[2, i]
         wk, wp, fc = loads[3, i], loads[4, i], loads[5, i]
@@ -114,6 +108,21 @@ def closing_geometry(theta: NDArray, A: NDArray, link: NDArray, rod_offset: NDAr
             out[6, i, j] = (force + s1 * (arm * ok * arm) + arm * ok * x0) * ds1
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _linkage(link: NDArray, rod_offset: float, l2: float, theta_bo: float
+             ) -> tuple[float, float, float, float, float, float, float, float, float]:
+    """One design's four-bar constants for :func:`_four_bar` and the rod arm's (p, q), from
+    its linkage (l1, l3, l4, l5, theta1) (5,) and rod offset: l1, l4, cos and sin of theta1
+    in the mirrored frame, 2 l2 l4, 2 l1 l2, l3^2 - l1^2 - l4^2 - l2^2, p and q."""
+    l1, l3, l4, l5, th1 = link[0], link[1], link[2], link[3], link[4]
+    frame = theta_bo - th1
+    c1, s1f = math.cos(frame), math.sin(frame)
+    lengths = l3 ** 2 - l1 ** 2 - l4 ** 2 - l2 ** 2
+    beta = rod_offset + theta_bo
+    return (l1, l4, c1, s1f, 2 * l2 * l4, 2 * l1 * l2, lengths, l5 * math.cos(beta),
+            l5 * math.sin(beta))
+
+
 @njit(cache=True, error_model="numpy")
 def _rod(c2: float, s2: float, k24: float, k12: float, l1: float, l4: float, c1: float,
          s1f: float, lengths: float, p: float, q: float) -> float:
@@ -152,15 +161,9 @@ def node_kinematics(angle: NDArray, dphi: NDArray, link: NDArray, rod_offset: ND
     chunk of tolerance draws were a tenth of the robust VCB's search."""
     n, m = angle.shape
     for i in range(n):
-        r = 0 if link.shape[0] == 1 else i
-        l1, l3, l4, l5, th1 = link[r, 0], link[r, 1], link[r, 2], link[r, 3], link[r, 4]
-        frame = theta_bo - th1
-        c1, s1f = math.cos(frame), math.sin(frame)
-        k24 = 2 * l2 * l4
-        k12 = 2 * l1 * l2
-        lengths = l3 ** 2 - l1 ** 2 - l4 ** 2 - l2 ** 2
-        beta = rod_offset[0 if rod_offset.shape[0] == 1 else i] + theta_bo
-        p, q = l5 * math.cos(beta), l5 * math.sin(beta)
+        l1, l4, c1, s1f, k24, k12, lengths, p, q = _linkage(
+            link[0 if link.shape[0] == 1 else i],
+            rod_offset[0 if rod_offset.shape[0] == 1 else i], l2, theta_bo)
         for j in range(m):
             c2, s2 = sincos(angle[i, j])
             out[0, i, j] = c2
