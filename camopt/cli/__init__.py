@@ -22,19 +22,19 @@ def main() -> None:
     whatever escapes a command (a closed pipe, a bug) is still one line, never a
     traceback."""
     perf.one_blas_thread_on_load()
-    interrupts.install()
-    checked_stdout()
     # a design that does not assemble is data (NaN), judged by the verdict: numpy's
     # 'invalid value' warnings, with source paths, are no message to a user
     warnings.simplefilter("ignore", RuntimeWarning)
-    unknown = unknown_command(sys.argv[1:])
-    if unknown:
-        print(unknown, file=sys.stderr)
-        sys.exit(2)
-    if not starts_only(sys.argv[1:]):
-        gc.enable()  # off from camopt.__main__: a command that computes collects cycles
-    load_commands(sys.argv[1:])
-    try:
+    try:  # from the handlers on: a signal while the command's modules load is exit 130 too
+        interrupts.install()
+        checked_stdout()
+        unknown = unknown_command(sys.argv[1:])
+        if unknown:
+            print(unknown, file=sys.stderr)
+            sys.exit(2)
+        if not starts_only(sys.argv[1:]):
+            gc.enable()  # off from camopt.__main__: a command that computes collects cycles
+        load_commands(sys.argv[1:])
         try:
             if sys.argv[1:] == ["solvers"]:
                 # nothing to parse: the stored listing, without typer's parameter

@@ -448,6 +448,26 @@ def test_sigterm_then_ctrl_c_during_the_final_write_keep_the_archive(tmp_path):
     assert len([r.index for r in archive.load_run(out).repeats]) == 3
 
 
+def test_sigterm_while_the_command_loads_is_exit_130_and_one_line(tmp_path):
+    """A SIGTERM landing after the handlers are in place but while the command's modules
+    still load (a randomised stress run hit it: the process died by SIGINT, Python's exit
+    for an uncaught KeyboardInterrupt, instead of exit 130)."""
+    out = tmp_path / "a.h5"
+    script = (
+        "import os, signal, sys\n"
+        "from camopt import cli\n"
+        "original = cli.load_commands\n"
+        "def loading(args):\n"
+        "    os.kill(os.getpid(), signal.SIGTERM)\n"
+        "    return original(args)\n"
+        "cli.load_commands = loading\n"
+    )
+    proc = run_three_repeats_patched(script, out)
+    assert proc.returncode == 130 and one_error_line(proc.stderr), (proc.returncode,
+                                                                     proc.stderr)
+    assert list(tmp_path.iterdir()) == []
+
+
 # ---- unbounded or unwrapped -----------------------------------------------------------------
 def test_a_second_ctrl_c_while_exiting_after_the_first_changes_nothing(tmp_path):
     """The corpus's 'other' exits: Ctrl-C once a repeat finished, then Ctrl-C again
