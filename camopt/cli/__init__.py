@@ -25,44 +25,51 @@ def main() -> None:
     # a design that does not assemble is data (NaN), judged by the verdict: numpy's
     # 'invalid value' warnings, with source paths, are no message to a user
     warnings.simplefilter("ignore", RuntimeWarning)
-    try:  # from the handlers on: a signal while the command's modules load is exit 130 too
-        interrupts.install()
-        checked_stdout()
-        unknown = unknown_command(sys.argv[1:])
-        if unknown:
-            print(unknown, file=sys.stderr)
-            sys.exit(2)
-        if not starts_only(sys.argv[1:]):
-            gc.enable()  # off from camopt.__main__: a command that computes collects cycles
-        load_commands(sys.argv[1:])
+    try:
+        # from the handlers on, a signal while the command's modules load is exit 130 too
         try:
-            if sys.argv[1:] == ["solvers"]:
-                # nothing to parse: the stored listing, without typer's parameter
-                # conversion (it imports pydantic: 1.4x `import numpy, scipy`)
-                from camopt.cli.catalog import list_solvers
+            interrupts.install()
+            checked_stdout()
+            unknown = unknown_command(sys.argv[1:])
+            if unknown:
+                print(unknown, file=sys.stderr)
+                sys.exit(2)
+            if not starts_only(sys.argv[1:]):
+                gc.enable()  # off from camopt.__main__: a computing command collects cycles
+            load_commands(sys.argv[1:])
+            try:
+                if sys.argv[1:] == ["solvers"]:
+                    # nothing to parse: the stored listing, without typer's parameter
+                    # conversion (it imports pydantic: 1.4x `import numpy, scipy`)
+                    from camopt.cli.catalog import list_solvers
 
-                list_solvers()
-                sys.exit(0)  # as typer ends every command
-            app(standalone_mode=True)
-        finally:
-            # the buffered rest goes out now, where a failure is one line (at exit,
-            # Python would print it as an ignored exception, or not at all)
-            sys.stdout.flush()
-    except SystemExit:
-        raise
-    except OutputError as exc:  # printed outside a command's errors(): stdout failed
-        print(f"error: {visible(exc)}", file=sys.stderr)
-        sys.exit(2)
-    except KeyboardInterrupt:
-        interrupts.handled()
-        print("error: interrupted", file=sys.stderr)
-        sys.exit(130)
-    except BrokenPipeError:  # `camopt show ... | head`: the reader left; not an error
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        sys.exit(0)
-    except Exception as exc:
-        print(internal_error(exc), file=sys.stderr)
-        sys.exit(2)
+                    list_solvers()
+                    sys.exit(0)  # as typer ends every command
+                app(standalone_mode=True)
+            finally:
+                # the buffered rest goes out now, where a failure is one line (at exit,
+                # Python would print it as an ignored exception, or not at all)
+                sys.stdout.flush()
+        except SystemExit:
+            raise
+        except OutputError as exc:  # printed outside a command's errors(): stdout failed
+            print(f"error: {visible(exc)}", file=sys.stderr)
+            sys.exit(2)
+        except KeyboardInterrupt:
+            interrupts.handled()
+            print("error: interrupted", file=sys.stderr)
+            sys.exit(130)
+        except BrokenPipeError:  # `camopt show ... | head`: the reader left; not an error
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            sys.exit(0)
+        except Exception as exc:
+            print(internal_error(exc), file=sys.stderr)
+            sys.exit(2)
+    finally:
+        # the command is over, its output written or its error reported: a signal
+        # landing while Python exits (which restores the default actions) would
+        # kill a finished process by the signal
+        interrupts.finished()
 
 
 STARTS_ONLY = frozenset({"validate", "show", "runs", "compare", "init", "solvers"})

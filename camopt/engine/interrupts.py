@@ -56,6 +56,15 @@ def handled() -> None:
             signal.signal(s, signal.SIG_IGN)
 
 
+def finished() -> None:
+    """The command is over: its output is written or its error reported. SIGINT and
+    SIGTERM are ignored from here on (as after :func:`handled`): Python's finalisation
+    restores their default actions, and a signal landing then killed a process whose
+    work was complete by the signal (exit -15 for a finished ``report``, found by a
+    randomised run of signals)."""
+    handled()
+
+
 @contextlib.contextmanager
 def deferred() -> Iterator[list[int]]:
     """SIGINT and SIGTERM noted, not raised, while the block runs; yields the list the
