@@ -21,7 +21,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from camopt.archive.files import atomic_write, claim, open_archive, versions
+from camopt.archive.files import atomic_write, claim, open_archive, passing_interrupt, versions
 from camopt.core.calibration import FittedCurve
 from camopt.errors import ArchiveError
 
@@ -91,5 +91,6 @@ def load_calibration(path: str | Path) -> CalibrationView:
         except ArchiveError:
             raise
         except Exception as exc:  # a damaged attribute or dataset: one line, no traceback
+            passing_interrupt(exc)
             raise ArchiveError(f"{path}: archive: damaged calibration archive "
                                f"({type(exc).__name__})") from None

@@ -61,6 +61,21 @@ _held: dict[Path, int] = {}  # archives this process holds locked -> lock file d
 _opening: dict[str, int] = {}  # lock files this process made -> descriptor (-1: not yet known)
 
 
+def passing_interrupt(exc: BaseException) -> None:
+    """Raise KeyboardInterrupt if ``exc`` came of one: h5py turns a Ctrl-C or SIGTERM
+    (raised as KeyboardInterrupt) landing in its callbacks into a SystemError whose
+    context is the interrupt, and a reader's ``except Exception`` then called an intact
+    archive damaged (a randomised run of SIGTERMs into ``camopt tolerance``). Call first
+    in every ``except Exception`` around h5py."""
+    seen: set[int] = set()
+    cur: BaseException | None = exc
+    while cur is not None and id(cur) not in seen:
+        if isinstance(cur, KeyboardInterrupt):
+            raise KeyboardInterrupt from None
+        seen.add(id(cur))
+        cur = cur.__cause__ or cur.__context__
+
+
 def default_path(name: str, out_dir: str | Path = "runs") -> Path:
     """``runs/<name>-<UTC timestamp>.h5`` (``name`` is a safe run name: no separators)."""
     stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S%fZ")
@@ -508,7 +523,8 @@ def _kind_of(handle: BinaryIO) -> str:
         with h5py.File(handle, "r", locking=False) as f:
             kind = f"a camopt {f.attrs.get('archive_kind', 'run')} archive" if (
                 "camopt_version" in f.attrs) else "an HDF5 file"
-    except Exception:  # anything h5py cannot open is simply 'a file'
+    except Exception as exc:  # anything h5py cannot open is simply 'a file'
+        passing_interrupt(exc)
         kind = "a file"
     return kind
 
@@ -535,15 +551,17 @@ def open_archive(path: str | Path) -> h5py.File:
         raise ArchiveError(f"{path}: file: not a camopt archive (not HDF5)") from None
     try:
         ok = "schema_version" in f.attrs and "camopt_version" in f.attrs
-    except Exception:  # a damaged attribute table
+    except Exception as exc:  # a damaged attribute table
+        passing_interrupt(exc)
         ok = False
     if not ok:
         f.close()
         raise ArchiveError(f"{path}: file: not a camopt archive (no camopt attributes)")
     try:
         outside = _reaches_outside(f)
-    except Exception:  # a damaged link table
+    except Exception as exc:  # a damaged link table
         f.close()
+        passing_interrupt(exc)
         raise ArchiveError(f"{path}: archive: damaged or incomplete: its objects cannot "
                            "be listed") from None
     if outside:
@@ -625,7 +643,8 @@ def archive_kind(path: str | Path) -> str:
     with open_archive(path) as f:
         try:
             kind = str(f.attrs.get("archive_kind", "run"))
-        except Exception:
+        except Exception as exc:
+            passing_interrupt(exc)
             kind = "?"
     if kind not in KINDS:
         raise ArchiveError(f"{path}: archive: unknown archive_kind {kind!r}")

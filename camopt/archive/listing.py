@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 from typing import TypedDict
 
-from camopt.archive.files import open_archive
+from camopt.archive.files import open_archive, passing_interrupt
 from camopt.errors import ArchiveError
 
 
@@ -67,6 +67,7 @@ def describe(path: Path) -> ArchiveRow:
     except ArchiveError as exc:
         row["verdict"] = str(exc).split(": ", 1)[-1]
     except Exception as exc:  # a damaged attribute or group: listed, not fatal
+        passing_interrupt(exc)
         row["verdict"] = f"damaged ({type(exc).__name__})"
     return row
 

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, cast
 import h5py
 import numpy as np
 
-from camopt.archive.files import atomic_write, claim, open_archive, versions
+from camopt.archive.files import atomic_write, claim, open_archive, passing_interrupt, versions
 from camopt.archive.tables import read_table, write_table
 from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
 from camopt.core.record import ExpectedYield, Repeat, RunRecord, nfev_to_target
@@ -228,6 +228,7 @@ def damaged(path: str | Path) -> Iterator[None]:
     try:
         yield
     except Exception as exc:
+        passing_interrupt(exc)
         if isinstance(exc, ArchiveError) and str(exc).startswith(f"{path}: "):
             raise
         what = str(exc).splitlines()[0] if str(exc) else type(exc).__name__

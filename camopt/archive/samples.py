@@ -17,7 +17,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from camopt.archive.files import atomic_write, claim, open_archive, versions
+from camopt.archive.files import atomic_write, claim, open_archive, passing_interrupt, versions
 from camopt.core.documents import ToleranceDoc
 from camopt.errors import ArchiveError
 from camopt.mechanics import Bools, Floats
@@ -80,5 +80,6 @@ def load_samples(path: str | Path) -> ToleranceSamples:
         except ArchiveError:
             raise
         except Exception as exc:  # a damaged attribute or dataset: one line, no traceback
+            passing_interrupt(exc)
             raise ArchiveError(f"{path}: archive: damaged tolerance archive "
                                f"({type(exc).__name__})") from None

@@ -50,7 +50,12 @@ def main() -> None:
                 # the buffered rest goes out now, where a failure is one line (at exit,
                 # Python would print it as an ignored exception, or not at all)
                 sys.stdout.flush()
-        except SystemExit:
+        except SystemExit as exc:
+            if exc.code == 130 and interrupts.pending():
+                # typer's own exit for a KeyboardInterrupt that left its parsing or a
+                # command's imports, silent: camopt's one line, as for any interruption
+                interrupts.handled()
+                print("error: interrupted", file=sys.stderr)
             raise
         except OutputError as exc:  # printed outside a command's errors(): stdout failed
             print(f"error: {visible(exc)}", file=sys.stderr)

@@ -56,6 +56,7 @@ from camopt.core.variation import (  # noqa: F401 - Distribution, parse_vary: th
     physical_range,
     variants_of,
 )
+from camopt.engine import interrupts
 from camopt.engine.driver import validate
 from camopt.errors import CamoptError
 
@@ -163,7 +164,8 @@ def analyse(run: RunView, varies: Sequence[Vary], samples: int, seed: int,
     drawn[:] = draw_inputs(seed, samples, nominal, half, distribution)
     variants = variants_of(problem)
     variant = assign_variants(samples, len(variants))
-    ev, bad = evaluate_inputs(run, problem, varies, values, describe=True, progress=progress,
+    ev, bad = evaluate_inputs(run, problem, varies, values, describe=True,
+                              progress=interrupts.checked(progress),
                               variant=np.r_[np.full(1 + 2 * k, -1), variant])
     ev = shared_constants(ev)
     result = Tolerance(run.path, list(varies), distribution, seed, nominal, drawn,

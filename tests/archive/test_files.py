@@ -363,3 +363,36 @@ def test_an_archive_reads_while_its_writer_still_holds_the_lock(tmp_path, monkey
     files.atomic_write(path, lambda f: f.attrs.update(
         {"schema_version": 1, "camopt_version": "test", "archive_kind": "sweep"}))
     assert seen == ["sweep"]
+
+
+def test_an_interrupt_inside_h5py_s_callbacks_is_an_interrupt_not_a_damaged_archive(
+        tmp_path, monkeypatch):
+    """h5py turns a KeyboardInterrupt raised in a visiting callback (a SIGTERM landing
+    there) into a SystemError; the reader called the intact archive damaged and exited 2
+    (a randomised run of SIGTERMs into ``camopt tolerance``). It is an interruption."""
+    out = tmp_path / "a.h5"
+    assert invoke("run", FAST, "--out", out, "--quiet").exit_code == 0
+
+    def interrupted_visit(f):
+        def visitor(name, *args):
+            raise KeyboardInterrupt
+        f.visit_links(visitor)
+
+    monkeypatch.setattr(files, "_reaches_outside", interrupted_visit)
+    with pytest.raises(KeyboardInterrupt):
+        archive.open_archive(out)
+    monkeypatch.undo()
+    with archive.open_archive(out):  # and it is intact
+        pass
+
+
+def test_passing_interrupt_finds_it_anywhere_in_the_chain():
+    try:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as inner:
+            raise SystemError("returned a result with an exception set") from inner
+    except SystemError as exc:
+        with pytest.raises(KeyboardInterrupt):
+            files.passing_interrupt(exc)
+    files.passing_interrupt(ValueError("a damaged attribute"))  # others pass through

@@ -494,6 +494,28 @@ def test_a_finished_command_ignores_signals_while_python_exits(tmp_path):
     assert [p for p in (tmp_path / "export").iterdir() if p.stat().st_size > 0]
 
 
+def test_a_signal_typer_turns_into_a_silent_exit_is_reported_as_one_line(tmp_path):
+    """A KeyboardInterrupt leaving a command's own imports, before its errors() block, is
+    caught by typer and turned into a silent exit 130: camopt now says so in one line (a
+    randomised run of SIGTERMs into ``camopt tolerance`` exited 130 with nothing said)."""
+    script = (
+        "import builtins, os, signal, sys\n"
+        "real = builtins.__import__\n"
+        "def importing(name, *a, **k):\n"
+        "    if name == 'camopt.engine.targets':\n"
+        "        os.kill(os.getpid(), signal.SIGTERM)\n"
+        "    return real(name, *a, **k)\n"
+        "builtins.__import__ = importing\n"
+        "from camopt.cli import main\n"
+        f"sys.argv = ['camopt', 'validate', {FAST!r}]\n"
+        "main()\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 130 and proc.stderr == "error: interrupted\n", (
+        proc.returncode, proc.stderr)
+
+
 # ---- unbounded or unwrapped -----------------------------------------------------------------
 def test_a_second_ctrl_c_while_exiting_after_the_first_changes_nothing(tmp_path):
     """The corpus's 'other' exits: Ctrl-C once a repeat finished, then Ctrl-C again
