@@ -88,3 +88,53 @@ def test_a_stall_at_either_end_is_no_velocity():
     np.testing.assert_array_equal(out.extras["latch_kinetic_energy_low_j"], [2.0, 1.0])
     # the identified set's own value is the first judgement's, not a band end
     np.testing.assert_array_equal(out.extras["closing_velocity_avg_m_s"], [0.9, 0.8])
+
+
+def test_the_release_at_the_end_of_life_needs_the_springs_work_of_the_equations(new):
+    """The necessary condition docs/tolerance.md derives ("Adjustments at assembly and the
+    end of life"): a breaker of friction scale s whose release passes at the end of life
+    (eps T_s >= 1.2 x 1.25 s T_f, compressions x 0.97, the nut held) has, as built, a
+    force at the release F >= (1.5 s T_f / rate_max - 0.03 eps K |ext|) / (0.97 eps),
+    rate_max the springs' rate at the latest release the latch's space allows (the
+    fit's 20.70 deg cap plus the band's 2.33 deg, rate rising toward the cam's meeting),
+    so the springs give the cam, from the release to the latch, at least
+    eps (F dL - K dL^2 / 2) (linear springs: the energy is F dL - K dL^2 / 2 exactly).
+    Checked against the model's release_torque_ratio and closing_energy on 4,000 random
+    springs (2-20 N/mm each), compressions (the nut anywhere), latches, efficiencies and
+    friction torques; it fails if the torque, the relaxation or the rate's maximum were
+    other than the argument takes."""
+    from camopt.cases.vcb.motion import ParameterColumns
+    from camopt.cases.vcb.rotation import release_torque_ratio
+    from camopt.units import DEG, MM
+
+    m = new.model
+    rng = np.random.default_rng(20261129)
+    n = 4000
+    kc = rng.uniform(2e3, 20e3, (n, 2))
+    pre = rng.uniform(20 * MM, 220 * MM, (n, 2))
+    latch = rng.uniform(14.0, 23.03, n) * DEG
+    eps = rng.uniform(0.8, 1.0, n)
+    friction = rng.uniform(8.0, 16.0, n) * rng.uniform(0.75, 1.25, n)  # T_f s as built
+    column = np.ones((n, 1))
+    p = ParameterColumns(column, column, column, column, latch[:, None], column,
+                         1.25 * friction[:, None], eps[:, None], column, column)
+    passes = release_torque_ratio(m, kc, p, 0.97 * pre) >= 1.2
+    assert 100 < passes.sum() < n - 100  # both sides of the requirement are sampled
+    start = m.dead_centre + latch - m.contact_crank_angle
+    ext, rate = m.closing_spring_geometry(start)
+    latest = m.dead_centre + 23.03 * DEG - m.contact_crank_angle
+    rates = m.closing_spring_geometry(np.linspace(-30 * DEG, latest, 400))[1]
+    rate_max = float(rates.max())
+    assert rate_max == pytest.approx(float(rates[-1]))  # rising up to the latest release
+    end = m.closing_spring_geometry(np.array([np.deg2rad(140.0)]))[0][0]
+    dL = end - ext
+    K = kc.sum(axis=1)
+    force = (kc * (pre - ext[:, None])).sum(axis=1)
+    least_force = (1.5 * friction / rate_max - 0.03 * eps * K * np.abs(ext)) / (0.97 * eps)
+    assert np.all(force[passes] >= least_force[passes] * (1 - 1e-12))
+    energy = m.closing_energy_rows(kc, np.stack([ext, np.full(n, end)], axis=1), pre)
+    given = eps * (energy[:, 0] - energy[:, 1])
+    # the energy identity, to round-off (1e-9 of the work): the force and the rate alone
+    np.testing.assert_allclose(given, eps * (force * dL - K * dL ** 2 / 2), rtol=1e-9)
+    least = eps * (least_force * dL - K * dL ** 2 / 2)
+    assert np.all(given[passes] >= least[passes] - 1e-9 * np.abs(given[passes]))
