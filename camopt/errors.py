@@ -38,3 +38,19 @@ def did_you_mean(word: str, known: Iterable[str]) -> str:
     if not match:
         match = [n for n in names if n.lower() == word.lower()][:1]
     return f" (did you mean {match[0]!r}?)" if match else ""
+
+
+def from_interrupt(exc: BaseException) -> bool:
+    """Whether ``exc`` is, or came of, a KeyboardInterrupt (Ctrl-C, or SIGTERM as the CLI
+    raises it): libraries turn one landing inside them into their own errors (h5py a
+    SystemError in its callbacks, an extension module an ImportError from its
+    initialisation), which must still read as an interruption, not a damaged archive or
+    an internal error."""
+    seen: set[int] = set()
+    cur: BaseException | None = exc
+    while cur is not None and id(cur) not in seen:
+        if isinstance(cur, KeyboardInterrupt):
+            return True
+        seen.add(id(cur))
+        cur = cur.__cause__ or cur.__context__
+    return False

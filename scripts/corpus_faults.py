@@ -1,6 +1,7 @@
 """Hostile corpus of issue #23 (beyond its list): planted FIFOs, symlinks and existing files
 at every output name, archives reaching outside themselves, forged journals, --force onto
-inputs, a full disk (RLIMIT_FSIZE) under every writer, signals at random moments, huge
+inputs, a full disk (RLIMIT_FSIZE) under every writer, signals at random moments (early
+ones into every writing command too), huge
 arguments. Each call is a subprocess with a 40 s limit. Counted: calls, exit codes, hangs
 (over the limit), tracebacks (a traceback, camopt's internal-error line, or more than one
 error line), losses (a file outside the output folder changed, an existing file replaced
@@ -308,6 +309,19 @@ for i in range(12):
         if r.returncode != 0:
             stats["losses"] += 1
             problems.append(f"loss: unreadable after signal: {p}: {r.stderr[-200:]}")
+
+# 6b. signals early (0.1-1.5 s: while Python and the command's modules load, h5py reads the
+# input, a chunk of draws runs) into every writing command, one signal each: five defects
+# were found here on 29 Nov 2026 that section 6's later signals into run and sweep missed
+EARLY = [["tolerance", RUN, "--samples", "200000", "--out", "{d}/t.h5", "--quiet"],
+         ["report", RUN, "--out", "{d}/r.html"], ["plot", RUN, "--out", "{d}"],
+         ["export", RUN, "--out", "{d}"],
+         ["run", DE, "--out", "{d}/a.h5", "--quiet", "--repeats", "6", *TINY]]
+for i in range(20):
+    d = fresh("early-signals")
+    template = EARLY[i % len(EARLY)]
+    call([a.format(d=d) if isinstance(a, str) else a for a in template], folder=d,
+         signal_after=rng.uniform(0.1, 1.5), fixture=f"early signal {i}")
 
 # 7. huge and odd arguments
 for args in (["sweep", DE, "--seeds", "9" * 5000], ["sweep", DE, "--seeds", "0:" + "9" * 4400],

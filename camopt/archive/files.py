@@ -48,7 +48,7 @@ import h5py
 import numpy as np
 
 import camopt
-from camopt.errors import ArchiveError, ConfigError
+from camopt.errors import ArchiveError, ConfigError, from_interrupt
 
 # the temporary file's name adds 21 bytes and a leading dot to the archive's name, and a
 # file name has at most 255 bytes
@@ -67,13 +67,8 @@ def passing_interrupt(exc: BaseException) -> None:
     context is the interrupt, and a reader's ``except Exception`` then called an intact
     archive damaged (a randomised run of SIGTERMs into ``camopt tolerance``). Call first
     in every ``except Exception`` around h5py."""
-    seen: set[int] = set()
-    cur: BaseException | None = exc
-    while cur is not None and id(cur) not in seen:
-        if isinstance(cur, KeyboardInterrupt):
-            raise KeyboardInterrupt from None
-        seen.add(id(cur))
-        cur = cur.__cause__ or cur.__context__
+    if from_interrupt(exc):
+        raise KeyboardInterrupt from None
 
 
 def default_path(name: str, out_dir: str | Path = "runs") -> Path:

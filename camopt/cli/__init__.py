@@ -14,6 +14,7 @@ from camopt.cli.app import app, internal_error, load_commands
 from camopt.cli.console import OutputError, checked_stdout, visible
 from camopt.core import perf
 from camopt.engine import interrupts
+from camopt.errors import from_interrupt
 
 
 def main() -> None:
@@ -68,6 +69,10 @@ def main() -> None:
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             sys.exit(0)
         except Exception as exc:
+            if from_interrupt(exc):  # a library's own error for an interrupt inside it
+                interrupts.handled()
+                print("error: interrupted", file=sys.stderr)
+                sys.exit(130)
             print(internal_error(exc), file=sys.stderr)
             sys.exit(2)
     finally:

@@ -15,14 +15,14 @@ import os
 import sys
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 
 import typer
 from typer.core import TyperGroup
 
 from camopt.cli.console import visible
 from camopt.engine import interrupts
-from camopt.errors import CamoptError
+from camopt.errors import CamoptError, from_interrupt
 
 if TYPE_CHECKING:
     from camopt.config import LoadedConfig
@@ -172,14 +172,14 @@ def errors() -> Iterator[None]:
         print(f"error: {visible(exc)}", file=sys.stderr)
         raise typer.Exit(2) from None
     except KeyboardInterrupt:
-        interrupts.handled()
-        print("error: interrupted; no archive written", file=sys.stderr)
-        raise typer.Exit(130) from None
+        _interrupted()
     except (typer.Exit, typer.Abort):
         raise
     except Exception as exc:
         if is_click_exception(exc):
             raise
+        if from_interrupt(exc):  # a library's own error for an interrupt inside it
+            _interrupted()
         if isinstance(exc, MemoryError):
             print("error: out of memory", file=sys.stderr)
             raise typer.Exit(2) from None
@@ -189,6 +189,12 @@ def errors() -> Iterator[None]:
         # a bug: still one line, never a traceback (tests keep it unused)
         print(internal_error(exc), file=sys.stderr)
         raise typer.Exit(2) from None
+
+
+def _interrupted() -> NoReturn:
+    interrupts.handled()
+    print("error: interrupted; no archive written", file=sys.stderr)
+    raise typer.Exit(130) from None
 
 
 def is_click_exception(exc: BaseException) -> bool:

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import contextlib
 import signal
+import sys
 import threading
 from collections.abc import Callable, Iterator
+from typing import Any
 
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
 _pending = False
@@ -32,7 +34,23 @@ def install() -> None:
     global _installed
     for s in _SIGNALS:
         signal.signal(s, _interrupt)
+    if sys.unraisablehook is not _quiet_unraisable:
+        _hooks.append(sys.unraisablehook)
+        sys.unraisablehook = _quiet_unraisable
     _installed = True
+
+
+_hooks: list[Callable[[Any], object]] = []  # the hook _quiet_unraisable passes others to
+
+
+def _quiet_unraisable(unraisable: Any) -> None:
+    """Python's report of an exception it could not raise (in a weakref callback,
+    ``__del__``), without the one a signal raised there: that one is remembered
+    (:func:`check` raises it again), and its traceback on stderr was a second message
+    beside camopt's one line (a randomised run of early signals into ``tolerance``)."""
+    if isinstance(unraisable.exc_value, KeyboardInterrupt):
+        return
+    _hooks[-1](unraisable)
 
 
 def check() -> None:

@@ -516,6 +516,38 @@ def test_a_signal_typer_turns_into_a_silent_exit_is_reported_as_one_line(tmp_pat
         proc.returncode, proc.stderr)
 
 
+@pytest.mark.parametrize("where, nth, said", [
+    ("camopt.engine.targets", 1, "error: interrupted\n"),  # a command's own imports
+    # validate imports it first outside its errors() block, then in load_case inside it
+    ("camopt.engine.setup", 2, "error: interrupted; no archive written\n"),
+])
+def test_a_library_s_error_for_an_interrupt_inside_it_is_an_interruption(where, nth, said):
+    """An extension module interrupted during its initialisation raises ImportError
+    ('initialization failed') with the KeyboardInterrupt as its context: camopt called it
+    an internal error, exit 2 (an early signal into ``plot``). It is an interruption."""
+    script = (
+        "import builtins, sys\n"
+        "real = builtins.__import__\n"
+        "seen = []\n"
+        "def importing(name, *a, **k):\n"
+        f"    if name == {where!r}:\n"
+        "        seen.append(name)\n"
+        f"        if len(seen) == {nth}:\n"
+        "            try:\n"
+        "                raise KeyboardInterrupt\n"
+        "            except KeyboardInterrupt:\n"
+        "                raise ImportError('initialization failed')\n"
+        "    return real(name, *a, **k)\n"
+        "from camopt.cli import main\n"
+        "builtins.__import__ = importing\n"
+        f"sys.argv = ['camopt', 'validate', {FAST!r}]\n"
+        "main()\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 130 and proc.stderr == said, (proc.returncode, proc.stderr)
+
+
 # ---- unbounded or unwrapped -----------------------------------------------------------------
 def test_a_second_ctrl_c_while_exiting_after_the_first_changes_nothing(tmp_path):
     """The corpus's 'other' exits: Ctrl-C once a repeat finished, then Ctrl-C again
