@@ -494,24 +494,36 @@ def test_a_finished_command_ignores_signals_while_python_exits(tmp_path):
     assert [p for p in (tmp_path / "export").iterdir() if p.stat().st_size > 0]
 
 
-def test_a_signal_typer_turns_into_a_silent_exit_is_reported_as_one_line(tmp_path):
-    """A KeyboardInterrupt leaving a command's own imports, before its errors() block, is
-    caught by typer and turned into a silent exit 130: camopt now says so in one line (a
-    randomised run of SIGTERMs into ``camopt tolerance`` exited 130 with nothing said)."""
+def validate_with_import_fault(where: str, nth: int, fault: str
+                               ) -> subprocess.CompletedProcess[str]:
+    """``camopt validate`` of the fast switch in a fresh Python whose ``nth`` import of
+    module ``where`` first runs ``fault`` (Python source, indented 12 spaces): a signal
+    or a library's error planted at an exact moment of the command's own imports."""
     script = (
         "import builtins, os, signal, sys\n"
         "real = builtins.__import__\n"
+        "seen = []\n"
         "def importing(name, *a, **k):\n"
-        "    if name == 'camopt.engine.targets':\n"
-        "        os.kill(os.getpid(), signal.SIGTERM)\n"
+        f"    if name == {where!r}:\n"
+        "        seen.append(name)\n"
+        f"        if len(seen) == {nth}:\n"
+        f"{fault}"
         "    return real(name, *a, **k)\n"
-        "builtins.__import__ = importing\n"
         "from camopt.cli import main\n"
+        "builtins.__import__ = importing\n"
         f"sys.argv = ['camopt', 'validate', {FAST!r}]\n"
         "main()\n"
     )
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                           timeout=60)
+
+
+def test_a_signal_typer_turns_into_a_silent_exit_is_reported_as_one_line():
+    """A KeyboardInterrupt leaving a command's own imports, before its errors() block, is
+    caught by typer and turned into a silent exit 130: camopt now says so in one line (a
+    randomised run of SIGTERMs into ``camopt tolerance`` exited 130 with nothing said)."""
+    proc = validate_with_import_fault("camopt.engine.targets", 1,
+                                      "            os.kill(os.getpid(), signal.SIGTERM)\n")
     assert proc.returncode == 130 and proc.stderr == "error: interrupted\n", (
         proc.returncode, proc.stderr)
 
@@ -525,26 +537,11 @@ def test_a_library_s_error_for_an_interrupt_inside_it_is_an_interruption(where, 
     """An extension module interrupted during its initialisation raises ImportError
     ('initialization failed') with the KeyboardInterrupt as its context: camopt called it
     an internal error, exit 2 (an early signal into ``plot``). It is an interruption."""
-    script = (
-        "import builtins, sys\n"
-        "real = builtins.__import__\n"
-        "seen = []\n"
-        "def importing(name, *a, **k):\n"
-        f"    if name == {where!r}:\n"
-        "        seen.append(name)\n"
-        f"        if len(seen) == {nth}:\n"
+    proc = validate_with_import_fault(where, nth, (
         "            try:\n"
         "                raise KeyboardInterrupt\n"
         "            except KeyboardInterrupt:\n"
-        "                raise ImportError('initialization failed')\n"
-        "    return real(name, *a, **k)\n"
-        "from camopt.cli import main\n"
-        "builtins.__import__ = importing\n"
-        f"sys.argv = ['camopt', 'validate', {FAST!r}]\n"
-        "main()\n"
-    )
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          timeout=60)
+        "                raise ImportError('initialization failed')\n"))
     assert proc.returncode == 130 and proc.stderr == said, (proc.returncode, proc.stderr)
 
 
