@@ -55,23 +55,20 @@ def main() -> None:
             if exc.code == 130 and interrupts.pending():
                 # typer's own exit for a KeyboardInterrupt that left its parsing or a
                 # command's imports, silent: camopt's one line, as for any interruption
-                interrupts.handled()
-                print("error: interrupted", file=sys.stderr)
+                _say_interrupted()
             raise
         except OutputError as exc:  # printed outside a command's errors(): stdout failed
             print(f"error: {visible(exc)}", file=sys.stderr)
             sys.exit(2)
         except KeyboardInterrupt:
-            interrupts.handled()
-            print("error: interrupted", file=sys.stderr)
+            _say_interrupted()
             sys.exit(130)
         except BrokenPipeError:  # `camopt show ... | head`: the reader left; not an error
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             sys.exit(0)
         except Exception as exc:
             if from_interrupt(exc):  # a library's own error for an interrupt inside it
-                interrupts.handled()
-                print("error: interrupted", file=sys.stderr)
+                _say_interrupted()
                 sys.exit(130)
             print(internal_error(exc), file=sys.stderr)
             sys.exit(2)
@@ -80,6 +77,11 @@ def main() -> None:
         # landing while Python exits (which restores the default actions) would
         # kill a finished process by the signal
         interrupts.finished()
+
+
+def _say_interrupted() -> None:
+    interrupts.handled()
+    print("error: interrupted", file=sys.stderr)
 
 
 STARTS_ONLY = frozenset({"validate", "show", "runs", "compare", "init", "solvers"})

@@ -34,23 +34,23 @@ def install() -> None:
     global _installed
     for s in _SIGNALS:
         signal.signal(s, _interrupt)
+    global _previous_hook
     if sys.unraisablehook is not _quiet_unraisable:
-        _hooks.append(sys.unraisablehook)
-        sys.unraisablehook = _quiet_unraisable
+        _previous_hook, sys.unraisablehook = sys.unraisablehook, _quiet_unraisable
     _installed = True
 
 
-_hooks: list[Callable[[Any], object]] = []  # the hook _quiet_unraisable passes others to
+_previous_hook: Callable[[Any], object] = sys.__unraisablehook__  # gets every other report
 
 
 def _quiet_unraisable(unraisable: Any) -> None:
     """Python's report of an exception it could not raise (in a weakref callback,
     ``__del__``), without the one a signal raised there: that one is remembered
-    (:func:`check` raises it again), and its traceback on stderr was a second message
-    beside camopt's one line (a randomised run of early signals into ``tolerance``)."""
+    (:func:`check` raises it again), and its traceback on stderr would be a second
+    message beside camopt's one line."""
     if isinstance(unraisable.exc_value, KeyboardInterrupt):
         return
-    _hooks[-1](unraisable)
+    _previous_hook(unraisable)
 
 
 def check() -> None:
@@ -69,7 +69,7 @@ def checked(progress: Callable[[int, int], None] | None) -> Callable[[int, int],
     """A row-chunk progress callback (``camopt.core.batch.RowsDone``) that first calls
     :func:`check`: a long evaluation in chunks (``camopt tolerance``) stops at the next
     chunk for a signal whose exception Python dropped (one landing in an import lock's
-    callback let a 200,000-sample analysis run to its end)."""
+    callback)."""
     def told(done: int, total: int) -> None:
         check()
         if progress is not None:
@@ -101,14 +101,14 @@ def _ignored() -> bool:
 
 
 def _forget_unhandled() -> None:
-    """Clear CPython's note of an unhandled KeyboardInterrupt. CPython 3.10 and 3.11 set
-    it when a KeyboardInterrupt leaves code an extension module runs with
-    ``PyRun_String`` (during an import), and never clear it when Python code catches that
-    exception higher up: at exit the process then killed itself by SIGINT (exit -2 for a
-    Python caller, 130 in a shell) after camopt had reported the interruption and chosen
-    exit 130 (a randomised run of SIGTERMs into ``camopt tolerance``: 8 of 60 landing
-    0.25-0.35 s in). Where the symbol is not exported (a static build, CPython 3.12+'s
-    runtime state), nothing is done."""
+    """Clear CPython's note of an unhandled KeyboardInterrupt. CPython 3.10 and 3.11 set it
+    where a KeyboardInterrupt leaves code CPython runs itself (``PyRun_*``, module
+    execution) and catching the exception higher up does not clear it: at exit the process
+    then killed itself by SIGINT (exit -2 for a Python caller, 130 in a shell) after camopt
+    had reported the interruption and chosen 130 (seen under strace; 8 of 60 SIGTERMs
+    0.2-0.45 s into ``camopt tolerance``; which code set it was not traced). Where the
+    symbol is not exported (a static build, CPython 3.12+'s runtime state) nothing is
+    done."""
     try:
         import ctypes
 
@@ -121,8 +121,7 @@ def finished() -> None:
     """The command is over: its output is written or its error reported. SIGINT and
     SIGTERM are ignored from here on (as after :func:`handled`): Python's finalisation
     restores their default actions, and a signal landing then killed a process whose
-    work was complete by the signal (exit -15 for a finished ``report``, found by a
-    randomised run of signals)."""
+    work was complete by the signal."""
     _ignored()
 
 
