@@ -330,10 +330,24 @@ def run_pymoo_ga(problem: Problem, budget: int, start: Start, seed: int, trace: 
     _pymoo(problem, budget, seed, trace, GA(pop_size=100, sampling=start.population(100)))
 
 
+def _scalar_prediction(value: object) -> float:
+    """``float`` of a one-element prediction, as numpy before 2.x converted it."""
+    return float(np.asarray(value).reshape(-1)[0])
+
+
 def run_nevergrad(problem: Problem, budget: int, start: Start, seed: int, trace: Trace) -> None:
     """nevergrad's NGOpt (its recommended optimiser) from camopt's start, 50 designs per
-    batch."""
+    batch.
+
+    nevergrad 1.0.12 (the newest) minimises its metamodel through ``float(prediction)`` of a
+    one-element array (``nevergrad.optimization.metamodel``), a TypeError since numpy 2.x
+    (its issue #1612): in low dimensions NGOpt picks a metamodel and stopped at 100
+    evaluations. The module's ``float`` is replaced by one that reads the single element,
+    which is what nevergrad means there, so the peer runs as its authors intended."""
     import nevergrad as ng
+    from nevergrad.optimization import metamodel
+
+    metamodel.float = _scalar_prediction  # type: ignore[attr-defined]
 
     evaluate = traced(problem, trace, snap_integers=True)
     param = ng.p.Array(init=start.x0).set_bounds(0.0, 1.0)
