@@ -79,8 +79,8 @@ switch's 17.984828 and 17.984829 ms are one design."""
 
 Quality = tuple[float, float]
 """(violation, objective) of a design, compared by Deb's rules: less violation first, then
-the lower objective (violation 0: feasible). Where no solver finds a feasible design (the
-shipped ``vcb_velocity`` since #31's release margin) the least violation decides."""
+the lower objective (violation 0: feasible). Where a solver finds no feasible design its least
+violation is its quality."""
 
 
 def at_least(q: Quality, ref: Quality) -> bool:
