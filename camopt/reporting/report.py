@@ -337,17 +337,13 @@ def robust_sibling(run: RunView) -> str:
     """The robust config beside the run's case file (``configs/vcb_velocity.toml`` ->
     ``configs/vcb_velocity_robust.toml``; else that of the file it ``extends``, else
     ``<kind>_robust.toml``) when it exists, else ''."""
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover
-        import tomli as tomllib
     if not run.config_path:
         return ""
     p = Path(run.config_path)
     stems = [p.stem]
     try:
-        base = tomllib.loads(p.read_text(encoding="utf-8")).get("extends")
-    except (OSError, ValueError):
+        base = extends_of(p.read_text(encoding="utf-8"))
+    except (OSError, ValueError):  # unreadable, not UTF-8
         base = None
     if isinstance(base, str):
         stems.append(Path(base).stem)
@@ -356,6 +352,22 @@ def robust_sibling(run: RunView) -> str:
         if sibling.is_file() and sibling.resolve() != p.resolve():
             return str(sibling)
     return ""
+
+
+def extends_of(text: str) -> object:
+    """The top-level ``extends`` of TOML ``text`` (None: none, or not TOML). Text that
+    holds neither the word nor a backslash (a quoted key's escape) cannot name it: it is
+    not parsed (``show``'s start-up: the TOML reader is not imported)."""
+    if "extends" not in text and "\\" not in text:
+        return None
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+    try:
+        return tomllib.loads(text).get("extends")
+    except ValueError:
+        return None
 
 
 def yield_target(run: RunView) -> float:
