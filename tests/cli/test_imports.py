@@ -231,3 +231,32 @@ def test_init_imports_its_case_s_config_not_its_model() -> None:
     assert "camopt.cases.vcb.config" in modules
     assert not modules & {"camopt.cases.vcb.problem", "camopt.cases.vcb.dynamics",
                           "camopt.cases.vcb.identify"}
+
+
+PLUGINS_PROBE = """
+import json, sys
+from camopt.cli import main
+sys.argv = ["camopt", "validate", "configs/vcb_velocity.toml"]
+try:
+    main()
+except SystemExit as exc:
+    code = exc.code
+from pydantic.plugin import _loader
+print("\\n" + json.dumps({"code": code, "looked_up": _loader._plugins is not None}))
+"""
+
+
+@pytest.mark.parametrize("user", [None, "", "__all__"])
+def test_validate_does_not_look_for_pydantic_plugins_unless_asked(user: str | None) -> None:
+    """pydantic reads every installed distribution's entry points to find its plugins on
+    the first model it validates (~0.017 s of ``validate``'s start-up): the command line
+    turns that off (``perf.no_pydantic_plugins``), unless the user set
+    PYDANTIC_DISABLE_PLUGINS (empty: every plugin, as pydantic's default)."""
+    env = {k: v for k, v in os.environ.items() if k != "PYDANTIC_DISABLE_PLUGINS"}
+    if user is not None:
+        env["PYDANTIC_DISABLE_PLUGINS"] = user
+    done = subprocess.run([sys.executable, "-c", PLUGINS_PROBE], capture_output=True,
+                          text=True, check=True, cwd=ROOT, env=env)
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["code"] in (0, None)
+    assert result["looked_up"] is (user == "")
