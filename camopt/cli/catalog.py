@@ -21,15 +21,18 @@ def validate(case: Annotated[Path, typer.Argument(help="case file (TOML)")],
              set_: Annotated[list[str] | None, typer.Option("--set")] = None) -> None:
     """Check a case file without running it; warn (stderr, exit 0) of a run.target no
     design can reach, or one inherited from a file whose case table differs."""
+    from typing import cast
+
     import numpy as np
 
-    from camopt.engine.setup import build_solver, prepare
+    from camopt.engine.setup import FirstUseRng, build_solver, prepare
     from camopt.engine.targets import target_warnings
 
     with errors():
         config = load_case(case, set_)
         problem, solver_cls = prepare(config)
-        build_solver(problem, solver_cls, config, np.random.default_rng(0))  # its own checks
+        # its own checks; a generator only if it draws
+        build_solver(problem, solver_cls, config, cast("np.random.Generator", FirstUseRng(0)))
     for warning in target_warnings(config, problem):
         print(f"warning: {visible(warning)}", file=sys.stderr)
     out.print(f"ok: {escape(str(case))}: case '{config.case.kind}' ({problem.n_var} variables, "
