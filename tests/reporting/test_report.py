@@ -24,12 +24,8 @@ from camopt import archive
 from camopt.archive.sweeps import load_sweep
 from camopt.cli import app
 from camopt.reporting import report
-from camopt.reporting.views import (
-    Comparison,
-    ShowView,
-    SweepRanking,
-    Verdict,
-)
+from camopt.reporting.comparisons import Comparison, SweepRanking
+from camopt.reporting.views import ShowView, Verdict
 
 REPO = Path(__file__).resolve().parents[2]
 RUN = "tests/data/archives/run_main_52e31ad.h5"
