@@ -27,7 +27,7 @@ import numpy as np
 
 from camopt.archive.files import atomic_write, claim, open_archive, passing_interrupt, versions
 from camopt.archive.tables import read_table, write_table
-from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
+from camopt.core.constraints import ACTIVE_TOL, FEASIBILITY_TOL
 from camopt.core.record import ExpectedYield, Repeat, RunRecord, nfev_to_target
 from camopt.core.runview import BestView, RunView
 from camopt.core.stats import succeeded

@@ -5,7 +5,6 @@ command line loads only its own command's modules (tests/cli/test_imports.py).""
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -87,6 +86,8 @@ def solver_listing() -> str:
     """The stored listing (:data:`LISTING`), or, when an installed distribution declares a
     case or solver entry point it was not rendered with (a plugin), the listing rendered
     from the registries (:func:`render_listing`: every case and solver imported)."""
+    import json
+
     from camopt.core.plugins import entry_points
 
     stored = json.loads(LISTING.read_text(encoding="utf-8"))
@@ -120,6 +121,8 @@ def render_listing() -> str:
 
 def write_listing() -> None:
     """Render the listing and store it with the installed entry points (:data:`LISTING`)."""
+    import json
+
     from camopt.core.plugins import entry_points
 
     groups = {group: {ep.name: ep.value for ep in entry_points(group)}

@@ -154,14 +154,14 @@ def test_show_and_runs_load_no_solver_library(command: str, current_archive: str
 def test_show_of_a_finished_archive_builds_no_config_model(current_archive: str) -> None:
     """``show`` checks the archive's variable names on its stored ``[case]`` as written
     (``CaseSpec.stored_names``): the case's config model, the config loader and models,
-    the solver's options, the TOML reader and the views of compared runs are not
-    imported (issue #48: start-up)."""
+    the solver's options, the TOML reader, the views of compared runs and the Problem's
+    classes are not imported (issue #48: start-up)."""
     code, modules = loaded_after("show", current_archive)
     assert code in (0, None)
     assert "camopt.cases.fast_switch" in modules  # the probe sees the case being read
     assert not modules & {"camopt.cases.fast_switch.config", "camopt.config.models",
                           "camopt.config.loader", "camopt.solvers", "tomllib",
-                          "camopt.reporting.comparisons"}, sorted(
+                          "camopt.reporting.comparisons", "camopt.core.problem"}, sorted(
         m for m in modules if m.startswith(("camopt.config", "camopt.solvers", "camopt.cases")))
 
 
