@@ -21,16 +21,23 @@ try:
     run()
 except SystemExit as exc:
     code = exc.code
-print("\\n" + json.dumps({"code": code, "collecting": gc.isenabled()}))
+print("\\n" + json.dumps({"code": code, "collecting": gc.isenabled(),
+                         "frozen": gc.get_freeze_count()}))
 """
 
 
-def collecting_after(*args: str) -> tuple[int | None, bool]:
-    """Exit code and whether the collector is on once ``camopt ARGS`` has run, in a fresh
-    interpreter."""
+def probe(*args: str) -> dict:
+    """Exit code, whether the collector is on and how many objects are frozen out of it
+    once ``camopt ARGS`` has run, in a fresh interpreter."""
     done = subprocess.run([sys.executable, "-c", PROBE, json.dumps(list(args))],
                           capture_output=True, text=True, check=True, cwd=ROOT)
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result: dict = json.loads(done.stdout.strip().splitlines()[-1])
+    return result
+
+
+def collecting_after(*args: str) -> tuple[int | None, bool]:
+    """Exit code and whether the collector is on once ``camopt ARGS`` has run."""
+    result = probe(*args)
     return result["code"], result["collecting"]
 
 
@@ -47,6 +54,21 @@ def test_the_collector_is_on_for_commands_that_compute(args: tuple[str, ...],
     code, on = collecting_after(*args)
     assert code in (0, None)
     assert on is collecting, args
+
+
+@pytest.mark.parametrize("args, frozen", [
+    (("validate", "configs/fast_switch.toml"), True),
+    (("--version",), True),
+    (("run", "--help"), False),
+])
+def test_a_start_up_command_exits_without_the_collector_walking_its_objects(
+        args: tuple[str, ...], frozen: bool) -> None:
+    """A command that ran with the collector off leaves its objects frozen out of it when
+    it returns (``camopt.__main__.exit_uncollected``: Python's collections at exit walk
+    none of them); a command that computes, with the collector on, does not."""
+    result = probe(*args)
+    assert result["code"] in (0, None)
+    assert (result["frozen"] > 0) is frozen, result
 
 
 def test_python_m_camopt_runs_the_same_entry_point() -> None:

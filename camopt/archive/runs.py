@@ -27,7 +27,7 @@ import numpy as np
 
 from camopt.archive.files import atomic_write, claim, open_archive, passing_interrupt, versions
 from camopt.archive.tables import read_table, write_table
-from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
+from camopt.core.constraints import ACTIVE_TOL, FEASIBILITY_TOL
 from camopt.core.record import ExpectedYield, Repeat, RunRecord, nfev_to_target
 from camopt.core.runview import BestView, RunView
 from camopt.core.stats import succeeded
@@ -169,13 +169,25 @@ def load_run(path: str | Path) -> RunView:
 def check_variables(view: RunView) -> None:
     """The stored variable names must be those the case's problem has for the stored
     config (a renamed or foreign ``variables`` attribute would otherwise show values under
-    wrong names and make ``tolerance`` fail on a missing one). A config this camopt no
-    longer accepts (an archive of another version) cannot be rebuilt, so is not compared:
-    it is shown as stored, and ``tolerance``, which must rebuild it, refuses it with the
-    config's own error (docs/reliability.md)."""
+    wrong names and make ``tolerance`` fail on a missing one). The stored ``[case]`` table
+    is the config as validated when the run was written: names the case gives for it as
+    stored (:meth:`~camopt.cases.registry.CaseSpec.stored_names`) that are the archive's
+    are accepted without validating it again (no config model, no solver imported:
+    ``show``'s start-up); anything else is decided on the config validated. A config this
+    camopt no longer accepts (an archive of another version) cannot be rebuilt, so is not
+    compared: it is shown as stored, and ``tolerance``, which must rebuild it, refuses it
+    with the config's own error (docs/reliability.md)."""
+    from camopt.cases import get_case
+
+    try:
+        spec = get_case(view.kind)
+    except CamoptError:  # a kind this camopt does not know: shown as stored
+        return
+    if spec.stored_names(view.case) == tuple(view.variables):
+        return
     from pydantic import ValidationError
 
-    from camopt.cases import case_configs, get_case
+    from camopt.cases import case_configs
     from camopt.config import validate_data
     from camopt.solvers.registry import solver_options
 
@@ -183,7 +195,7 @@ def check_variables(view: RunView) -> None:
         config = validate_data({"case": view.case, "solver": view.solver, "run": view.run},
                                solver_options(), case_configs(), view.path)
         with np.errstate(all="ignore"):  # a non-assembling design is the run's business
-            names = get_case(config.case.kind).names_of(config.case)
+            names = spec.names_of(config.case)
     except (CamoptError, ValidationError):
         return
     if names != tuple(view.variables):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from camopt.cases.registry import (
     CaseSpec,
     OverlayCurve,
@@ -13,8 +15,10 @@ from camopt.cases.registry import (
     register_case,
     run_requirements,
 )
-from camopt.config.models import CaseConfig
-from camopt.core.problem import Problem
+
+if TYPE_CHECKING:
+    from camopt.config.models import CaseConfig
+    from camopt.core.problem import Problem
 
 
 def build_problem(config: CaseConfig) -> Problem:

@@ -19,20 +19,21 @@ import importlib
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any, Protocol
 
-from camopt.config.models import CaseConfig
 from camopt.core.plugins import OnDemand, entry_points, look_up
-from camopt.core.problem import Problem
 from camopt.core.requirements import Requirement
-from camopt.errors import ConfigError, did_you_mean
+from camopt.errors import ConfigError, did_you_mean, from_interrupt
 
 if TYPE_CHECKING:
     from importlib.metadata import EntryPoint
 
     from matplotlib.figure import Figure
 
+    from camopt.config.models import CaseConfig
     from camopt.core.calibration import Calibrated, CalibrationRequest
+    from camopt.core.problem import Problem
     from camopt.core.runview import RunView
     from camopt.mechanics.cam_outline import CamOutline
 
@@ -201,6 +202,21 @@ class CaseSpec:
         if self.variable_names is not None:
             return tuple(self.variable_names(config))
         return tuple(self.build(config).names)
+
+    def stored_names(self, case: Mapping[str, Any]) -> tuple[str, ...] | None:
+        """The names :attr:`variable_names` gives for a run's stored ``[case]`` table (a
+        dict: the config as validated when the run was written), its fields read as
+        attributes without validating it again (no config model imported); None when the
+        case has no :attr:`variable_names` or the table cannot answer (a field it lacks,
+        a value of another kind: an archive of another version)."""
+        if self.variable_names is None:
+            return None
+        try:
+            return tuple(self.variable_names(SimpleNamespace(**case)))
+        except Exception as exc:
+            if from_interrupt(exc):
+                raise
+            return None
 
     def class_names(self) -> tuple[str, ...]:
         """Every tolerance class of the case, cheapest (loosest) first; the default class

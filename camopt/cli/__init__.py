@@ -19,10 +19,12 @@ from camopt.errors import from_interrupt
 
 def main() -> None:
     """Console-script entry point: BLAS on one thread before numpy loads
-    (:func:`camopt.core.perf.one_blas_thread_on_load`); SIGTERM handled like Ctrl-C;
+    (:func:`camopt.core.perf.one_blas_thread_on_load`), pydantic's plugin look-up off
+    (:func:`camopt.core.perf.no_pydantic_plugins`); SIGTERM handled like Ctrl-C;
     whatever escapes a command (a closed pipe, a bug) is still one line, never a
     traceback."""
     perf.one_blas_thread_on_load()
+    perf.no_pydantic_plugins()
     # a design that does not assemble is data (NaN), judged by the verdict: numpy's
     # 'invalid value' warnings, with source paths, are no message to a user
     warnings.simplefilter("ignore", RuntimeWarning)

@@ -5,7 +5,6 @@ command line loads only its own command's modules (tests/cli/test_imports.py).""
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -21,15 +20,18 @@ def validate(case: Annotated[Path, typer.Argument(help="case file (TOML)")],
              set_: Annotated[list[str] | None, typer.Option("--set")] = None) -> None:
     """Check a case file without running it; warn (stderr, exit 0) of a run.target no
     design can reach, or one inherited from a file whose case table differs."""
+    from typing import cast
+
     import numpy as np
 
-    from camopt.engine.setup import build_solver, prepare
+    from camopt.engine.setup import FirstUseRng, build_solver, prepare
     from camopt.engine.targets import target_warnings
 
     with errors():
         config = load_case(case, set_)
         problem, solver_cls = prepare(config)
-        build_solver(problem, solver_cls, config, np.random.default_rng(0))  # its own checks
+        # its own checks; a generator only if it draws
+        build_solver(problem, solver_cls, config, cast("np.random.Generator", FirstUseRng(0)))
     for warning in target_warnings(config, problem):
         print(f"warning: {visible(warning)}", file=sys.stderr)
     out.print(f"ok: {escape(str(case))}: case '{config.case.kind}' ({problem.n_var} variables, "
@@ -84,6 +86,8 @@ def solver_listing() -> str:
     """The stored listing (:data:`LISTING`), or, when an installed distribution declares a
     case or solver entry point it was not rendered with (a plugin), the listing rendered
     from the registries (:func:`render_listing`: every case and solver imported)."""
+    import json
+
     from camopt.core.plugins import entry_points
 
     stored = json.loads(LISTING.read_text(encoding="utf-8"))
@@ -117,6 +121,8 @@ def render_listing() -> str:
 
 def write_listing() -> None:
     """Render the listing and store it with the installed entry points (:data:`LISTING`)."""
+    import json
+
     from camopt.core.plugins import entry_points
 
     groups = {group: {ep.name: ep.value for ep in entry_points(group)}

@@ -23,14 +23,13 @@ from camopt.cli.console import escape, fmt, out, plain, visible
 if TYPE_CHECKING:
     from camopt.core.documents import FrontsCompared, ParetoSummary
     from camopt.core.runview import RunView
+    from camopt.reporting.comparisons import Comparison, SweepRanking
     from camopt.reporting.views import (
-        Comparison,
         ReferenceVerdict,
         RobustSummary,
         RobustYield,
         ShowView,
         Summary,
-        SweepRanking,
         Verdict,
     )
 

@@ -104,6 +104,22 @@ def one_blas_thread_on_load() -> None:
         _one_on_load = True
 
 
+PYDANTIC_PLUGINS = "PYDANTIC_DISABLE_PLUGINS"
+"""pydantic's switch for its plugins (``__all__``: none; a comma-separated list: those)."""
+
+
+def no_pydantic_plugins() -> None:
+    """Tell pydantic to look for no plugins, unless the user set :data:`PYDANTIC_PLUGINS`
+    (an empty value: every installed plugin, as pydantic's default).
+
+    The command line calls it first (``camopt.cli.main``): on the first model it
+    validates, pydantic otherwise reads the entry points of every installed distribution
+    to find its plugins (observability hooks; camopt uses none), ~0.017 s of CPU with 80
+    distributions installed and more in a larger environment, paid by every command that
+    reads a case file (bench/bench_startup.py)."""
+    os.environ.setdefault(PYDANTIC_PLUGINS, "__all__")
+
+
 _PR_SET_PDEATHSIG = 1
 
 

@@ -13,13 +13,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from camopt.core.constraints import ACTIVE_TOL as ACTIVE_TOL
+from camopt.core.constraints import FEASIBILITY_TOL as FEASIBILITY_TOL
 from camopt.mechanics import Bools, Floats, Ints
-
-ACTIVE_TOL = 1e-4
-"""A normalised constraint g with ``|g| <= ACTIVE_TOL`` counts as active (at its bound):
-0.01 % of the bound, loose enough for gradient solvers that stop a margin inside."""
-FEASIBILITY_TOL = 1e-9
-"""Round-off allowance: a normalised constraint counts as violated only above this."""
 
 
 @dataclass(frozen=True)

@@ -9,8 +9,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from camopt.core.constraints import ACTIVE_TOL, FEASIBILITY_TOL
 from camopt.core.documents import RobustCheck, Row
-from camopt.core.problem import ACTIVE_TOL, FEASIBILITY_TOL
 from camopt.core.record import ExpectedYield, Repeat, RunRecord
 from camopt.mechanics import Floats
 

@@ -21,8 +21,8 @@ from camopt.core.documents import ParetoSummary, Row, RunStatisticsDoc, Toleranc
 from camopt.core.record import Repeat
 from camopt.core.runview import RunView
 from camopt.reporting import report
+from camopt.reporting.comparisons import RankedPoint
 from camopt.reporting.views import (
-    RankedPoint,
     ReferenceVerdict,
     RobustSummary,
     RobustYield,

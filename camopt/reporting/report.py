@@ -13,7 +13,7 @@ import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -37,8 +37,6 @@ from camopt.core.requirements import verdict as verdict_of
 from camopt.core.runview import RunView, design_values
 from camopt.errors import ConfigError
 from camopt.reporting.views import (
-    Comparison,
-    RankedPoint,
     Reference,
     ReferenceVerdict,
     RepeatRow,
@@ -46,15 +44,20 @@ from camopt.reporting.views import (
     RobustRow,
     RobustSummary,
     RobustYield,
-    SameObjective,
     ShowView,
-    Significance,
     Summary,
     SummaryRow,
-    SweepRanking,
     Verdict,
 )
 from camopt.reporting.views import jsonable as jsonable  # re-exported for the printers
+
+if TYPE_CHECKING:  # built where runs are compared or a sweep ranked: show needs none
+    from camopt.reporting.comparisons import (
+        Comparison,
+        SameObjective,
+        Significance,
+        SweepRanking,
+    )
 
 SHOW_KEYS = ("case", "solver", "best", "repeats", "table")
 
@@ -337,17 +340,13 @@ def robust_sibling(run: RunView) -> str:
     """The robust config beside the run's case file (``configs/vcb_velocity.toml`` ->
     ``configs/vcb_velocity_robust.toml``; else that of the file it ``extends``, else
     ``<kind>_robust.toml``) when it exists, else ''."""
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover
-        import tomli as tomllib
     if not run.config_path:
         return ""
     p = Path(run.config_path)
     stems = [p.stem]
     try:
-        base = tomllib.loads(p.read_text(encoding="utf-8")).get("extends")
-    except (OSError, ValueError):
+        base = extends_of(p.read_text(encoding="utf-8"))
+    except (OSError, ValueError):  # unreadable, not UTF-8
         base = None
     if isinstance(base, str):
         stems.append(Path(base).stem)
@@ -356,6 +355,22 @@ def robust_sibling(run: RunView) -> str:
         if sibling.is_file() and sibling.resolve() != p.resolve():
             return str(sibling)
     return ""
+
+
+def extends_of(text: str) -> object:
+    """The top-level ``extends`` of TOML ``text`` (None: none, or not TOML). Text that
+    holds neither the word nor a backslash (a quoted key's escape) cannot name it: it is
+    not parsed (``show``'s start-up: the TOML reader is not imported)."""
+    if "extends" not in text and "\\" not in text:
+        return None
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+    try:
+        return tomllib.loads(text).get("extends")
+    except ValueError:
+        return None
 
 
 def yield_target(run: RunView) -> float:
@@ -537,6 +552,8 @@ def significance(name_a: str, a: np.ndarray, k_a: int, name_b: str, b: np.ndarra
     success rates with Clopper-Pearson intervals and Fisher's exact test on them
     (``success_p_value``), ``decidable`` (whether these counts can give a p-value below
     alpha at all) and the verdict line."""
+    from camopt.reporting.comparisons import Significance
+
     test = stats.compare_objectives(a, b)
     test = replace(test, threshold=stats.equivalence_threshold(test.median_a, test.median_b,
                                                                equivalence))
@@ -555,6 +572,8 @@ def compare(runs: list[RunView], equivalence: float | None = None) -> Comparison
     different case kinds or objectives are not comparable (ConfigError against the second
     run's ``case_kind`` or ``objective_name``). Values are raw (inf and NaN kept, for
     tables); ``to_json()`` makes them null."""
+    from camopt.reporting.comparisons import Comparison
+
     for run in runs[1:]:
         for key, mine, first in (("case_kind", run.kind, runs[0].kind),
                                  ("objective_name", run.objective_name,
@@ -605,6 +624,8 @@ def same_objective_different_designs(runs: list[RunView]) -> tuple[SameObjective
     both reach the first run's target) while their designs differ
     (:data:`DIFFERENT_DESIGN_RTOL`): a flat objective or several optima, which the
     objective alone hides."""
+    from camopt.reporting.comparisons import SameObjective
+
     found = []
     for i, a in enumerate(runs):
         for j in range(i + 1, len(runs)):
@@ -641,6 +662,7 @@ def rank_sweep(spec: Any, results: dict) -> SweepRanking:
     """Grid points ranked by success rate, then median objective; each tested against
     the best point; judged by ``run.min_success_rate`` when set."""
     from camopt.core.stats import sweep_summary as summary
+    from camopt.reporting.comparisons import RankedPoint, SweepRanking
 
     rows = summary(spec, results.values())
     order = sorted(rows, key=lambda r: (-r["success_rate"], r["median"]))

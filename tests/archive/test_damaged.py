@@ -95,6 +95,24 @@ def test_damaged_run_archives(good, tmp_path, damage):
         assert ": archive: " in r.stderr
 
 
+def test_names_checked_on_the_validated_config_when_the_stored_table_cannot_answer(
+        good, tmp_path, monkeypatch):
+    """Names the stored ``[case]`` does not confirm as written (an archive of another
+    version) are checked on the config validated: an intact archive is shown, renamed
+    variables are still refused."""
+    from camopt.cases import CaseSpec
+
+    monkeypatch.setattr(CaseSpec, "stored_names", lambda self, case: None)
+    assert invoke("show", good[0]).exit_code == 0
+    path = tmp_path / "bad.h5"
+    shutil.copy(good[0], path)
+    with h5py.File(path, "a") as f:
+        RUN_DAMAGE["variables renamed"](f)
+    r = invoke("show", path)
+    one_error_line(r, path)
+    assert "do not match case 'fast_switch'" in r.stderr
+
+
 def _set_cell(column, index, value):
     def damage(f):
         f["cells"][column][index] = value

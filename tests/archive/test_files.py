@@ -396,3 +396,62 @@ def test_passing_interrupt_finds_it_anywhere_in_the_chain():
         with pytest.raises(KeyboardInterrupt):
             files.passing_interrupt(exc)
     files.passing_interrupt(ValueError("a damaged attribute"))  # others pass through
+
+
+def _reaches_outside_high_level(f):
+    """The check as h5py's high-level objects make it (every link visited as a Link
+    object, every hard-linked object opened as a Dataset or Group): the reference the
+    low-level :func:`camopt.archive.files._reaches_outside` is compared with."""
+    import h5py
+
+    found = []
+
+    def visit(name, link):
+        if isinstance(link, h5py.ExternalLink):
+            found.append(f"/{name}: an external link to {link.filename}")
+        elif isinstance(link, h5py.HardLink):
+            obj = f.get(name)
+            if isinstance(obj, h5py.Dataset):
+                plist = obj.id.get_create_plist()
+                if plist.get_layout() == h5py.h5d.VIRTUAL:
+                    found.append(f"/{name}: a virtual dataset")
+                elif plist.get_external_count() > 0:
+                    found.append(f"/{name}: a dataset stored in external files")
+        return True if found else None
+
+    f.visititems_links(visit)
+    return found[0] if found else None
+
+
+@pytest.mark.parametrize("outside", [None, "external link", "virtual", "external storage",
+                                     "soft link", "deep external link"])
+def test_reaches_outside_finds_what_h5py_s_objects_find(tmp_path, outside):
+    """Nested groups, datasets and a soft link (inside the file: allowed), with one
+    object reaching outside or none: the same answer, word for word, as the check made
+    with h5py's high-level objects."""
+    import h5py
+
+    raw = tmp_path / "raw.bin"
+    raw.write_bytes(b"\0" * 80)
+    path = tmp_path / "a.h5"
+    with h5py.File(path, "w") as f:
+        f.attrs["x"] = 1
+        f.create_dataset("a/b/x", data=[1.0, 2.0])
+        f.create_dataset("c", data="text")
+        f.create_group("d/e")
+        if outside == "external link":
+            f["a/ext"] = h5py.ExternalLink(str(tmp_path / "other.h5"), "/x")
+        elif outside == "deep external link":
+            f["d/e/zz"] = h5py.ExternalLink("ü other.h5", "/y")
+        elif outside == "virtual":
+            layout = h5py.VirtualLayout(shape=(10,), dtype="f8")
+            layout[:] = h5py.VirtualSource(str(raw), "x", shape=(10,))
+            f["a"].create_virtual_dataset("v", layout)
+        elif outside == "external storage":
+            f["d"].create_dataset("s", shape=(10,), dtype="f8", external=[(str(raw), 0, 80)])
+        elif outside == "soft link":
+            f["d/e/soft"] = h5py.SoftLink("/a/b/x")
+    with h5py.File(path, "r", locking=False) as f:
+        low = files._reaches_outside(f)
+        assert low == _reaches_outside_high_level(f)
+    assert (low is None) == (outside in (None, "soft link")), low

@@ -7,6 +7,7 @@ import re
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 from typer.testing import CliRunner
@@ -158,9 +159,33 @@ def test_variable_names_without_the_model_are_the_problem_s(name: str) -> None:
     spec = get_case(config.case.kind)
     assert spec.variable_names is not None, spec.kind
     assert spec.names_of(config.case) == tuple(build_problem(config.case).names)
+    # as a run archive stores the [case] table (JSON of the validated config): the
+    # names show accepts without validating it again are the same
+    assert spec.stored_names(_as_stored(config.case)) == spec.names_of(config.case)
     if config.case.kind == "vcb" and config.case.step == "cam":
         bare = config.case.model_copy(update={"release_offset_bounds_deg": None,
                                               "velocity_setting_bounds_m_s": None})
         assert spec.names_of(bare) == tuple(build_problem(bare).names)
         assert len(spec.names_of(bare)) < len(spec.names_of(config.case)) or \
             config.case.release_offset_bounds_deg is None
+        assert spec.stored_names(_as_stored(bare)) == spec.names_of(bare)
+
+
+def _as_stored(case: Any) -> dict[str, Any]:
+    """A validated ``[case]`` as a run archive stores it and reads it back (JSON)."""
+    stored: dict[str, Any] = json.loads(json.dumps(case.model_dump(mode="json")))
+    return stored
+
+
+def test_stored_names_leave_a_table_that_cannot_answer_to_the_validated_config() -> None:
+    """A stored ``[case]`` without a field its names depend on (an archive of another
+    version), or with a value of another kind, gives None (the full check on the config
+    validated decides), never a guess; a case without ``variable_names`` gives None."""
+    vcb = get_case("vcb")
+    stored = _as_stored(vcb.config())
+    assert vcb.stored_names(stored) == vcb.names_of(vcb.config())
+    assert vcb.stored_names({k: v for k, v in stored.items() if k != "step"}) is None
+    emb = get_case("emb_cam")
+    assert emb.stored_names({**_as_stored(emb.config()), "key_points": "7"}) is None
+    assert CaseSpec(kind="bare", config=SphereConfig, problem=SphereProblem,
+                    default_solver="de_gr").stored_names(stored) is None

@@ -147,9 +147,22 @@ def test_show_and_runs_load_no_solver_library(command: str, current_archive: str
     models = {m for m in modules if m.startswith("camopt.cases.")
               and m.rsplit(".", 1)[-1] in ("problem", "model", "dynamics", "kernel")}
     assert not models and not modules & {"scipy", "numba"}, sorted(models)
-    if command == "show":  # the archive's case and solver only
+    if command == "show":  # the archive's case only
         assert _loaded(modules, "cases") & CASES == {"fast_switch"}
-        assert _loaded(modules, "solvers") & SOLVERS == {"enumeration"}
+
+
+def test_show_of_a_finished_archive_builds_no_config_model(current_archive: str) -> None:
+    """``show`` checks the archive's variable names on its stored ``[case]`` as written
+    (``CaseSpec.stored_names``): the case's config model, the config loader and models,
+    the solver's options, the TOML reader, the views of compared runs and the Problem's
+    classes are not imported (issue #48: start-up)."""
+    code, modules = loaded_after("show", current_archive)
+    assert code in (0, None)
+    assert "camopt.cases.fast_switch" in modules  # the probe sees the case being read
+    assert not modules & {"camopt.cases.fast_switch.config", "camopt.config.models",
+                          "camopt.config.loader", "camopt.solvers", "tomllib",
+                          "camopt.reporting.comparisons", "camopt.core.problem"}, sorted(
+        m for m in modules if m.startswith(("camopt.config", "camopt.solvers", "camopt.cases")))
 
 
 @pytest.fixture(scope="module")
@@ -188,7 +201,8 @@ def test_validate_imports_its_command_module_only_and_not_the_engine_s_loop() ->
     identification kinds nor their configs (``config_at``); and not threadpoolctl (BLAS
     was told one thread before numpy loaded); nor the reference cam's points and curve
     readers, which its case file does not name, nor pkgutil, which only listing a
-    registry needs: issue #36."""
+    registry needs (issue #36); nor numpy.random, as CMA-ES draws nothing when it is
+    built (``engine.setup.FirstUseRng``, issue #48)."""
     code, modules = loaded_after("validate", "configs/vcb_velocity.toml")
     assert code in (0, None)
     commands = _loaded(modules, "cli") - {"app", "console"}
@@ -197,7 +211,8 @@ def test_validate_imports_its_command_module_only_and_not_the_engine_s_loop() ->
     assert not modules & {"camopt.engine.driver", "camopt.engine.robust",
                           "camopt.cases.vcb.identify", "camopt.cases.vcb.identify_config",
                           "threadpoolctl", "click",
-                          "camopt.cases.vcb.cam_points", "camopt.cases.vcb.curves", "pkgutil"}
+                          "camopt.cases.vcb.cam_points", "camopt.cases.vcb.curves", "pkgutil",
+                          "numpy.random"}
 
 
 def test_every_command_is_where_commands_says() -> None:
@@ -220,3 +235,32 @@ def test_init_imports_its_case_s_config_not_its_model() -> None:
     assert "camopt.cases.vcb.config" in modules
     assert not modules & {"camopt.cases.vcb.problem", "camopt.cases.vcb.dynamics",
                           "camopt.cases.vcb.identify"}
+
+
+PLUGINS_PROBE = """
+import json, sys
+from camopt.cli import main
+sys.argv = ["camopt", "validate", "configs/vcb_velocity.toml"]
+try:
+    main()
+except SystemExit as exc:
+    code = exc.code
+from pydantic.plugin import _loader
+print("\\n" + json.dumps({"code": code, "looked_up": _loader._plugins is not None}))
+"""
+
+
+@pytest.mark.parametrize("user", [None, "", "__all__"])
+def test_validate_does_not_look_for_pydantic_plugins_unless_asked(user: str | None) -> None:
+    """pydantic reads every installed distribution's entry points to find its plugins on
+    the first model it validates (~0.017 s of ``validate``'s start-up): the command line
+    turns that off (``perf.no_pydantic_plugins``), unless the user set
+    PYDANTIC_DISABLE_PLUGINS (empty: every plugin, as pydantic's default)."""
+    env = {k: v for k, v in os.environ.items() if k != "PYDANTIC_DISABLE_PLUGINS"}
+    if user is not None:
+        env["PYDANTIC_DISABLE_PLUGINS"] = user
+    done = subprocess.run([sys.executable, "-c", PLUGINS_PROBE], capture_output=True,
+                          text=True, check=True, cwd=ROOT, env=env)
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["code"] in (0, None)
+    assert result["looked_up"] is (user == "")

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import sys
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -23,12 +24,8 @@ from camopt import archive
 from camopt.archive.sweeps import load_sweep
 from camopt.cli import app
 from camopt.reporting import report
-from camopt.reporting.views import (
-    Comparison,
-    ShowView,
-    SweepRanking,
-    Verdict,
-)
+from camopt.reporting.comparisons import Comparison, SweepRanking
+from camopt.reporting.views import ShowView, Verdict
 
 REPO = Path(__file__).resolve().parents[2]
 RUN = "tests/data/archives/run_main_52e31ad.h5"
@@ -181,6 +178,30 @@ def test_the_next_step_rule(tmp_path):
         "next: camopt tolerance r.h5 --samples 2000; for parts made to tolerance: "
         f"camopt run {robust}")
     assert report.next_step(_run(tmp_path), _judged("pass", "pass")) == REPORT_LINE
+
+
+@pytest.mark.parametrize(("text", "expected"), [
+    ('extends = "base.toml"\n[case]\nkind = "vcb"\n', "base.toml"),
+    ('"ext\\u0065nds" = "base.toml"\n', "base.toml"),  # a quoted key's escape
+    ("'extends' = 'base.toml'\n", "base.toml"),
+    ('[case]\nextends = "not top-level"\n', None),
+    ('# extends nothing\n[case]\nkind = "vcb"\n', None),
+    ('[case]\nkind = "vcb"\n', None),  # not parsed: no word, no escape
+    ("extends = \n", None),  # not TOML
+])
+def test_extends_of_reads_the_top_level_key_as_the_toml_reader_does(text, expected):
+    """The robust sibling's ``extends``: what tomllib reads, also for text the reader is
+    spared (no ``extends``, no backslash), checked against tomllib itself."""
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+    assert report.extends_of(text) == expected
+    try:
+        parsed = tomllib.loads(text).get("extends")
+    except ValueError:
+        parsed = None
+    assert parsed == expected
 
 
 def test_compare_reports_each_runs_own_counts():

@@ -52,7 +52,7 @@ def test_each_views_document_type_names_the_keys_its_to_json_writes(monkeypatch)
     from pathlib import Path
 
     from camopt import archive
-    from camopt.reporting import report, views
+    from camopt.reporting import comparisons, report, views
 
     monkeypatch.chdir(Path(__file__).resolve().parents[2])
     run = archive.load_run(RUN)
@@ -73,8 +73,8 @@ def test_each_views_document_type_names_the_keys_its_to_json_writes(monkeypatch)
     for row in summary["rows"]:
         _check_keys(dict(row), views.SummaryRowJson)
     comparison = report.compare([run, run]).to_json()
-    _check_keys(dict(comparison), views.ComparisonJson)
+    _check_keys(dict(comparison), comparisons.ComparisonJson)
     assert {"verdict_grade", "verdict_headline", "yield_target"} <= comparison.keys()
     assert comparison["tests"], "the golden run has repeats: one significance test"
     for t in comparison["tests"]:
-        _check_keys(dict(t), views.SignificanceJson)
+        _check_keys(dict(t), comparisons.SignificanceJson)

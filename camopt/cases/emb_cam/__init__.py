@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from camopt.cases.emb_cam.config import EmbCamConfig
 from camopt.cases.emb_cam.paper import PAPER
 from camopt.cases.emb_cam.requirements import requirements
 from camopt.cases.registry import (
@@ -12,11 +11,13 @@ from camopt.cases.registry import (
     ProfileCircle,
     ProfileCurve,
     ToleranceClass,
+    config_at,
     problem_at,
     register_case,
 )
 
 if TYPE_CHECKING:  # imported on first use: __getattr__ below
+    from camopt.cases.emb_cam.config import EmbCamConfig as EmbCamConfig
     from camopt.cases.emb_cam.problem import EmbCamProblem as EmbCamProblem
 
 TOLERANCES = {  # docs/assumptions.md, "Default tolerances": a ground cam profile
@@ -31,7 +32,7 @@ TOLERANCE_CLASSES = {
 }
 
 SPEC = register_case(CaseSpec(
-    kind="emb_cam", config=EmbCamConfig,
+    kind="emb_cam", config=config_at("camopt.cases.emb_cam.config:EmbCamConfig"),
     problem=problem_at("camopt.cases.emb_cam.problem:EmbCamProblem"), default_solver="pso",
     summary="negative-radius roller cam of an electromechanical brake",
     paper_source="Yan, Chen, Yan & Hang (2023), Actuators 12:329",
@@ -49,7 +50,10 @@ SPEC = register_case(CaseSpec(
 
 
 def __getattr__(name: str) -> Any:
-    """The problem class, imported on first use (the spec names it)."""
+    """The config model and the problem class, imported on first use (the spec names
+    them)."""
+    if name == "EmbCamConfig":
+        return SPEC.config
     if name == "EmbCamProblem":
         return SPEC.problem
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -4,12 +4,18 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from camopt.cases.fast_switch.config import FastSwitchConfig
 from camopt.cases.fast_switch.paper import OPTIMUM, PAPER
 from camopt.cases.fast_switch.requirements import requirements
-from camopt.cases.registry import CaseSpec, ToleranceClass, problem_at, register_case
+from camopt.cases.registry import (
+    CaseSpec,
+    ToleranceClass,
+    config_at,
+    problem_at,
+    register_case,
+)
 
 if TYPE_CHECKING:  # imported on first use: __getattr__ below
+    from camopt.cases.fast_switch.config import FastSwitchConfig as FastSwitchConfig
     from camopt.cases.fast_switch.problem import FastSwitchProblem as FastSwitchProblem
 
 TOLERANCES = {  # docs/assumptions.md, "Default tolerances"
@@ -30,7 +36,7 @@ TOLERANCE_CLASSES = {
 }
 
 SPEC = register_case(CaseSpec(
-    kind="fast_switch", config=FastSwitchConfig,
+    kind="fast_switch", config=config_at("camopt.cases.fast_switch.config:FastSwitchConfig"),
     problem=problem_at("camopt.cases.fast_switch.problem:FastSwitchProblem"),
     default_solver="enumeration",
     summary="minimum closure time of a spring-driven slider-crank switch",
@@ -43,7 +49,10 @@ SPEC = register_case(CaseSpec(
 
 
 def __getattr__(name: str) -> Any:
-    """The problem class, imported on first use (the spec names it)."""
+    """The config model and the problem class, imported on first use (the spec names
+    them)."""
+    if name == "FastSwitchConfig":
+        return SPEC.config
     if name == "FastSwitchProblem":
         return SPEC.problem
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

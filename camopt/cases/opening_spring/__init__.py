@@ -4,12 +4,18 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from camopt.cases.opening_spring.config import OpeningSpringConfig
 from camopt.cases.opening_spring.paper import PAPER
 from camopt.cases.opening_spring.requirements import requirements
-from camopt.cases.registry import CaseSpec, ToleranceClass, problem_at, register_case
+from camopt.cases.registry import (
+    CaseSpec,
+    ToleranceClass,
+    config_at,
+    problem_at,
+    register_case,
+)
 
 if TYPE_CHECKING:  # imported on first use: __getattr__ below
+    from camopt.cases.opening_spring.config import OpeningSpringConfig as OpeningSpringConfig
     from camopt.cases.opening_spring.problem import OpeningSpringProblem as OpeningSpringProblem
 
 TOLERANCES = {  # class "standard", docs/tolerance.md, "Tolerance classes"
@@ -24,7 +30,8 @@ TOLERANCE_CLASSES = {
 }
 
 SPEC = register_case(CaseSpec(
-    kind="opening_spring", config=OpeningSpringConfig,
+    kind="opening_spring",
+    config=config_at("camopt.cases.opening_spring.config:OpeningSpringConfig"),
     problem=problem_at("camopt.cases.opening_spring.problem:OpeningSpringProblem"),
     default_solver="newton_pp",
     summary="opening spring of a 40 kA VCB for a specified opening motion (energy method)",
@@ -37,7 +44,10 @@ SPEC = register_case(CaseSpec(
 
 
 def __getattr__(name: str) -> Any:
-    """The problem class, imported on first use (the spec names it)."""
+    """The config model and the problem class, imported on first use (the spec names
+    them)."""
+    if name == "OpeningSpringConfig":
+        return SPEC.config
     if name == "OpeningSpringProblem":
         return SPEC.problem
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
