@@ -15,9 +15,11 @@ every other part nominal (the band's coupler set left out), and runs a nominal
 breaker, as built and at the end of its life. Where none does it is where the search
 stopped, not a bound: the other parts are held nominal, not at their most favourable.
 
-    python scripts/vcb_life_form_frontier.py [--seed N] [--repeats N] FORM:S [FORM:S ...]
+    python scripts/vcb_life_form_frontier.py [--seed N] [--repeats N] [--set K=V ...]
+        FORM:S [FORM:S ...]
 
-FORM is ``coulomb`` or ``efficiency_coulomb``; e.g. ``coulomb:0.9 coulomb:1.0``.
+FORM is ``coulomb`` or ``efficiency_coulomb``; e.g. ``coulomb:0.9 coulomb:1.0``; ``--set``
+is passed to ``camopt run`` (another keying of the crank: ``case.preset_qox_deg=105``).
 """
 
 from __future__ import annotations
@@ -59,7 +61,8 @@ def form_rows(form: str, scale: float) -> list[list[float]]:
             if (r[7] == 1.0) == coulomb]
 
 
-def run(form: str, scale: float, seed: int, repeats: int, folder: Path) -> dict:
+def run(form: str, scale: float, seed: int, repeats: int, folder: Path,
+        overrides: list[str]) -> dict:
     rows = ", ".join(json.dumps(r) for r in form_rows(form, scale))
     case = folder / f"{form}_{scale:g}.toml"
     case.write_text(CASE.format(base=ROOT / "configs" / "vcb_velocity.toml", rows=rows,
@@ -67,7 +70,8 @@ def run(form: str, scale: float, seed: int, repeats: int, folder: Path) -> dict:
     out = folder / f"{form}_{scale:g}.h5"
     camopt = [sys.executable, "-m", "camopt"]
     subprocess.run([*camopt, "run", str(case), "--seed", str(seed), "--repeats",
-                    str(repeats), "--out", str(out), "--quiet"], check=True,
+                    str(repeats), "--out", str(out), "--quiet",
+                    *(a for o in overrides for a in ("--set", o))], check=True,
                    stdout=subprocess.DEVNULL)
     shown = subprocess.run([*camopt, "show", str(out), "--format", "json"], check=True,
                            capture_output=True, text=True).stdout
@@ -79,13 +83,20 @@ def main() -> None:
     parser.add_argument("cases", nargs="+", help="FORM:S, e.g. coulomb:1.0")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--set", action="append", default=[], dest="overrides",
+                        help="section.key=value, passed to camopt run")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         for item in args.cases:
             form, scale = item.split(":")
-            doc = run(form, float(scale), args.seed, args.repeats, Path(tmp))
+            try:
+                doc = run(form, float(scale), args.seed, args.repeats, Path(tmp),
+                          args.overrides)
+            except subprocess.CalledProcessError as exc:  # camopt printed its error line
+                sys.exit(exc.returncode)
             metrics = doc["best"]["metrics"]
-            print(f"{form} x {float(scale):g} (seed {args.seed}, {args.repeats} repeats): "
+            print(f"{form} x {float(scale):g} (seed {args.seed}, {args.repeats} repeats"
+                  f"{''.join(', ' + o for o in args.overrides)}): "
                   f"{doc['verdict']}; release margin at the end of life "
                   f"{metrics['life_end_release_torque_margin_low']:.4f}, latch energy at "
                   f"the end of life {metrics['life_end_latch_kinetic_energy_low_j']:.2f} J; "
