@@ -5,8 +5,9 @@ reads no archive (``validate`` resolving no archive reference) does not import h
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from camopt.lazy import lazy_names
 
 if TYPE_CHECKING:
     from camopt.archive.files import (
@@ -46,10 +47,4 @@ __all__ = ["Claim", "archive_kind", "atomic_write", "check_not_input", "check_wr
 assert sorted(__all__) == sorted(_HOME)
 
 
-def __getattr__(name: str) -> Any:
-    module = _HOME.get(name)
-    if module is None:
-        raise AttributeError(f"module 'camopt.archive' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"camopt.archive.{module}"), name)
-    globals()[name] = value  # once: later lookups are plain attribute reads
-    return value
+__getattr__ = lazy_names(globals(), _HOME)

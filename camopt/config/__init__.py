@@ -6,8 +6,9 @@ config models."""
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from camopt.lazy import lazy_names
 
 if TYPE_CHECKING:
     from camopt.config.loader import LoadedConfig, load_config, parse_overrides, validate_data
@@ -32,10 +33,4 @@ __all__ = [
 assert sorted(__all__) == sorted(_HOME)
 
 
-def __getattr__(name: str) -> Any:
-    module = _HOME.get(name)
-    if module is None:
-        raise AttributeError(f"module 'camopt.config' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"camopt.config.{module}"), name)
-    globals()[name] = value  # once: later lookups are plain attribute reads
-    return value
+__getattr__ = lazy_names(globals(), _HOME)
