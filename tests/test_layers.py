@@ -9,12 +9,12 @@ from collections import defaultdict
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "camopt"
-LAYER = {"camopt": 0, "errors": 0, "units": 0, "config": 1, "mechanics": 1, "core": 2,
+LAYER = {"camopt": 0, "errors": 0, "units": 0, "lazy": 0, "config": 1, "mechanics": 1, "core": 2,
          "cases": 3, "solvers": 4, "engine": 5, "archive": 6, "reporting": 7, "cli": 8,
          "__main__": 9}
 """Each wing's layer: a module imports only from its own layer or those below
 (``camopt`` itself is the version string and imports nothing)."""
-TOP = {"__init__", "__main__", "errors", "units"}
+TOP = {"__init__", "__main__", "errors", "units", "lazy"}
 
 
 def _modules() -> dict[str, Path]:
