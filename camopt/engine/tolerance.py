@@ -424,9 +424,9 @@ a sharper one)."""
 def expected_yield(run: RunView, samples: int = EXPECTED_YIELD_SAMPLES) -> ExpectedYield:
     """The quick expected yield of a run's best design: the share of ``samples`` draws of
     the case's default tolerances (:func:`default_varies`, uniform) whose design meets every
-    requirement of the run (the run's constraints included; none of them, outside a robust
-    run, when the run calls its best design infeasible), with its Clopper-Pearson 95 % interval,
-    and per requirement the share that meets it and half the 5-95 % spread of its quantity
+    requirement of the run (the run's constraints included; outside a robust run no draw
+    does when the run calls its best design infeasible), with its Clopper-Pearson 95 %
+    interval, and per requirement the share that meets it and half the 5-95 % spread of its quantity
     (what :meth:`~camopt.core.requirements.Requirement.at_limit` reads).
 
     The draws come from ``SeedSequence(run.seed)`` itself (the repeats use its children), so
