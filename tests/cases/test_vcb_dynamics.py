@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from camopt.cases.vcb import VcbProblem
+from camopt.cases.vcb import VcbProblem, dynamics
 from camopt.cases.vcb.dynamics import (
     MotionParameters,
     closing_events,
@@ -412,10 +412,37 @@ def test_a_cam_the_springs_cannot_release_never_closes():
                         "case.release_offset_deg=1.0", "case.cam_friction_nm=30").case)
     mo = p.motion(p.vendor_x())
     assert np.isinf(mo.cam_contact_time[0]) and not mo.latched[0]
-    assert np.isinf(mo.closing_time[0]) and mo.reach[0] == 0
+    # its reach is below 0 by the torque ratio's shortfall (rotation.start_shortfall)
+    ratio = mo.release_torque_ratio[0]
+    assert 0 < ratio < 1 and mo.reach[0] == pytest.approx(ratio - 1, rel=1e-12)
+    assert np.isinf(mo.closing_time[0])
     free = VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]",
                            "case.release_offset_deg=1.0", "case.cam_friction_nm=0").case)
     assert free.motion(free.vendor_x()).latched[0]  # the same springs close without it
+
+
+def test_a_latch_seat_past_the_roller_contact_is_graded_by_how_far():
+    """A latch seat that holds the crank past the roller contact (release angle >= 0):
+    no free rotation, and the reach is minus that angle as a share of the cam's stroke,
+    so the latch constraint grows with it instead of sitting on one value for every
+    such seat (what stranded the robust VCB's searches); the compiled events and the
+    numpy reference agree."""
+    problems = [VcbProblem(load(CONFIGS / "vcb.toml", "case.dynamics_band=[]",
+                                f"case.release_offset_deg={deg}").case) for deg in (24, 26, 28)]
+    m = problems[0].model
+    past = [m.dead_centre + d * np.pi / 180 - m.contact_crank_angle for d in (24, 26, 28)]
+    assert min(past) > 0  # every seat lies past the contact
+    reach = []
+    for p, angle in zip(problems, past):
+        mo = p.motion(p.vendor_x())
+        assert np.isinf(mo.cam_contact_time[0]) and not mo.latched[0]
+        reach.append(mo.reach[0])
+        assert mo.reach[0] == pytest.approx(-angle / m.theta_c[-1], rel=1e-9)
+        A, kc, link = p.designs(p.vendor_x())
+        state = dynamics.closing_state(m, A, kc, link, p.rod_offset, p.load, p.dynamics,
+                                       p.config.dynamics_steps)
+        assert dynamics.events_of(state).reach[0] == pytest.approx(mo.reach[0], rel=1e-12)
+    assert reach[0] > reach[1] > reach[2]
 
 
 @pytest.mark.parametrize("ratio", [0.999, 1.001])
@@ -447,7 +474,8 @@ def test_release_decision_matches_an_ode_at_torque_ratios_either_side_of_one(rat
     assert mo.release_torque_ratio[0] == pytest.approx(ratio, rel=1e-12)
     if ratio < 1:
         assert sol.status == 0 and np.all(sol.y[0] == start)  # the ODE's cam never moves
-        assert np.isinf(mo.cam_contact_time[0]) and not mo.latched[0] and mo.reach[0] == 0
+        assert np.isinf(mo.cam_contact_time[0]) and not mo.latched[0]
+        assert mo.reach[0] == pytest.approx(ratio - 1, rel=1e-9)  # minus its shortfall
     else:
         assert sol.status == 1
         assert mo.cam_contact_time[0] == pytest.approx(sol.t_events[0][0], rel=1e-6)

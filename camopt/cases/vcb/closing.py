@@ -20,7 +20,13 @@ from camopt.cases.vcb.motion import (
     ParameterColumns,
     least_torque,
 )
-from camopt.cases.vcb.rotation import free_steps, release_torque_ratio, rotation_of
+from camopt.cases.vcb.rotation import (
+    free_steps,
+    release_angle,
+    release_torque_ratio,
+    rotation_of,
+    start_shortfall,
+)
 
 DAMPING_PASSES = 4
 """Fixed-point passes for a rod dashpot's work (:func:`closing_state`): each pass's
@@ -38,9 +44,10 @@ class ClosingState:
     contacts' touch (n, m); the touch interval ``k``, fraction ``w`` and instant
     (``theta_touch``, ``t_touch``, ``t_k`` the first node after it); ``stall_theta`` where
     the kinetic energy first reaches zero (nan: never) and ``stalled_at``, the first node
-    at or beyond it (m if none); ``pickup_loss`` the pick-up impact's loss (J, (n,)).
-    Built by :func:`closing_state`; read by the pure
-    :func:`events_of` and :func:`curves_of`."""
+    at or beyond it (m if none); ``pickup_loss`` the pick-up impact's loss (J, (n,));
+    ``shortfall`` how far the release is from starting the cam (n,;
+    :func:`~camopt.cases.vcb.rotation.start_shortfall`). Built by :func:`closing_state`;
+    read by the pure :func:`events_of` and :func:`curves_of`."""
 
     theta: NDArray
     dtheta_du: NDArray
@@ -67,6 +74,7 @@ class ClosingState:
     stall_theta: NDArray
     stalled_at: NDArray
     pickup_loss: NDArray
+    shortfall: NDArray
 
     @property
     def latched(self) -> NDArray:
@@ -206,7 +214,9 @@ def closing_state(model: VcbModel, A: NDArray, kc: NDArray, link: NDArray,
         omega_before=omega_before, omega_after=omega_after, kinetic=kinetic, after=after,
         k=k, touched=reached, v_touch=v_touch, loss=loss, t_before=t_before,
         t_touch=t_touch, t_k=t_touch + first_cell, cells=cells, stall_theta=stall_theta,
-        stalled_at=stalled_at, pickup_loss=pickup_loss)
+        stalled_at=stalled_at, pickup_loss=pickup_loss,
+        shortfall=start_shortfall(release_angle(model, p.release_offset_rad[:, 0]),
+                                  release_ratio, float(theta[-1])))
 
 
 def events_of(s: ClosingState) -> ClosingEvents:
@@ -231,7 +241,8 @@ def _events(s: ClosingState) -> dict[str, NDArray]:
         cam_contact_time=s.t_free, touch_time=np.where(s.touched, s.t_touch, np.inf),
         touch_velocity=s.v_touch, closing_velocity_avg=v_avg,
         final_kinetic=np.where(latched, s.kinetic[:, -1], 0.0), touch_loss=s.loss,
-        latched=latched, reach=np.where(latched, 1.0, np.nan_to_num(s.stall_theta) / end),
+        latched=latched, reach=np.where(latched, 1.0, np.nan_to_num(s.stall_theta) / end
+                                        - s.shortfall),
         release_torque_ratio=s.release_ratio, pickup_loss=s.pickup_loss)
 
 

@@ -97,8 +97,10 @@ from camopt.cases.vcb.opening import opening_motion
 from camopt.cases.vcb.rotation import (
     free_rotation,
     free_steps,
+    release_angle,
     release_torque_ratio,
     rotation_of,
+    start_shortfall,
 )
 
 __all__ = [
@@ -189,10 +191,12 @@ def _compiled(kernel: ModuleType, model: VcbModel, A: NDArray, kc: NDArray, link
     kernel.closing_rows(theta, dtheta_du, 1.0 / steps, geometry, kc, pre_rows, loads_table,
                         float(loads.gap), table, model.release_crank, u, weights, torque_min,
                         out)
+    shortfall = start_shortfall(release_angle(model, table[7]), out[10], float(theta[-1]))
     return ClosingEvents(
         cam_contact_time=out[0], touch_time=out[1], touch_velocity=out[2],
         closing_velocity_avg=out[3], closing_time=out[4], final_kinetic=out[5],
-        touch_loss=out[6], latched=out[7] > 0, reach=out[8], release_torque_ratio=out[10],
+        touch_loss=out[6], latched=out[7] > 0, reach=out[8] - shortfall,
+        release_torque_ratio=out[10],
         pickup_loss=out[11]), out[9]
 
 

@@ -101,11 +101,13 @@ class ClosingEvents:
     ``closing_time`` (s, to theta_end; inf if stalled), ``final_kinetic`` (J, at
     theta_end), ``touch_loss`` (J), ``latched``, ``reach``, the fraction of theta_end
     the cam turns before its kinetic energy first reaches zero (1 if latched; 0 if it
-    never meets the roller), ``release_torque_ratio``, eps T_s / T_f at the release
-    crank angle (the cam starts iff it exceeds 1; inf without friction in the free
-    rotation), and ``pickup_loss`` (J), the kinetic energy the plastic impact of the cam on
-    the resting roller takes (1/2 J* omega^2 of the relative motion, what the contact
-    stores at its peak; 0 if the cam never gets there). What a band member contributes
+    stops before the roller; below 0 if it never starts: minus how far it is from
+    starting, :func:`~camopt.cases.vcb.rotation.start_shortfall`),
+    ``release_torque_ratio``, eps T_s / T_f at the release crank angle (the cam starts iff
+    it exceeds 1; inf without friction in the free rotation), and ``pickup_loss`` (J),
+    the kinetic energy the plastic impact of the cam on the resting roller takes (1/2 J*
+    omega^2 of the relative motion, what the contact stores at its peak; 0 if the cam
+    never gets there). What a band member contributes
     (:func:`closing_events`)."""
 
     cam_contact_time: NDArray

@@ -13,6 +13,25 @@ from camopt.cases.vcb.motion import MotionParameters, ParameterColumns, compiled
 from camopt.units import MM
 
 
+def release_angle(model: VcbModel, offset_rad: NDArray) -> NDArray:
+    """The cam angle theta_c of the release (rad), negative: measured back from the
+    roller contact, for latch seats ``offset_rad`` past the crank's dead centre (any
+    shape). At or above 0 the seat holds the crank at or past the roller contact: no
+    free rotation."""
+    return model.dead_centre + offset_rad - model.contact_crank_angle
+
+
+def start_shortfall(start: NDArray, ratio: NDArray, stroke: float) -> NDArray:
+    """How far a release is from starting the cam, >= 0 (0 where it starts or stops on
+    its way to the roller), (n,): the release angle ``start`` (rad, :func:`release_angle`)
+    past the roller contact as a share of the cam's ``stroke`` (rad), plus the torque
+    ratio's shortfall below 1 (:func:`release_torque_ratio`). The closing reads it as a
+    negative reach, so that a search among cams that never start still sees which way
+    they start (without it every such design had the same constraints: a plateau the
+    robust VCB's searches ended on)."""
+    return np.maximum(start, 0.0) / stroke + np.maximum(1.0 - ratio, 0.0)
+
+
 def release_torque_ratio(model: VcbModel, kc: NDArray, p: ParameterColumns,
                          pre: NDArray | None = None) -> NDArray:
     """eps T_s / T_f at the release crank angle, (n,): the springs' torque on the cam at
@@ -21,7 +40,7 @@ def release_torque_ratio(model: VcbModel, kc: NDArray, p: ParameterColumns,
     torque ratio of exactly 1 does not start it). inf where there is no friction there
     (and the springs turn it), 0 where the springs hold it back (crank at or before its
     dead centre). ``pre`` (n, 2) m: each row's spring compressions (else the config's)."""
-    start = model.dead_centre + p.release_offset_rad[:, 0] - model.contact_crank_angle
+    start = release_angle(model, p.release_offset_rad[:, 0])
     ext, rate = model.closing_spring_geometry(start)
     torque = _row_torque(model, kc, ext, rate, pre)
     driving = p.efficiency[:, 0] * np.maximum(torque, 0.0)
@@ -82,8 +101,7 @@ def rotation_of(model: VcbModel, kc: NDArray, p: ParameterColumns, steps: int,
     :func:`release_torque_ratio` (what the closing has at hand)."""
     n = len(kc)
     steps += steps % 2  # Simpson's rule: an even number of intervals
-    # cam angle theta_c of the release: negative, measured back from the roller contact
-    start = model.dead_centre + p.release_offset_rad - model.contact_crank_angle
+    start = release_angle(model, p.release_offset_rad)
     u = np.linspace(0.0, 1.0, steps + 1)
     weights = np.ones(steps + 1)
     weights[1:-1:2], weights[2:-1:2] = 4.0, 2.0
