@@ -256,6 +256,11 @@ class RobustSection(Strict):
                             "objective = \"quantile\"")
     distribution: Literal["uniform", "normal"] = Field(
         "uniform", description="uniform on nominal ± X, or normal with sigma = X/3")
+    draws: Literal["generation", "repeat"] = Field(
+        "generation", description="common random numbers: a new set of samples draws every "
+        "generation (a design that passed one set by luck meets another), or one set for "
+        "the whole repeat (a sample-average approximation: the search sees one deterministic "
+        "function; the finalists' fresh draws judge what it fitted to its set)")
     screen: bool = Field(True, description="sample only candidates whose nominal design "
                          "meets every constraint (the others keep their nominal violation)")
     finalists: int = Field(8, ge=0, le=MAX_ROBUST_SAMPLES, description="designs that met "

@@ -344,8 +344,12 @@ class RobustProblem(Problem, Stochastic):
         self._last = None
 
     def new_generation(self) -> None:
-        """Draw the generation's perturbations (S, k), shared by every candidate."""
+        """Draw the generation's perturbations (S, k), shared by every candidate; with
+        ``draws = "repeat"`` only the repeat's first generation draws (:meth:`reseed`
+        clears them)."""
         spec = self.plan.spec
+        if spec.draws == "repeat" and self.unit is not None:
+            return
         self.unit = unit_draws(self.rng, spec.samples, len(self.plan.varies),
                                self.plan.distribution)
 

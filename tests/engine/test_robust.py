@@ -92,6 +92,25 @@ def test_chunks_change_nothing():
     np.testing.assert_allclose(ea.f, eb.f, rtol=1e-12, atol=1e-12)
 
 
+def test_repeat_draws_keep_one_set_until_the_next_repeat():
+    """draws = "repeat": the first generation's draws stay for every later generation of
+    the repeat (the search sees one function), and a new repeat draws again from its own
+    seed, the same first set as draws = "generation" from that seed."""
+    fixed, fresh = _problem("robust.draws=repeat"), _problem()
+    for p in (fixed, fresh):
+        p.reseed(np.random.SeedSequence(5))
+        p.new_generation()
+    first = fixed.unit.copy()
+    np.testing.assert_array_equal(first, fresh.unit)
+    for p in (fixed, fresh):
+        p.new_generation()
+    np.testing.assert_array_equal(fixed.unit, first)
+    assert not np.array_equal(fresh.unit, first)
+    fixed.reseed(np.random.SeedSequence(6))
+    fixed.new_generation()
+    assert not np.array_equal(fixed.unit, first)
+
+
 def test_margin_objective_is_the_yield_column():
     """objective = "margin": the objective is the yield column itself (the worst sample's
     worst normalised constraint at the target's order statistic), named yield_margin, so
