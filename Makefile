@@ -27,7 +27,7 @@ test: install
 lint: typecheck
 	$(BIN)/ruff check camopt tests bench scripts/mutants.py scripts/vcb_release_margin.py \
 		scripts/vcb_yield_limit.py scripts/archive_identity.py scripts/vcb_life_form_frontier.py \
-		scripts/vcb_life_release_work.py
+		scripts/vcb_life_release_work.py scripts/vcb_life_touch_energy.py
 
 # types and units as a gate: mypy's settings are in pyproject.toml ([tool.mypy])
 typecheck: install
