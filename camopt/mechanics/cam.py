@@ -86,11 +86,21 @@ def profile(xp: FloatsLike, yp: FloatsLike, dxp: FloatsLike, dyp: FloatsLike,
 
 
 def pressure_angle(l2: float, l6: float, f: Follower) -> Floats:
-    """Pressure angle psi = pi/2 - eta - xi - phi (Eqs 13-14), rad."""
-    oi = l6 * f.dphi / (1 - f.dphi)
-    id_ = np.sqrt(l2**2 + (oi + l6) ** 2 - 2 * l2 * (oi + l6) * f.cos_a)
-    eta = np.arcsin(np.clip(l2 * f.sin_a / id_, -1.0, 1.0))
-    return np.pi / 2 - eta - f.angle
+    """Pressure angle psi (rad, signed), the shape of ``f.angle``: the angle between the
+    common normal at the roller centre D (the pitch curve's normal, from Eq 12's
+    derivative) and the direction D moves in as the follower swings (perpendicular to BD).
+    In the cam's frame the two give
+
+        tan psi = (l6 cos(xi + phi) - l2 (1 - phi')) / (l6 sin(xi + phi)).
+
+    For phi' < 1 this is the paper's psi = pi/2 - eta - xi - phi (Eqs 13-14, through the
+    instant centre I at OI = l6 phi' / (1 - phi')) to rounding. From phi' = 1 on, I
+    passes to the other side of O and Eq 14's arcsin takes the wrong branch (at
+    phi' = 1.3 in tests/mechanics/test_cam.py, 26.3 deg where the geometry gives 45.6
+    deg): a steep law could pass the 45 deg limit (docs/assumptions.md, "VCB: the
+    pressure angle of a steep law")."""
+    with np.errstate(divide="ignore"):
+        return np.arctan((l6 * f.cos_a - l2 * (1 - f.dphi)) / (l6 * f.sin_a))
 
 
 def curvature_radius(l2: float, l6: float, f: Follower, rf: float) -> Floats:

@@ -100,18 +100,48 @@ def test_base_circle_curvature_is_the_base_radius():
     np.testing.assert_allclose(cam.curvature_radius(L2, L6, f, RF), RB, rtol=1e-12)
 
 
-def test_pressure_angle_eqs13_14_against_the_velocity_direction():
-    """|psi| is the angle between the pitch-curve normal at D and the direction D moves in
-    as the follower swings (perpendicular to BD), both in the cam's frame."""
-    psi = cam.pressure_angle(L2, L6, follower())[0]
+def _swing_angle(a: np.ndarray) -> np.ndarray:
+    """The angle between the pitch-curve normal at D and the direction D moves in as the
+    follower swings (perpendicular to BD), both in the cam's frame, for the cubic ``a``
+    (4,) at THETA: the tangent by central differences of D built by vectors."""
+    def centre(theta):
+        u = theta - xi() - np.polyval(a[::-1], theta)
+        return L6 * np.array([np.cos(theta), np.sin(theta)]) - L2 * np.array([np.cos(u),
+                                                                               np.sin(u)])
     h = 1e-6
-    tangent = (roller_centre(THETA + h) - roller_centre(THETA - h)) / (2 * h)
+    tangent = (centre(THETA + h) - centre(THETA - h)) / (2 * h)
     normal = np.array([-tangent[1], tangent[0]]) / np.hypot(*tangent)
-    u = THETA - xi() - phi_by_hand(THETA)
+    u = THETA - xi() - np.polyval(a[::-1], THETA)
     swing = np.array([-np.sin(u), np.cos(u)])  # unit, perpendicular to BD
-    expected = np.arccos(np.abs(np.sum(normal * swing, axis=0)))
-    np.testing.assert_allclose(np.abs(psi), expected, atol=1e-7)
+    return np.arccos(np.abs(np.sum(normal * swing, axis=0)))
+
+
+@pytest.mark.parametrize("a", [A[0], np.array([0.01, 1.3, 0.15, -0.03])])
+def test_pressure_angle_against_the_velocity_direction(a):
+    """|psi| is the angle between the pitch-curve normal at D and the direction D moves in
+    (:func:`_swing_angle`): for the test's gentle law (phi' < 1) and a steep one (phi' from
+    1.3 to 1.9), where the paper's Eqs 13-14 take the wrong branch of their arcsin."""
+    f = cam.Follower.polynomial(a[None, :], THETA, xi())
+    psi = cam.pressure_angle(L2, L6, f)[0]
+    np.testing.assert_allclose(np.abs(psi), _swing_angle(a), atol=1e-7)
     assert np.abs(psi).max() > np.radians(10)
+
+
+def test_pressure_angle_is_eqs13_14_below_a_unit_follower_rate():
+    """For phi' < 1 the pressure angle is the paper's psi = pi/2 - eta - xi - phi through
+    the instant centre (Eqs 13-14 written out here); at phi' = 1.3 Eq 14 reads 26.3 deg
+    where the geometry gives 45.6 deg (the first node: a steep law passed 45 deg)."""
+    def eqs13_14(f):
+        oi = L6 * f.dphi / (1 - f.dphi)  # Eq 13: the instant centre
+        id_ = np.sqrt(L2**2 + (oi + L6) ** 2 - 2 * L2 * (oi + L6) * f.cos_a)
+        return np.pi / 2 - np.arcsin(np.clip(L2 * f.sin_a / id_, -1, 1)) - f.angle  # Eq 14
+    gentle = follower()
+    assert gentle.dphi.max() < 1
+    np.testing.assert_allclose(cam.pressure_angle(L2, L6, gentle), eqs13_14(gentle),
+                               rtol=1e-12, atol=1e-14)
+    steep = cam.Follower.polynomial(np.array([[0.01, 1.3, 0.0, 0.0]]), THETA, xi())
+    gap = np.abs(cam.pressure_angle(L2, L6, steep)) - np.abs(eqs13_14(steep))
+    assert np.radians(5) < np.abs(gap).max()
 
 
 def test_profile_eq11_offsets_the_pitch_curve_by_the_roller():
