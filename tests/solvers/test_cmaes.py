@@ -14,16 +14,22 @@ from tests.conftest import SphereConfig, SphereProblem
 def test_core_solves_rosenbrock():
     """4-D Rosenbrock scaled into the unit box (x = 4 u - 2, minimum at u = 0.75): from
     u = 0.3 the core reaches the minimum to 1e-6 in at most 60 000 evaluations."""
-    rng = np.random.default_rng(0)
-    core = CMACore(np.full(4, 0.3), 0.2, rng)
+    core = CMACore(np.full(4, 0.3), 0.2, np.random.default_rng(0))
+    _minimise_rosenbrock(core)
+    np.testing.assert_allclose(core.mean, 0.75, atol=1e-6)
+
+
+def _minimise_rosenbrock(core: CMACore, check=lambda core: None) -> None:
+    """Run ``core`` on the 4-D Rosenbrock scaled into the unit box (x = 4 u - 2) until its
+    step falls below 1e-13 or 60 000 evaluations, calling ``check`` after every tell."""
     evals = 0
     while evals < 60_000 and core.step_size() > 1e-13:
         U = core.ask()
         X = 4 * U - 2
         f = np.sum(100 * (X[:, 1:] - X[:, :-1] ** 2) ** 2 + (1 - X[:, :-1]) ** 2, axis=1)
         core.tell(U, deb_order(f, np.zeros(len(f))))
+        check(core)
         evals += len(U)
-    np.testing.assert_allclose(core.mean, 0.75, atol=1e-6)
 
 
 def test_active_core_solves_rosenbrock_with_a_positive_definite_covariance():
@@ -38,14 +44,10 @@ def test_active_core_solves_rosenbrock_with_a_positive_definite_covariance():
                 1 + 2 * core.negative.sum() ** 2 / np.sum(core.negative**2) / (core.mueff + 2))
     np.testing.assert_allclose(core.negative.sum(), -alpha, rtol=1e-12)
     assert CMACore(np.full(4, 0.3), 0.2, rng).negative is None  # passive by default
-    evals = 0
-    while evals < 60_000 and core.step_size() > 1e-13:
-        U = core.ask()
-        X = 4 * U - 2
-        f = np.sum(100 * (X[:, 1:] - X[:, :-1] ** 2) ** 2 + (1 - X[:, :-1]) ** 2, axis=1)
-        core.tell(U, deb_order(f, np.zeros(len(f))))
-        assert np.linalg.eigvalsh(core.C).min() > 0
-        evals += len(U)
+
+    def positive_definite(c: CMACore) -> None:
+        assert np.linalg.eigvalsh(c.C).min() > 0
+    _minimise_rosenbrock(core, positive_definite)
     np.testing.assert_allclose(core.mean, 0.75, atol=1e-6)
 
 
