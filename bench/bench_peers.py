@@ -28,8 +28,9 @@ Before any solver is timed the case's Problem evaluates a few designs once
 (:func:`warm_up`): one-time costs (numba's kernels loaded from its cache, modules imported
 on first use) would otherwise fall on whichever solver runs first, camopt at seed 0.
 Quality is by Deb's rules (less violation, then lower objective): where no solver finds a
-feasible design the least violation decides. Budgets are reduced (``OBJECTIVES``) so a
-5-seed run ends in ~10 minutes; ``--full`` runs the shipped budgets.
+feasible design the least violation decides. Budgets are reduced (``OBJECTIVES``): the
+seven rows at 5 seeds (16 for the robust VCB) take about 40 minutes in two processes on a
+loaded 2-core host; ``--full`` runs the shipped budgets.
 Run ``python -m bench.bench_peers [--full] [--peers names] [--set key=value ...] [seeds]
 [objective ...]``; a row of :data:`MIN_SEEDS` runs with at least its seeds.
 """
@@ -52,8 +53,7 @@ from camopt.engine.driver import load, prepare, run_repeat
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 OBJECTIVES: dict[str, tuple[str, list[str]]] = {
-    # the shipped configs with budgets reduced so that 5 seeds of every solver on all four
-    # take ~10 minutes on a loaded 2-core host (the shipped budgets: `full`)
+    # the shipped configs with budgets reduced (the shipped budgets: `full`)
     "vcb_velocity": ("vcb_velocity.toml", ["solver.evaluations=15000"]),
     "emb": ("emb.toml", ["solver.iterations=100", "solver.polish.evaluations=3000"]),
     "fast_switch_de": ("fast_switch_de.toml", ["solver.generations=200"]),
