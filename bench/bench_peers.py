@@ -77,7 +77,7 @@ SEEDS = 9  # the reduced robust VCB reaches its peers' level in ~0.2 s: 5 seeds 
 MIN_SEEDS = {"vcb_velocity_robust": 16}
 """Rows run with at least this many seeds whatever is asked: the robust VCB's chosen
 designs fall 0.03-0.5 short of the target on fresh draws from seed to seed, for every
-solver, and its 5-seed median moved by up to 0.06 from one set of seeds to the next."""
+solver, and its 5-seed median moved by up to 0.07 from one set of seeds to the next."""
 INFEASIBLE = 1e9  # a scalar peer's floor for infeasible designs (every feasible one is below)
 SAME = 1e-6
 """Relative difference below which two objectives count as one quality: below the
