@@ -138,6 +138,7 @@ def mechanism_of(problem: object, x: Floats, params: MotionParameters | None = N
     (MotionParameters, its release already the design's) with the closing springs'
     compressions ``pre`` (2,) m (None: the case's or the factory setting's)."""
     from camopt.cases.vcb.problem import VcbProblem
+    from camopt.cases.vcb.rotation import release_angle
 
     if not isinstance(problem, VcbProblem):
         raise TypeError("a VCB problem")
@@ -156,7 +157,7 @@ def mechanism_of(problem: object, x: Floats, params: MotionParameters | None = N
                          release_offset_rad=np.ravel(problem.release_offset(x))[0])
     cols = params.columns(1, c.efficiency)
     loads = problem.load
-    release = float(m.dead_centre + cols.release_offset_rad[0, 0] - m.contact_crank_angle)
+    release = float(release_angle(m, cols.release_offset_rad[0, 0]))
     return Mechanism(
         pivot_b=(float(m.B[0]), float(m.B[1])), l2=float(m.l2), xi=float(m.xi),
         bo_angle=float(m.theta_bo), law=tuple(float(a) for a in A[0]),
